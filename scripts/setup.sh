@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Set up everything cdbrdf needs, idempotently: Debian packages (when missing),
+# a virtual environment at .venv and the package with its dependencies.
+# Quick when already done. Usage: bash scripts/setup.sh [--test]
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+WITH_TESTS=0
+[ "${1:-}" = "--test" ] && WITH_TESTS=1
+
+log() { printf '[setup] %s\n' "$*" >&2; }
+
+# --- Python ---------------------------------------------------------------
+PY="${PYTHON:-}"
+if [ -z "$PY" ]; then
+  for cand in python3.11 python3.12 python3.13 python3; do
+    if command -v "$cand" >/dev/null 2>&1 && "$cand" -c 'import sys; sys.exit(sys.version_info < (3, 11))'; then
+      PY="$cand"; break
+    fi
+  done
+fi
+[ -n "$PY" ] || { log "Python >= 3.11 is needed; none was found"; exit 1; }
+
+# --- Debian packages ------------------------------------------------------
+# libllvm19: Mitsuba 3's LLVM variants (vectorised CPU rendering) need libLLVM 19.
+DEB_PKGS="libllvm19"
+# (test-only Debian packages are added here when a test needs one)
+[ "$WITH_TESTS" = 1 ] && DEB_PKGS="$DEB_PKGS"
+missing=""
+for p in $DEB_PKGS; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
+done
+if [ -n "$missing" ]; then
+  if ! command -v apt-get >/dev/null 2>&1; then
+    log "missing system packages:$missing (no apt-get here: install them by hand)"; exit 1
+  fi
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  log "installing Debian packages:$missing"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends $missing >/dev/null
+fi
+
+# --- virtual environment ---------------------------------------------------
+if [ ! -x .venv/bin/python ]; then
+  log "creating .venv with $PY"
+  "$PY" -m venv .venv
+fi
+STAMP=".venv/.cdbrdf-installed"
+WANT="$(sha256sum pyproject.toml | cut -d' ' -f1)"
+if [ "$(cat "$STAMP" 2>/dev/null)" != "$WANT" ] || ! .venv/bin/python -c 'import cdbrdf' 2>/dev/null; then
+  log "installing cdbrdf and its dependencies into .venv (first time: a few minutes)"
+  .venv/bin/python -m pip install -q --disable-pip-version-check --upgrade pip >/dev/null
+  .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[test]"
+  echo "$WANT" > "$STAMP"
+fi
+log "ready: $ROOT/.venv"

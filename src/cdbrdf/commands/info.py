@@ -1,0 +1,92 @@
+"""``cdbrdf info FILE``: what a CDBRDF file holds."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+__all__ = ["register", "run", "describe"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "info",
+        help="show a CDBRDF file's grid, quantity, material, provenance and value range",
+        description="Show what a CDBRDF file holds: grid, quantity, material, "
+        "provenance, measured fraction and the value range per channel.",
+    )
+    p.add_argument("file", help="a CDBRDF file (.h5)")
+    p.add_argument("--json", action="store_true", help="print the information as JSON")
+    p.set_defaults(func=run)
+
+
+def _axis(a: np.ndarray, unit: str) -> str:
+    vals = ", ".join(f"{x:g}" for x in a) if a.size <= 8 else f"{a[0]:g} .. {a[-1]:g}"
+    step = ""
+    if a.size > 2 and np.allclose(np.diff(a), a[1] - a[0]):
+        step = f" step {a[1] - a[0]:g}"
+    return f"{a.size:3d} [{vals}]{step} {unit}"
+
+
+def describe(table) -> dict:
+    """The information ``cdbrdf info`` shows, as a JSON-ready dict."""
+    v = table.values
+    ranges = {
+        name: {"min": float(v[..., i].min()), "max": float(v[..., i].max()), "mean": float(v[..., i].mean())}
+        for i, name in enumerate(table.channels)
+    }
+    per_kappa = {
+        f"{k:g}": float(table.measured[i].mean()) for i, k in enumerate(table.kappa)
+    }
+    return {
+        "material": table.attrs.get("material"),
+        "quantity": table.quantity,
+        "colour_space": table.attrs.get("colour_space"),
+        "shape": list(table.shape),
+        "axes": {name: axis.tolist() for name, axis in table.grid.axes().items()},
+        "measured_fraction": float(table.measured.mean()),
+        "measured_fraction_per_kappa": per_kappa,
+        "channels": ranges,
+        "provenance": table.attrs.get("provenance"),
+        "attrs": {k: v for k, v in table.attrs.items() if k not in ("provenance",)},
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..io import load
+
+    table = load(args.file)
+    info = describe(table)
+    if args.json:
+        print(json.dumps(info, indent=2, sort_keys=True))
+        return 0
+    g = table.grid
+    lines = [
+        f"file          {args.file}",
+        f"material      {info['material'] or '(not recorded)'}",
+        f"quantity      {table.quantity}"
+        + ("  (BRDF, sr^-1)" if table.quantity == "brdf" else "  (BRDF up to an unknown scale)"),
+        f"colour space  {info['colour_space']}",
+        f"values        {table.shape} {table.values.dtype}"
+        f"  (kappa, phi_l, theta_l, phi_v, theta_v, channel)",
+        f"kappa       {_axis(g.kappa, '1/mm')}",
+        f"theta_l     {_axis(g.theta_l, 'deg')}",
+        f"phi_l       {_axis(g.phi_l, 'deg')}",
+        f"theta_v     {_axis(g.theta_v, 'deg')}",
+        f"phi_v       {_axis(g.phi_v, 'deg')}",
+        f"measured      {100 * info['measured_fraction']:.1f}% of samples"
+        + "  (per kappa: "
+        + ", ".join(f"{k}: {100 * f:.1f}%" for k, f in info["measured_fraction_per_kappa"].items())
+        + ")",
+        f"std           {'stored' if table.std is not None else 'none'}",
+    ]
+    for name, r in info["channels"].items():
+        lines.append(f"channel {name:5s} min {r['min']:.4g}  mean {r['mean']:.4g}  max {r['max']:.4g}")
+    prov = info["provenance"]
+    if prov is not None:
+        text = json.dumps(prov, indent=2, sort_keys=True) if not isinstance(prov, str) else prov
+        lines.append("provenance    " + text.replace("\n", "\n              "))
+    print("\n".join(lines))
+    return 0

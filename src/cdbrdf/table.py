@@ -1,0 +1,562 @@
+"""The curvature-dependent BRDF table.
+
+A :class:`CDBRDF` holds reflectance samples over five axes, in the order fixed
+by the project's conventions (``docs/conventions.md``)::
+
+    values[kappa, phi_l, theta_l, phi_v, theta_v, channel]
+
+- ``kappa``: surface curvature in mm^-1 (> 0 convex, < 0 concave), strictly
+  increasing, any spacing; a single value makes a plain BRDF.
+- ``theta_l``, ``theta_v``: elevation from the normal in degrees, strictly
+  increasing, in [0, 90).
+- ``phi_l``, ``phi_v``: azimuth from the reference tangent x towards y in
+  degrees, evenly spaced in [0, 360) and periodic.
+- ``channel``: linear RGB (Rec. 709 primaries) unless ``attrs`` say otherwise.
+
+Values are the BRDF in sr^-1 with the cosine of the light direction *not*
+included (``quantity = "brdf"``), or the same up to an unknown scale
+(``quantity = "relative"``). Reshaped to ``(n_kappa, n_phi_l * n_theta_l,
+n_phi_v * n_theta_v, channel)`` the table is the paper's Fig. 7 layout.
+
+References
+----------
+Matsufuji, Kawai, "Measurement and Rendering of Curvature Dependent BRDF".
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping
+from dataclasses import dataclass
+from os import PathLike
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import TableError
+
+__all__ = ["Grid", "CDBRDF", "AXES", "QUANTITIES", "PAPER_KAPPA", "PAPER_THETA", "PAPER_PHI"]
+
+#: Axis names of :attr:`CDBRDF.values`, in storage order.
+AXES: tuple[str, ...] = ("kappa", "phi_l", "theta_l", "phi_v", "theta_v", "channel")
+
+#: Valid values of ``attrs["quantity"]``.
+QUANTITIES: tuple[str, ...] = ("brdf", "relative")
+
+#: The paper's curvatures, mm^-1.
+PAPER_KAPPA = np.array([-0.22, -0.13, 0.0, 0.13, 0.22])
+#: The paper's elevations, degrees.
+PAPER_THETA = np.arange(0.0, 76.0, 15.0)
+#: The paper's azimuths, degrees.
+PAPER_PHI = np.arange(0.0, 360.0, 30.0)
+
+_PHI_TOL_DEG = 1e-6
+
+
+def _axis(name: str, value: ArrayLike) -> NDArray[np.float64]:
+    try:
+        a = np.array(value, dtype=np.float64, ndmin=1)
+    except (TypeError, ValueError) as exc:
+        raise TableError(f"{name}: cannot be read as numbers ({exc})") from None
+    if a.ndim != 1:
+        raise TableError(f"{name}: expected a 1-D axis, got shape {a.shape}")
+    if a.size == 0:
+        raise TableError(f"{name}: the axis is empty")
+    if not np.all(np.isfinite(a)):
+        raise TableError(f"{name}: contains NaN or infinite values")
+    if a.size > 1 and not np.all(np.diff(a) > 0):
+        raise TableError(f"{name}: must be strictly increasing, got {a.tolist()}")
+    a.setflags(write=False)
+    return a
+
+
+def _check_theta(name: str, a: NDArray[np.float64]) -> None:
+    if a[0] < 0 or a[-1] >= 90:
+        raise TableError(
+            f"{name}: elevations must lie in [0, 90) degrees, got {a[0]:g}..{a[-1]:g}"
+        )
+
+
+def _check_phi(name: str, a: NDArray[np.float64]) -> None:
+    if a[0] < 0 or a[-1] >= 360:
+        raise TableError(
+            f"{name}: azimuths must lie in [0, 360) degrees, got {a[0]:g}..{a[-1]:g}"
+        )
+    if a.size > 1:
+        step = 360.0 / a.size
+        expected = a[0] + step * np.arange(a.size)
+        if not np.allclose(a, expected, rtol=0, atol=_PHI_TOL_DEG * max(1.0, step)):
+            raise TableError(
+                f"{name}: azimuths must be evenly spaced around the full circle "
+                f"(step 360/{a.size} = {step:g} deg, periodic), got {a.tolist()}"
+            )
+
+
+@dataclass(frozen=True, eq=False)
+class Grid:
+    """The five sample axes of a table.
+
+    Parameters
+    ----------
+    kappa
+        Curvatures in mm^-1, strictly increasing (any spacing).
+    theta_l, theta_v
+        Light and view elevations in degrees, strictly increasing in [0, 90).
+    phi_l, phi_v
+        Light and view azimuths in degrees, evenly spaced in [0, 360).
+    """
+
+    kappa: NDArray[np.float64]
+    theta_l: NDArray[np.float64]
+    phi_l: NDArray[np.float64]
+    theta_v: NDArray[np.float64]
+    phi_v: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for name in ("kappa", "theta_l", "phi_l", "theta_v", "phi_v"):
+            object.__setattr__(self, name, _axis(name, getattr(self, name)))
+        _check_theta("theta_l", self.theta_l)
+        _check_theta("theta_v", self.theta_v)
+        _check_phi("phi_l", self.phi_l)
+        _check_phi("phi_v", self.phi_v)
+
+    @classmethod
+    def paper(cls, *, kappa: ArrayLike | None = None) -> "Grid":
+        """The paper's grid: theta 0..75 step 15, phi 0..330 step 30, 5 curvatures."""
+        return cls(
+            kappa=PAPER_KAPPA if kappa is None else kappa,
+            theta_l=PAPER_THETA,
+            phi_l=PAPER_PHI,
+            theta_v=PAPER_THETA,
+            phi_v=PAPER_PHI,
+        )
+
+    @classmethod
+    def regular(
+        cls,
+        *,
+        theta_step_deg: float,
+        phi_step_deg: float,
+        theta_max_deg: float = 75.0,
+        kappa: ArrayLike = PAPER_KAPPA,
+    ) -> "Grid":
+        """A grid with the same regular direction sampling for light and view."""
+        if not (theta_step_deg > 0 and phi_step_deg > 0):
+            raise TableError("theta_step_deg and phi_step_deg must be positive")
+        n_phi = 360.0 / phi_step_deg
+        if abs(n_phi - round(n_phi)) > 1e-9:
+            raise TableError(f"phi_step_deg: {phi_step_deg} does not divide 360")
+        theta = np.arange(0.0, theta_max_deg + 1e-9, theta_step_deg)
+        phi = np.arange(round(n_phi)) * phi_step_deg
+        return cls(kappa=kappa, theta_l=theta, phi_l=phi, theta_v=theta, phi_v=phi)
+
+    @property
+    def shape(self) -> tuple[int, int, int, int, int]:
+        """Sample counts ``(kappa, phi_l, theta_l, phi_v, theta_v)``."""
+        return (
+            self.kappa.size,
+            self.phi_l.size,
+            self.theta_l.size,
+            self.phi_v.size,
+            self.theta_v.size,
+        )
+
+    def axes(self) -> dict[str, NDArray[np.float64]]:
+        """The axes by name, in storage order."""
+        return {name: getattr(self, name) for name in AXES[:-1]}
+
+    def mesh(self) -> dict[str, NDArray[np.float64]]:
+        """Every sample's coordinates, each broadcast to :attr:`shape`."""
+        grids = np.meshgrid(*self.axes().values(), indexing="ij")
+        return dict(zip(AXES[:-1], grids))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Grid):
+            return NotImplemented
+        return all(
+            np.array_equal(getattr(self, n), getattr(other, n)) for n in AXES[:-1]
+        )
+
+    def __repr__(self) -> str:
+        def r(a: NDArray[np.float64]) -> str:
+            if a.size <= 6:
+                return "[" + ", ".join(f"{x:g}" for x in a) + "]"
+            return f"[{a[0]:g}..{a[-1]:g}] ({a.size})"
+
+        return (
+            f"Grid(kappa={r(self.kappa)}, theta_l={r(self.theta_l)}, phi_l={r(self.phi_l)}, "
+            f"theta_v={r(self.theta_v)}, phi_v={r(self.phi_v)})"
+        )
+
+
+class CDBRDF:
+    """A curvature-dependent BRDF sampled on a 5-D grid (RGB or other channels).
+
+    Parameters
+    ----------
+    values
+        Reflectance, shape ``(kappa, phi_l, theta_l, phi_v, theta_v, channel)``;
+        sr^-1 for ``quantity="brdf"``. Stored as float32 or float64 (other
+        dtypes are converted to float64). Must be finite.
+    kappa
+        Curvatures, mm^-1, strictly increasing.
+    theta_l, phi_l, theta_v, phi_v
+        Light/view elevation and azimuth axes, degrees (see :class:`Grid`).
+    measured
+        Boolean mask, shape ``values.shape[:-1]``: True where the sample was
+        measured, False where it was filled. Default: all True.
+    fill_source
+        Integer array, shape ``values.shape[:-1]``: for a filled sample, the
+        C-order flat index (over the five sample axes) of the sample its value
+        was copied from; -1 for measured samples. Default: -1 where measured.
+    std
+        Optional per-sample standard deviation, same shape as ``values``.
+    attrs
+        Metadata: ``quantity`` ("brdf" or "relative"), ``colour_space``,
+        ``material``, ``provenance`` (any JSON-serialisable value), ``channels``.
+
+    Raises
+    ------
+    TableError
+        When the shapes, axes, mask or values are inconsistent. The message
+        names the argument.
+
+    Examples
+    --------
+    >>> import numpy as np, cdbrdf
+    >>> g = cdbrdf.Grid.paper()
+    >>> t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), **g.axes())
+    >>> t.evaluate(30.0, 45.0, 10.0, 200.0, 0.05).round(3)
+    array([0.2, 0.2, 0.2])
+    """
+
+    __slots__ = ("_grid", "_values", "_measured", "_fill_source", "_std", "_attrs", "_lookup")
+
+    def __init__(
+        self,
+        values: ArrayLike,
+        *,
+        kappa: ArrayLike,
+        theta_l: ArrayLike,
+        phi_l: ArrayLike,
+        theta_v: ArrayLike,
+        phi_v: ArrayLike,
+        measured: ArrayLike | None = None,
+        fill_source: ArrayLike | None = None,
+        std: ArrayLike | None = None,
+        attrs: Mapping[str, Any] | None = None,
+    ) -> None:
+        grid = Grid(kappa=kappa, theta_l=theta_l, phi_l=phi_l, theta_v=theta_v, phi_v=phi_v)
+        self._grid = grid
+        self._values = self._check_values("values", values, grid)
+        if std is None:
+            self._std = None
+        else:
+            s = self._check_values("std", std, grid)
+            if s.shape != self._values.shape:
+                raise TableError(f"std: shape {s.shape} differs from values {self._values.shape}")
+            if np.any(s < 0):
+                raise TableError("std: standard deviations must be non-negative")
+            self._std = s
+        self._measured = self._check_mask(measured, grid.shape)
+        self._fill_source = self._check_fill(fill_source, self._measured)
+        self._attrs = self._check_attrs(attrs)
+        self._lookup = None
+
+    # -- validation -------------------------------------------------------------
+    @staticmethod
+    def _check_values(name: str, values: ArrayLike, grid: Grid) -> NDArray[np.floating]:
+        try:
+            v = np.asarray(values)
+        except (TypeError, ValueError) as exc:
+            raise TableError(f"{name}: cannot be read as an array ({exc})") from None
+        if v.dtype not in (np.float32, np.float64):
+            if not (np.issubdtype(v.dtype, np.number) or v.dtype == bool):
+                raise TableError(f"{name}: expected numbers, got dtype {v.dtype}")
+            v = v.astype(np.float64)
+        if v.ndim != 6:
+            raise TableError(
+                f"{name}: expected 6 dimensions {AXES}, got shape {v.shape}"
+            )
+        if v.shape[:5] != grid.shape:
+            raise TableError(
+                f"{name}: shape {v.shape} does not match the axes "
+                f"(kappa, phi_l, theta_l, phi_v, theta_v) = {grid.shape}"
+            )
+        if v.shape[5] < 1:
+            raise TableError(f"{name}: needs at least one channel")
+        if not np.all(np.isfinite(v)):
+            bad = int(np.count_nonzero(~np.isfinite(v)))
+            raise TableError(f"{name}: contains {bad} NaN or infinite value(s)")
+        v = np.array(v, order="C", copy=True)
+        v.setflags(write=False)
+        return v
+
+    @staticmethod
+    def _check_mask(measured: ArrayLike | None, shape: tuple[int, ...]) -> NDArray[np.bool_]:
+        if measured is None:
+            m = np.ones(shape, dtype=bool)
+        else:
+            m = np.asarray(measured)
+            if m.dtype != bool:
+                if not np.issubdtype(m.dtype, np.integer) or not np.isin(m, (0, 1)).all():
+                    raise TableError(f"measured: expected booleans, got dtype {m.dtype}")
+                m = m.astype(bool)
+            if m.shape != shape:
+                raise TableError(f"measured: shape {m.shape} differs from the sample grid {shape}")
+            m = m.copy()
+        m.setflags(write=False)
+        return m
+
+    @staticmethod
+    def _check_fill(fill: ArrayLike | None, measured: NDArray[np.bool_]) -> NDArray[np.int64]:
+        if fill is None:
+            if not measured.all():
+                f = np.full(measured.shape, -1, dtype=np.int64)
+                # Unknown sources: mark with -2 ("filled, source not recorded").
+                f[~measured] = -2
+            else:
+                f = np.full(measured.shape, -1, dtype=np.int64)
+        else:
+            f = np.asarray(fill)
+            if not np.issubdtype(f.dtype, np.integer):
+                raise TableError(f"fill_source: expected integers, got dtype {f.dtype}")
+            if f.shape != measured.shape:
+                raise TableError(
+                    f"fill_source: shape {f.shape} differs from the sample grid {measured.shape}"
+                )
+            f = f.astype(np.int64)
+            if np.any(f[measured] != -1):
+                raise TableError("fill_source: must be -1 wherever the sample is measured")
+            src = f[~measured]
+            if np.any((src < -2) | (src >= measured.size)):
+                raise TableError(
+                    f"fill_source: indices must be in [0, {measured.size}) (or -2 = unknown)"
+                )
+            known = src[src >= 0]
+            if known.size and not measured.reshape(-1)[known].all():
+                raise TableError("fill_source: a filled sample points at a sample that is not measured")
+        f.setflags(write=False)
+        return f
+
+    @staticmethod
+    def _check_attrs(attrs: Mapping[str, Any] | None) -> dict[str, Any]:
+        a: dict[str, Any] = {"quantity": "relative", "colour_space": "linear Rec.709 (sRGB primaries)"}
+        if attrs is not None:
+            if not isinstance(attrs, Mapping):
+                raise TableError(f"attrs: expected a mapping, got {type(attrs).__name__}")
+            for k in attrs:
+                if not isinstance(k, str):
+                    raise TableError(f"attrs: keys must be strings, got {k!r}")
+            a.update(copy.deepcopy(dict(attrs)))
+        if a["quantity"] not in QUANTITIES:
+            raise TableError(
+                f"attrs['quantity']: {a['quantity']!r} is not one of {', '.join(QUANTITIES)}"
+            )
+        return a
+
+    # -- properties -----------------------------------------------------------------
+    @property
+    def grid(self) -> Grid:
+        """The sample axes."""
+        return self._grid
+
+    @property
+    def values(self) -> NDArray[np.floating]:
+        """Read-only samples, ``(kappa, phi_l, theta_l, phi_v, theta_v, channel)``."""
+        return self._values
+
+    @property
+    def measured(self) -> NDArray[np.bool_]:
+        """Read-only mask: True where measured, False where filled."""
+        return self._measured
+
+    @property
+    def fill_source(self) -> NDArray[np.int64]:
+        """Flat index of each filled sample's source; -1 measured, -2 unknown."""
+        return self._fill_source
+
+    @property
+    def std(self) -> NDArray[np.floating] | None:
+        """Per-sample standard deviation, or None."""
+        return self._std
+
+    @property
+    def attrs(self) -> dict[str, Any]:
+        """Metadata (a dict; changes to it are kept)."""
+        return self._attrs
+
+    kappa = property(lambda self: self._grid.kappa, doc="Curvature axis, mm^-1.")
+    theta_l = property(lambda self: self._grid.theta_l, doc="Light elevation axis, degrees.")
+    phi_l = property(lambda self: self._grid.phi_l, doc="Light azimuth axis, degrees.")
+    theta_v = property(lambda self: self._grid.theta_v, doc="View elevation axis, degrees.")
+    phi_v = property(lambda self: self._grid.phi_v, doc="View azimuth axis, degrees.")
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Shape of :attr:`values`."""
+        return self._values.shape
+
+    @property
+    def n_channels(self) -> int:
+        """Number of channels (3 for RGB)."""
+        return self._values.shape[-1]
+
+    @property
+    def channels(self) -> list[str]:
+        """Channel names (``attrs['channels']`` or R, G, B)."""
+        names = self._attrs.get("channels")
+        if names is not None and len(names) == self.n_channels:
+            return [str(n) for n in names]
+        if self.n_channels == 3:
+            return ["R", "G", "B"]
+        return [f"c{i}" for i in range(self.n_channels)]
+
+    @property
+    def quantity(self) -> str:
+        """``"brdf"`` (sr^-1) or ``"relative"`` (unknown scale)."""
+        return str(self._attrs["quantity"])
+
+    # -- operations ---------------------------------------------------------------
+    def evaluate(
+        self,
+        theta_v: ArrayLike,
+        phi_v: ArrayLike,
+        theta_l: ArrayLike,
+        phi_l: ArrayLike,
+        kappa: ArrayLike = 0.0,
+    ) -> NDArray[np.float64]:
+        """Interpolate the table at continuous directions and curvature.
+
+        5-D multilinear: azimuths periodic, elevations clamped beyond the last
+        sample, curvature clamped to the axis ends. At elevation 0 the azimuth
+        has no effect (pole rule, see :func:`cdbrdf.interp.evaluate`).
+
+        Parameters
+        ----------
+        theta_v, phi_v
+            View elevation in [0, 90] and azimuth (any real; periodic), degrees.
+        theta_l, phi_l
+            Light elevation in [0, 90] and azimuth, degrees.
+        kappa
+            Curvature, mm^-1.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``broadcast(...).shape + (n_channels,)``, float64. Rows whose query
+            holds a NaN (or infinity) are NaN.
+
+        Raises
+        ------
+        QueryError
+            When an elevation lies outside [0, 90] degrees.
+        """
+        from .interp import evaluate
+
+        return evaluate(self, theta_v, phi_v, theta_l, phi_l, kappa)
+
+    def brdf(self, kappa: float = 0.0) -> "CDBRDF":
+        """The plain BRDF: the table at one curvature as a one-kappa table.
+
+        With the default ``kappa = 0`` and a table that samples 0 this is the
+        flat stand's slice, copied exactly; otherwise the slice is
+        interpolated linearly in kappa (clamped).
+        """
+        k = float(kappa)
+        if not np.isfinite(k):
+            raise TableError(f"kappa: must be finite, got {kappa!r}")
+        ks = self.kappa
+        hit = np.flatnonzero(ks == k)
+        if hit.size:
+            i = int(hit[0])
+            vals = self._values[i : i + 1]
+            meas = self._measured[i : i + 1]
+            fill = self._fill_source[i : i + 1].copy()
+            per = int(np.prod(self.grid.shape[1:]))
+            fill = np.where(fill >= 0, fill - i * per, fill)
+            std = None if self._std is None else self._std[i : i + 1]
+        else:
+            kc = float(np.clip(k, ks[0], ks[-1]))
+            j = int(np.clip(np.searchsorted(ks, kc, side="right") - 1, 0, ks.size - 2))
+            w = (kc - ks[j]) / (ks[j + 1] - ks[j])
+            vals = ((1 - w) * self._values[j] + w * self._values[j + 1])[None].astype(self._values.dtype)
+            meas = (self._measured[j] & self._measured[j + 1])[None]
+            fill = np.where(meas, -1, -2)
+            std = None
+        attrs = copy.deepcopy(self._attrs)
+        attrs["plain_brdf_of_kappa"] = k
+        return CDBRDF(
+            vals,
+            kappa=[k],
+            theta_l=self.theta_l,
+            phi_l=self.phi_l,
+            theta_v=self.theta_v,
+            phi_v=self.phi_v,
+            measured=meas,
+            fill_source=fill,
+            std=std,
+            attrs=attrs,
+        )
+
+    def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
+        """Write the table to an HDF5 file (atomically); see ``docs/format.md``."""
+        from .io import save
+
+        save(self, path, compression=compression)
+
+    def fig7(self) -> NDArray[np.floating]:
+        """The values in the paper's Fig. 7 layout.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n_kappa, n_phi_l * n_theta_l, n_phi_v * n_theta_v, channel)``:
+            rows are light directions, columns view directions, grouped by
+            azimuth with the elevation varying inside a group.
+        """
+        k, pl, tl, pv, tv, c = self.shape
+        return self._values.reshape(k, pl * tl, pv * tv, c)
+
+    def with_attrs(self, **attrs: Any) -> "CDBRDF":
+        """A copy with ``attrs`` updated."""
+        a = copy.deepcopy(self._attrs)
+        a.update(attrs)
+        return CDBRDF(
+            self._values,
+            **self._grid.axes(),
+            measured=self._measured,
+            fill_source=self._fill_source,
+            std=self._std,
+            attrs=a,
+        )
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, CDBRDF):
+            return NotImplemented
+        return (
+            self._grid == other._grid
+            and self._values.dtype == other._values.dtype
+            and np.array_equal(self._values, other._values)
+            and np.array_equal(self._measured, other._measured)
+            and np.array_equal(self._fill_source, other._fill_source)
+            and (
+                (self._std is None and other._std is None)
+                or (
+                    self._std is not None
+                    and other._std is not None
+                    and np.array_equal(self._std, other._std)
+                )
+            )
+            and self._attrs == other._attrs
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        meas = self._measured.mean() * 100
+        return (
+            f"CDBRDF(material={self._attrs.get('material', '?')!r}, quantity={self.quantity!r}, "
+            f"shape={self.shape}, measured={meas:.1f}%, {self._grid!r})"
+        )
