@@ -37,7 +37,7 @@ def test_help_lists_commands(capsys):
     with pytest.raises(SystemExit):
         main(["--help"])
     out = capsys.readouterr().out
-    assert "info" in out
+    assert "info" in out and "mosaic" in out
 
 
 def test_no_command_is_an_error(capsys):

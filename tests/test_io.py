@@ -189,3 +189,13 @@ def test_reflectance_with_wrong_dims(tmp_path, small_grid):
 def test_older_minor_version_is_read(tmp_path, small_grid):
     p = _write_then_edit(tmp_path, small_grid, lambda f: f.attrs.__setitem__("format_version", "1.7"))
     assert cdbrdf.load(p).shape == small_grid.shape + (3,)
+
+
+def test_saved_file_has_umask_permissions(tmp_path, small_grid):
+    old = os.umask(0o022)
+    try:
+        p = tmp_path / "t.h5"
+        make_table(small_grid).save(p)
+        assert (p.stat().st_mode & 0o777) == 0o644
+    finally:
+        os.umask(old)

@@ -172,3 +172,11 @@ def test_regular_grid():
     np.testing.assert_array_equal(g.phi_l, [0, 90, 180, 270])
     with pytest.raises(TableError, match="does not divide 360"):
         Grid.regular(theta_step_deg=30, phi_step_deg=70)
+
+
+def test_brdf_clamps_outside_the_curvature_range(small_grid):
+    t = make_table(small_grid)
+    np.testing.assert_array_equal(t.brdf(5.0).values[0], t.values[-1])
+    np.testing.assert_array_equal(t.brdf(-5.0).values[0], t.values[0])
+    single = t.brdf(0.0)
+    np.testing.assert_array_equal(single.brdf(0.3).values, single.values)

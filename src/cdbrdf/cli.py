@@ -20,6 +20,7 @@ __all__ = ["main", "build_parser", "COMMANDS"]
 #: Sub-command modules under :mod:`cdbrdf.commands`, in ``--help`` order.
 COMMANDS: tuple[str, ...] = (
     "info",
+    "mosaic",
 )
 
 EXIT_USER_ERROR = 2

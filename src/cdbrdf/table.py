@@ -461,16 +461,19 @@ class CDBRDF:
         """The plain BRDF: the table at one curvature as a one-kappa table.
 
         With the default ``kappa = 0`` and a table that samples 0 this is the
-        flat stand's slice, copied exactly; otherwise the slice is
-        interpolated linearly in kappa (clamped).
+        flat stand's slice, copied exactly (mask and fill sources included);
+        outside the table's curvature range the end slice is copied (clamped,
+        as in the lookup); between samples the slice is interpolated linearly
+        in kappa and a sample counts as measured only if both neighbours were.
         """
         k = float(kappa)
         if not np.isfinite(k):
             raise TableError(f"kappa: must be finite, got {kappa!r}")
         ks = self.kappa
         hit = np.flatnonzero(ks == k)
-        if hit.size:
-            i = int(hit[0])
+        if ks.size == 1 or k <= ks[0] or k >= ks[-1] or hit.size:
+            # a sampled curvature, or clamped to an end of the axis
+            i = int(hit[0]) if hit.size else (0 if k <= ks[0] else ks.size - 1)
             vals = self._values[i : i + 1]
             meas = self._measured[i : i + 1]
             fill = self._fill_source[i : i + 1].copy()
@@ -478,9 +481,8 @@ class CDBRDF:
             fill = np.where(fill >= 0, fill - i * per, fill)
             std = None if self._std is None else self._std[i : i + 1]
         else:
-            kc = float(np.clip(k, ks[0], ks[-1]))
-            j = int(np.clip(np.searchsorted(ks, kc, side="right") - 1, 0, ks.size - 2))
-            w = (kc - ks[j]) / (ks[j + 1] - ks[j])
+            j = int(np.searchsorted(ks, k, side="right") - 1)
+            w = (k - ks[j]) / (ks[j + 1] - ks[j])
             vals = ((1 - w) * self._values[j] + w * self._values[j + 1])[None].astype(self._values.dtype)
             meas = (self._measured[j] & self._measured[j + 1])[None]
             fill = np.where(meas, -1, -2)

@@ -1,0 +1,126 @@
+"""``cdbrdf mosaic FILE -o OUT.png``: the paper's Fig. 7 mosaic of a table."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+__all__ = ["register", "run", "FORMATS"]
+
+#: Output formats, chosen by the output file's suffix.
+FORMATS: dict[str, str] = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
+
+
+def _exposure(text: str) -> float | str:
+    from ..plot import EXPOSURE_MODES  # light: numpy only, matplotlib is imported lazily
+
+    if text in EXPOSURE_MODES:
+        return text
+    try:
+        return _positive(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(
+            f"expected a positive number or one of {', '.join(EXPOSURE_MODES)}, got {text!r}"
+        ) from None
+
+
+def _positive(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (x > 0 and x < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
+    return x
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "mosaic",
+        help="draw the Fig. 7 mosaic (one image per curvature + differences) of a file",
+        description=(
+            "Draw the paper's Fig. 7 mosaic of a CDBRDF file: for each curvature one "
+            "image (rows: light direction, columns: view direction, grouped by azimuth, "
+            "elevation inside a group), all with one exposure, filled (unmeasured) "
+            "samples hatched, and a second row of luminance differences against "
+            "kappa = 0. The output format follows the suffix of OUT: "
+            + ", ".join(FORMATS) + "."
+        ),
+        epilog="example: cdbrdf mosaic denim.h5 -o denim.png --kappa 0 0.13 0.22",
+    )
+    p.add_argument("file", metavar="FILE", help="a CDBRDF file (.h5)")
+    p.add_argument("-o", "--output", metavar="OUT", required=True,
+                   help="the image to write (.png, .pdf or .svg); replaced if it exists")
+    p.add_argument("--kappa", metavar="K", type=float, nargs="+", action="extend",
+                   help="curvatures to show, mm^-1, as sampled in the file "
+                   "(default: all; e.g. --kappa -0.13 0 0.13)")
+    p.add_argument("--exposure", metavar="X", type=_exposure, default="auto",
+                   help="linear exposure factor before sRGB encoding, or 'auto' (default: "
+                   "the 99.5th percentile of the luminance over all panels maps to white) "
+                   "or 'white' (x pi: a white Lambertian reflector maps to white; "
+                   "tables in sr^-1 only)")
+    p.add_argument("--no-diff", dest="diff", action="store_false",
+                   help="leave out the row of differences against kappa = 0")
+    p.add_argument("--no-marks", dest="mark_filled", action="store_false",
+                   help="do not hatch filled (unmeasured) samples")
+    p.add_argument("--channel", metavar="C",
+                   help="show one channel (index or name, e.g. G) in grey instead of RGB")
+    p.add_argument("--title", help="figure title (default: material and quantity)")
+    p.add_argument("--dpi", type=_positive, default=150.0,
+                   help="resolution of a PNG in dots per inch (default: 150)")
+    p.set_defaults(func=run)
+
+
+def _output(path_text: str) -> tuple[Path, str]:
+    out = Path(path_text)
+    fmt = FORMATS.get(out.suffix.lower())
+    if fmt is None:
+        got = f"{out.suffix!r}" if out.suffix else "no suffix"
+        raise ValueError(
+            f"{out}: cannot tell the output format from {got}; use one of "
+            + ", ".join(FORMATS)
+        )
+    folder = out.parent if str(out.parent) else Path(".")
+    if not folder.is_dir():
+        raise FileNotFoundError(f"{out}: the folder {folder} does not exist")
+    if out.is_dir():
+        raise IsADirectoryError(f"{out}: is a folder, give a file name")
+    return out, fmt
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _channel(text: str | None) -> int | str | None:
+    if text is None:
+        return None
+    return int(text) if text.lstrip("-").isdigit() else text
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..io import atomic_path, load
+    from ..plot import plot_mosaic
+
+    out, fmt = _output(args.output)
+    table = load(args.file)
+    fig = plot_mosaic(
+        table,
+        kappa=args.kappa,
+        exposure=args.exposure,
+        diff=args.diff,
+        channel=_channel(args.channel),
+        mark_filled=args.mark_filled,
+        title=args.title,
+        dpi=args.dpi,
+    )
+    with atomic_path(out) as tmp:
+        fig.savefig(tmp, format=fmt, dpi=args.dpi)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
+    if not args.quiet:
+        n = len(args.kappa) if args.kappa else table.kappa.size
+        print(f"wrote {out} ({n} curvature{'s' * (n != 1)}, {fmt.upper()})")
+    return 0
