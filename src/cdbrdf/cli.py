@@ -21,6 +21,8 @@ __all__ = ["main", "build_parser", "COMMANDS"]
 COMMANDS: tuple[str, ...] = (
     "info",
     "mosaic",
+    "curvature",
+    "render",
 )
 
 EXIT_USER_ERROR = 2
