@@ -1,0 +1,30 @@
+"""Synthetic materials: reflectance models of woven cloth that depend on bending.
+
+- :mod:`cdbrdf.synth.weave`: weave patterns and the yarn micro-geometry;
+- :mod:`cdbrdf.synth.fibre`: per-fibre scattering (Sadeghi et al. 2013);
+- :mod:`cdbrdf.synth.cloth`: the cloth's curvature-dependent BRDF and its
+  tabulation (:class:`ClothModel`, :class:`ClothParams`);
+- :mod:`cdbrdf.synth.presets`: ``denim`` and ``shot``;
+- :mod:`cdbrdf.synth.figures`: the documentation's plots.
+
+Nothing is computed at import time.
+"""
+
+from __future__ import annotations
+
+from .cloth import MODEL_NAME, MODEL_VERSION, ClothModel, ClothParams
+from .presets import PRESETS, model, names, params
+from .weave import WEAVES, weave_matrix
+
+__all__ = [
+    "ClothModel",
+    "ClothParams",
+    "MODEL_NAME",
+    "MODEL_VERSION",
+    "PRESETS",
+    "WEAVES",
+    "model",
+    "names",
+    "params",
+    "weave_matrix",
+]

@@ -1,0 +1,617 @@
+"""The curvature-dependent BRDF of a woven cloth, from its micro-structure.
+
+:class:`ClothParams` describes a cloth (weave, yarns, fibres, colours,
+thickness); :class:`ClothModel` evaluates its reflectance
+``f(theta_v, phi_v, theta_l, phi_l, kappa)`` (BRDF in sr^-1, cosine of the
+light direction not included, linear Rec. 709 RGB) and tabulates it onto any
+:class:`cdbrdf.Grid`.
+
+How a value is computed (``docs/fabric-model.md`` has the details):
+
+1. *Geometry.* One repeat of the weave is built as a periodic height field
+   (:func:`cdbrdf.synth.weave.build_heightfield`), with the yarn layout
+   stretched along x by ``s = 1 + kappa t / 2`` (the face of a cloth of
+   thickness ``t`` on a cylinder of curvature ``kappa``; yarn cross-sections
+   keep their size, so gaps open for ``kappa > 0`` and close for ``kappa < 0``).
+2. *Masking.* Rays from the viewer, spread uniformly over the repeat (a
+   rank-1 lattice, exact for periodic integrands in the limit), are marched
+   through the height field to the first surface point ``p`` they meet.
+3. *Shadowing.* From ``p`` a ray is marched towards the light; ``V(p, l)`` is
+   1 if it leaves the cloth.
+4. *Scattering.* ``f_p`` is the fibre BRDF of :mod:`cdbrdf.synth.fibre` with
+   the yarn's colour, fibre direction and surface normal at ``p``.
+5. The flat BRDF is the mean over the rays of
+   ``f_p(v, l) (n_p . l)+ V(p, l) / cos(theta_l)``: the visible micro-surface
+   seen per unit of projected area (Irawan & Marschner 2012, Sec. 4; Heitz
+   2014's visible-normal form of the micro-surface BRDF).
+6. *Footprint.* On the cylinder the macro-normal turns by ``kappa x`` across
+   the measured spot of diameter ``footprint_mm``; the value is the average
+   over ``tilt_samples`` patches across it, each seen in its own frame and
+   weighted by its projected area towards the viewer.
+
+Energy: every local BRDF has directional albedo <= 1, the rays see each
+point of the micro-surface in proportion to its projected area, and the
+footprint weights sum to 1, so the directional albedo of the cloth is <= 1 for
+every view direction and curvature (tested numerically).
+
+Reciprocity: the continuous model is reciprocal (the micro-surface integral is
+symmetric in v and l and so is ``f_p``); the estimator traces from the viewer
+and normalises the footprint by the viewer's projected area, so the computed
+values are reciprocal only to within the integration error.
+
+References
+----------
+P. Irawan and S. Marschner, "Specular reflection from woven cloth",
+ACM Transactions on Graphics 31(1), 2012.
+I. Sadeghi, O. Bisker, J. De Deken, H. W. Jensen, "A practical microcylinder
+appearance model for cloth rendering", ACM Transactions on Graphics 32(2), 2013.
+E. Heitz, "Understanding the masking-shadowing function in microfacet-based
+BRDFs", Journal of Computer Graphics Techniques 3(2), 2014.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import QueryError
+from ..table import CDBRDF, Grid
+from . import _trace
+from .fibre import FibreLobes
+from .weave import (
+    Heightfield,
+    YarnGeometry,
+    build_heightfield,
+    face_stretch,
+    weave_matrix,
+)
+
+__all__ = ["ClothParams", "ClothModel", "MODEL_NAME", "MODEL_VERSION"]
+
+log = logging.getLogger(__name__)
+
+MODEL_NAME = "cdbrdf.synth.cloth"
+#: Bump when a change alters any computed value.
+MODEL_VERSION = "1.1"
+
+_LIGHT_CHUNK = 512
+_GOLDEN = 0.6180339887498949
+
+RGB = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class ClothParams:
+    """Parameters of a woven cloth. Lengths in mm, angles in degrees.
+
+    Attributes
+    ----------
+    name
+        Material name written into tables.
+    weave
+        A registered weave name (:data:`cdbrdf.synth.weave.WEAVES`) or a 0/1
+        matrix ``(n_weft, n_warp)``, 1 where the warp is on top.
+    warp_along
+        Local axis the warp runs along, ``"x"`` (the bending direction) or
+        ``"y"`` (the cylinder's axis). Gaps open between the yarns that run
+        along y.
+    warp_rgb, weft_rgb
+        Fibre volume-scattering albedo of each yarn (linear Rec. 709, [0, 1]).
+    backing_rgb
+        Lambertian albedo of what is seen through holes between the yarns.
+    warp_pitch_mm, weft_pitch_mm
+        Distance between neighbouring yarn centres.
+    warp_width_mm, weft_width_mm, warp_height_mm, weft_height_mm
+        Elliptical yarn cross-section (full width and height).
+    crimp_share_warp
+        In [0, 1]: how much of the crimp the warp takes (0.5 balanced).
+    warp_twist_deg, weft_twist_deg
+        Angle of the surface fibres to the yarn axis.
+    crimp_transition
+        In (0, 1]: fraction of the distance between crossings over which a
+        yarn dives from one side to the other (1 = smooth cosine crimp).
+    thickness_mm
+        Cloth thickness ``t``; the face stretches by ``1 + kappa t / 2``.
+    footprint_mm
+        Diameter (along x) of the spot whose reflectance a sample averages;
+        on a bent cloth the normal turns by ``kappa * footprint`` across it.
+    ior
+        Refractive index of the fibres.
+    warp_specular, weft_specular
+        Weight of the white surface reflection (1 = Fresnel).
+    warp_gloss_deg, weft_gloss_deg
+        Width ``gamma_s`` of the surface-reflection lobe.
+    warp_sheen_deg, weft_sheen_deg
+        Width ``gamma_v`` of the coloured forward-scattering lobe.
+    warp_isotropic, weft_isotropic
+        ``k_d`` in [0, 1]: isotropic fraction of the volume scattering.
+    texels
+        Height-field texels along the longer side of the repeat.
+    rays
+        View rays per sample (integration points over the repeat).
+    tilt_samples
+        Patches across the footprint on a bent cloth.
+    """
+
+    name: str = "cloth"
+    weave: str | tuple[tuple[int, ...], ...] = "plain"
+    warp_along: str = "y"
+    warp_rgb: RGB = (0.5, 0.5, 0.5)
+    weft_rgb: RGB = (0.5, 0.5, 0.5)
+    backing_rgb: RGB = (0.1, 0.1, 0.1)
+    warp_pitch_mm: float = 0.3
+    weft_pitch_mm: float = 0.3
+    warp_width_mm: float = 0.3
+    weft_width_mm: float = 0.3
+    warp_height_mm: float = 0.15
+    weft_height_mm: float = 0.15
+    crimp_share_warp: float = 0.5
+    warp_twist_deg: float = 15.0
+    weft_twist_deg: float = 15.0
+    crimp_transition: float = 1.0
+    thickness_mm: float = 0.5
+    footprint_mm: float = 1.0
+    ior: float = 1.53
+    warp_specular: float = 1.0
+    weft_specular: float = 1.0
+    warp_gloss_deg: float = 10.0
+    weft_gloss_deg: float = 10.0
+    warp_sheen_deg: float = 20.0
+    weft_sheen_deg: float = 20.0
+    warp_isotropic: float = 0.7
+    weft_isotropic: float = 0.7
+    texels: int = 128
+    rays: int = 1597
+    tilt_samples: int = 5
+
+    def __post_init__(self) -> None:
+        w = self.weave
+        if not isinstance(w, str):
+            m = weave_matrix(w)
+            object.__setattr__(self, "weave", tuple(tuple(int(x) for x in row) for row in m))
+        else:
+            weave_matrix(w)
+        if self.warp_along not in ("x", "y"):
+            raise ValueError(f"warp_along: expected 'x' or 'y', got {self.warp_along!r}")
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError("name: must be a non-empty string")
+        for f in ("warp_rgb", "weft_rgb", "backing_rgb"):
+            v = getattr(self, f)
+            try:
+                a = np.asarray(v, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise ValueError(f"{f}: expected three numbers, got {v!r}") from None
+            if a.shape != (3,) or not np.all(np.isfinite(a)) or np.any(a < 0) or np.any(a > 1):
+                raise ValueError(f"{f}: expected three albedos in [0, 1], got {v!r}")
+            object.__setattr__(self, f, tuple(float(x) for x in a))
+        positive = (
+            "warp_pitch_mm", "weft_pitch_mm", "warp_width_mm", "weft_width_mm",
+            "warp_height_mm", "weft_height_mm", "thickness_mm", "ior",
+            "warp_gloss_deg", "weft_gloss_deg", "warp_sheen_deg", "weft_sheen_deg",
+        )
+        for f in positive:
+            v = getattr(self, f)
+            if not _is_real(v) or not v > 0:
+                raise ValueError(f"{f}: must be a positive number, got {v!r}")
+            object.__setattr__(self, f, float(v))
+        for f in ("crimp_share_warp", "warp_isotropic", "weft_isotropic"):
+            v = getattr(self, f)
+            if not _is_real(v) or not 0 <= v <= 1:
+                raise ValueError(f"{f}: must lie in [0, 1], got {v!r}")
+            object.__setattr__(self, f, float(v))
+        v = self.crimp_transition
+        if not _is_real(v) or not 0.05 <= v <= 1:
+            raise ValueError(f"crimp_transition: must lie in [0.05, 1], got {v!r}")
+        object.__setattr__(self, "crimp_transition", float(v))
+        for f in ("footprint_mm", "warp_specular", "weft_specular"):
+            v = getattr(self, f)
+            if not _is_real(v) or not v >= 0:
+                raise ValueError(f"{f}: must be a non-negative number, got {v!r}")
+            object.__setattr__(self, f, float(v))
+        for f in ("warp_twist_deg", "weft_twist_deg"):
+            v = getattr(self, f)
+            if not _is_real(v) or not -60 <= v <= 60:
+                raise ValueError(f"{f}: must lie in [-60, 60] degrees, got {v!r}")
+            object.__setattr__(self, f, float(v))
+        if self.ior < 1.0:
+            raise ValueError(f"ior: must be >= 1, got {self.ior!r}")
+        for f in ("warp_gloss_deg", "weft_gloss_deg", "warp_sheen_deg", "weft_sheen_deg"):
+            if getattr(self, f) > 90:
+                raise ValueError(f"{f}: must be at most 90 degrees, got {getattr(self, f)!r}")
+        for f, lo in (("texels", 8), ("rays", 16), ("tilt_samples", 1)):
+            v = getattr(self, f)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
+                raise ValueError(f"{f}: must be an integer >= {lo}, got {v!r}")
+            object.__setattr__(self, f, int(v))
+
+    @classmethod
+    def names(cls) -> list[str]:
+        """Valid parameter names."""
+        return [f.name for f in fields(cls)]
+
+    def replace(self, **changes: Any) -> "ClothParams":
+        """A copy with some parameters changed (validated).
+
+        Raises
+        ------
+        ValueError
+            For an unknown parameter name (the message lists the valid ones)
+            or an invalid value.
+        """
+        unknown = sorted(set(changes) - set(self.names()))
+        if unknown:
+            raise ValueError(
+                f"unknown cloth parameter(s) {', '.join(map(repr, unknown))}; "
+                f"valid names: {', '.join(self.names())}"
+            )
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-friendly parameters (tuples become lists)."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, tuple):
+                v = [list(x) if isinstance(x, tuple) else x for x in v]
+            out[f.name] = v
+        return out
+
+    @classmethod
+    def parse_value(cls, name: str, text: str) -> Any:
+        """Convert a command-line value ``text`` for parameter ``name``.
+
+        Colours are ``r,g,b``; a weave is a registered name or rows of 0/1
+        separated by commas or semicolons (``1110,0111,1011,1101``).
+
+        Raises
+        ------
+        ValueError
+            For an unknown name (listing the valid ones) or unreadable text.
+        """
+        if name not in cls.names():
+            raise ValueError(
+                f"unknown cloth parameter {name!r}; valid names: {', '.join(cls.names())}"
+            )
+        default = next(f.default for f in fields(cls) if f.name == name)
+        t = text.strip()
+        try:
+            if name == "weave":
+                if t.replace(",", "").replace(";", "").replace(" ", "").isdigit():
+                    rows = [r.strip() for r in t.replace(";", ",").split(",") if r.strip()]
+                    return tuple(tuple(int(c) for c in r) for r in rows)
+                return t
+            if isinstance(default, tuple):
+                return tuple(float(x) for x in t.split(","))
+            if isinstance(default, bool):
+                raise ValueError
+            if isinstance(default, int):
+                return int(t)
+            if isinstance(default, float):
+                return float(t)
+            return t
+        except ValueError:
+            raise ValueError(f"{name}: cannot read {text!r} as a value of this parameter") from None
+
+    @property
+    def weave_matrix(self) -> NDArray[np.int8]:
+        """The weave repeat as a matrix ``(n_weft, n_warp)``."""
+        return weave_matrix(self.weave if isinstance(self.weave, str) else np.array(self.weave))
+
+    def yarns(self) -> tuple[YarnGeometry, YarnGeometry]:
+        """Warp and weft geometry (crimp split by :attr:`crimp_share_warp`)."""
+        total = 0.5 * (self.warp_height_mm + self.weft_height_mm)
+        warp = YarnGeometry(
+            pitch_mm=self.warp_pitch_mm,
+            width_mm=self.warp_width_mm,
+            height_mm=self.warp_height_mm,
+            crimp_mm=self.crimp_share_warp * total,
+            twist_deg=self.warp_twist_deg,
+            transition=self.crimp_transition,
+        )
+        weft = YarnGeometry(
+            pitch_mm=self.weft_pitch_mm,
+            width_mm=self.weft_width_mm,
+            height_mm=self.weft_height_mm,
+            crimp_mm=(1.0 - self.crimp_share_warp) * total,
+            twist_deg=self.weft_twist_deg,
+            transition=self.crimp_transition,
+        )
+        return warp, weft
+
+
+def _is_real(v: Any) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _dirs(theta_deg: NDArray[np.float64], phi_deg: NDArray[np.float64]) -> NDArray[np.float64]:
+    t = np.radians(theta_deg)
+    p = np.radians(phi_deg)
+    s = np.sin(t)
+    return np.stack([s * np.cos(p), s * np.sin(p), np.cos(t)], axis=-1)
+
+
+class ClothModel:
+    """Reflectance of a woven cloth as a function of directions and curvature.
+
+    Parameters
+    ----------
+    params
+        The cloth (:class:`ClothParams`).
+
+    Examples
+    --------
+    >>> from cdbrdf.synth import presets
+    >>> m = presets.model("denim")
+    >>> m.evaluate(30.0, 0.0, 30.0, 180.0, kappa=0.22).shape
+    (3,)
+    """
+
+    def __init__(self, params: ClothParams) -> None:
+        if not isinstance(params, ClothParams):
+            raise TypeError(f"params: expected ClothParams, got {type(params).__name__}")
+        self.params = params
+        p = params
+        warp = FibreLobes(
+            p.warp_rgb, specular=p.warp_specular, gloss_width_deg=p.warp_gloss_deg,
+            sheen_width_deg=p.warp_sheen_deg, isotropic=p.warp_isotropic, ior=p.ior,
+        )
+        weft = FibreLobes(
+            p.weft_rgb, specular=p.weft_specular, gloss_width_deg=p.weft_gloss_deg,
+            sheen_width_deg=p.weft_sheen_deg, isotropic=p.weft_isotropic, ior=p.ior,
+        )
+        rows = np.stack([warp.row, weft.row, FibreLobes.lambertian(p.backing_rgb)])
+        rows.setflags(write=False)
+        self._kernel_params = rows
+        self._weave = p.weave_matrix
+        self._hf_cache: dict[float, Heightfield] = {}
+
+    # -- geometry -------------------------------------------------------------------
+    def stretch(self, kappa: float) -> float:
+        """Face stretch ``1 + kappa t / 2`` along x."""
+        return face_stretch(kappa, self.params.thickness_mm)
+
+    def heightfield(self, kappa: float = 0.0) -> Heightfield:
+        """The micro-geometry of one repeat on a cylinder of curvature ``kappa``."""
+        k = float(kappa)
+        hf = self._hf_cache.get(k)
+        if hf is None:
+            warp, weft = self.params.yarns()
+            hf = build_heightfield(
+                self._weave, warp, weft, warp_along=self.params.warp_along,
+                stretch_x=self.stretch(k), texels=self.params.texels,
+            )
+            if len(self._hf_cache) > 16:
+                self._hf_cache.clear()
+            self._hf_cache[k] = hf
+        return hf
+
+    def _points(self, hf: Heightfield) -> NDArray[np.float64]:
+        n = self.params.rays
+        i = np.arange(n, dtype=np.float64)
+        lx, ly = hf.size_mm
+        return np.stack([(i + 0.5) / n * lx, np.mod(0.5 + i * _GOLDEN, 1.0) * ly], axis=-1)
+
+    def tilts_rad(self, kappa: float) -> NDArray[np.float64]:
+        """Macro-normal tilt of each footprint patch (midpoints across the spot)."""
+        k = int(self.params.tilt_samples)
+        if kappa == 0.0 or self.params.footprint_mm == 0.0 or k == 1:
+            return np.zeros(1)
+        x = ((np.arange(k) + 0.5) / k - 0.5) * self.params.footprint_mm
+        return kappa * x
+
+    # -- evaluation -------------------------------------------------------------------
+    def _flat(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
+        """``mean_rays f_p (n_p . l)+ V``, i.e. f * cos(theta_l), flat frame; (n, 3)."""
+        out = np.zeros((v.shape[0], 3))
+        if v.shape[0] == 0:
+            return out
+        hf = self.heightfield(kappa)
+        ny, nx = hf.shape
+        dy = hf.size_mm[1] / ny
+        xmap = np.ascontiguousarray(hf.xmap)
+        xs = np.ascontiguousarray(hf.x_mm)
+        # Half the typical texel: the gap texels may be narrower (a thin gap
+        # can be stepped over by an oblique ray, as it is hidden then anyway).
+        step = 0.5 * min(float(np.median(hf.texel_width_mm)), dy)
+        uv, inv_v = np.unique(v, axis=0, return_inverse=True)
+        ul, inv_l = np.unique(l, axis=0, return_inverse=True)
+        inv_v = inv_v.reshape(-1)
+        inv_l = inv_l.reshape(-1)
+        H = np.ascontiguousarray(hf.height)
+        hits = _trace.trace_views(H, xmap, dy, step, np.ascontiguousarray(uv), self._points(hf))
+        needed = np.zeros(ny * nx, dtype=np.uint8)
+        needed[np.unique(hits)] = 1
+        normal = np.ascontiguousarray(hf.normal.reshape(-1, 3))
+        tangent = np.ascontiguousarray(hf.tangent.reshape(-1, 3))
+        kind = np.ascontiguousarray(hf.kind.reshape(-1))
+        order = np.argsort(inv_l, kind="stable")
+        for c0 in range(0, ul.shape[0], _LIGHT_CHUNK):
+            c1 = min(c0 + _LIGHT_CHUNK, ul.shape[0])
+            sm = _trace.shadow_maps(H, xs, xmap, dy, step, np.ascontiguousarray(ul[c0:c1]), needed)
+            row = np.full(ul.shape[0], -1, dtype=np.int64)
+            row[c0:c1] = np.arange(c1 - c0)
+            sel = order[(inv_l[order] >= c0) & (inv_l[order] < c1)]
+            if sel.size == 0:
+                continue
+            out[sel] = _trace.integrate(
+                inv_v[sel].astype(np.int64), inv_l[sel].astype(np.int64), uv, ul, hits, sm, row,
+                normal, tangent, kind, self._kernel_params,
+            )
+        return out
+
+    def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
+        """BRDF (n, 3) for unit direction pairs at one curvature."""
+        tilts = self.tilts_rad(kappa)
+        n = v.shape[0]
+        num = np.zeros((n, 3))
+        den = np.zeros(n)
+        vs, ls, idx, wv = [], [], [], []
+        for a in tilts:
+            ca, sa = math.cos(a), math.sin(a)
+            # Patch frame: normal (sin a, 0, cos a), tangent (cos a, 0, -sin a).
+            vp = np.stack([v[:, 0] * ca - v[:, 2] * sa, v[:, 1], v[:, 0] * sa + v[:, 2] * ca], -1)
+            lp = np.stack([l[:, 0] * ca - l[:, 2] * sa, l[:, 1], l[:, 0] * sa + l[:, 2] * ca], -1)
+            cv = np.maximum(vp[:, 2], 0.0)
+            den += cv
+            ok = (vp[:, 2] > 0) & (lp[:, 2] > 0) & (l[:, 2] > 0)
+            vs.append(vp[ok])
+            ls.append(lp[ok])
+            idx.append(np.flatnonzero(ok))
+            wv.append(cv[ok])
+        g = self._flat(np.concatenate(vs), np.concatenate(ls), kappa)
+        start = 0
+        for i, w in zip(idx, wv):
+            num[i] += w[:, None] * g[start : start + i.size]
+            start += i.size
+        denom = den * l[:, 2]
+        good = denom > 1e-12
+        out = np.zeros((n, 3))
+        out[good] = num[good] / denom[good, None]
+        return out
+
+    def evaluate(
+        self,
+        theta_v: ArrayLike,
+        phi_v: ArrayLike,
+        theta_l: ArrayLike,
+        phi_l: ArrayLike,
+        kappa: ArrayLike = 0.0,
+    ) -> NDArray[np.float64]:
+        """The BRDF (sr^-1, RGB) at any directions and curvatures.
+
+        Parameters
+        ----------
+        theta_v, phi_v, theta_l, phi_l
+            View and light elevation in [0, 90] and azimuth, degrees
+            (broadcast together).
+        kappa
+            Curvature in mm^-1 (> 0 convex), ``|kappa| < 1 / thickness``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``broadcast shape + (3,)``, float64, >= 0.
+
+        Raises
+        ------
+        QueryError
+            For an elevation outside [0, 90] degrees or a non-finite argument.
+        ValueError
+            For a curvature tighter than the cloth's thickness allows.
+        """
+        arrs = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (theta_v, phi_v, theta_l, phi_l, kappa)))
+        shape = arrs[0].shape
+        tv, pv, tl, pl, kk = (a.reshape(-1) for a in arrs)
+        for name, a in (("theta_v", tv), ("phi_v", pv), ("theta_l", tl), ("phi_l", pl), ("kappa", kk)):
+            if not np.all(np.isfinite(a)):
+                raise QueryError(f"{name}: must be finite")
+        for name, a in (("theta_v", tv), ("theta_l", tl)):
+            if np.any((a < 0) | (a > 90)):
+                raise QueryError(f"{name}: elevations must lie in [0, 90] degrees")
+        # Azimuths reduced to [0, 360) first: equal directions give equal values.
+        v = _dirs(tv, np.mod(pv, 360.0))
+        l = _dirs(tl, np.mod(pl, 360.0))
+        out = np.zeros((tv.size, 3))
+        for k in np.unique(kk):
+            sel = np.flatnonzero(kk == k)
+            out[sel] = self._pairs(v[sel], l[sel], float(k))
+        return out.reshape(shape + (3,))
+
+    def tabulate(
+        self,
+        grid: Grid | None = None,
+        *,
+        progress: Callable[[int, int], None] | None = None,
+    ) -> CDBRDF:
+        """Sample the model on a grid into a :class:`cdbrdf.CDBRDF` (float32).
+
+        Parameters
+        ----------
+        grid
+            The sample axes; default :meth:`cdbrdf.Grid.paper`.
+        progress
+            Called as ``progress(done, total)`` after each curvature slice.
+
+        Returns
+        -------
+        CDBRDF
+            ``quantity = "brdf"``, every sample marked measured (computed),
+            attrs with the material name, the model and all its parameters.
+        """
+        g = Grid.paper() if grid is None else grid
+        if not isinstance(g, Grid):
+            raise TypeError(f"grid: expected cdbrdf.Grid, got {type(g).__name__}")
+        nk = g.kappa.size
+        PL, TL, PV, TV = np.meshgrid(g.phi_l, g.theta_l, g.phi_v, g.theta_v, indexing="ij")
+        v = _dirs(TV.reshape(-1), PV.reshape(-1))
+        l = _dirs(TL.reshape(-1), PL.reshape(-1))
+        values = np.empty(g.shape + (3,), dtype=np.float32)
+        for i, k in enumerate(g.kappa):
+            log.debug("%s: tabulating kappa = %g (%d samples)", self.params.name, k, v.shape[0])
+            vals = self._pairs(v, l, float(k))
+            values[i] = vals.reshape(g.shape[1:] + (3,)).astype(np.float32)
+            if progress is not None:
+                progress(i + 1, nk)
+        return CDBRDF(values, **g.axes(), attrs=self.attrs())
+
+    def attrs(self) -> dict[str, Any]:
+        """Table metadata: quantity, material, model and parameters (provenance)."""
+        return {
+            "quantity": "brdf",
+            "material": self.params.name,
+            "model": MODEL_NAME,
+            "model_version": MODEL_VERSION,
+            "provenance": {
+                "kind": "synthesised",
+                "model": MODEL_NAME,
+                "model_version": MODEL_VERSION,
+                "parameters": self.params.to_dict(),
+                "weave_matrix": self.params.weave_matrix.tolist(),
+                "references": [
+                    "Sadeghi et al. 2013, A practical microcylinder appearance model for cloth rendering",
+                    "Irawan & Marschner 2012, Specular reflection from woven cloth",
+                ],
+            },
+        }
+
+    def albedo(
+        self,
+        theta_v: ArrayLike,
+        phi_v: ArrayLike,
+        kappa: float = 0.0,
+        *,
+        n_theta: int = 24,
+        n_phi: int = 48,
+    ) -> NDArray[np.float64]:
+        """Directional albedo ``int f cos(theta_l) dw_l`` (midpoint rule), RGB.
+
+        Parameters
+        ----------
+        theta_v, phi_v
+            View directions (1-D arrays of equal length or scalars), degrees.
+        kappa
+            Curvature, mm^-1.
+        n_theta, n_phi
+            Quadrature nodes over the light hemisphere.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n_views, 3)``.
+        """
+        tv, pv = np.broadcast_arrays(np.atleast_1d(np.asarray(theta_v, float)), np.atleast_1d(np.asarray(phi_v, float)))
+        dt = 90.0 / n_theta
+        dp = 360.0 / n_phi
+        tl = (np.arange(n_theta) + 0.5) * dt
+        pl = (np.arange(n_phi) + 0.5) * dp
+        TL, PL = np.meshgrid(tl, pl, indexing="ij")
+        w = np.cos(np.radians(TL)) * np.sin(np.radians(TL)) * np.radians(dt) * np.radians(dp)
+        f = self.evaluate(tv[:, None, None], pv[:, None, None], TL[None], PL[None], kappa)
+        return np.sum(f * w[None, ..., None], axis=(1, 2))
