@@ -22,6 +22,9 @@ COMMANDS: tuple[str, ...] = (
     "info",
     "mosaic",
     "synth",
+    "plan",
+    "simulate-capture",
+    "measure",
     "curvature",
     "render",
 )

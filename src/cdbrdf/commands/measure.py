@@ -1,0 +1,74 @@
+"""``cdbrdf measure CAPTURE_DIR -o FILE``: photographs to a CDBRDF file."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+__all__ = ["register", "run"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "measure",
+        help="measure a capture folder (capture.csv + photographs) into a CDBRDF file",
+        description="For every sample, the mean of the N x N patch at the stand's centre, "
+        "decoded to linear, saturated pixels excluded, brackets merged, dark frame subtracted, "
+        "divided by cos(theta_l), scaled by the white reference (quantity brdf; else relative). "
+        "Invalid samples (hidden by the stand, missing, unreadable, saturated) are filled from "
+        "the nearest measured direction at the same curvature. An interrupted run resumes "
+        "from FILE.ckpt. See docs/capture.md.",
+    )
+    p.add_argument("capture", metavar="CAPTURE_DIR", help="capture folder with capture.csv")
+    p.add_argument("-o", "--output", required=True, metavar="FILE", help="CDBRDF file to write (.h5)")
+    p.add_argument("--patch", type=int, default=7, help="patch size N in pixels (7)")
+    p.add_argument("--linear", action="store_true", help="integer images hold linear values, not sRGB")
+    p.add_argument("--skip-bad", action="store_true",
+                   help="fill the samples of missing or unreadable photographs instead of stopping")
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="Dask scheduler address (tcp://host:port) or threads/processes/synchronous; "
+                   "default: local threads")
+    p.add_argument("--white-albedo", type=float, default=None,
+                   help="albedo of the white reference (default: stands.json's, else 1)")
+    p.add_argument("--material", default=None, help="material name written to the file")
+    p.add_argument("--workers", type=int, default=None, help="local threads/processes")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..measure.pipeline import measure
+
+    out = Path(args.output)
+    if out.exists() and not args.force:
+        raise FileExistsError(f"{out}: already exists (use --force to overwrite)")
+    bar = None
+    if not args.quiet:
+        from tqdm import tqdm
+
+        bar = tqdm(total=0, unit="img", desc="measure", leave=False, mininterval=0.5)
+
+    def progress(done: int, total: int) -> None:
+        if bar is not None:
+            bar.total = total
+            bar.update(done - bar.n)  # tqdm redraws at most every mininterval
+
+    try:
+        table, report = measure(
+            args.capture, out, patch=args.patch, linear=args.linear, skip_bad=args.skip_bad,
+            scheduler=args.scheduler, white_albedo=args.white_albedo, material=args.material,
+            num_workers=args.workers, progress=progress,
+        )
+    except KeyboardInterrupt:
+        import sys
+
+        print(f"cdbrdf measure: progress kept in {out}.ckpt; run the same command again to resume",
+              file=sys.stderr)
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+    if not args.quiet:
+        print(report.summary())
+        print(f"wrote {out}")
+    return 0

@@ -1,0 +1,109 @@
+"""``cdbrdf plan -o DIR``: a capture plan (capture.csv + stands.json) and its hidden regions."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["register", "run", "plot_hidden"]
+
+
+def _floats(text: str) -> list[float]:
+    try:
+        return [float(x) for x in text.replace(" ", "").split(",") if x]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "plan",
+        help="write a capture plan (capture.csv, stands.json) marking directions the stands hide",
+        description="Write a capture.csv template and a stands.json for a grid and a set of "
+        "stands (the paper's by default): one row per photograph, each marked measurable or "
+        "hidden by its stand (camera or light blocked by a concave trough or its walls), "
+        "plus white-reference rows, a summary and a picture of the hidden regions "
+        "(plan.png, Fig. 7 layout). See docs/capture.md.",
+    )
+    p.add_argument("-o", "--output", required=True, help="capture folder to create")
+    p.add_argument("--kappa", type=_floats, default=None,
+                   help="stand curvatures in 1/mm, comma-separated (default -0.22,-0.13,0,0.13,0.22)")
+    p.add_argument("--theta-step", type=float, default=15.0, help="elevation step, degrees (15)")
+    p.add_argument("--theta-max", type=float, default=75.0, help="largest elevation, degrees (75)")
+    p.add_argument("--phi-step", type=float, default=30.0, help="azimuth step, degrees (30)")
+    p.add_argument("--face-width", type=float, default=None, help="fabric face width (arc), mm (6)")
+    p.add_argument("--wall-height", type=float, default=None,
+                   help="concave stands: wall height above the face's edges, mm (1)")
+    p.add_argument("--pixel-mm", type=float, default=0.0,
+                   help="size of a camera pixel at the stand, mm: hidden marks then cover the "
+                   "whole patch, not only its centre (default 0: centre only)")
+    p.add_argument("--patch", type=int, default=7, help="patch size N for --pixel-mm (7)")
+    p.add_argument("--format", default="png", choices=("png", "tif", "exr"), help="image format (png)")
+    p.add_argument("--no-white", action="store_true", help="no white-reference rows")
+    p.add_argument("--no-picture", action="store_true", help="do not write plan.png")
+    p.add_argument("--force", action="store_true", help="overwrite an existing capture.csv")
+    p.set_defaults(func=run)
+
+
+def plot_hidden(grid, hidden, path) -> None:  # noqa: ANN001
+    """Save a picture of the hidden samples in the Fig. 7 layout (one panel per kappa)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+
+    nk = grid.kappa.size
+    k, pl, tl, pv, tv = hidden.shape
+    mos = hidden.reshape(k, pl * tl, pv * tv)
+    fig, axes = plt.subplots(1, nk, figsize=(3.2 * nk, 3.6), squeeze=False)
+    cmap = ListedColormap(["#3b6ea8", "#f2f2f2", "#d98c3a", "#a03030"])
+    for i, ax in enumerate(axes[0]):
+        ax.imshow(mos[i], cmap=cmap, vmin=-0.5, vmax=3.5, interpolation="nearest")
+        ax.set_title(f"kappa = {grid.kappa[i]:g} 1/mm\n{int((mos[i] > 0).sum())} hidden", fontsize=9)
+        ax.set_xlabel("view (azimuth groups, elevation inside)", fontsize=7)
+        ax.set_ylabel("light", fontsize=7)
+        ax.set_xticks(np.arange(pv) * tv - 0.5, [f"{p:g}" for p in grid.phi_v], fontsize=5)
+        ax.set_yticks(np.arange(pl) * tl - 0.5, [f"{p:g}" for p in grid.phi_l], fontsize=5)
+    fig.suptitle("hidden by the stand: white = view, orange = light, red = both", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..measure.plan import (
+        CAPTURE_FILE, DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM, Stand, hidden_mask, write_plan,
+    )
+    from ..table import PAPER_KAPPA, Grid
+
+    out = Path(args.output)
+    if (out / CAPTURE_FILE).exists() and not args.force:
+        raise FileExistsError(f"{out / CAPTURE_FILE}: already exists (use --force to overwrite)")
+    kappa = PAPER_KAPPA if args.kappa is None else np.array(sorted(args.kappa))
+    grid = Grid.regular(theta_step_deg=args.theta_step, phi_step_deg=args.phi_step,
+                        theta_max_deg=args.theta_max, kappa=kappa)
+    stands = [
+        Stand(kappa=float(k),
+              face_width_mm=DEFAULT_FACE_WIDTH_MM if args.face_width is None else args.face_width,
+              wall_height_mm=DEFAULT_WALL_HEIGHT_MM if args.wall_height is None else args.wall_height)
+        for k in grid.kappa
+    ]
+    if args.pixel_mm < 0:
+        raise ValueError(f"--pixel-mm: must be non-negative, got {args.pixel_mm:g}")
+    rows = write_plan(out, grid, stands, extension=args.format, white=not args.no_white,
+                      pixel_mm=args.pixel_mm, patch_px=args.patch)
+    hid = hidden_mask(grid, stands, pixel_mm=args.pixel_mm, patch_px=args.patch)
+    if not args.no_picture:
+        plot_hidden(grid, hid, out / "plan.png")
+    if not args.quiet:
+        n_s = sum(1 for r in rows if r["kind"] == "sample")
+        n_w = len(rows) - n_s
+        print(f"{out / CAPTURE_FILE}: {len(rows)} photographs ({n_s} samples, {n_w} white references)")
+        for i, k in enumerate(grid.kappa):
+            h = hid[i]
+            print(f"  kappa {k:+g} 1/mm: {int((h > 0).sum())} of {h.size} hidden "
+                  f"(view {int((h & 1).astype(bool).sum())}, light {int((h & 2).astype(bool).sum())})")
+    return 0

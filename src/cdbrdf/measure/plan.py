@@ -1,0 +1,349 @@
+"""Capture plans and stand geometry: which directions a stand hides from its centre.
+
+A stand (``docs/capture.md``) carries the fabric on a cylindrical face whose
+axis is the local y axis; x is the bending direction, z the normal at the
+stand's centre (the measured point, at the origin).
+
+- ``kappa > 0`` (convex): the fabric lies on the outside of a cylinder of
+  radius ``R = 1/kappa``. The body lies entirely below the tangent plane at
+  the centre, so it hides no direction above it.
+- ``kappa = 0``: a flat face; nothing is hidden.
+- ``kappa < 0`` (concave): the fabric lines a trough of radius ``R = 1/|kappa|``
+  over an arc of length ``face_width_mm`` (half-angle ``alpha = w / 2R``,
+  below 90 degrees), whose edges, at ``x_e = +-R sin(alpha)`` and height
+  ``z_e = R (1 - cos(alpha))``, carry vertical white walls of height
+  ``wall_height_mm``. The stand is long along y, so only the direction's
+  projection on the x-z plane matters. The trough's profile is convex seen
+  from the centre, so a direction ``(dx, dy, dz)`` is hidden (the ray from
+  the centre meets the face or the wall) exactly when
+  ``dz < |dx| (z_e + h) / x_e``: when its elevation in the x-z plane lies
+  below the wall's top edge. Directions on the boundary count as visible.
+
+The measurement averages an N x N patch, not a point: with the camera's
+pixel size at the stand (``pixel_mm`` in ``stands.json``) the test is made
+from the point of the face nearest to the wall the direction points to,
+``margin = (N/2) sqrt(2) pixel_mm / cos(theta_v)`` from the centre
+(:func:`footprint_mm`), so that no pixel of the patch sees the wall or lies
+in its shadow.
+
+A hidden *view* means the camera sees the trough or the white wall instead
+of the centre; a hidden *light* means the centre is in shadow. Both make the
+photograph useless for that sample (the white lines of the paper's Fig. 7b).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import asdict, dataclass
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..frames import direction_from_angles
+from ..table import Grid
+
+__all__ = [
+    "Stand",
+    "default_stand",
+    "hidden_mask",
+    "footprint_mm",
+    "plan_rows",
+    "write_plan",
+    "read_stands",
+    "write_stands",
+    "STAND_FILE",
+    "CAPTURE_FILE",
+    "PLAN_COLUMNS",
+    "DEFAULT_FACE_WIDTH_MM",
+    "DEFAULT_WALL_HEIGHT_MM",
+    "DEFAULT_LENGTH_MM",
+]
+
+#: Name of the capture table in a capture folder.
+CAPTURE_FILE = "capture.csv"
+#: Name of the optional stand geometry file beside it.
+STAND_FILE = "stands.json"
+#: Columns written by :func:`write_plan`.
+PLAN_COLUMNS = ("file", "kappa", "theta_v", "phi_v", "theta_l", "phi_l", "exposure", "kind", "hidden")
+
+DEFAULT_FACE_WIDTH_MM = 6.0
+DEFAULT_WALL_HEIGHT_MM = 1.0
+DEFAULT_LENGTH_MM = 40.0
+_KAPPA_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Stand:
+    """One measurement stand.
+
+    Parameters
+    ----------
+    kappa
+        Curvature of the face in mm^-1 (> 0 convex cylinder, < 0 concave trough).
+    face_width_mm
+        Arc length of the fabric face across the axis (x), mm.
+    wall_height_mm
+        Concave stands: height of the white walls above the face's edges, mm.
+    length_mm
+        Length along the axis (y), mm (used by the simulated rig; the
+        occlusion test treats the stand as long).
+    """
+
+    kappa: float
+    face_width_mm: float = DEFAULT_FACE_WIDTH_MM
+    wall_height_mm: float = DEFAULT_WALL_HEIGHT_MM
+    length_mm: float = DEFAULT_LENGTH_MM
+
+    def __post_init__(self) -> None:
+        for name in ("kappa", "face_width_mm", "wall_height_mm", "length_mm"):
+            v = getattr(self, name)
+            try:
+                v = float(v)
+            except (TypeError, ValueError):
+                raise ValueError(f"stand {name}: expected a number, got {v!r}") from None
+            if not math.isfinite(v):
+                raise ValueError(f"stand {name}: must be finite, got {v!r}")
+            object.__setattr__(self, name, v)
+        if self.face_width_mm <= 0 or self.length_mm <= 0 or self.wall_height_mm < 0:
+            raise ValueError(
+                f"stand kappa={self.kappa:g}: face_width_mm and length_mm must be positive "
+                "and wall_height_mm non-negative"
+            )
+        if self.kappa < 0 and self.half_angle_rad >= math.pi / 2:
+            raise ValueError(
+                f"stand kappa={self.kappa:g}: a face {self.face_width_mm:g} mm wide spans "
+                f"{math.degrees(2 * self.half_angle_rad):.1f} degrees of the trough; it must "
+                f"stay below 180 (face_width_mm < {math.pi * self.radius_mm:.3g})"
+            )
+
+    @property
+    def radius_mm(self) -> float:
+        """Radius of the face (``inf`` for a flat stand)."""
+        return math.inf if self.kappa == 0 else 1.0 / abs(self.kappa)
+
+    @property
+    def half_angle_rad(self) -> float:
+        """Half the angle the face spans on its cylinder (0 for a flat stand)."""
+        return 0.0 if self.kappa == 0 else 0.5 * self.face_width_mm / self.radius_mm
+
+    @property
+    def edge_mm(self) -> tuple[float, float]:
+        """``(x_e, z_e)``: the face's edge in the x-z plane (x_e > 0)."""
+        if self.kappa == 0:
+            return 0.5 * self.face_width_mm, 0.0
+        r, a = self.radius_mm, self.half_angle_rad
+        z = r * (1 - math.cos(a))
+        return r * math.sin(a), (z if self.kappa < 0 else -z)
+
+    def horizon_slope(self, margin_mm: float = 0.0) -> float:
+        """``tan`` of the elevation (in the x-z plane) below which directions are hidden.
+
+        Seen from the point of the face ``margin_mm`` (arc length) from the
+        centre towards the wall the direction points to: the worst point of
+        a patch that reaches ``margin_mm`` from the centre. 0 for stands that
+        hide nothing (convex and flat); ``inf`` when the margin reaches the
+        face's edge.
+        """
+        if self.kappa >= 0:
+            return 0.0
+        x_e, z_e = self.edge_mm
+        r = self.radius_mm
+        m = min(max(float(margin_mm), 0.0), 0.5 * self.face_width_mm)
+        px, pz = r * math.sin(m / r), r * (1.0 - math.cos(m / r))
+        if x_e - px <= 1e-12:
+            return math.inf
+        return (z_e + self.wall_height_mm - pz) / (x_e - px)
+
+    def hides(self, theta_deg: ArrayLike, phi_deg: ArrayLike, *, margin_mm: float = 0.0) -> NDArray[np.bool_]:
+        """True where the direction ``(theta, phi)`` cannot reach the patch (see module doc).
+
+        ``margin_mm``: the patch's half-extent on the face (0 = the centre only).
+        """
+        d = direction_from_angles(theta_deg, phi_deg)
+        s = self.horizon_slope(margin_mm)
+        if s == 0.0:
+            return np.zeros(d.shape[:-1], dtype=bool)
+        if math.isinf(s):
+            return np.abs(d[..., 0]) > 1e-12
+        return d[..., 2] < np.abs(d[..., 0]) * s - 1e-12
+
+    def to_dict(self) -> dict[str, float]:
+        """The stand as written to ``stands.json``."""
+        return asdict(self)
+
+
+def default_stand(kappa: float) -> Stand:
+    """A stand of the given curvature with the default face width and wall height."""
+    return Stand(kappa=float(kappa))
+
+
+def _stand_for(stands: Mapping[float, Stand] | Sequence[Stand], kappa: float) -> Stand:
+    items = stands.values() if isinstance(stands, Mapping) else stands
+    for s in items:
+        if abs(s.kappa - kappa) <= _KAPPA_TOL:
+            return s
+    raise ValueError(f"no stand is described for kappa = {kappa:g} 1/mm")
+
+
+def footprint_mm(theta_v_deg: ArrayLike, *, pixel_mm: float, patch_px: int) -> NDArray[np.float64]:
+    """Half-extent on the face of an N x N patch seen from elevation ``theta_v``.
+
+    ``(N / 2) * sqrt(2) * pixel_mm / cos(theta_v)``: the half-diagonal of the
+    patch (its orientation in the image is unknown), stretched by the
+    foreshortening of an oblique view. ``pixel_mm`` is the size of one pixel
+    at the stand's centre for a camera along the normal.
+    """
+    c = np.cos(np.radians(np.asarray(theta_v_deg, dtype=np.float64)))
+    return 0.5 * patch_px * math.sqrt(2.0) * float(pixel_mm) / c
+
+
+def hidden_mask(
+    grid: Grid,
+    stands: Mapping[float, Stand] | Sequence[Stand],
+    *,
+    pixel_mm: float = 0.0,
+    patch_px: int = 7,
+) -> NDArray[np.uint8]:
+    """Per sample: 0 visible, 1 view hidden, 2 light hidden, 3 both; shape ``grid.shape``.
+
+    With ``pixel_mm = 0`` only the centre point is tested. Otherwise a sample
+    is hidden when the camera or the light cannot reach any point of the
+    patch: the margin is :func:`footprint_mm` at the sample's view elevation.
+    """
+    out = np.zeros(grid.shape, dtype=np.uint8)
+    for k, kappa in enumerate(grid.kappa):
+        st = _stand_for(stands, float(kappa))
+        for j, tv in enumerate(grid.theta_v):
+            m = float(footprint_mm(tv, pixel_mm=pixel_mm, patch_px=patch_px)) if pixel_mm else 0.0
+            view = st.hides(tv, grid.phi_v, margin_mm=m)  # (n_phi_v,)
+            light = st.hides(grid.theta_l[None, :], grid.phi_l[:, None], margin_mm=m)  # (n_phi_l, n_theta_l)
+            out[k, :, :, :, j] = view[None, None, :].astype(np.uint8) + 2 * light[:, :, None].astype(np.uint8)
+    return out
+
+
+_HIDDEN_NAMES = {0: "", 1: "view", 2: "light", 3: "view+light"}
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def plan_rows(
+    grid: Grid,
+    stands: Sequence[Stand],
+    *,
+    extension: str = "png",
+    white: bool = True,
+    pixel_mm: float = 0.0,
+    patch_px: int = 7,
+) -> list[dict[str, Any]]:
+    """The rows of a capture plan, in table order (kappa, phi_l, theta_l, phi_v, theta_v).
+
+    Each sample row names its photograph ``k<i>/l<theta_l>_<phi_l>_v<theta_v>_<phi_v>.<ext>``
+    and says in ``hidden`` whether (and how) its stand hides it. With
+    ``white`` one white-reference row per light direction follows, with the
+    camera along the normal (``white/l<theta_l>_<phi_l>.<ext>``, blank kappa).
+    """
+    ext = extension.lstrip(".").lower()
+    if f".{ext}" not in (".png", ".tif", ".tiff", ".exr"):
+        raise ValueError(f"extension: {extension!r} is not one of png, tif, tiff, exr")
+    hid = hidden_mask(grid, stands, pixel_mm=pixel_mm, patch_px=patch_px)
+    rows: list[dict[str, Any]] = []
+    for k, kappa in enumerate(grid.kappa):
+        for a, pl in enumerate(grid.phi_l):
+            for b, tl in enumerate(grid.theta_l):
+                for c, pv in enumerate(grid.phi_v):
+                    for d, tv in enumerate(grid.theta_v):
+                        rows.append({
+                            "file": f"k{k}/l{_fmt(tl)}_{_fmt(pl)}_v{_fmt(tv)}_{_fmt(pv)}.{ext}",
+                            "kappa": _fmt(kappa),
+                            "theta_v": _fmt(tv), "phi_v": _fmt(pv),
+                            "theta_l": _fmt(tl), "phi_l": _fmt(pl),
+                            "exposure": "1", "kind": "sample",
+                            "hidden": _HIDDEN_NAMES[int(hid[k, a, b, c, d])],
+                        })
+    if white:
+        for pl in grid.phi_l:
+            for tl in grid.theta_l:
+                rows.append({
+                    "file": f"white/l{_fmt(tl)}_{_fmt(pl)}.{ext}", "kappa": "",
+                    "theta_v": _fmt(grid.theta_v[0]), "phi_v": _fmt(grid.phi_v[0]),
+                    "theta_l": _fmt(tl), "phi_l": _fmt(pl),
+                    "exposure": "1", "kind": "white", "hidden": "",
+                })
+    return rows
+
+
+def write_stands(path: str | PathLike[str], stands: Iterable[Stand], **extra: Any) -> None:
+    """Write ``stands.json``: ``{"stands": [...], ...extra}``."""
+    doc = {"stands": [s.to_dict() for s in stands], **extra}
+    Path(path).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+
+
+def read_stands(path: str | PathLike[str]) -> dict[float, Stand]:
+    """Read a stand file; returns the stands by curvature.
+
+    Raises
+    ------
+    ValueError
+        When the file is not valid JSON or a stand is malformed (names the file).
+    """
+    p = Path(path)
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{p}: not valid JSON ({exc})") from None
+    items = doc.get("stands") if isinstance(doc, dict) else None
+    if not isinstance(items, list) or not items:
+        raise ValueError(f"{p}: expected an object with a non-empty list 'stands'")
+    out: dict[float, Stand] = {}
+    fields = {"kappa", "face_width_mm", "wall_height_mm", "length_mm"}
+    for i, item in enumerate(items):
+        if not isinstance(item, dict) or "kappa" not in item:
+            raise ValueError(f"{p}: stand {i} must be an object with at least 'kappa'")
+        unknown = set(item) - fields
+        if unknown:
+            raise ValueError(
+                f"{p}: stand {i} has unknown keys {sorted(unknown)}; valid: {sorted(fields)}"
+            )
+        try:
+            st = Stand(**item)
+        except ValueError as exc:
+            raise ValueError(f"{p}: {exc}") from None
+        out[st.kappa] = st
+    return out
+
+
+def write_plan(
+    folder: str | PathLike[str],
+    grid: Grid,
+    stands: Sequence[Stand],
+    *,
+    extension: str = "png",
+    white: bool = True,
+    pixel_mm: float = 0.0,
+    patch_px: int = 7,
+) -> list[dict[str, Any]]:
+    """Write ``capture.csv`` and ``stands.json`` into ``folder`` (created if needed).
+
+    ``pixel_mm`` (> 0) is written to ``stands.json`` and makes the hidden
+    marks cover the whole ``patch_px`` patch (:func:`hidden_mask`).
+    Returns the rows written.
+    """
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = plan_rows(grid, stands, extension=extension, white=white, pixel_mm=pixel_mm,
+                     patch_px=patch_px)
+    with open(out / CAPTURE_FILE, "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(PLAN_COLUMNS))
+        w.writeheader()
+        w.writerows(rows)
+    extra = {"pixel_mm": float(pixel_mm)} if pixel_mm else {}
+    write_stands(out / STAND_FILE, stands, **extra)
+    return rows

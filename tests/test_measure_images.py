@@ -1,0 +1,251 @@
+"""Readers of cdbrdf.measure.images: bit depth kept, windows, corrupt files."""
+
+from __future__ import annotations
+
+import zlib
+
+import numpy as np
+import pytest
+
+from cdbrdf.measure.images import (
+    ImageError,
+    image_format,
+    linear_to_srgb,
+    read_image,
+    read_window,
+    srgb_to_linear,
+    write_exr,
+    write_png,
+    write_tiff,
+)
+
+
+@pytest.fixture
+def rgb16():
+    rng = np.random.default_rng(1)
+    return rng.integers(0, 65536, (37, 29, 3), dtype=np.uint16)
+
+
+def test_png16_keeps_16_bits(tmp_path, rgb16):
+    p = tmp_path / "a.png"
+    write_png(p, rgb16)
+    a, info = read_image(p)
+    assert a.dtype == np.uint16 and info.max_code == 65535
+    np.testing.assert_array_equal(a, rgb16)
+    # a reader that reduced to 8 bits would give multiples of 257 only
+    assert np.any(a % 257 != 0)
+
+
+def test_png16_from_pillow_reader_would_lose_bits(tmp_path, rgb16):
+    """Pillow opens 16-bit RGB PNG as 8-bit RGB: the reason for our own decoder."""
+    PIL = pytest.importorskip("PIL.Image")
+    p = tmp_path / "a.png"
+    write_png(p, rgb16)
+    with PIL.open(p) as im:
+        pil = np.asarray(im)
+    assert pil.dtype == np.uint8  # the loss our reader avoids
+    a, _ = read_image(p)
+    np.testing.assert_array_equal(a >> 8, pil)
+
+
+@pytest.mark.parametrize("channels", [1, 2, 3, 4])
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
+def test_png_round_trip_channels(tmp_path, channels, dtype):
+    rng = np.random.default_rng(channels)
+    img = rng.integers(0, np.iinfo(dtype).max + 1, (9, 11, channels)).astype(dtype)
+    p = tmp_path / "c.png"
+    write_png(p, img)
+    a, info = read_image(p)
+    keep = 1 if channels <= 2 else 3
+    assert info.channels == keep
+    np.testing.assert_array_equal(a, img[..., :keep])
+
+
+def test_png_all_filter_types(tmp_path):
+    """A PNG written by Pillow with optimisation uses Sub/Up/Average/Paeth filters."""
+    Image = pytest.importorskip("PIL.Image")
+    rng = np.random.default_rng(3)
+    img = (np.add.outer(np.arange(40), np.arange(30))[..., None] * [1, 2, 3] % 256).astype(np.uint8)
+    img = (img + rng.integers(0, 3, img.shape)).astype(np.uint8)
+    p = tmp_path / "f.png"
+    Image.fromarray(img).save(p, optimize=True)
+    a, _ = read_image(p)
+    np.testing.assert_array_equal(a, img)
+
+
+def test_png_window_decodes_only_needed_rows(tmp_path, rgb16):
+    p = tmp_path / "w.png"
+    write_png(p, rgb16)
+    a, info = read_window(p, (4, 6, 5, 3))
+    np.testing.assert_array_equal(a, rgb16[6:9, 4:9])
+    a, _ = read_window(p, lambda inf: (inf.width - 2, inf.height - 2, 2, 2))
+    np.testing.assert_array_equal(a, rgb16[-2:, -2:])
+
+
+@pytest.mark.parametrize("tile", [None, (16, 16)])
+@pytest.mark.parametrize("compression", [None, "zlib"])
+def test_tiff_window(tmp_path, rgb16, tile, compression):
+    p = tmp_path / "t.tif"
+    write_tiff(p, rgb16, tile=tile, compression=compression)
+    for win in [(0, 0, 29, 37), (3, 5, 7, 7), (20, 30, 9, 7), (15, 14, 3, 4)]:
+        x0, y0, nx, ny = win
+        a, info = read_window(p, win)
+        assert info.max_code == 65535 and not info.linear
+        np.testing.assert_array_equal(a, rgb16[y0 : y0 + ny, x0 : x0 + nx])
+    full, _ = read_image(p)
+    np.testing.assert_array_equal(full, rgb16)
+
+
+def test_tiff_grey_and_float(tmp_path):
+    g = np.arange(12 * 10, dtype=np.uint8).reshape(12, 10)
+    write_tiff(tmp_path / "g.tif", g)
+    a, info = read_window(tmp_path / "g.tif", (2, 3, 4, 5))
+    assert info.channels == 1 and info.max_code == 255
+    np.testing.assert_array_equal(a[..., 0], g[3:8, 2:6])
+    f = np.random.default_rng(0).random((8, 9, 3)).astype(np.float32)
+    write_tiff(tmp_path / "f.tif", f)
+    a, info = read_window(tmp_path / "f.tif", (1, 2, 3, 4))
+    assert info.linear and info.max_code is None
+    np.testing.assert_array_equal(a, f[2:6, 1:4])
+
+
+def test_exr_window(tmp_path):
+    f = np.random.default_rng(2).random((21, 17, 3)).astype(np.float32) * 40
+    p = tmp_path / "e.exr"
+    write_exr(p, f)
+    a, info = read_window(p, (3, 4, 5, 6))
+    assert info.linear and info.max_code is None and (info.width, info.height) == (17, 21)
+    np.testing.assert_array_equal(a, f[4:10, 3:8])
+    full, _ = read_image(p)
+    np.testing.assert_array_equal(full, f)
+
+
+def test_srgb_round_trip_and_known_values():
+    x = np.linspace(0, 1, 1001)
+    np.testing.assert_allclose(srgb_to_linear(linear_to_srgb(x)), x, atol=1e-12)
+    assert srgb_to_linear(0.5) == pytest.approx(0.21404114, rel=1e-6)
+    assert srgb_to_linear(0.04045) == pytest.approx(0.04045 / 12.92)
+
+
+def test_missing_file(tmp_path):
+    for ext in ("png", "tif", "exr"):
+        with pytest.raises(FileNotFoundError, match=f"nope.{ext}"):
+            read_window(tmp_path / f"nope.{ext}", (0, 0, 1, 1))
+
+
+def test_unsupported_extension(tmp_path):
+    with pytest.raises(ImageError, match="unsupported image type '.jpg'"):
+        image_format(tmp_path / "x.jpg")
+
+
+def _corrupt(tmp_path, rgb16):
+    p = tmp_path / "c.png"
+    write_png(p, rgb16)
+    data = bytearray(p.read_bytes())
+    return p, data
+
+
+def test_corrupt_png_crc(tmp_path, rgb16):
+    p, data = _corrupt(tmp_path, rgb16)
+    data[60] ^= 0xFF  # inside the IDAT body
+    p.write_bytes(bytes(data))
+    with pytest.raises(ImageError, match=r"c\.png.*CRC"):
+        read_image(p)
+
+
+def test_truncated_png(tmp_path, rgb16):
+    p, data = _corrupt(tmp_path, rgb16)
+    p.write_bytes(bytes(data[: len(data) // 2]))
+    with pytest.raises(ImageError, match=r"c\.png.*truncated"):
+        read_window(p, (0, 0, 2, 2))
+
+
+def test_png_bad_stream(tmp_path):
+    """Valid chunks around a zlib stream that is not one."""
+    import struct
+
+    def chunk(t, b):
+        return struct.pack(">I", len(b)) + t + b + struct.pack(">I", zlib.crc32(b, zlib.crc32(t)))
+
+    body = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 4, 4, 8, 2, 0, 0, 0))
+    body += chunk(b"IDAT", b"not zlib at all") + chunk(b"IEND", b"")
+    p = tmp_path / "z.png"
+    p.write_bytes(body)
+    with pytest.raises(ImageError, match=r"z\.png.*corrupt PNG data"):
+        read_image(p)
+
+
+def test_garbage_files(tmp_path):
+    for ext in ("png", "tif", "exr"):
+        p = tmp_path / f"g.{ext}"
+        p.write_bytes(b"this is not an image" * 10)
+        with pytest.raises(ImageError, match=f"g.{ext}"):
+            read_window(p, (0, 0, 1, 1))
+
+
+def test_window_outside_image(tmp_path, rgb16):
+    p = tmp_path / "o.png"
+    write_png(p, rgb16)
+    with pytest.raises(ImageError, match="does not lie inside the 29 x 37 image"):
+        read_window(p, (25, 0, 7, 7))
+
+
+@pytest.mark.parametrize("byteorder", ["<", ">"])
+@pytest.mark.parametrize("rowsperstrip", [1, 4, None])
+def test_tiff_strips_and_byte_order(tmp_path, rgb16, byteorder, rowsperstrip):
+    """The fast uncompressed path: several strips, either byte order, 8 and 16 bit."""
+    import tifffile
+
+    from cdbrdf.measure.images import _tiff_fast_window
+
+    for img in (rgb16, (rgb16 >> 8).astype(np.uint8)):
+        p = tmp_path / "s.tif"
+        tifffile.imwrite(p, img, photometric="rgb", byteorder=byteorder, rowsperstrip=rowsperstrip)
+        got = _tiff_fast_window(p, (2, 3, 11, 13))
+        assert got is not None  # handled by the fast path
+        np.testing.assert_array_equal(got[0], img[3:16, 2:13])
+        assert got[1].max_code == np.iinfo(img.dtype).max
+
+
+def test_palette_png_falls_back(tmp_path):
+    Image = pytest.importorskip("PIL.Image")
+    img = (np.arange(12 * 10).reshape(12, 10) % 7).astype(np.uint8)
+    im = Image.fromarray(img, mode="L").convert("P")
+    p = tmp_path / "p.png"
+    im.save(p)
+    a, info = read_window(p, (1, 2, 3, 4))
+    ref = np.asarray(Image.open(p).convert("RGB"))
+    assert info.max_code == 255
+    np.testing.assert_array_equal(a, ref[2:6, 1:4, : a.shape[-1]] if a.shape[-1] == 3 else ref[2:6, 1:4, :1])
+
+
+@pytest.mark.parametrize("compression", ["zlib", "lzw", "zstd"])
+@pytest.mark.parametrize("layout", [{"tile": (16, 16)}, {"rowsperstrip": 8}])
+def test_compressed_tiff_decodes_only_needed_segments(tmp_path, rgb16, compression, layout, monkeypatch):
+    import tifffile
+
+    p = tmp_path / "c.tif"
+    try:
+        tifffile.imwrite(p, rgb16, photometric="rgb", compression=compression, predictor=True, **layout)
+    except (ValueError, NotImplementedError, ImportError, KeyError) as exc:  # codec not available
+        pytest.skip(f"{compression}: {exc}")
+    from cdbrdf.measure import images
+
+    # a full decode would be a failure of the partial path
+    monkeypatch.setattr(images, "_tiff_full", lambda *a: pytest.fail("decoded the whole TIFF"))
+    for win in [(3, 5, 7, 7), (14, 14, 5, 6), (0, 30, 29, 7)]:
+        x0, y0, nx, ny = win
+        a, _ = read_window(p, win)
+        np.testing.assert_array_equal(a, rgb16[y0 : y0 + ny, x0 : x0 + nx])
+
+
+def test_truncated_tiff_and_exr(tmp_path):
+    a = np.random.default_rng(5).random((64, 64, 3)).astype(np.float32)
+    write_exr(tmp_path / "t.exr", a)
+    write_tiff(tmp_path / "t.tif", (a * 60000).astype(np.uint16))
+    for name in ("t.exr", "t.tif"):
+        p = tmp_path / name
+        data = p.read_bytes()
+        p.write_bytes(data[: len(data) // 3])
+        with pytest.raises(ImageError, match=name):
+            read_window(p, (30, 30, 7, 7))

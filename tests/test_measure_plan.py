@@ -1,0 +1,133 @@
+"""Stand geometry, occlusion and capture plans."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+from cdbrdf import Grid
+from cdbrdf.cli import main
+from cdbrdf.measure.plan import Stand, hidden_mask, plan_rows, read_stands, write_plan
+
+
+def test_convex_and_flat_hide_nothing():
+    th, ph = np.meshgrid(np.arange(0, 90, 5.0), np.arange(0, 360, 10.0))
+    for k in (0.0, 0.13, 0.22):
+        assert not Stand(k).hides(th, ph).any()
+
+
+def test_concave_horizon_analytic():
+    st = Stand(-0.2, face_width_mm=5.0, wall_height_mm=1.5)
+    r = 5.0
+    a = 2.5 / r
+    x_e, z_e = r * math.sin(a), r * (1 - math.cos(a))
+    assert st.edge_mm == pytest.approx((x_e, z_e))
+    elev = math.degrees(math.atan2(z_e + 1.5, x_e))  # elevation of the wall top from the centre
+    theta_b = 90 - elev
+    # along x (phi 0 and 180): hidden just beyond the boundary, visible just inside
+    for phi in (0.0, 180.0):
+        assert st.hides(theta_b + 0.01, phi) and not st.hides(theta_b - 0.01, phi)
+    # along the cylinder axis nothing is hidden
+    assert not st.hides(89.0, 90.0) and not st.hides(89.0, 270.0)
+    # oblique: the x-z projection decides: tan(theta) |cos(phi)| vs 1 / slope
+    phi = 50.0
+    tb = math.degrees(math.atan(1 / (st.horizon_slope() * math.cos(math.radians(phi)))))
+    assert st.hides(tb + 0.01, phi) and not st.hides(tb - 0.01, phi)
+
+
+def test_patch_margin_analytic():
+    """From a face point m mm towards the wall, the wall top is seen higher."""
+    st = Stand(-0.2, face_width_mm=5.0, wall_height_mm=1.0)
+    r, m = 5.0, 0.4
+    x_e, z_e = st.edge_mm
+    px, pz = r * math.sin(m / r), r * (1 - math.cos(m / r))
+    assert st.horizon_slope(m) == pytest.approx((z_e + 1.0 - pz) / (x_e - px))
+    assert st.horizon_slope(m) > st.horizon_slope(0.0)
+    assert math.isinf(st.horizon_slope(2.5))  # the patch reaches the face's edge
+    th = np.arange(0, 90, 1.0)
+    assert np.all(st.hides(th, 0.0) <= st.hides(th, 0.0, margin_mm=m))
+
+
+def test_hidden_mask_with_footprint():
+    from cdbrdf.measure.plan import footprint_mm
+
+    assert footprint_mm(60.0, pixel_mm=0.1, patch_px=7) == pytest.approx(3.5 * math.sqrt(2) * 0.1 / 0.5)
+    g = Grid.regular(theta_step_deg=15, phi_step_deg=30, kappa=[-0.13, 0.13])
+    st = [Stand(-0.13), Stand(0.13)]
+    h0 = hidden_mask(g, st) > 0
+    h1 = hidden_mask(g, st, pixel_mm=0.06) > 0
+    assert np.all(h1 >= h0) and h1.sum() > h0.sum() and not h1[1].any()
+    # the margin follows the view elevation: the light test is stricter for oblique views
+    k, pl, tl, pv = 0, 0, 4, 0  # light at 60 deg along x
+    col = h1[k, pl, tl, pv, :]
+    assert list(col) == sorted(col)
+
+
+def test_deeper_trough_hides_more():
+    th, ph = np.meshgrid(np.arange(0, 90, 1.0), np.arange(0, 360, 5.0))
+    n1 = Stand(-0.13).hides(th, ph).sum()
+    n2 = Stand(-0.22).hides(th, ph).sum()
+    n3 = Stand(-0.22, wall_height_mm=3).hides(th, ph).sum()
+    assert 0 < n1 < n2 < n3
+
+
+def test_stand_validation():
+    with pytest.raises(ValueError, match="spans"):
+        Stand(-0.5, face_width_mm=8.0)
+    with pytest.raises(ValueError, match="must be positive"):
+        Stand(0.1, face_width_mm=-1)
+
+
+def test_hidden_mask_layout():
+    g = Grid.regular(theta_step_deg=15, phi_step_deg=30, kappa=[-0.22, 0.0])
+    st = [Stand(-0.22), Stand(0.0)]
+    h = hidden_mask(g, st)
+    assert not h[1].any()
+    view = st[0].hides(g.theta_v[None, :], g.phi_v[:, None])
+    light = st[0].hides(g.theta_l[None, :], g.phi_l[:, None])
+    np.testing.assert_array_equal(h[0] & 1 > 0, np.broadcast_to(view[None, None], h[0].shape))
+    np.testing.assert_array_equal(h[0] & 2 > 0, np.broadcast_to(light[:, :, None, None], h[0].shape))
+
+
+def test_write_plan_and_read_stands(tmp_path):
+    g = Grid.regular(theta_step_deg=30, phi_step_deg=90, theta_max_deg=60, kappa=[-0.22, 0.22])
+    rows = write_plan(tmp_path, g, [Stand(-0.22), Stand(0.22)])
+    with open(tmp_path / "capture.csv") as fh:
+        got = list(csv.DictReader(fh))
+    assert len(got) == len(rows) == 2 * 12 * 12 + 12
+    assert {r["kind"] for r in got} == {"sample", "white"}
+    assert len({r["file"] for r in got}) == len(got)
+    hidden = [r for r in got if r["hidden"]]
+    assert hidden and all(float(r["kappa"]) == -0.22 for r in hidden)
+    stands = read_stands(tmp_path / "stands.json")
+    assert set(stands) == {-0.22, 0.22}
+
+
+def test_read_stands_errors(tmp_path):
+    p = tmp_path / "stands.json"
+    p.write_text("{not json")
+    with pytest.raises(ValueError, match="not valid JSON"):
+        read_stands(p)
+    p.write_text(json.dumps({"stands": [{"kappa": 0.1, "radius": 3}]}))
+    with pytest.raises(ValueError, match="unknown keys"):
+        read_stands(p)
+
+
+def test_plan_rows_extension():
+    g = Grid.regular(theta_step_deg=30, phi_step_deg=180, theta_max_deg=30, kappa=[0.0])
+    assert plan_rows(g, [Stand(0.0)], extension="exr")[0]["file"].endswith(".exr")
+    with pytest.raises(ValueError, match="not one of"):
+        plan_rows(g, [Stand(0.0)], extension="jpg")
+
+
+def test_cli_plan(tmp_path, capsys):
+    out = tmp_path / "p"
+    assert main(["plan", "-o", str(out), "--theta-step", "30", "--phi-step", "90"]) == 0
+    text = capsys.readouterr().out
+    assert "kappa -0.22 1/mm" in text and (out / "plan.png").stat().st_size > 0
+    assert main(["plan", "-o", str(out)]) == 2  # exists
+    assert "already exists" in capsys.readouterr().err
