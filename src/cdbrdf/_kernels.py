@@ -20,46 +20,50 @@ _SNAP = 1e-9
 
 
 @njit(inline="always", cache=True, error_model="numpy")
-def _locate(axis, n, inv_step, x):
+def _locate(axis, inv_d, n, inv_step, x):
     """Lower index and weight of ``x`` on a sorted axis, clamped at both ends.
 
-    ``inv_step > 0`` declares the axis evenly spaced (index by division);
-    otherwise short axes are scanned and long ones bisected.
+    ``inv_d[i] = 1 / (axis[i + 1] - axis[i])``. ``inv_step > 0`` declares the
+    axis evenly spaced (index by multiplication); otherwise short axes are
+    scanned and long ones bisected. The weight is exactly 0 at every node.
     """
     if n == 1 or x <= axis[0]:
         return 0, 0.0
     if x >= axis[n - 1]:
         return n - 2, 1.0
     if inv_step > 0.0:
-        u = (x - axis[0]) * inv_step
-        i = min(int(u), n - 2)
-        if x < axis[i]:  # guard against rounding of u
+        i = min(int((x - axis[0]) * inv_step), n - 2)
+        if x < axis[i]:  # guard against rounding
             i -= 1
         elif i < n - 2 and x >= axis[i + 1]:
             i += 1
-        return i, (x - axis[i]) / (axis[i + 1] - axis[i])
-    if n <= 16:
+    elif n <= 16:
         i = 0
         for j in range(1, n - 1):
             i += axis[j] <= x
-        return i, (x - axis[i]) / (axis[i + 1] - axis[i])
-    lo = 0
-    hi = n - 1
-    while hi - lo > 1:
-        mid = (lo + hi) >> 1
-        if axis[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
-    return lo, (x - axis[lo]) / (axis[lo + 1] - axis[lo])
+    else:
+        lo = 0
+        hi = n - 1
+        while hi - lo > 1:
+            mid = (lo + hi) >> 1
+            if axis[mid] <= x:
+                lo = mid
+            else:
+                hi = mid
+        i = lo
+    return i, (x - axis[i]) * inv_d[i]
 
 
 @njit(inline="always", cache=True, error_model="numpy")
-def _locate_periodic(phi0, step, n, x):
-    """Lower index and weight of azimuth ``x`` on an evenly spaced circle."""
+def _locate_periodic(phi0, inv_step, n, x):
+    """Lower index and weight of azimuth ``x`` on an evenly spaced circle.
+
+    Weights within 1e-9 of a node snap to it, so nodes are reproduced exactly
+    despite the rounding of ``(x - phi0) / step``.
+    """
     if n == 1:
         return 0, 0.0
-    u = (x - phi0) / step
+    u = (x - phi0) * inv_step
     f = np.floor(u)
     w = u - f
     if w < _SNAP:
@@ -67,8 +71,9 @@ def _locate_periodic(phi0, step, n, x):
     elif w > 1.0 - _SNAP:
         w = 0.0
         f += 1.0
-    i = f - n * np.floor(f / n)
-    return int(i), w
+    if f < 0.0 or f >= n:
+        f = f - n * np.floor(f / n)
+    return int(f), w
 
 
 @njit(inline="always", cache=True, error_model="numpy")
@@ -95,13 +100,13 @@ def _invalid(tv, pv, tl, pl, k):
 
 
 @njit(inline="always", cache=True, error_model="numpy")
-def _cell(g_kap, g_thl, g_thv, inv_tl, inv_tv, pl0, pl_step, pv0, pv_step,
+def _cell(g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
           n_k, n_pl, n_tl, n_pv, n_tv, tv, pv, tl, pl, k):
-    ik, wk = _locate(g_kap, n_k, 0.0, k)
-    itl, wtl = _locate(g_thl, n_tl, inv_tl, tl)
-    itv, wtv = _locate(g_thv, n_tv, inv_tv, tv)
-    ipl, wpl = _locate_periodic(pl0, pl_step, n_pl, pl)
-    ipv, wpv = _locate_periodic(pv0, pv_step, n_pv, pv)
+    ik, wk = _locate(g_kap, d_kap, n_k, 0.0, k)
+    itl, wtl = _locate(g_thl, d_thl, n_tl, inv_tl, tl)
+    itv, wtv = _locate(g_thv, d_thv, n_tv, inv_tv, tv)
+    ipl, wpl = _locate_periodic(pl0, pl_inv, n_pl, pl)
+    ipv, wpv = _locate_periodic(pv0, pv_inv, n_pv, pv)
     # Pole: grid node 0 of each elevation axis is theta = 0, whose ring holds
     # one value, so the azimuth weight must not matter there.
     if itl == 0 and wtl == 0.0:
@@ -116,29 +121,118 @@ def _cell(g_kap, g_thl, g_thv, inv_tl, inv_tv, pl0, pl_step, pv0, pv_step,
     return ik, ik1, wk, ipl, ipl1, wpl, itl, itl1, wtl, ipv, ipv1, wpv, itv, itv1, wtv
 
 
-@njit(parallel=True, cache=True, error_model="numpy")
-def lookup(
-    flat, n_k, n_pl, n_tl, n_pv, n_tv, n_c,
-    g_kap, g_thl, g_thv, inv_tl, inv_tv, pl0, pl_step, pv0, pv_step,
+_FASTMATH = {"contract"}  # fused multiply-add only: NaN/inf semantics are kept
+
+
+@njit(parallel=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
+def lookup_rgb(
+    flat, n_k, n_pl, n_tl, n_pv, n_tv, n_c, stride,
+    g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
     q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset,
 ):
-    """Interpolate ``n`` queries into ``out[offset:offset + n]``.
+    """RGB tables (``n_c == 3``, padded to ``stride = 4``): see :func:`lookup_generic`.
+
+    Interpolate ``n`` queries into ``out[offset:offset + n]``.
 
     ``flat`` is the prepared table (:func:`cdbrdf.interp.prepare`) raveled in
-    C order. Query arrays have length ``n`` or 1 (broadcast). Rows with a
-    non-finite component, or an elevation outside [0, 90], are NaN; the
-    counts of bad view and light elevations are returned.
+    C order with ``stride`` values per sample (RGB tables are padded to 4 so
+    that a sample is one aligned 16-byte load). Query arrays have length ``n``
+    or 1 (broadcast). Rows with a non-finite component, or an elevation
+    outside [0, 90], are NaN; the counts of bad view and light elevations are
+    returned.
 
     The 32 corners are summed as 8 light/curvature corners of 4-corner view
-    bilinear sums: short dependency chains, and every node is reproduced
-    exactly (weights 0 and 1 only).
+    bilinear sums; every node is reproduced exactly (weights 0 and 1 only).
     """
     s_tv = 1 if q_tv.shape[0] > 1 else 0
     s_pv = 1 if q_pv.shape[0] > 1 else 0
     s_tl = 1 if q_tl.shape[0] > 1 else 0
     s_pl = 1 if q_pl.shape[0] > 1 else 0
     s_k = 1 if q_k.shape[0] > 1 else 0
-    s_view = n_tv * n_c
+    s_view = n_tv * stride
+    s_tlight = n_pv * s_view
+    one = np.uint64(1)
+    two = np.uint64(2)
+    bad_v = 0
+    bad_l = 0
+    for i in prange(n):
+        tv, pv, tl, pl, k = _query(q_tv, q_pv, q_tl, q_pl, q_k, i, s_tv, s_pv, s_tl, s_pl, s_k)
+        row = offset + i
+        bad = _invalid(tv, pv, tl, pl, k)
+        if bad != 0:
+            if bad == 2 or bad == 4:
+                bad_v += 1
+            if bad == 3 or bad == 4:
+                bad_l += 1
+            for c in range(n_c):
+                out[row, c] = np.nan
+            continue
+        ik, ik1, wk, ipl, ipl1, wpl, itl, itl1, wtl, ipv, ipv1, wpv, itv, itv1, wtv = _cell(
+            g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
+            n_k, n_pl, n_tl, n_pv, n_tv, tv, pv, tl, pl, k,
+        )
+        v00 = np.uint64(ipv * s_view + itv * stride)
+        v01 = np.uint64(ipv * s_view + itv1 * stride)
+        v10 = np.uint64(ipv1 * s_view + itv * stride)
+        v11 = np.uint64(ipv1 * s_view + itv1 * stride)
+        w00 = (1.0 - wpv) * (1.0 - wtv)
+        w01 = (1.0 - wpv) * wtv
+        w10 = wpv * (1.0 - wtv)
+        w11 = wpv * wtv
+        r = 0.0
+        g = 0.0
+        b = 0.0
+        for a in range(2):
+            ka = ik if a == 0 else ik1
+            wa = (1.0 - wk) if a == 0 else wk
+            for e in range(2):
+                pe = ipl if e == 0 else ipl1
+                we = wa * ((1.0 - wpl) if e == 0 else wpl)
+                for d in range(2):
+                    td = itl if d == 0 else itl1
+                    wd = we * ((1.0 - wtl) if d == 0 else wtl)
+                    base = np.uint64(((ka * n_pl + pe) * n_tl + td) * s_tlight)
+                    x0 = wd * w00
+                    x1 = wd * w01
+                    x2 = wd * w10
+                    x3 = wd * w11
+                    o0 = base + v00
+                    o1 = base + v01
+                    o2 = base + v10
+                    o3 = base + v11
+                    r += (x0 * flat[o0] + x1 * flat[o1]) + (x2 * flat[o2] + x3 * flat[o3])
+                    g += (x0 * flat[o0 + one] + x1 * flat[o1 + one]) + (x2 * flat[o2 + one] + x3 * flat[o3 + one])
+                    b += (x0 * flat[o0 + two] + x1 * flat[o1 + two]) + (x2 * flat[o2 + two] + x3 * flat[o3 + two])
+        out[row, 0] = r
+        out[row, 1] = g
+        out[row, 2] = b
+    return bad_v, bad_l
+
+
+@njit(parallel=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
+def lookup_generic(
+    flat, n_k, n_pl, n_tl, n_pv, n_tv, n_c, stride,
+    g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
+    q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset,
+):
+    """Interpolate ``n`` queries into ``out[offset:offset + n]``.
+
+    ``flat`` is the prepared table (:func:`cdbrdf.interp.prepare`) raveled in
+    C order with ``stride`` values per sample (RGB tables are padded to 4 so
+    that a sample is one aligned 16-byte load). Query arrays have length ``n``
+    or 1 (broadcast). Rows with a non-finite component, or an elevation
+    outside [0, 90], are NaN; the counts of bad view and light elevations are
+    returned.
+
+    The 32 corners are summed as 8 light/curvature corners of 4-corner view
+    bilinear sums; every node is reproduced exactly (weights 0 and 1 only).
+    """
+    s_tv = 1 if q_tv.shape[0] > 1 else 0
+    s_pv = 1 if q_pv.shape[0] > 1 else 0
+    s_tl = 1 if q_tl.shape[0] > 1 else 0
+    s_pl = 1 if q_pl.shape[0] > 1 else 0
+    s_k = 1 if q_k.shape[0] > 1 else 0
+    s_view = n_tv * stride
     s_tlight = n_pv * s_view
     bad_v = 0
     bad_l = 0
@@ -155,73 +249,33 @@ def lookup(
                 out[row, c] = np.nan
             continue
         ik, ik1, wk, ipl, ipl1, wpl, itl, itl1, wtl, ipv, ipv1, wpv, itv, itv1, wtv = _cell(
-            g_kap, g_thl, g_thv, inv_tl, inv_tv, pl0, pl_step, pv0, pv_step,
+            g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
             n_k, n_pl, n_tl, n_pv, n_tv, tv, pv, tl, pl, k,
         )
-        v00 = np.uint64(ipv * s_view + itv * n_c)
-        v01 = np.uint64(ipv * s_view + itv1 * n_c)
-        v10 = np.uint64(ipv1 * s_view + itv * n_c)
-        v11 = np.uint64(ipv1 * s_view + itv1 * n_c)
+        v00 = np.uint64(ipv * s_view + itv * stride)
+        v01 = np.uint64(ipv * s_view + itv1 * stride)
+        v10 = np.uint64(ipv1 * s_view + itv * stride)
+        v11 = np.uint64(ipv1 * s_view + itv1 * stride)
         w00 = (1.0 - wpv) * (1.0 - wtv)
         w01 = (1.0 - wpv) * wtv
         w10 = wpv * (1.0 - wtv)
         w11 = wpv * wtv
-        dtl = np.uint64(s_tlight if n_tl > 1 else 0)
-        if n_c == 3:
-            r = 0.0
-            g = 0.0
-            b = 0.0
-            for a in range(2):
-                ka = ik if a == 0 else ik1
-                wa = (1.0 - wk) if a == 0 else wk
-                ra = 0.0
-                ga = 0.0
-                ba = 0.0
-                for e in range(2):
-                    pe = ipl if e == 0 else ipl1
-                    we = (1.0 - wpl) if e == 0 else wpl
-                    b0 = np.uint64(((ka * n_pl + pe) * n_tl + itl) * s_tlight)
-                    b1 = b0 + dtl
-                    o0 = b0 + v00
-                    o1 = b0 + v01
-                    o2 = b0 + v10
-                    o3 = b0 + v11
-                    r0 = (w00 * flat[o0] + w01 * flat[o1]) + (w10 * flat[o2] + w11 * flat[o3])
-                    g0 = (w00 * flat[o0 + 1] + w01 * flat[o1 + 1]) + (w10 * flat[o2 + 1] + w11 * flat[o3 + 1])
-                    b0_ = (w00 * flat[o0 + 2] + w01 * flat[o1 + 2]) + (w10 * flat[o2 + 2] + w11 * flat[o3 + 2])
-                    o0 = b1 + v00
-                    o1 = b1 + v01
-                    o2 = b1 + v10
-                    o3 = b1 + v11
-                    r1 = (w00 * flat[o0] + w01 * flat[o1]) + (w10 * flat[o2] + w11 * flat[o3])
-                    g1 = (w00 * flat[o0 + 1] + w01 * flat[o1 + 1]) + (w10 * flat[o2 + 1] + w11 * flat[o3 + 1])
-                    b1_ = (w00 * flat[o0 + 2] + w01 * flat[o1 + 2]) + (w10 * flat[o2 + 2] + w11 * flat[o3 + 2])
-                    ra += we * ((1.0 - wtl) * r0 + wtl * r1)
-                    ga += we * ((1.0 - wtl) * g0 + wtl * g1)
-                    ba += we * ((1.0 - wtl) * b0_ + wtl * b1_)
-                r += wa * ra
-                g += wa * ga
-                b += wa * ba
-            out[row, 0] = r
-            out[row, 1] = g
-            out[row, 2] = b
-        else:
-            for c in range(n_c):
-                out[row, c] = 0.0
-            for a in range(2):
-                ka = ik if a == 0 else ik1
-                wa = (1.0 - wk) if a == 0 else wk
-                for e in range(2):
-                    pe = ipl if e == 0 else ipl1
-                    we = wa * ((1.0 - wpl) if e == 0 else wpl)
-                    b0 = np.uint64(((ka * n_pl + pe) * n_tl + itl) * s_tlight)
-                    for d in range(2):
-                        bd = b0 + dtl if d == 1 else b0
-                        wd = we * ((1.0 - wtl) if d == 0 else wtl)
-                        for c in range(n_c):
-                            cc = np.uint64(c)
-                            out[row, c] += wd * (
-                                (w00 * flat[bd + v00 + cc] + w01 * flat[bd + v01 + cc])
-                                + (w10 * flat[bd + v10 + cc] + w11 * flat[bd + v11 + cc])
-                            )
+        for c in range(n_c):
+            out[row, c] = 0.0
+        for a in range(2):
+            ka = ik if a == 0 else ik1
+            wa = (1.0 - wk) if a == 0 else wk
+            for e in range(2):
+                pe = ipl if e == 0 else ipl1
+                we = wa * ((1.0 - wpl) if e == 0 else wpl)
+                for d in range(2):
+                    td = itl if d == 0 else itl1
+                    wd = we * ((1.0 - wtl) if d == 0 else wtl)
+                    bd = np.uint64(((ka * n_pl + pe) * n_tl + td) * s_tlight)
+                    for c in range(n_c):
+                        cc = np.uint64(c)
+                        out[row, c] += wd * (
+                            (w00 * flat[bd + v00 + cc] + w01 * flat[bd + v01 + cc])
+                            + (w10 * flat[bd + v10 + cc] + w11 * flat[bd + v11 + cc])
+                        )
     return bad_v, bad_l

@@ -105,6 +105,41 @@ def prepare(table) -> LookupGrid:
     return lg
 
 
+def _inv_spacing(axis: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``1 / (axis[i + 1] - axis[i])`` (one zero for a single-sample axis)."""
+    if axis.size < 2:
+        return np.zeros(1)
+    return np.ascontiguousarray(1.0 / np.diff(axis))
+
+
+def _kernel_consts(lg: LookupGrid) -> tuple:
+    """The kernel's table and axis arguments, built once per table.
+
+    RGB tables are padded to 4 values per sample so that a sample is one
+    aligned 16-byte (float32) or 32-byte (float64) block.
+    """
+    cached = lg.__dict__.get("_kernel_consts")
+    if cached is not None:
+        return cached
+    nk, npl, ntl, npv, ntv, nc = lg.values.shape
+    if nc == 3:
+        padded = np.zeros(lg.values.shape[:-1] + (4,), dtype=lg.values.dtype)
+        padded[..., :3] = lg.values
+        flat, stride = padded.reshape(-1), 4
+    else:
+        flat, stride = np.ascontiguousarray(lg.values).reshape(-1), nc
+    consts = (
+        flat, nk, npl, ntl, npv, ntv, nc, stride,
+        lg.kappa, _inv_spacing(lg.kappa),
+        lg.theta_l, _inv_spacing(lg.theta_l),
+        lg.theta_v, _inv_spacing(lg.theta_v),
+        _inv_step(lg.theta_l), _inv_step(lg.theta_v),
+        lg.phi_l0, 1.0 / lg.phi_l_step, lg.phi_v0, 1.0 / lg.phi_v_step,
+    )
+    object.__setattr__(lg, "_kernel_consts", consts)
+    return consts
+
+
 def _inv_step(axis: NDArray[np.float64]) -> float:
     """1 / spacing of an evenly spaced axis, or 0.0 when the spacing varies."""
     if axis.size < 3:
@@ -177,16 +212,11 @@ def evaluate(
             + " do not broadcast together"
         ) from None
     lg = prepare(table)
-    nk, npl, ntl, npv, ntv, nc = lg.values.shape
+    nc = lg.values.shape[-1]
     n = int(np.prod(shape, dtype=np.int64))
     out = np.empty((n, nc), dtype=np.float64)
-    flat = lg.values.reshape(-1)
-    consts = (
-        flat, nk, npl, ntl, npv, ntv, nc,
-        lg.kappa, lg.theta_l, lg.theta_v,
-        _inv_step(lg.theta_l), _inv_step(lg.theta_v),
-        lg.phi_l0, lg.phi_l_step, lg.phi_v0, lg.phi_v_step,
-    )
+    consts = _kernel_consts(lg)
+    kernel = _kernels.lookup_rgb if nc == 3 else _kernels.lookup_generic
 
     direct = []
     for q in qs:
@@ -200,13 +230,13 @@ def evaluate(
     if n == 0:
         pass
     elif all(d is not None for d in direct):
-        bad_v, bad_l = _kernels.lookup(*consts, *direct, n, out, 0)
+        bad_v, bad_l = kernel(*consts, *direct, n, out, 0)
     else:
         views = [np.broadcast_to(q, shape) if d is None else None for q, d in zip(qs, direct)]
         for s in range(0, n, _CHUNK):
             e = min(n, s + _CHUNK)
             args = [d if d is not None else v.flat[s:e].astype(np.float64, copy=False) for d, v in zip(direct, views)]
-            a, b = _kernels.lookup(*consts, *args, e - s, out, s)
+            a, b = kernel(*consts, *args, e - s, out, s)
             bad_v += a
             bad_l += b
     if on_invalid == "raise" and (bad_v or bad_l):
