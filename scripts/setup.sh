@@ -25,8 +25,8 @@ fi
 # --- Debian packages ------------------------------------------------------
 # libllvm19: Mitsuba 3's LLVM variants (vectorised CPU rendering) need libLLVM 19.
 DEB_PKGS="libllvm19"
-# (test-only Debian packages are added here when a test needs one)
-[ "$WITH_TESTS" = 1 ] && DEB_PKGS="$DEB_PKGS"
+# chromium: the tests open the demo's report in a headless browser (Playwright).
+[ "$WITH_TESTS" = 1 ] && DEB_PKGS="$DEB_PKGS chromium"
 missing=""
 for p in $DEB_PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"

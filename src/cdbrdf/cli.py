@@ -19,14 +19,15 @@ __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: Sub-command modules under :mod:`cdbrdf.commands`, in ``--help`` order.
 COMMANDS: tuple[str, ...] = (
+    "demo",
     "info",
     "mosaic",
-    "synth",
     "plan",
-    "simulate-capture",
     "measure",
+    "simulate-capture",
     "curvature",
     "render",
+    "synth",
 )
 
 EXIT_USER_ERROR = 2

@@ -127,7 +127,7 @@ class Report:
                 out.append("</table>")
             for f in s.figures:
                 out.append(
-                    f'<figure><img src="{html.escape(f.file)}" alt="{html.escape(f.alt)}" loading="lazy">'
+                    f'<figure><img src="{html.escape(f.file)}" alt="{html.escape(f.alt)}">'
                     f"<figcaption><b>{html.escape(f.title)}.</b> {f.caption}</figcaption></figure>"
                 )
             for summary, data in s.details:

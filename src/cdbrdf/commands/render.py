@@ -77,9 +77,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def encode_png(image: np.ndarray, *, exposure_ev: float = 0.0) -> np.ndarray:
     """Linear radiance -> 8-bit sRGB: ``srgb(clip(image * 2**exposure_ev, 0, 1))``."""
-    x = np.clip(np.nan_to_num(np.asarray(image, dtype=np.float64) * 2.0 ** exposure_ev), 0.0, 1.0)
-    s = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-    return np.rint(s * 255).astype(np.uint8)
+    from ..plot import tonemap_srgb8
+
+    return tonemap_srgb8(image, exposure_ev=exposure_ev)
 
 
 def write_image(path: str | Path, image: np.ndarray, *, exposure_ev: float = 0.0) -> None:
@@ -104,37 +104,16 @@ def write_image(path: str | Path, image: np.ndarray, *, exposure_ev: float = 0.0
 
 def compare_figure(brdf_img: np.ndarray, cdbrdf_img: np.ndarray, path: str | Path, *,
                    exposure_ev: float = 0.0, title: str | None = None) -> None:
-    """Write the figure BRDF | CDBRDF | difference heat map (with a colour bar)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
+    """Write the figure BRDF | CDBRDF | difference heat map (with a colour bar), atomically."""
     from ..io import atomic_path
+    from ..plot import plot_render_comparison
 
     p = Path(path)
     if p.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise ValueError(f"{p}: --compare writes a figure; use .png, .pdf or .svg")
-    diff = np.linalg.norm(cdbrdf_img.astype(np.float64) - brdf_img.astype(np.float64), axis=-1)
-    h, w = diff.shape
-    fig, axes = plt.subplots(1, 3, figsize=(3 * 4.0, 4.0 * h / w + 0.9), constrained_layout=True)
-    axes[0].imshow(encode_png(brdf_img, exposure_ev=exposure_ev))
-    axes[0].set_title("(a) plain BRDF (kappa = 0)")
-    axes[1].imshow(encode_png(cdbrdf_img, exposure_ev=exposure_ev))
-    axes[1].set_title("(b) CDBRDF")
-    vmax = float(np.percentile(diff, 99.5)) or 1e-6
-    im = axes[2].imshow(diff, cmap="inferno", vmin=0.0, vmax=vmax)
-    axes[2].set_title("(c) |CDBRDF - BRDF|")
-    for ax in axes:
-        ax.set_xticks([])
-        ax.set_yticks([])
-    cb = fig.colorbar(im, ax=axes[2], shrink=0.85)
-    cb.set_label("RGB distance (linear radiance)")
-    if title:
-        fig.suptitle(title)
+    fig = plot_render_comparison(brdf_img, cdbrdf_img, exposure_ev=exposure_ev, title=title)
     with atomic_path(p, suffix=p.suffix) as tmp:
         fig.savefig(tmp, dpi=150, format=p.suffix.lower().lstrip("."))
-    plt.close(fig)
 
 
 def run(args: argparse.Namespace) -> int:

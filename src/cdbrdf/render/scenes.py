@@ -120,9 +120,12 @@ def sine_sheet_mesh(sheet: SineSheet = SineSheet()) -> Mesh:
 
 
 def prepare_mesh(
-    path: str | PathLike[str], *, units: str = "mm", recompute: bool = False
+    path: str | PathLike[str] | Mesh, *, units: str = "mm", recompute: bool = False
 ) -> Mesh:
     """Read a user mesh for rendering: check its UVs, compute its curvature if absent.
+
+    ``path`` may also be a :class:`~cdbrdf.render.meshio.Mesh` already in memory
+    (it is not modified; a copy with the curvature is returned).
 
     The curvature (attribute ``"curvature"``, mm^-1) is taken from the file
     when present (written by ``cdbrdf curvature``), otherwise computed with
@@ -138,7 +141,11 @@ def prepare_mesh(
 
     if units not in UNITS_MM:
         raise ValueError(f"units: {units!r} is not one of {', '.join(UNITS_MM)}")
-    mesh = read_mesh(path)
+    if isinstance(path, Mesh):
+        mesh = Mesh(path.vertices, path.faces, path.normals, path.uv, dict(path.attributes))
+        path = "mesh"
+    else:
+        mesh = read_mesh(path)
     if mesh.uv is None:
         raise ValueError(
             f"{path}: the mesh has no UV coordinates; the CDBRDF's reference direction x is "

@@ -1,0 +1,158 @@
+"""The end-to-end demo: the quick run, its report in a real browser, re-runs."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cdbrdf
+from cdbrdf.demo import CONFIGS, DemoConfig, compare_with_truth, run_demo
+from cdbrdf.table import Grid
+
+from .conftest import make_table
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+@pytest.fixture(scope="module")
+def quick_demo(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo") / "out"
+    return run_demo(out, quick=True)
+
+
+def test_quick_demo_report_is_complete(quick_demo):
+    folder = quick_demo.folder
+    page = (folder / "report.html").read_text()
+    images = re.findall(r'<img src="([^"]+)"', page)
+    # per material: photographs, measured mosaic, truth mosaic, sine sheet, draped cloth
+    assert len(images) == 5 * 2
+    for img in images:
+        assert (folder / img).is_file() and (folder / img).stat().st_size > 10_000
+        assert "/" not in img  # relative, beside the page
+    assert "http://" not in page and "https://" not in page and "<script" not in page
+    for name in ("denim", "shot"):
+        assert name in page
+        t = cdbrdf.load(folder / f"{name}-measured.h5")
+        assert t.attrs["material"] == name
+        assert t.quantity == "brdf"
+    results = json.loads((folder / "results.json").read_text())
+    assert [m["name"] for m in results["materials"]] == ["denim", "shot"]
+
+
+def test_quick_demo_measures_the_ground_truth(quick_demo):
+    for m in quick_demo.materials:
+        t = cdbrdf.load(m.measured_path)
+        # concave stands hide directions; flat and convex stands hide none
+        filled = {round(s["kappa"], 2): s["filled"] for s in m.per_stand}
+        assert filled[-0.22] > 0 and filled[-0.13] > 0
+        assert filled[0.0] == 0 and filled[0.13] == 0 and filled[0.22] == 0
+        assert (~t.measured).sum() == sum(filled.values())
+        # every filled sample names a measured source at the same curvature
+        src = t.fill_source[~t.measured]
+        assert (src >= 0).all() and t.measured.reshape(-1)[src].all()
+        per = int(np.prod(t.grid.shape[1:]))
+        ks = np.nonzero(~t.measured)[0]
+        assert (src // per == ks).all()
+        # measured samples reproduce the truth: noise of the rig is ~1 %
+        assert m.error["median_rel_error_measured"] < 0.03, m.error
+        assert m.error["p95_rel_error_measured"] < 0.15, m.error
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (scripts/setup.sh --test installs it)")
+def test_report_opens_in_headless_chromium(quick_demo):
+    from playwright.sync_api import sync_playwright
+
+    url = (quick_demo.folder / "report.html").resolve().as_uri()
+    with sync_playwright() as p:
+        browser = p.chromium.launch(
+            executable_path=CHROMIUM,
+            headless=True,
+            args=["--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                  "--disable-component-update", "--disable-sync", "--no-first-run"],
+        )
+        try:
+            page = browser.new_page()
+            page.set_default_timeout(30_000)
+            failed = []
+            page.on("requestfailed", lambda r: failed.append(r.url))
+            page.goto(url, wait_until="load")
+            page.wait_for_function("[...document.images].every(i => i.complete)", timeout=30_000)
+            sizes = page.evaluate("[...document.images].map(i => [i.getAttribute('src'), i.complete, i.naturalWidth])")
+            title = page.title()
+        finally:
+            browser.close()
+    assert not failed, failed
+    assert len(sizes) == 10
+    for src, complete, width in sizes:
+        assert complete and width > 100, (src, complete, width)
+    assert "cdbrdf" in title
+
+
+def _tiny_config() -> DemoConfig:
+    g = Grid(kappa=[-0.22, 0.0, 0.22], theta_l=[0.0, 40.0, 75.0], phi_l=[0.0, 180.0],
+             theta_v=[0.0, 40.0, 75.0], phi_v=[0.0, 180.0])
+    return DemoConfig(name="tiny", grid=g, image_px=24, capture_spp=1, render_size=(48, 32),
+                      render_spp=1, keep_capture=False)
+
+
+def test_rerun_replaces_old_results(tmp_path):
+    out = tmp_path / "out"
+    run_demo(out, materials=["denim"], config=_tiny_config())
+    (out / "stale.png").write_bytes(b"old")
+    assert (out / "denim-sine.png").exists() and not (out / "capture-denim").exists()
+    r = run_demo(out, materials=["shot"], config=_tiny_config())
+    names = sorted(p.name for p in out.iterdir())
+    assert "stale.png" not in names and not any(n.startswith("denim") for n in names)
+    assert "shot-sine.png" in names and r.report.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no partial folders left
+
+
+def test_refuses_a_foreign_folder(tmp_path):
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("keep me")
+    with pytest.raises(FileExistsError, match="not written by cdbrdf"):
+        run_demo(out, materials=["denim"], config=_tiny_config())
+    assert (out / "notes.txt").read_text() == "keep me"
+
+
+def test_unknown_material(tmp_path):
+    with pytest.raises(ValueError, match="unknown; valid: .*denim"):
+        run_demo(tmp_path / "o", materials=["tweed"], config=_tiny_config())
+
+
+def _pole_consistent(grid):
+    """A random table whose theta = 0 rings hold one value each (as a real BRDF does)."""
+    v = make_table(grid).values.copy()
+    v[:, :, 0] = v[:, :, 0].mean(axis=1, keepdims=True)
+    v[:, :, :, :, 0] = v[:, :, :, :, 0].mean(axis=3, keepdims=True)
+    return cdbrdf.CDBRDF(v, **grid.axes(), attrs={"quantity": "brdf"})
+
+
+def test_compare_with_truth_is_zero_for_the_truth(small_grid):
+    t = _pole_consistent(small_grid)
+    stats, rows = compare_with_truth(t, t)
+    assert stats["median_rel_error_measured"] == 0.0 and stats["p95_rel_error_measured"] < 1e-12
+    assert [r["samples"] for r in rows] == [int(np.prod(small_grid.shape[1:]))] * small_grid.kappa.size
+
+
+def test_compare_with_truth_sees_a_known_error(small_grid):
+    t = _pole_consistent(small_grid)
+    m = cdbrdf.CDBRDF(t.values * 1.1, **small_grid.axes(), attrs={"quantity": "brdf"})
+    stats, _ = compare_with_truth(m, t)
+    assert stats["median_rel_error_measured"] == pytest.approx(0.1, rel=1e-9)
+    # a relative table is compared after its best scale
+    r = cdbrdf.CDBRDF(t.values * 7.0, **small_grid.axes(), attrs={"quantity": "relative"})
+    stats, _ = compare_with_truth(r, t)
+    assert stats["median_rel_error_measured"] < 1e-12
+
+
+def test_configs_state_their_cost():
+    assert CONFIGS["full"].grid == Grid.paper()
+    assert CONFIGS["full"].n_photos == 72 * 72 * 5 + 72
+    assert CONFIGS["quick"].expected_seconds(2) < CONFIGS["full"].expected_seconds(2)
