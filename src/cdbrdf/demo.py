@@ -79,8 +79,8 @@ class DemoConfig:
     render_size: tuple[int, int]
     render_spp: int
     keep_capture: bool
-    seconds_per_photo: float = 0.012
-    seconds_per_render_spp_mpix: float = 0.09
+    seconds_per_photo: float = 0.006
+    seconds_per_render_spp_mpix: float = 0.13
 
     @property
     def n_photos(self) -> int:
