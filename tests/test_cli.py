@@ -92,3 +92,13 @@ def test_console_script_exit_code(tmp_path):
     r = subprocess.run([sys.executable, "-m", "cdbrdf.cli", "info", str(tmp_path / "x.h5")],
                        capture_output=True, text=True)
     assert r.returncode == 2 and r.stderr.startswith("cdbrdf info: error:")
+
+
+def test_negative_comma_lists_are_values():
+    from cdbrdf.cli import _join_negative_lists
+
+    assert _join_negative_lists(["plan", "--kappa", "-0.22,-0.13,0", "-o", "x"]) == [
+        "plan", "--kappa=-0.22,-0.13,0", "-o", "x"]
+    # space-separated lists (nargs="+") and plain negative numbers are left alone
+    assert _join_negative_lists(["mosaic", "f", "--kappa", "-0.13", "0"]) == ["mosaic", "f", "--kappa", "-0.13", "0"]
+    assert _join_negative_lists(["x", "-q", "-0.1,2"]) == ["x", "-q", "-0.1,2"]
