@@ -3,16 +3,27 @@
 Numba was chosen over a C/C++ extension because it needs no compiler on the
 user's machine (wheels for every platform NumPy supports), compiles lazily on
 first use (nothing happens at import), caches the machine code on disk, and
-parallelises with ``prange`` over all cores. The kernel is a plain 5-D
+parallelises with ``prange`` over all cores. The kernels are a plain 5-D
 multilinear interpolation on a grid already prepared by
 :func:`cdbrdf.interp.prepare` (pole rule applied, pole node present), so the
 same arithmetic can be reproduced in Dr.Jit for the renderer.
+
+:func:`lookup_rgb` (RGB tables with evenly spaced elevations, the common
+case) is about 4x faster than a scalar kernel (6.5 ms instead of 30 ms for
+10^6 queries on 2 cores) without changing numba's global configuration: per
+block of queries, the index math is written with selects only so that
+LLVM's loop vectoriser handles several queries at once, and the 32 corners
+are summed with explicit LLVM vector instructions (:func:`_blend_rgb`, a
+numba intrinsic), which numba's pipeline does not emit by itself (its SLP
+vectoriser is off).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from llvmlite import ir
+from numba import njit, prange, types
+from numba.core.extending import intrinsic
 
 __all__: list[str] = []
 
@@ -121,91 +132,274 @@ def _cell(g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv,
     return ik, ik1, wk, ipl, ipl1, wpl, itl, itl1, wtl, ipv, ipv1, wpv, itv, itv1, wtv
 
 
+@intrinsic
+def _blend_rgb(typingctx, flat, bases, wl, v0, v1, wv):
+    """Sum the 32 corners of an RGB cell with LLVM vector instructions.
+
+    ``flat`` holds 4 values per sample (RGB + padding) and the two view
+    elevation neighbours ``itv, itv + 1`` of a sample are adjacent, so one
+    8-value load at ``bases[c] + v0`` (view azimuth ``ipv``) or ``+ v1``
+    (``ipv + 1``) fetches both. For each of the 8 light/curvature corners
+    ``c`` the loads are widened to float64 and accumulated with the weight
+    ``wl[c]``; the two accumulators are then weighted by the view bilinear
+    weights ``wv = (w00, w01, w10, w11)`` (azimuth-major) and the RGB lanes
+    returned. With weights 0 and 1 every step is exact, so nodes are too.
+    """
+    if not (isinstance(flat, types.Array) and flat.ndim == 1
+            and flat.dtype in (types.float32, types.float64)):
+        return None
+    if not (isinstance(bases, types.UniTuple) and bases.count == 8 and isinstance(bases.dtype, types.Integer)):
+        return None
+    if not (isinstance(wl, types.UniTuple) and wl.count == 8 and wl.dtype == types.float64):
+        return None
+    if not (isinstance(wv, types.UniTuple) and wv.count == 4 and wv.dtype == types.float64):
+        return None
+    if not (isinstance(v0, types.Integer) and isinstance(v1, types.Integer)):
+        return None
+    ret = types.UniTuple(types.float64, 3)
+    sig = ret(flat, bases, wl, v0, v1, wv)
+
+    def codegen(context, builder, signature, args):
+        aty, bty, _, v0ty, v1ty, _ = signature.args
+        a_flat, a_bases, a_wl, a_v0, a_v1, a_wv = args
+        ary = context.make_array(aty)(context, builder, a_flat)
+        elt = context.get_data_type(aty.dtype)
+        esize = context.get_abi_sizeof(elt)
+        i32 = ir.IntType(32)
+        f64 = ir.DoubleType()
+        vin = ir.VectorType(elt, 8)
+        vd = ir.VectorType(f64, 8)
+        flags = ("contract",)
+        data = ary.data
+        off0 = context.cast(builder, a_v0, v0ty, types.int64)
+        off1 = context.cast(builder, a_v1, v1ty, types.int64)
+        zeros8 = ir.Constant(ir.VectorType(i32, 8), [0] * 8)
+        undef = ir.Constant(vd, ir.Undefined)
+
+        def splat(x):
+            return builder.shuffle_vector(builder.insert_element(undef, x, ir.Constant(i32, 0)), undef, zeros8)
+
+        def load(off):
+            ptr = builder.bitcast(builder.gep(data, [off]), vin.as_pointer())
+            x = builder.load(ptr, align=esize)
+            return x if elt == f64 else builder.fpext(x, vd)
+
+        t0s = []
+        t1s = []
+        for c in range(8):
+            base = context.cast(builder, builder.extract_value(a_bases, c), bty.dtype, types.int64)
+            w = splat(builder.extract_value(a_wl, c))
+            t0s.append(builder.fmul(load(builder.add(base, off0)), w, flags=flags))
+            t1s.append(builder.fmul(load(builder.add(base, off1)), w, flags=flags))
+
+        def tree(ts):  # pairwise sum: short dependency chains
+            while len(ts) > 1:
+                ts = [builder.fadd(ts[j], ts[j + 1], flags=flags) for j in range(0, len(ts), 2)]
+            return ts[0]
+
+        acc0 = tree(t0s)
+        acc1 = tree(t1s)
+        # view weights, lanes 0-3 -> itv, lanes 4-7 -> itv + 1
+        wvs = [builder.extract_value(a_wv, j) for j in range(4)]
+        lanes = ir.Constant(ir.VectorType(i32, 8), [0, 0, 0, 0, 1, 1, 1, 1])
+
+        def pairw(wa, wb):
+            v = builder.insert_element(undef, wa, ir.Constant(i32, 0))
+            v = builder.insert_element(v, wb, ir.Constant(i32, 1))
+            return builder.shuffle_vector(v, undef, lanes)
+
+        s = builder.fadd(builder.fmul(acc0, pairw(wvs[0], wvs[1]), flags=flags),
+                         builder.fmul(acc1, pairw(wvs[2], wvs[3]), flags=flags), flags=flags)
+        out = []
+        for ch in range(3):
+            lo = builder.extract_element(s, ir.Constant(i32, ch))
+            hi = builder.extract_element(s, ir.Constant(i32, ch + 4))
+            out.append(builder.fadd(lo, hi))
+        return context.make_tuple(builder, ret, out)
+
+    return sig, codegen
+
+
 _FASTMATH = {"contract"}  # fused multiply-add only: NaN/inf semantics are kept
+
+
+#: Queries per block of :func:`lookup_rgb` (its scratch is 22 values per query).
+_BLOCK = 64
+#: Most curvature samples :func:`lookup_rgb` handles: its scan of the interior
+#: nodes (indices 1 to 6 of the padded axis) is unrolled.
+RGB_MAX_KAPPA = 8
+
+
+@njit(inline="always", cache=True, error_model="numpy")
+def _periodic_select(x, phi0, inv_step, n, inv_n):
+    """:func:`_locate_periodic` with selects instead of branches, plus the next index.
+
+    The wrap ``f mod n`` multiplies by ``inv_n = 1 / n`` and corrects the
+    rounding, which gives the exact remainder for integral ``|f| < 2**52``;
+    the index is clamped into ``[0, n)`` whatever ``x`` is.
+    """
+    u = (x - phi0) * inv_step
+    f = np.floor(u)
+    w = u - f
+    up = w > 1.0 - _SNAP
+    f = f + 1.0 if up else f
+    w = 0.0 if (up or w < _SNAP or n == 1) else w
+    r = f - n * np.floor(f * inv_n)
+    r = r - n if r >= n else r
+    r = r + n if r < 0.0 else r
+    i = int(min(max(r, 0.0), n - 1.0))
+    return i, (i + 1 if i + 1 < n else 0), w
+
+
+@njit(inline="always", cache=True, error_model="numpy")
+def _elevation_select(x, inv_step, n):
+    """Lower index and weight on an evenly spaced axis ``0, step, ..., (n - 1) step``.
+
+    Clamped at both ends like :func:`_locate`, with selects instead of
+    branches; the weight is the fractional part of ``x / step``, snapped to
+    the node within 1e-9 so that nodes are reproduced exactly despite its
+    rounding (``n >= 2``).
+    """
+    u = min(max(x * inv_step, 0.0), n - 1.0)
+    i = min(int(u), n - 2)
+    w = u - i
+    w = 0.0 if w < _SNAP else w
+    w = 1.0 if w > 1.0 - _SNAP else w
+    return i, w
 
 
 @njit(parallel=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
 def lookup_rgb(
-    flat, n_k, n_pl, n_tl, n_pv, n_tv, n_c, stride,
-    g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
+    flat, n_k, n_pl, n_tl, n_pv, n_tv, k_lo, k_hi, k_node, k_scan, k_inv, inv_tl, inv_tv,
+    pl0, pl_inv, pv0, pv_inv,
     q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset,
 ):
-    """RGB tables (``n_c == 3``, padded to ``stride = 4``): see :func:`lookup_generic`.
+    """:func:`lookup_generic` for RGB tables with evenly spaced elevations.
 
-    Interpolate ``n`` queries into ``out[offset:offset + n]``.
+    Same results (up to rounding) for tables with 3 channels (padded to
+    ``stride = 4`` in ``flat``), evenly spaced elevation axes of at least 3
+    samples (``inv_tl``, ``inv_tv``: 1 / spacing) and at most
+    :data:`RGB_MAX_KAPPA` curvatures: interpolate ``n`` queries into
+    ``out[offset:offset + n]``, return the counts of bad view and light
+    elevations. ``k_lo``, ``k_hi`` are the curvature axis ends; ``k_node``,
+    ``k_inv`` the axis and ``1 / spacing`` padded to :data:`RGB_MAX_KAPPA`;
+    ``k_scan`` the interior nodes at the same places, +inf elsewhere.
 
-    ``flat`` is the prepared table (:func:`cdbrdf.interp.prepare`) raveled in
-    C order with ``stride`` values per sample (RGB tables are padded to 4 so
-    that a sample is one aligned 16-byte load). Query arrays have length ``n``
-    or 1 (broadcast). Rows with a non-finite component, or an elevation
-    outside [0, 90], are NaN; the counts of bad view and light elevations are
-    returned.
-
-    The 32 corners are summed as 8 light/curvature corners of 4-corner view
-    bilinear sums; every node is reproduced exactly (weights 0 and 1 only).
+    Queries go in blocks of :data:`_BLOCK` (scratch of a few KiB per block,
+    none of query size): a first loop, written with selects only so that
+    LLVM vectorises it across queries, turns each query into a validity flag,
+    a table offset and 12 weights; a second loop sums the 32 corners of each
+    valid query with :func:`_blend_rgb` and classifies the invalid ones.
     """
     s_tv = 1 if q_tv.shape[0] > 1 else 0
     s_pv = 1 if q_pv.shape[0] > 1 else 0
     s_tl = 1 if q_tl.shape[0] > 1 else 0
     s_pl = 1 if q_pl.shape[0] > 1 else 0
     s_k = 1 if q_k.shape[0] > 1 else 0
-    s_view = n_tv * stride
+    s_view = n_tv * 4
     s_tlight = n_pv * s_view
-    one = np.uint64(1)
-    two = np.uint64(2)
+    d_tl = s_tlight  # n_tl >= 3
+    d_k = n_pl * n_tl * s_tlight if n_k > 1 else 0
+    inv_npl = 1.0 / n_pl
+    inv_npv = 1.0 / n_pv
+    kn1, kn2, kn3, kn4, kn5, kn6 = k_node[1], k_node[2], k_node[3], k_node[4], k_node[5], k_node[6]
+    ks1, ks2, ks3, ks4, ks5, ks6 = k_scan[1], k_scan[2], k_scan[3], k_scan[4], k_scan[5], k_scan[6]
+    ki0, ki1, ki2, ki3 = k_inv[0], k_inv[1], k_inv[2], k_inv[3]
+    ki4, ki5, ki6 = k_inv[4], k_inv[5], k_inv[6]
+    n_blocks = (n + _BLOCK - 1) // _BLOCK
     bad_v = 0
     bad_l = 0
-    for i in prange(n):
-        tv, pv, tl, pl, k = _query(q_tv, q_pv, q_tl, q_pl, q_k, i, s_tv, s_pv, s_tl, s_pl, s_k)
-        row = offset + i
-        bad = _invalid(tv, pv, tl, pl, k)
-        if bad != 0:
-            if bad == 2 or bad == 4:
-                bad_v += 1
-            if bad == 3 or bad == 4:
-                bad_l += 1
-            for c in range(n_c):
-                out[row, c] = np.nan
-            continue
-        ik, ik1, wk, ipl, ipl1, wpl, itl, itl1, wtl, ipv, ipv1, wpv, itv, itv1, wtv = _cell(
-            g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
-            n_k, n_pl, n_tl, n_pv, n_tv, tv, pv, tl, pl, k,
-        )
-        v00 = np.uint64(ipv * s_view + itv * stride)
-        v01 = np.uint64(ipv * s_view + itv1 * stride)
-        v10 = np.uint64(ipv1 * s_view + itv * stride)
-        v11 = np.uint64(ipv1 * s_view + itv1 * stride)
-        w00 = (1.0 - wpv) * (1.0 - wtv)
-        w01 = (1.0 - wpv) * wtv
-        w10 = wpv * (1.0 - wtv)
-        w11 = wpv * wtv
-        r = 0.0
-        g = 0.0
-        b = 0.0
-        for a in range(2):
-            ka = ik if a == 0 else ik1
-            wa = (1.0 - wk) if a == 0 else wk
-            for e in range(2):
-                pe = ipl if e == 0 else ipl1
-                we = wa * ((1.0 - wpl) if e == 0 else wpl)
-                for d in range(2):
-                    td = itl if d == 0 else itl1
-                    wd = we * ((1.0 - wtl) if d == 0 else wtl)
-                    base = np.uint64(((ka * n_pl + pe) * n_tl + td) * s_tlight)
-                    x0 = wd * w00
-                    x1 = wd * w01
-                    x2 = wd * w10
-                    x3 = wd * w11
-                    o0 = base + v00
-                    o1 = base + v01
-                    o2 = base + v10
-                    o3 = base + v11
-                    r += (x0 * flat[o0] + x1 * flat[o1]) + (x2 * flat[o2] + x3 * flat[o3])
-                    g += (x0 * flat[o0 + one] + x1 * flat[o1 + one]) + (x2 * flat[o2 + one] + x3 * flat[o3 + one])
-                    b += (x0 * flat[o0 + two] + x1 * flat[o1 + two]) + (x2 * flat[o2 + two] + x3 * flat[o3 + two])
-        out[row, 0] = r
-        out[row, 1] = g
-        out[row, 2] = b
+    for blk in prange(n_blocks):
+        start = blk * _BLOCK
+        m = min(_BLOCK, n - start)
+        qbuf = np.empty((5, _BLOCK), dtype=np.float64)
+        ibuf = np.empty((5, _BLOCK), dtype=np.int64)
+        fbuf = np.empty((12, _BLOCK), dtype=np.float64)
+        # contiguous copies of the (possibly broadcast) queries: lets the next loop vectorise
+        for j in range(m):
+            q = start + j
+            qbuf[0, j] = q_tv[q * s_tv]
+            qbuf[1, j] = q_pv[q * s_pv]
+            qbuf[2, j] = q_tl[q * s_tl]
+            qbuf[3, j] = q_pl[q * s_pl]
+            qbuf[4, j] = q_k[q * s_k]
+        for j in range(m):
+            tv = qbuf[0, j]
+            pv = qbuf[1, j]
+            tl = qbuf[2, j]
+            pl = qbuf[3, j]
+            k = qbuf[4, j]
+            # valid: elevations in [0, 90], everything finite (the rest is then unused)
+            ibuf[4, j] = ((tv >= 0.0) & (tv <= 90.0) & (tl >= 0.0) & (tl <= 90.0)
+                          & (pv - pv == 0.0) & (pl - pl == 0.0) & (k - k == 0.0))
+            # curvature as _locate: clamp, count the interior nodes at or below
+            kc = min(max(k, k_lo), k_hi)
+            b1 = ks1 <= kc
+            b2 = ks2 <= kc
+            b3 = ks3 <= kc
+            b4 = ks4 <= kc
+            b5 = ks5 <= kc
+            b6 = ks6 <= kc
+            ik = np.int64(b1) + np.int64(b2) + np.int64(b3) + np.int64(b4) + np.int64(b5) + np.int64(b6)
+            klo = kn6 if b6 else (kn5 if b5 else (kn4 if b4 else (
+                kn3 if b3 else (kn2 if b2 else (kn1 if b1 else k_lo)))))
+            kinv = ki6 if b6 else (ki5 if b5 else (ki4 if b4 else (
+                ki3 if b3 else (ki2 if b2 else (ki1 if b1 else ki0)))))
+            wk = (kc - klo) * kinv
+            wk = 1.0 if kc >= k_hi else wk
+            itl, wtl = _elevation_select(tl, inv_tl, n_tl)
+            itv, wtv = _elevation_select(tv, inv_tv, n_tv)
+            ipl, ipl1, wpl = _periodic_select(pl, pl0, pl_inv, n_pl, inv_npl)
+            ipv, ipv1, wpv = _periodic_select(pv, pv0, pv_inv, n_pv, inv_npv)
+            # pole rule, as in _cell
+            wpl = 0.0 if (itl == 0 and wtl == 0.0) else wpl
+            wpv = 0.0 if (itv == 0 and wtv == 0.0) else wpv
+            ibuf[0, j] = ((ik * n_pl + ipl) * n_tl + itl) * s_tlight
+            ibuf[1, j] = (ipl1 - ipl) * n_tl * s_tlight
+            ibuf[2, j] = ipv * s_view + itv * 4
+            ibuf[3, j] = ipv1 * s_view + itv * 4
+            wk0 = 1.0 - wk
+            wp00 = wk0 * (1.0 - wpl)
+            wp01 = wk0 * wpl
+            wp10 = wk * (1.0 - wpl)
+            wp11 = wk * wpl
+            wt0 = 1.0 - wtl
+            fbuf[0, j] = wp00 * wt0
+            fbuf[1, j] = wp00 * wtl
+            fbuf[2, j] = wp01 * wt0
+            fbuf[3, j] = wp01 * wtl
+            fbuf[4, j] = wp10 * wt0
+            fbuf[5, j] = wp10 * wtl
+            fbuf[6, j] = wp11 * wt0
+            fbuf[7, j] = wp11 * wtl
+            wv0 = 1.0 - wpv
+            wu0 = 1.0 - wtv
+            fbuf[8, j] = wv0 * wu0
+            fbuf[9, j] = wv0 * wtv
+            fbuf[10, j] = wpv * wu0
+            fbuf[11, j] = wpv * wtv
+        for j in range(m):
+            row = offset + start + j
+            if ibuf[4, j] == 0:
+                bad = _invalid(qbuf[0, j], qbuf[1, j], qbuf[2, j], qbuf[3, j], qbuf[4, j])
+                if bad == 2 or bad == 4:
+                    bad_v += 1
+                if bad == 3 or bad == 4:
+                    bad_l += 1
+                out[row, 0] = np.nan
+                out[row, 1] = np.nan
+                out[row, 2] = np.nan
+                continue
+            b = ibuf[0, j]
+            d_pl = ibuf[1, j]
+            bases = (b, b + d_tl, b + d_pl, b + d_pl + d_tl,
+                     b + d_k, b + d_k + d_tl, b + d_k + d_pl, b + d_k + d_pl + d_tl)
+            wl = (fbuf[0, j], fbuf[1, j], fbuf[2, j], fbuf[3, j], fbuf[4, j], fbuf[5, j], fbuf[6, j], fbuf[7, j])
+            wv = (fbuf[8, j], fbuf[9, j], fbuf[10, j], fbuf[11, j])
+            r, g, bl = _blend_rgb(flat, bases, wl, ibuf[2, j], ibuf[3, j], wv)
+            out[row, 0] = r
+            out[row, 1] = g
+            out[row, 2] = bl
     return bad_v, bad_l
 
 

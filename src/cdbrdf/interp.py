@@ -140,6 +140,35 @@ def _kernel_consts(lg: LookupGrid) -> tuple:
     return consts
 
 
+def _rgb_consts(lg: LookupGrid) -> tuple | None:
+    """Arguments of :func:`cdbrdf._kernels.lookup_rgb`, or None when it does not apply.
+
+    It needs an RGB table, evenly spaced elevation axes and at most
+    ``RGB_MAX_KAPPA`` curvatures; other tables use ``lookup_generic``.
+    """
+    from ._kernels import RGB_MAX_KAPPA
+
+    if "_rgb_consts" in lg.__dict__:
+        return lg.__dict__["_rgb_consts"]
+    consts = None
+    base = _kernel_consts(lg)
+    flat, nk, npl, ntl, npv, ntv, nc = base[:7]
+    inv_tl, inv_tv = base[14], base[15]
+    if nc == 3 and inv_tl > 0.0 and inv_tv > 0.0 and nk <= RGB_MAX_KAPPA:
+        k_node = np.full(RGB_MAX_KAPPA, lg.kappa[-1])
+        k_node[:nk] = lg.kappa
+        k_scan = np.full(RGB_MAX_KAPPA, np.inf)
+        k_scan[1:nk - 1] = lg.kappa[1:nk - 1]
+        k_inv = np.zeros(RGB_MAX_KAPPA)
+        k_inv[:max(nk - 1, 1)] = _inv_spacing(lg.kappa)
+        consts = (
+            flat, nk, npl, ntl, npv, ntv, float(lg.kappa[0]), float(lg.kappa[-1]), k_node, k_scan, k_inv,
+            inv_tl, inv_tv, lg.phi_l0, 1.0 / lg.phi_l_step, lg.phi_v0, 1.0 / lg.phi_v_step,
+        )
+    object.__setattr__(lg, "_rgb_consts", consts)
+    return consts
+
+
 def _inv_step(axis: NDArray[np.float64]) -> float:
     """1 / spacing of an evenly spaced axis, or 0.0 when the spacing varies."""
     if axis.size < 3:
@@ -215,8 +244,12 @@ def evaluate(
     nc = lg.values.shape[-1]
     n = int(np.prod(shape, dtype=np.int64))
     out = np.empty((n, nc), dtype=np.float64)
-    consts = _kernel_consts(lg)
-    kernel = _kernels.lookup_rgb if nc == 3 else _kernels.lookup_generic
+    consts = _rgb_consts(lg)
+    if consts is not None:
+        kernel = _kernels.lookup_rgb
+    else:
+        consts = _kernel_consts(lg)
+        kernel = _kernels.lookup_generic
 
     direct = []
     for q in qs:
