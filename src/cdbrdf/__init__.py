@@ -5,9 +5,12 @@ The public surface is small:
 - :class:`CDBRDF` the table, :class:`Grid` its axes;
 - :func:`load` / :meth:`CDBRDF.save` the HDF5 file (``docs/format.md``);
 - :meth:`CDBRDF.evaluate` the 5-D lookup;
-- submodules for each stage: :mod:`cdbrdf.interp`, :mod:`cdbrdf.io`,
-  :mod:`cdbrdf.plot`, :mod:`cdbrdf.curvature`, :mod:`cdbrdf.synth`,
-  :mod:`cdbrdf.measure`, :mod:`cdbrdf.render` (imported on demand).
+- submodules for each stage, imported on demand: :mod:`cdbrdf.interp` (the
+  lookup), :mod:`cdbrdf.io` (the file), :mod:`cdbrdf.materials` (bundled
+  fabrics), :mod:`cdbrdf.synth` (fabric model, simulated capture rig),
+  :mod:`cdbrdf.measure` (photographs to a table), :mod:`cdbrdf.curvature`,
+  :mod:`cdbrdf.render` (Mitsuba 3 plug-in and scenes), :mod:`cdbrdf.plot`,
+  :mod:`cdbrdf.report` and :mod:`cdbrdf.demo` (the paper end to end).
 """
 
 from __future__ import annotations
