@@ -29,8 +29,9 @@ def test_quick_demo_report_is_complete(quick_demo):
     folder = quick_demo.folder
     page = (folder / "report.html").read_text()
     images = re.findall(r'<img src="([^"]+)"', page)
-    # per material: photographs, measured mosaic, truth mosaic, sine sheet, draped cloth
-    assert len(images) == 5 * 2
+    # the surfaces' curvature, then per material: photographs, measured mosaic,
+    # truth mosaic, sine sheet, draped cloth
+    assert len(images) == 1 + 5 * 2
     for img in images:
         assert (folder / img).is_file() and (folder / img).stat().st_size > 10_000
         assert "/" not in img  # relative, beside the page
@@ -87,7 +88,7 @@ def test_report_opens_in_headless_chromium(quick_demo):
         finally:
             browser.close()
     assert not failed, failed
-    assert len(sizes) == 10
+    assert len(sizes) == 11
     for src, complete, width in sizes:
         assert complete and width > 100, (src, complete, width)
     assert "cdbrdf" in title

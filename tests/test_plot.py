@@ -434,3 +434,20 @@ def test_cli_mosaic_usage_errors(table_file, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         main(["mosaic", str(table_file), "-o", str(tmp_path / "m.png"), "--exposure", "bright"])
     assert e.value.code == 2 and "auto, white" in capsys.readouterr().err
+
+
+def test_curvature_map_draws_each_surface(tmp_path):
+    from cdbrdf.plot import plot_curvature_map
+
+    x, y = np.meshgrid(np.linspace(0, 1, 5), np.linspace(0, 1, 5), indexing="ij")
+    v = np.stack([x.ravel(), y.ravel(), np.zeros(25)], axis=1)
+    i, j = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
+    a = (i * 5 + j).ravel()
+    f = np.concatenate([np.stack([a, a + 5, a + 6], 1), np.stack([a, a + 6, a + 1], 1)])
+    k = np.linspace(-0.2, 0.2, 25)
+    fig = plot_curvature_map([("a", v, f, k), ("b", v, f, -k)])
+    assert len([ax for ax in fig.axes if ax.name == "3d"]) == 2
+    fig.savefig(tmp_path / "c.png")
+    assert (tmp_path / "c.png").stat().st_size > 1000
+    with pytest.raises(ValueError, match="surfaces: give at least one"):
+        plot_curvature_map([])

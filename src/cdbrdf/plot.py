@@ -56,6 +56,7 @@ __all__ = [
     "plot_slice",
     "plot_hemisphere",
     "plot_render_comparison",
+    "plot_curvature_map",
     "tonemap_srgb8",
     "luminance",
     "srgb_encode",
@@ -1074,4 +1075,55 @@ def plot_render_comparison(
     cb.set_label("RGB distance (linear radiance)")
     if title:
         fig.suptitle(title)
+    return fig
+
+
+def plot_curvature_map(
+    surfaces: Sequence[tuple[str, ArrayLike, ArrayLike, ArrayLike]],
+    *,
+    limit: float | None = None,
+    width_in: float = 10.0,
+    fig: "Figure | None" = None,
+) -> "Figure":
+    """Surfaces in 3-D coloured by their signed curvature (red convex, blue concave).
+
+    Parameters
+    ----------
+    surfaces
+        ``(title, vertices (n, 3) mm, faces (m, 3), kappa (n,) mm^-1)`` per panel.
+    limit
+        Colour-scale limit in mm^-1 (default: the 99th percentile of |kappa|).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One 3-D panel per surface and a shared colour bar.
+    """
+    from matplotlib import colormaps
+    from matplotlib.colors import Normalize
+    from matplotlib.cm import ScalarMappable
+
+    if not surfaces:
+        raise ValueError("surfaces: give at least one surface")
+    ks = [np.asarray(k, dtype=np.float64) for _, _, _, k in surfaces]
+    lim = float(limit) if limit is not None else float(np.percentile(np.abs(np.concatenate(ks)), 99)) or 1e-3
+    norm = Normalize(-lim, lim)
+    cmap = colormaps["RdBu_r"]
+    n = len(surfaces)
+    fig = _new_figure(fig, (width_in, width_in / n * 0.85 + 0.6), 120)
+    for i, (title, v, f, k) in enumerate(surfaces):
+        v = np.asarray(v, dtype=np.float64)
+        f = np.asarray(f)
+        k = np.asarray(k, dtype=np.float64)
+        ax = fig.add_subplot(1, n, i + 1, projection="3d")
+        face_k = k[f].mean(axis=1)
+        tri = ax.plot_trisurf(v[:, 0], v[:, 1], v[:, 2], triangles=f, linewidth=0, antialiased=False,
+                              shade=False)
+        tri.set_facecolor(cmap(norm(face_k)))
+        ax.set_title(title, fontsize=10)
+        ax.set_box_aspect((np.ptp(v[:, 0]), np.ptp(v[:, 1]), max(np.ptp(v[:, 2]), 1e-6) * 2))
+        ax.view_init(elev=35, azim=-60)
+        ax.set_axis_off()
+    cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=fig.axes, shrink=0.7, pad=0.02)
+    cb.set_label("curvature kappa [mm$^{-1}$]  (> 0 convex, < 0 concave)")
     return fig
