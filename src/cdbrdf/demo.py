@@ -197,10 +197,17 @@ def compare_with_truth(measured: CDBRDF, truth: CDBRDF) -> tuple[dict[str, float
     return stats, rows
 
 
-def _auto_ev(image: np.ndarray, target: float = 0.85) -> float:
+#: Renders are exposed at most this many stops above the physical exposure
+#: (a white Lambertian surface facing the light at display white), so that
+#: dark fabrics such as denim stay dark instead of being pushed to pastel.
+MAX_RENDER_EV = 2.0
+
+
+def _auto_ev(image: np.ndarray, target: float = 0.85, *, max_ev: float = 12.0) -> float:
+    """Exposure (stops) mapping the 99th percentile of luminance to ``target``."""
     y = image[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
     p = float(np.percentile(y, 99.0))
-    return float(np.clip(math.log2(target / p), -8.0, 12.0)) if p > 0 else 0.0
+    return float(np.clip(math.log2(target / p), -8.0, max_ev)) if p > 0 else 0.0
 
 
 def _stage(progress: Progress | None, label: str) -> Callable[[int, int], None] | None:
@@ -319,7 +326,7 @@ def _material(
     images, secs = _render_pair(measured, lambda mode: sine_scene(measured, mode=mode, **common),
                                 config=config, progress=progress, label=f"{name}: sine sheet")
     res.seconds["render_sine"] = secs
-    ev = _auto_ev(images["cdbrdf"])
+    ev = _auto_ev(images["cdbrdf"], max_ev=MAX_RENDER_EV)
     res.render_exposure_ev = ev
     fig = plot_render_comparison(images["brdf"], images["cdbrdf"], exposure_ev=ev,
                                  title=f"{name}: sine sheet, light 45 deg from the bending direction")
@@ -330,7 +337,8 @@ def _material(
     images, secs = _render_pair(measured, lambda mode: mesh_scene(measured, mesh, mode=mode, **common),
                                 config=config, progress=progress, label=f"{name}: draped cloth")
     res.seconds["render_drape"] = secs
-    fig = plot_render_comparison(images["brdf"], images["cdbrdf"], exposure_ev=_auto_ev(images["cdbrdf"]),
+    fig = plot_render_comparison(images["brdf"], images["cdbrdf"],
+                                 exposure_ev=_auto_ev(images["cdbrdf"], max_ev=MAX_RENDER_EV),
                                  title=f"{name}: cloth draped over a dome (curvature from the mesh)")
     fig.savefig(folder / f"{name}-drape.png")
     res.figures["drape"] = f"{name}-drape.png"
@@ -419,7 +427,9 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
                  "Rendered in Mitsuba 3 with (a) the plain BRDF and (b) the measured CDBRDF, the "
                  "curvature taken at every point; (c) shows where they differ: along the crests "
                  "(convex) and troughs (concave), not on the flanks where the sheet is nearly flat. "
-                 f"Exposure {m.render_exposure_ev:+.1f} EV; {config.render_size[0]} x "
+                 f"Exposure {m.render_exposure_ev:+.1f} EV (0 EV shows a white Lambertian surface facing "
+                 f"the light as white; at most +{MAX_RENDER_EV:g} EV, so dark fabrics stay dark); "
+                 f"{config.render_size[0]} x "
                  f"{config.render_size[1]} pixels, {config.render_spp} spp.")
         s.figure(m.figures["drape"], "A draped cloth",
                  "A generated cloth over a dome with radial folds, its curvature computed from the mesh "
