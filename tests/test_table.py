@@ -180,3 +180,24 @@ def test_brdf_clamps_outside_the_curvature_range(small_grid):
     np.testing.assert_array_equal(t.brdf(-5.0).values[0], t.values[0])
     single = t.brdf(0.0)
     np.testing.assert_array_equal(single.brdf(0.3).values, single.values)
+
+
+def test_xarray_round_trip(small_grid):
+    xr = pytest.importorskip("xarray")
+    measured = np.ones(small_grid.shape, bool)
+    measured[1, 2, 2, 0, 2] = False
+    src = np.full(small_grid.shape, -1)
+    src[1, 2, 2, 0, 2] = np.ravel_multi_index((1, 2, 1, 0, 2), small_grid.shape)
+    t = make_table(small_grid, measured=measured, fill_source=src, std=np.full(small_grid.shape + (3,), 0.02),
+                   attrs={"material": "m", "quantity": "brdf", "provenance": {"a": [1, 2]}})
+    ds = t.to_xarray()
+    assert ds["reflectance"].dims == ("kappa", "phi_l", "theta_l", "phi_v", "theta_v", "channel")
+    assert ds["kappa"].attrs["units"] == "1/mm" and ds["reflectance"].attrs["units"] == "1/sr"
+    v = ds["reflectance"].sel(kappa=0.05, phi_l=90.0, theta_l=20.0, phi_v=120.0, theta_v=30.0, channel="G")
+    assert float(v) == t.values[2, 1, 1, 1, 1, 1]
+    assert CDBRDF.from_xarray(ds) == t
+    # any dimension order is accepted
+    assert CDBRDF.from_xarray(ds.transpose("channel", "theta_v", "phi_v", "theta_l", "phi_l", "kappa")) == t
+    with pytest.raises(TableError, match="no variable 'reflectance'"):
+        CDBRDF.from_xarray(ds.drop_vars("reflectance"))
+    assert isinstance(ds, xr.Dataset)

@@ -521,6 +521,57 @@ class CDBRDF:
         k, pl, tl, pv, tv, c = self.shape
         return self._values.reshape(k, pl * tl, pv * tv, c)
 
+    def to_xarray(self):
+        """The table as an :class:`xarray.Dataset` with named dimensions.
+
+        Variables ``reflectance`` (kappa, phi_l, theta_l, phi_v, theta_v,
+        channel), ``measured``, ``fill_source`` and, when present,
+        ``reflectance_std``; coordinates with ``units``; ``attrs`` copied
+        (non-scalar values as they are). Needs xarray.
+        """
+        import xarray as xr
+
+        coords = {name: (name, axis, {"units": "1/mm" if name == "kappa" else "degree"})
+                  for name, axis in self._grid.axes().items()}
+        coords["channel"] = ("channel", np.array(self.channels))
+        data = {
+            "reflectance": (AXES, self._values, {"units": "1/sr" if self.quantity == "brdf" else "1"}),
+            "measured": (AXES[:-1], self._measured),
+            "fill_source": (AXES[:-1], self._fill_source),
+        }
+        if self._std is not None:
+            data["reflectance_std"] = (AXES, self._std)
+        return xr.Dataset(data, coords=coords, attrs=copy.deepcopy(self._attrs))
+
+    @classmethod
+    def from_xarray(cls, ds) -> "CDBRDF":
+        """A table from a :class:`xarray.Dataset` laid out as :meth:`to_xarray` makes.
+
+        Dimensions are transposed into the table's order when needed; values
+        are validated as by the constructor.
+        """
+        for name in ("reflectance",) + AXES[:-1]:
+            if name not in ds.variables:
+                raise TableError(f"ds: the dataset has no variable {name!r}")
+        refl = ds["reflectance"].transpose(*AXES)
+        measured = ds["measured"].transpose(*AXES[:-1]).values if "measured" in ds else None
+        fill = ds["fill_source"].transpose(*AXES[:-1]).values if "fill_source" in ds else None
+        std = ds["reflectance_std"].transpose(*AXES).values if "reflectance_std" in ds else None
+        attrs = dict(ds.attrs)
+        if "channel" in ds.coords:
+            names = [str(c) for c in ds["channel"].values]
+            default = ["R", "G", "B"] if len(names) == 3 else [f"c{i}" for i in range(len(names))]
+            if names != default:
+                attrs.setdefault("channels", names)
+        return cls(
+            refl.values,
+            **{name: ds[name].values for name in AXES[:-1]},
+            measured=measured,
+            fill_source=fill,
+            std=std,
+            attrs=attrs,
+        )
+
     def with_attrs(self, **attrs: Any) -> "CDBRDF":
         """A copy with ``attrs`` updated."""
         a = copy.deepcopy(self._attrs)
