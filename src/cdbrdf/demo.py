@@ -26,7 +26,6 @@ are never mixed and a failed run leaves the previous one intact.
 from __future__ import annotations
 
 import json
-import logging
 import math
 import tempfile
 import time
@@ -41,8 +40,6 @@ import numpy as np
 from .table import CDBRDF, Grid, PAPER_KAPPA
 
 __all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth"]
-
-_LOG = logging.getLogger(__name__)
 
 #: ``progress(stage, done, total)``: stage is a short label such as "denim: photographs".
 Progress = Callable[[str, int, int], None]
@@ -221,7 +218,7 @@ def _contact_sheet(capture_dir: Path, grid: Grid, path: Path, *, material: str) 
     from matplotlib.figure import Figure
 
     from .measure.images import read_image, srgb_to_linear
-    from .plot import kappa_label
+    from .plot import kappa_label, tonemap_srgb8
 
     tl = grid.theta_l[min(1, grid.theta_l.size - 1)]
     pl = grid.phi_l[0]
@@ -242,8 +239,6 @@ def _contact_sheet(capture_dir: Path, grid: Grid, path: Path, *, material: str) 
                 x = x[..., :3] if x.ndim == 3 else np.repeat(x[..., None], 3, axis=-1)
                 lin = srgb_to_linear(x)
                 ev = _auto_ev(lin, 0.7)
-                from .plot import tonemap_srgb8
-
                 ax.imshow(tonemap_srgb8(lin, exposure_ev=ev), interpolation="nearest")
                 h, w = x.shape[:2]
                 ax.add_patch(_rect(w // 2 - 3.5, h // 2 - 3.5, 7, 7))
@@ -267,7 +262,7 @@ def _render_pair(table: CDBRDF, scene_fn, *, config: DemoConfig, progress, label
 
     images = {}
     t0 = time.perf_counter()
-    for i, mode in enumerate(("brdf", "cdbrdf")):
+    for mode in ("brdf", "cdbrdf"):
         scene = scene_fn(mode)
         cb = _stage(progress, f"{label} ({mode})")
         images[mode] = render_scene(scene, spp=config.render_spp, seed=0, progress=cb)
@@ -282,7 +277,6 @@ def _material(
     progress: Progress | None,
 ) -> MaterialResult:
     from . import materials
-    from .io import load
     from .measure import measure
     from .measure.plan import default_stand, write_plan
     from .plot import plot_mosaic, plot_render_comparison
@@ -307,7 +301,6 @@ def _material(
                             progress=_stage(progress, f"{name}: measuring"))
     res.seconds["measuring"] = time.perf_counter() - t0
     res.summary = rep.summary()
-    measured = load(res.measured_path)
     res.error, res.per_stand = compare_with_truth(measured, truth)
 
     t0 = time.perf_counter()
