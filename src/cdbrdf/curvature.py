@@ -26,6 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .errors import MeshError
+
 __all__ = [
     "MeshError",
     "PrincipalCurvatures",
@@ -43,10 +45,6 @@ IGL_RADIUS = 2
 
 #: Relative tolerance (of the bounding-box diagonal) under which vertices are welded.
 WELD_TOLERANCE = 1e-7
-
-
-class MeshError(ValueError):
-    """A mesh cannot be used (degenerate, inconsistent winding, bad arrays)."""
 
 
 @dataclass(frozen=True)

@@ -1,12 +1,23 @@
 """Exceptions raised by :mod:`cdbrdf`.
 
-Every error about user input is a :class:`ValueError` subclass so that
-``except ValueError`` keeps working, and names the argument or file at fault.
+Every error about user input derives from :class:`CDBRDFError` and, so that
+``except ValueError`` keeps working, from :class:`ValueError` (or
+:class:`OSError` for a missing system library). Each message is one line that
+names the argument, file or limit at fault and the problem.
 """
 
 from __future__ import annotations
 
-__all__ = ["CDBRDFError", "TableError", "FormatError", "QueryError"]
+__all__ = [
+    "CDBRDFError",
+    "TableError",
+    "FormatError",
+    "QueryError",
+    "ImageError",
+    "MeshError",
+    "CaptureError",
+    "LimitError",
+]
 
 
 class CDBRDFError(Exception):
@@ -23,3 +34,23 @@ class FormatError(CDBRDFError, ValueError):
 
 class QueryError(CDBRDFError, ValueError):
     """A lookup was given an impossible direction (the message names it)."""
+
+
+class ImageError(CDBRDFError, ValueError):
+    """A photograph cannot be read (corrupt, truncated or unsupported); names the file."""
+
+
+class MeshError(CDBRDFError, ValueError):
+    """A mesh cannot be used (degenerate, inconsistent, bad arrays); names the mesh."""
+
+
+class CaptureError(CDBRDFError, ValueError):
+    """The capture folder or table is malformed; the message names the file and line."""
+
+
+class LimitError(CDBRDFError, ValueError):
+    """An input asks for more than a configured limit (:mod:`cdbrdf.limits`).
+
+    The message names the limit, the amount asked for and the environment
+    variable that raises it.
+    """

@@ -10,9 +10,7 @@ from __future__ import annotations
 import datetime as _dt
 import html
 import json
-import os
 import shutil
-import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -20,9 +18,12 @@ from os import PathLike
 from pathlib import Path
 from typing import Any
 
+from .fsutil import is_owned, mark_owned, sweep_stale, temp_sibling
+
 __all__ = ["Figure", "Section", "Report", "output_folder"]
 
 _MARKER = ".cdbrdf-output"
+_KIND = "output"
 
 _CSS = """
 body { font: 15px/1.5 system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0 auto;
@@ -157,37 +158,48 @@ def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
     Old results are never mixed with new ones: the new folder replaces a
     previous cdbrdf output folder whole. A folder that exists, is not empty
     and was not made by cdbrdf is refused (nothing of the user's is deleted).
-    On failure the partial folder is removed and the old one left as it was.
+    On failure the partial folder is removed and the old one left as it was;
+    partial folders of killed runs are removed by the next run.
     """
     dest = Path(path)
-    if dest.exists():
-        if not dest.is_dir():
+    if dest.exists() or dest.is_symlink():
+        if dest.is_symlink() or not dest.is_dir():
             raise FileExistsError(f"{dest}: exists and is not a folder")
-        if any(dest.iterdir()) and not (dest / _MARKER).exists():
+        if any(dest.iterdir()) and not _owned(dest):
             raise FileExistsError(
                 f"{dest}: folder exists, is not empty and was not written by cdbrdf; "
                 "choose another output folder"
             )
+        cwd = Path.cwd().resolve()
+        if cwd == dest.resolve() or dest.resolve() in cwd.parents:
+            raise FileExistsError(
+                f"{dest}: is the current folder (or holds it) and would be replaced whole; "
+                "run from another folder or choose another output folder"
+            )
     parent = dest.parent if str(dest.parent) else Path(".")
     parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".partial", dir=parent))
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private
+    sweep_stale(dest)
+    tmp = temp_sibling(dest, "partial")
+    tmp.mkdir(mode=0o777)
     try:
+        mark_owned(tmp, _KIND)
         (tmp / _MARKER).write_text("written by cdbrdf; the whole folder is replaced on the next run\n")
         yield tmp
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     if dest.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".old", dir=parent))
-        old.rmdir()
+        old = temp_sibling(dest, "old")
         dest.rename(old)
         tmp.rename(dest)
         shutil.rmtree(old, ignore_errors=True)
     else:
         tmp.rename(dest)
+
+
+def _owned(folder: Path) -> bool:
+    # folders of cdbrdf <= 0.1 carry only the old marker
+    return is_owned(folder, _KIND) or (folder / _MARKER).is_file()
 
 
 def provenance_text(attrs: Mapping[str, Any]) -> str:

@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import CDBRDFError
+from ..errors import CDBRDFError, ImageError
 
 __all__ = [
     "ImageError",
@@ -65,10 +65,6 @@ FORMATS: dict[str, str] = {
 }
 
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-
-
-class ImageError(CDBRDFError, ValueError):
-    """A photograph cannot be read (corrupt, truncated or unsupported); names the file."""
 
 
 @dataclass(frozen=True)

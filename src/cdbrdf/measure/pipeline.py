@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import CDBRDFError, TableError
+from ..errors import CaptureError, CDBRDFError, TableError
 from ..frames import direction_from_angles
 from ..table import CDBRDF, Grid
 from .fill import angle_between_deg, fill_nearest
@@ -73,10 +73,6 @@ _REQUIRED = ("file", "kappa", "theta_v", "phi_v", "theta_l", "phi_l")
 _KNOWN = _REQUIRED + ("exposure", "cx", "cy", "kind", "hidden", "encoding")
 _ANGLE_DECIMALS = 6
 _CKPT_VERSION = 1
-
-
-class CaptureError(CDBRDFError, ValueError):
-    """The capture folder or table is malformed; the message names the file and line."""
 
 
 class MeasurementInterrupted(RuntimeError):

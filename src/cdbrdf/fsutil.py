@@ -1,0 +1,197 @@
+"""File safety: atomic writes, folders cdbrdf owns, leftovers of killed runs.
+
+Three rules every writer in cdbrdf follows:
+
+1. A file is written to a temporary name beside its destination and renamed
+   over it only once complete (:func:`atomic_path`), so an interrupted write
+   never leaves a half file under the final name.
+2. A folder cdbrdf creates carries a marker file (:data:`OWNER_MARK`) naming
+   what made it; cdbrdf deletes or replaces only folders that carry the
+   marker (:func:`is_owned`, :func:`remove_owned`), never a user's folder.
+3. Temporary names embed the writer's process id
+   (``.NAME.<pid>.<random>.<kind>``); :func:`sweep_stale` removes those whose
+   process is gone (a run killed with SIGKILL), so nothing piles up.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import re
+import secrets
+import shutil
+import socket
+from collections.abc import Iterator
+from contextlib import contextmanager
+from os import PathLike
+from pathlib import Path
+
+__all__ = [
+    "OWNER_MARK",
+    "atomic_path",
+    "temp_sibling",
+    "mark_owned",
+    "is_owned",
+    "remove_owned",
+    "sweep_stale",
+    "same_file",
+]
+
+_LOG = logging.getLogger(__name__)
+
+#: Name of the marker file in every folder cdbrdf creates.
+OWNER_MARK = ".cdbrdf-owned"
+
+_TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<host>[0-9a-f]{8})\.[0-9a-f]{8}\.(?P<kind>[a-z]+)$")
+
+
+def _host_tag() -> str:
+    import hashlib
+
+    return hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
+
+
+def _umask() -> int:
+    m = os.umask(0)
+    os.umask(m)
+    return m
+
+
+def temp_sibling(dest: str | PathLike[str], kind: str) -> Path:
+    """A fresh temporary name beside ``dest``: ``.NAME.<pid>.<host>.<random>.<kind>``.
+
+    ``kind`` is a lower-case word (``tmp``, ``partial``, ``old``...). Nothing is
+    created; :func:`sweep_stale` recognises the name once its process is gone.
+    """
+    if not kind.isalpha() or not kind.islower():
+        raise ValueError(f"kind: {kind!r} must be a lower-case word")
+    d = Path(dest)
+    return d.with_name(f".{d.name}.{os.getpid()}.{_host_tag()}.{secrets.token_hex(4)}.{kind}")
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    except OverflowError:
+        return False
+    return True
+
+
+def sweep_stale(dest: str | PathLike[str]) -> list[Path]:
+    """Remove temporaries beside ``dest`` left by runs that no longer exist.
+
+    Only names made by :func:`temp_sibling` for ``dest`` on this host whose
+    process id is not running are removed (files, or folders that carry
+    :data:`OWNER_MARK` or are empty). Returns what was removed.
+    """
+    d = Path(dest)
+    folder = d.parent if str(d.parent) else Path(".")
+    removed: list[Path] = []
+    try:
+        entries = list(folder.iterdir())
+    except OSError:
+        return removed
+    host = _host_tag()
+    for p in entries:
+        m = _TEMP_RE.match(p.name)
+        if not m or m["name"] != d.name or m["host"] != host or _pid_alive(int(m["pid"])):
+            continue
+        try:
+            if p.is_symlink() or p.is_file():
+                p.unlink()
+            elif p.is_dir():
+                if (p / OWNER_MARK).is_file() or not any(p.iterdir()):
+                    shutil.rmtree(p)
+                else:
+                    continue
+            removed.append(p)
+            _LOG.info("removed %s, left by an interrupted run", p)
+        except OSError as exc:  # pragma: no cover - races with another cleaner
+            _LOG.debug("could not remove %s: %s", p, exc)
+    return removed
+
+
+@contextmanager
+def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp") -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
+
+    On any exception the temporary file is removed and ``path`` is untouched.
+    Temporaries of killed runs for the same destination are swept first.
+    ``suffix`` is kept for writers that pick the format from the name
+    (``.png``, ``.exr``): the temporary is ``.NAME.<pid>...tmp<suffix>``.
+    """
+    dest = Path(path)
+    folder = dest.parent if str(dest.parent) else Path(".")
+    if not folder.is_dir():
+        raise FileNotFoundError(f"{dest}: the folder {folder} does not exist")
+    if dest.is_dir():
+        raise IsADirectoryError(f"{dest}: is a folder; give a file name")
+    sweep_stale(dest)
+    tmp_path = temp_sibling(dest, "tmp")
+    if suffix and suffix != ".tmp":
+        tmp_path = tmp_path.with_name(tmp_path.name + suffix)
+    fd = os.open(tmp_path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666 & ~_umask())
+    os.close(fd)
+    try:
+        yield tmp_path
+        with open(tmp_path, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp_path, dest)
+    except BaseException:
+        tmp_path.unlink(missing_ok=True)
+        raise
+
+
+def mark_owned(folder: str | PathLike[str], kind: str) -> None:
+    """Write the owner marker into ``folder`` (which cdbrdf has just created)."""
+    Path(folder, OWNER_MARK).write_text(
+        json.dumps({"written_by": "cdbrdf", "kind": kind}) + "\n", encoding="utf-8"
+    )
+
+
+def is_owned(folder: str | PathLike[str], kind: str | None = None) -> bool:
+    """True when ``folder`` is a folder that cdbrdf made (of ``kind``, when given)."""
+    p = Path(folder)
+    mark = p / OWNER_MARK
+    if p.is_symlink() or not p.is_dir() or not mark.is_file() or mark.is_symlink():
+        return False
+    if kind is None:
+        return True
+    try:
+        info = json.loads(mark.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(info, dict) and info.get("kind") == kind
+
+
+def remove_owned(folder: str | PathLike[str], kind: str | None = None) -> None:
+    """Delete ``folder`` if cdbrdf made it; :class:`FileExistsError` otherwise.
+
+    A missing folder is fine. Nothing of a folder without the marker is touched.
+    """
+    p = Path(folder)
+    if not p.exists() and not p.is_symlink():
+        return
+    if not is_owned(p, kind):
+        raise FileExistsError(
+            f"{p}: exists and was not made by cdbrdf; move it away or choose another name"
+        )
+    # rename first so that a run killed half-way leaves a stale temporary, not a damaged folder
+    doomed = temp_sibling(p, "old")
+    p.rename(doomed)
+    shutil.rmtree(doomed, ignore_errors=True)
+
+
+def same_file(a: str | PathLike[str], b: str | PathLike[str]) -> bool:
+    """True when ``a`` and ``b`` name the same existing file (links resolved)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return Path(a).resolve() == Path(b).resolve()
