@@ -237,3 +237,120 @@ def test_prepare_is_cached(paper_table):
     assert prepare(paper_table) is prepare(paper_table)
     lg = prepare(paper_table)
     assert lg.theta_l[0] == 0 and lg.phi_l_step == 30.0
+
+
+# -- robustness of the index math (huge, tiny and non-finite queries) ----------------------
+def _kernel_tables() -> dict[str, CDBRDF]:
+    """One table per kernel path: RGB, generic 1-channel, > 8 curvatures, uneven elevations, 1 kappa."""
+    paper = Grid.paper()
+    many_k = Grid.paper(kappa=np.linspace(-0.3, 0.3, 11))
+    uneven = Grid(kappa=[-0.2, 0.0, 0.2], theta_l=[0.0, 10.0, 35.0, 70.0], phi_l=np.arange(0.0, 360.0, 45.0),
+                  theta_v=[5.0, 20.0, 60.0], phi_v=np.arange(0.0, 360.0, 72.0) + 10.0)
+    return {
+        "rgb": make_table(paper, seed=11),
+        "rgb_float32": make_table(paper, seed=12, dtype=np.float32),
+        "one_channel": make_table(paper, seed=13, channels=1),
+        "many_kappa": make_table(many_k, seed=14),
+        "uneven_theta": make_table(uneven, seed=15),
+        "single_kappa": make_table(Grid.paper(kappa=[0.0]), seed=16),
+        "fine_azimuth": make_table(Grid(kappa=[0.0], theta_l=[0.0, 30.0, 60.0], phi_l=np.arange(720) * 0.5,
+                                        theta_v=[0.0, 30.0, 60.0], phi_v=np.arange(720) * 0.5), seed=17),
+    }
+
+
+#: Extreme finite azimuths, degrees (float64 and float32 ones).
+_HUGE_AZIMUTHS = [1e15, 1e16, 1e23, -1e23, 1e30, -1e30, 3.4e38, -3.4e38, 1e300, 1e308, -1.7976931348623157e308,
+                  float(np.float32(3.4028235e38)), float(np.float32(-1e30)), 5e-324, -5e-324, -0.0,
+                  360.0 - 1e-13, -360.0 + 1e-13, 720.0, -720.0, 2.0**53 + 1.0, 2.0**63]
+
+
+def check_huge_azimuths() -> None:
+    """Every kernel: a huge finite azimuth gives the value at its exact place on the circle.
+
+    Run in a child process by the test below (before the fix these queries
+    read outside the table and could kill the process).
+    """
+    az = np.array(_HUGE_AZIMUTHS)
+    for name, t in _kernel_tables().items():
+        lo, hi = float(t.values.min()), float(t.values.max())
+        for a_dtype in (np.float64, np.float32):
+            a = az[np.abs(az) <= np.finfo(a_dtype).max].astype(a_dtype)
+            w = np.fmod(a.astype(np.float64), 360.0)  # exact
+            for args, ref in (((40.0, a, 30.0, 270.0, 0.1), (40.0, w, 30.0, 270.0, 0.1)),
+                              ((40.0, 100.0, 30.0, a, -0.1), (40.0, 100.0, 30.0, w, -0.1)),
+                              ((1e-300, a, 89.999999, a[::-1], 1e308), (1e-300, w, 89.999999, w[::-1], 1e308))):
+                got = t.evaluate(*args)
+                assert np.all(np.isfinite(got)), (name, a_dtype, got)
+                assert np.all((got >= lo) & (got <= hi)), (name, a_dtype, got.min(), got.max(), lo, hi)
+                np.testing.assert_allclose(got, t.evaluate(*ref), rtol=1e-12, atol=0, err_msg=name)
+
+
+def test_huge_finite_azimuths_stay_in_the_table_in_every_kernel():
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+    r = subprocess.run([sys.executable, "-c", "import tests.test_interp as m; m.check_huge_azimuths()"],
+                       capture_output=True, text=True, env=env, timeout=600)
+    assert r.returncode == 0, f"exit code {r.returncode}: {r.stderr[-2000:]}"
+
+
+@pytest.mark.parametrize("name", list(_kernel_tables()))
+def test_nodes_and_wraps_in_every_kernel(name):
+    t = _kernel_tables()[name]
+    g = t.grid
+    # every grid node off the pole is reproduced exactly, also one or many turns away
+    il, iv = min(1, g.theta_l.size - 1), min(1, g.theta_v.size - 1)
+    for turns in (0.0, 1.0, -3.0, 1e6):
+        got = t.evaluate(g.theta_v[iv], g.phi_v + 360.0 * turns, g.theta_l[il], g.phi_l[-1] - 360.0 * turns, g.kappa[-1])
+        np.testing.assert_allclose(got, t.values[-1, -1, il, :, iv], rtol=1e-9)
+    # elevations at and near the ends of [0, 90]
+    v = t.evaluate([0.0, 5e-324, 1e-300, 90.0 - 1e-13, 90.0], 10.0, [90.0, 89.9999, 0.0, 5e-324, 0.0], 370.0)
+    assert np.isfinite(v).all() and (v >= t.values.min()).all() and (v <= t.values.max()).all()
+    # non-finite queries give NaN rows, bad elevations a QueryError, in every kernel
+    bad = t.evaluate(30.0, [np.nan, np.inf, -np.inf, 10.0], 30.0, 0.0, [0.0, 0.0, 0.0, np.nan])
+    assert np.isnan(bad).all()
+    with pytest.raises(QueryError, match="theta_v"):
+        t.evaluate(90.0 + 1e-13, 0.0, 30.0, 0.0)
+    with pytest.raises(QueryError, match="theta_l"):
+        t.evaluate(30.0, 0.0, -5e-324, 1e30)
+
+
+def test_drjit_lookup_index_stays_in_the_table():
+    """The plug-in's Dr.Jit lookup: no float32 input (huge, infinite, NaN) indexes outside the table."""
+    pytest.importorskip("mitsuba")
+    pytest.importorskip("drjit")
+    from cdbrdf.render import _llvm
+
+    if not _llvm.find_llvm().ok:
+        pytest.skip(_llvm.llvm_message(_llvm.find_llvm()))
+    import mitsuba as mi
+
+    import cdbrdf.render as cr
+    from cdbrdf.render._bsdf import lookup_jit, pack_table
+
+    cr.set_variant("llvm_ad_rgb")
+    specials = np.array([np.nan, np.inf, -np.inf, 3.4028235e38, -3.4028235e38, 1e30, -1e30, 1e20, 2.0**24 + 3.0,
+                         -0.0, 1e-45, 359.99997, 720.0, -1e-30], dtype=np.float32)
+    rng = np.random.default_rng(0)
+    for name in ("rgb", "one_channel", "many_kappa", "uneven_theta", "fine_azimuth"):
+        t = _kernel_tables()[name]
+        lg = prepare(t)
+        packed = pack_table(mi, lg)
+        n = 4000
+        pv = rng.choice(specials, n)
+        pl = rng.choice(specials, n)
+        tv = rng.uniform(0, 90, n).astype(np.float32)
+        tl = rng.uniform(0, 90, n).astype(np.float32)
+        k = rng.uniform(-1, 1, n).astype(np.float32)
+        got = np.array(lookup_jit(mi, lg, packed, mi.Float(tv), mi.Float(pv), mi.Float(tl), mi.Float(pl),
+                                  mi.Float(k))).T
+        lo, hi = float(t.values.min()), float(t.values.max())
+        tol = 1e-5 * (hi - lo) + 1e-6
+        assert np.isfinite(got).all(), name
+        assert (got >= lo - tol).all() and (got <= hi + tol).all(), (name, got.min(), got.max(), lo, hi)
+        # finite azimuths that float32 wraps exactly agree with the float64 lookup
+        ok = np.isfinite(pv) & np.isfinite(pl) & (np.abs(pv) <= 720) & (np.abs(pl) <= 720)
+        ref = t.evaluate(tv[ok], pv[ok], tl[ok], pl[ok], k[ok])
+        np.testing.assert_allclose(got[ok][:, :t.n_channels], ref, rtol=1e-4, atol=1e-5 * hi)

@@ -66,15 +66,32 @@ def _locate(axis, inv_d, n, inv_step, x):
 
 
 @njit(inline="always", cache=True, error_model="numpy")
+def _wrap_azimuth(x):
+    """``x`` (degrees) reduced exactly into (-360, 360) when it lies outside.
+
+    ``np.fmod`` is exact for every finite float64, so a huge azimuth (1e30,
+    1e308) keeps its true place on the circle and the index math after it
+    works on small numbers only. Azimuths already inside are returned
+    unchanged (bit for bit); infinities and NaN become NaN.
+    """
+    if -360.0 < x < 360.0:
+        return x
+    return np.fmod(x, 360.0)
+
+
+@njit(inline="always", cache=True, error_model="numpy")
 def _locate_periodic(phi0, inv_step, n, x):
     """Lower index and weight of azimuth ``x`` on an evenly spaced circle.
 
+    ``x`` is first reduced with :func:`_wrap_azimuth`, so ``(x - phi0) /
+    step`` stays below ``2 n`` in magnitude and its floor wraps exactly. The
+    index is clamped into ``[0, n)`` as a last line of defence (NaN gives 0).
     Weights within 1e-9 of a node snap to it, so nodes are reproduced exactly
     despite the rounding of ``(x - phi0) / step``.
     """
     if n == 1:
         return 0, 0.0
-    u = (x - phi0) * inv_step
+    u = (_wrap_azimuth(x) - phi0) * inv_step
     f = np.floor(u)
     w = u - f
     if w < _SNAP:
@@ -84,6 +101,9 @@ def _locate_periodic(phi0, inv_step, n, x):
         f += 1.0
     if f < 0.0 or f >= n:
         f = f - n * np.floor(f / n)
+    if not (0.0 <= f <= n - 1.0):  # unreachable for finite x; also catches NaN
+        f = 0.0
+        w = 0.0
     return int(f), w
 
 
@@ -234,9 +254,11 @@ RGB_MAX_KAPPA = 8
 def _periodic_select(x, phi0, inv_step, n, inv_n):
     """:func:`_locate_periodic` with selects instead of branches, plus the next index.
 
-    The wrap ``f mod n`` multiplies by ``inv_n = 1 / n`` and corrects the
-    rounding, which gives the exact remainder for integral ``|f| < 2**52``;
-    the index is clamped into ``[0, n)`` whatever ``x`` is.
+    ``x`` must already be reduced by :func:`_wrap_azimuth` (done when the
+    queries are copied), so ``|f| < 2 n``. The wrap ``f mod n`` multiplies by
+    ``inv_n = 1 / n`` and corrects the rounding, which gives the exact
+    remainder for integral ``|f| < 2**52``; the index is clamped into
+    ``[0, n)`` whatever ``x`` is (NaN gives 0).
     """
     u = (x - phi0) * inv_step
     f = np.floor(u)
@@ -247,7 +269,8 @@ def _periodic_select(x, phi0, inv_step, n, inv_n):
     r = f - n * np.floor(f * inv_n)
     r = r - n if r >= n else r
     r = r + n if r < 0.0 else r
-    i = int(min(max(r, 0.0), n - 1.0))
+    r = r if (r >= 0.0) & (r <= n - 1.0) else 0.0  # last line of defence; NaN -> 0
+    i = int(r)
     return i, (i + 1 if i + 1 < n else 0), w
 
 
@@ -319,9 +342,9 @@ def lookup_rgb(
         for j in range(m):
             q = start + j
             qbuf[0, j] = q_tv[q * s_tv]
-            qbuf[1, j] = q_pv[q * s_pv]
+            qbuf[1, j] = _wrap_azimuth(q_pv[q * s_pv])
             qbuf[2, j] = q_tl[q * s_tl]
-            qbuf[3, j] = q_pl[q * s_pl]
+            qbuf[3, j] = _wrap_azimuth(q_pl[q * s_pl])
             qbuf[4, j] = q_k[q * s_k]
         for j in range(m):
             tv = qbuf[0, j]

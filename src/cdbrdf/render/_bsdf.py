@@ -73,7 +73,13 @@ def _locate(dr, Float, UInt, axis: np.ndarray, x):
 
 
 def _locate_periodic(dr, Float, UInt, phi0: float, step: float, n: int, x):
-    """Lower index and weight of an azimuth on an evenly spaced circle."""
+    """Lower index and weight of an azimuth on an evenly spaced circle.
+
+    The index is in ``[0, n)`` for every input, NaN and infinities included:
+    a lane whose wrapped position is not a number in range (a non-finite or
+    huge azimuth whose floor does not wrap exactly in float32) gets index 0
+    and weight 0, so no gather can leave the table.
+    """
     if n == 1:
         return UInt(0), Float(0.0)
     u = (x - phi0) * (1.0 / step)
@@ -83,8 +89,10 @@ def _locate_periodic(dr, Float, UInt, phi0: float, step: float, n: int, x):
     w = dr.select(snap, 0.0, w)
     f = dr.select(snap, f + 1.0, f)
     i = f - n * dr.floor(f / n)
-    i = dr.clip(i, 0.0, n - 1.0)
-    return UInt(i), w
+    ok = (i >= 0.0) & (i <= n - 1.0) & (w >= 0.0) & (w < 1.0)  # False for NaN
+    i = dr.select(ok, i, 0.0)
+    w = dr.select(ok, w, 0.0)
+    return UInt(dr.clip(i, 0.0, n - 1.0)), w
 
 
 #: Bits per channel of the packed RGB table (3 x 21 bits in one 64-bit word).
