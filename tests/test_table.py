@@ -62,7 +62,7 @@ def test_fig7_layout(small_grid):
         (dict(kappa=[np.nan]), "kappa: contains NaN"),
         (dict(kappa=[[0.0]]), "kappa: expected a 1-D axis"),
         (dict(kappa=[]), "kappa: the axis is empty"),
-        (dict(theta_v=["a"]), "theta_v: cannot be read as numbers"),
+        (dict(theta_v=["a"]), "theta_v: expected numbers, got dtype <U1"),
     ],
 )
 def test_bad_axes(axes, match):
@@ -201,3 +201,149 @@ def test_xarray_round_trip(small_grid):
     with pytest.raises(TableError, match="no variable 'reflectance'"):
         CDBRDF.from_xarray(ds.drop_vars("reflectance"))
     assert isinstance(ds, xr.Dataset)
+
+
+# -- hardening: axes, dtypes, masked arrays, fill sources, size limit -------------------------
+_BASE = dict(kappa=[0.0], theta_l=[0.0, 30.0], phi_l=[0.0, 180.0], theta_v=[0.0, 30.0], phi_v=[0.0, 180.0])
+
+
+def _table(values=None, **axes):
+    a = dict(_BASE, **axes)
+    shape = tuple(np.size(a[n]) for n in ("kappa", "phi_l", "theta_l", "phi_v", "theta_v"))
+    return CDBRDF(np.ones(shape + (3,)) if values is None else values, **a)
+
+
+@pytest.mark.parametrize(
+    "axes, match",
+    [
+        (dict(kappa=[-1e308, 1e308]), r"kappa: curvatures must lie in \[-1000, 1000\] 1/mm"),
+        (dict(kappa=[1e308]), r"kappa: curvatures must lie in"),
+        (dict(kappa=[-1.7e308, 0.0, 1.7e308]), r"kappa: curvatures must lie in"),
+        (dict(kappa=[0.0, 5e-324]), "kappa: neighbouring samples are .* closer than 1e-09"),
+        (dict(theta_l=[0.0, 1e-12]), "theta_l: neighbouring samples"),
+        (dict(kappa=[1 + 2j]), "kappa: expected numbers, got dtype complex128"),
+        (dict(kappa=np.array([0.0, 0.1], dtype=np.complex64)), "kappa: expected numbers, got dtype complex64"),
+        (dict(kappa=np.array([1], dtype="timedelta64[s]")), "kappa: expected numbers, got dtype timedelta64"),
+        (dict(theta_l=np.array(["2020-01-01", "2020-01-02"], dtype="datetime64[D]")),
+         "theta_l: expected numbers, got dtype datetime64"),
+        (dict(phi_v=np.array([0.0, 180.0], dtype=object)), "phi_v: expected numbers, got dtype object"),
+        (dict(kappa=[True]), "kappa: expected numbers, got dtype bool"),
+        (dict(theta_v=["0", "30"]), "theta_v: expected numbers, got dtype <U2"),
+        (dict(theta_v=[b"0", b"30"]), "theta_v: expected numbers, got dtype |S2"),
+        (dict(kappa=[0.0, None]), "kappa: expected numbers, got dtype object"),
+        (dict(kappa=np.ma.masked_array([0.0, 0.1], mask=[False, True])),
+         "kappa: masked array with 1 masked entries; fill them first"),
+    ],
+)
+def test_bad_axes_are_refused(axes, match):
+    with pytest.raises(TableError, match=match):
+        _table(**axes)
+
+
+def test_axis_bounds_are_inclusive_and_unmasked_masked_arrays_work():
+    t = _table(kappa=[-1e3, 0.0, 1e3])
+    assert t.kappa[-1] == 1e3
+    t = _table(kappa=np.ma.masked_array([0.0, 0.5], mask=False), theta_l=np.array([0, 30], dtype=np.int16))
+    assert t.kappa.dtype == np.float64 and t.theta_l.dtype == np.float64
+    assert not isinstance(t.kappa, np.ma.MaskedArray)
+
+
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda s: np.ones(s, dtype=np.complex128), "values: expected numbers, got dtype complex128"),
+        (lambda s: np.ones(s, dtype=bool), "values: expected numbers, got dtype bool"),
+        (lambda s: np.ones(s, dtype="timedelta64[ns]"), "values: expected numbers, got dtype timedelta64"),
+        (lambda s: np.ones(s, dtype="datetime64[ns]"), "values: expected numbers, got dtype datetime64"),
+        (lambda s: np.ones(s).astype(object), "values: expected numbers, got dtype object"),
+        (lambda s: np.full(s, "1.0"), "values: expected numbers, got dtype <U3"),
+        (lambda s: np.ma.masked_array(np.ones(s), mask=np.arange(np.prod(s)).reshape(s) == 3),
+         "values: masked array with 1 masked entries; fill them first"),
+        (lambda s: np.full(s, 1e300, dtype=np.longdouble) * np.longdouble(1e300), "values: contains .* infinite"),
+    ],
+)
+def test_bad_value_dtypes_are_refused(make, match):
+    shape = (1, 2, 2, 2, 2, 3)
+    with pytest.raises(TableError, match=match):
+        _table(make(shape))
+    # the same for std
+    with pytest.raises(TableError, match=match.replace("values", "std")):
+        CDBRDF(np.ones(shape), **_BASE, std=make(shape))
+
+
+def test_integer_and_float16_values_are_converted():
+    shape = (1, 2, 2, 2, 2, 3)
+    assert _table(np.ones(shape, dtype=np.int32)).values.dtype == np.float64
+    assert _table(np.ones(shape, dtype=np.float16)).values.dtype == np.float64
+    assert _table(np.ma.masked_array(np.ones(shape), mask=False)).values.dtype == np.float64
+
+
+def test_bad_measured_and_fill_source_dtypes(small_grid):
+    shape = small_grid.shape
+    measured = np.ones(shape, bool)
+    measured[0, 0, 2, 0, 2] = False
+    with pytest.raises(TableError, match="measured: expected booleans, got dtype timedelta64"):
+        make_table(small_grid, measured=np.ones(shape, dtype="timedelta64[s]"))
+    with pytest.raises(TableError, match="measured: expected booleans, got dtype float64"):
+        make_table(small_grid, measured=np.ones(shape))
+    with pytest.raises(TableError, match="measured: masked array with 1 masked entries"):
+        make_table(small_grid, measured=np.ma.masked_array(measured, mask=~measured))
+    src = np.full(shape, -1)
+    src[0, 0, 2, 0, 2] = 5
+    for bad, match in ((src.astype("timedelta64[s]"), "fill_source: expected integers, got dtype timedelta64"),
+                       (src.astype(bool), "fill_source: expected integers, got dtype bool"),
+                       (src.astype(np.float64), "fill_source: expected integers, got dtype float64"),
+                       (np.where(src == -1, 2**64 - 1, src).astype(np.uint64), r"fill_source: indices must be in")):
+        with pytest.raises(TableError, match=match):
+            make_table(small_grid, measured=measured, fill_source=bad)
+
+
+def test_fill_source_minus_one_on_a_filled_sample_is_refused(small_grid):
+    shape = small_grid.shape
+    measured = np.ones(shape, bool)
+    measured[0, 0, 2, 0, 2] = False
+    measured[1, 0, 2, 0, 2] = False
+    src = np.full(shape, -1)
+    src[0, 0, 2, 0, 2] = np.ravel_multi_index((0, 0, 1, 0, 2), shape)
+    with pytest.raises(TableError, match=r"fill_source: 1 filled sample\(s\) have -1 \(measured\)"):
+        make_table(small_grid, measured=measured, fill_source=src)
+    src[1, 0, 2, 0, 2] = -2  # unknown source: fine
+    assert make_table(small_grid, measured=measured, fill_source=src).fill_source[1, 0, 2, 0, 2] == -2
+
+
+def test_table_larger_than_the_limit_is_refused_before_allocating(monkeypatch):
+    from cdbrdf.errors import LimitError
+
+    monkeypatch.setenv("CDBRDF_MAX_TABLE_SAMPLES", "1000")
+    with pytest.raises(LimitError, match=r"grid of 5 x 12 x 6 x 12 x 6 samples: 25,920 values exceed the limit "
+                                         r"of 1,000 \(raise it with CDBRDF_MAX_TABLE_SAMPLES\)"):
+        Grid.paper()
+    # values whose shape is over the limit (a broadcast view: nothing allocated yet)
+    monkeypatch.setenv("CDBRDF_MAX_TABLE_SAMPLES", "30000")
+    g = Grid.paper()
+    with pytest.raises(LimitError, match=r"values: table of shape \(5, 12, 6, 12, 6, 3\): 77,760 values"):
+        CDBRDF(np.broadcast_to(np.float32(1), g.shape + (3,)), **g.axes())
+    # a grid of 10^15 samples is refused without building anything
+    monkeypatch.delenv("CDBRDF_MAX_TABLE_SAMPLES")
+    with pytest.raises(LimitError, match="regular grid of 5 x 36000 x 75001 x 36000 x 75001 samples"):
+        Grid.regular(theta_step_deg=0.001, phi_step_deg=0.01)
+    big = np.arange(10_000) * 1e-3
+    with pytest.raises(LimitError, match="grid of 10000 x 1 x 10000 x 1 x 10000 samples"):
+        Grid(kappa=big, theta_l=big * 8e-3, phi_l=[0.0], theta_v=big * 8e-3, phi_v=[0.0])
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(theta_step_deg=float("nan"), phi_step_deg=30.0), "theta_step_deg: must be positive and finite"),
+        (dict(theta_step_deg=15.0, phi_step_deg=1e-300), r"phi_step_deg: .* does not divide 360|table_samples|limit"),
+        (dict(theta_step_deg=15.0, phi_step_deg=720.0), r"phi_step_deg: must lie in \(0, 360\]"),
+        (dict(theta_step_deg=15.0, phi_step_deg=30.0, theta_max_deg=90.0), r"theta_max_deg: must lie in \[0, 90\)"),
+        (dict(theta_step_deg=15.0, phi_step_deg=30.0, kappa=[1e308]), "kappa: curvatures must lie in"),
+    ],
+)
+def test_bad_regular_grids(kw, match):
+    from cdbrdf.errors import CDBRDFError
+
+    with pytest.raises(CDBRDFError, match=match):
+        Grid.regular(**kw)

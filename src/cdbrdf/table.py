@@ -6,12 +6,20 @@ by the project's conventions (``docs/conventions.md``)::
     values[kappa, phi_l, theta_l, phi_v, theta_v, channel]
 
 - ``kappa``: surface curvature in mm^-1 (> 0 convex, < 0 concave), strictly
-  increasing, any spacing; a single value makes a plain BRDF.
+  increasing, any spacing, within +-:data:`MAX_ABS_KAPPA` (1e3 mm^-1, a
+  radius of 1 um); a single value makes a plain BRDF.
 - ``theta_l``, ``theta_v``: elevation from the normal in degrees, strictly
   increasing, in [0, 90).
 - ``phi_l``, ``phi_v``: azimuth from the reference tangent x towards y in
   degrees, evenly spaced in [0, 360) and periodic.
 - ``channel``: linear RGB (Rec. 709 primaries) unless ``attrs`` say otherwise.
+
+Neighbouring samples of every axis are at least :data:`MIN_AXIS_STEP` apart.
+Axes and values must be real numbers (integer or float dtypes; bool, complex,
+``datetime64``/``timedelta64``, object and string dtypes are refused) and a
+numpy masked array is refused when it has masked entries. A table with more
+values than the ``table_samples`` limit (:mod:`cdbrdf.limits`) is refused
+before anything is allocated.
 
 Values are the BRDF in sr^-1 with the cosine of the light direction *not*
 included (``quantity = "brdf"``), or the same up to an unknown scale
@@ -26,6 +34,7 @@ Matsufuji, Kawai, "Measurement and Rendering of Curvature Dependent BRDF".
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from os import PathLike
@@ -34,9 +43,20 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import limits
 from .errors import TableError
 
-__all__ = ["Grid", "CDBRDF", "AXES", "QUANTITIES", "PAPER_KAPPA", "PAPER_THETA", "PAPER_PHI"]
+__all__ = [
+    "Grid",
+    "CDBRDF",
+    "AXES",
+    "QUANTITIES",
+    "PAPER_KAPPA",
+    "PAPER_THETA",
+    "PAPER_PHI",
+    "MAX_ABS_KAPPA",
+    "MIN_AXIS_STEP",
+]
 
 #: Axis names of :attr:`CDBRDF.values`, in storage order.
 AXES: tuple[str, ...] = ("kappa", "phi_l", "theta_l", "phi_v", "theta_v", "channel")
@@ -53,20 +73,61 @@ PAPER_PHI = np.arange(0.0, 360.0, 30.0)
 
 _PHI_TOL_DEG = 1e-6
 
+#: Largest curvature magnitude an axis may hold, mm^-1 (a radius of 1 um).
+MAX_ABS_KAPPA = 1e3
+#: Smallest spacing of neighbouring samples on any axis (mm^-1 or degrees):
+#: closer samples would make ``1 / spacing`` in the lookup overflow.
+MIN_AXIS_STEP = 1e-9
+
+#: dtype kinds accepted for numbers: signed/unsigned integers and real floats
+#: (no bool, complex, timedelta64, datetime64, object, strings, records).
+_NUMBER_KINDS = "iuf"
+
+
+def _read_array(name: str, value: Any, *, kinds: str = _NUMBER_KINDS, what: str = "numbers") -> np.ndarray:
+    """``value`` as an ndarray whose dtype kind is in ``kinds``; refuse anything else.
+
+    A numpy masked array is accepted only when nothing is masked (its data is
+    used): a mask would otherwise be dropped silently.
+    """
+    if isinstance(value, np.ma.MaskedArray):
+        n_masked = int(np.count_nonzero(np.ma.getmaskarray(value)))
+        if n_masked:
+            raise TableError(
+                f"{name}: masked array with {n_masked} masked entries; fill them first "
+                "(e.g. .filled(value)) or mark filled samples with 'measured'"
+            )
+        value = np.ma.getdata(value)
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise TableError(f"{name}: cannot be read as {what} ({exc})") from None
+    if a.dtype.kind not in kinds:
+        raise TableError(f"{name}: expected {what}, got dtype {a.dtype}")
+    return a
+
 
 def _axis(name: str, value: ArrayLike) -> NDArray[np.float64]:
-    try:
-        a = np.array(value, dtype=np.float64, ndmin=1)
-    except (TypeError, ValueError) as exc:
-        raise TableError(f"{name}: cannot be read as numbers ({exc})") from None
+    a = _read_array(name, value)
+    with np.errstate(all="ignore"):  # out-of-range values become inf: refused below
+        a = np.array(a, dtype=np.float64, ndmin=1)
     if a.ndim != 1:
         raise TableError(f"{name}: expected a 1-D axis, got shape {a.shape}")
     if a.size == 0:
         raise TableError(f"{name}: the axis is empty")
     if not np.all(np.isfinite(a)):
         raise TableError(f"{name}: contains NaN or infinite values")
+    if name == "kappa" and np.abs(a).max() > MAX_ABS_KAPPA:
+        raise TableError(
+            f"{name}: curvatures must lie in [-{MAX_ABS_KAPPA:g}, {MAX_ABS_KAPPA:g}] 1/mm, "
+            f"got {a[0]:g}..{a[-1]:g}"
+        )
     if a.size > 1 and not np.all(np.diff(a) > 0):
         raise TableError(f"{name}: must be strictly increasing, got {a.tolist()}")
+    if a.size > 1 and np.diff(a).min() < MIN_AXIS_STEP:
+        raise TableError(
+            f"{name}: neighbouring samples are {np.diff(a).min():g} apart, closer than {MIN_AXIS_STEP:g}"
+        )
     a.setflags(write=False)
     return a
 
@@ -100,11 +161,20 @@ class Grid:
     Parameters
     ----------
     kappa
-        Curvatures in mm^-1, strictly increasing (any spacing).
+        Curvatures in mm^-1, strictly increasing (any spacing), in
+        [-:data:`MAX_ABS_KAPPA`, :data:`MAX_ABS_KAPPA`].
     theta_l, theta_v
         Light and view elevations in degrees, strictly increasing in [0, 90).
     phi_l, phi_v
         Light and view azimuths in degrees, evenly spaced in [0, 360).
+
+    Raises
+    ------
+    TableError
+        For an axis that is not 1-D real numbers, not finite, not strictly
+        increasing by at least :data:`MIN_AXIS_STEP`, or out of its range.
+    LimitError
+        When the grid has more samples than the ``table_samples`` limit.
     """
 
     kappa: NDArray[np.float64]
@@ -120,6 +190,10 @@ class Grid:
         _check_theta("theta_v", self.theta_v)
         _check_phi("phi_l", self.phi_l)
         _check_phi("phi_v", self.phi_v)
+        limits.check(
+            "table_samples", float(np.prod([float(n) for n in self.shape])),
+            what=f"grid of {' x '.join(str(n) for n in self.shape)} samples",
+        )
 
     @classmethod
     def paper(cls, *, kappa: ArrayLike | None = None) -> "Grid":
@@ -142,11 +216,26 @@ class Grid:
         kappa: ArrayLike = PAPER_KAPPA,
     ) -> "Grid":
         """A grid with the same regular direction sampling for light and view."""
-        if not (theta_step_deg > 0 and phi_step_deg > 0):
-            raise TableError("theta_step_deg and phi_step_deg must be positive")
+        for name, x in (("theta_step_deg", theta_step_deg), ("phi_step_deg", phi_step_deg),
+                        ("theta_max_deg", theta_max_deg)):
+            if not isinstance(x, (int, float, np.integer, np.floating)) or isinstance(x, (bool, np.bool_)):
+                raise TableError(f"{name}: expected a number, got {type(x).__name__}")
+        if not (math.isfinite(theta_step_deg) and theta_step_deg > 0):
+            raise TableError(f"theta_step_deg: must be positive and finite, got {theta_step_deg}")
+        if not (math.isfinite(phi_step_deg) and 0 < phi_step_deg <= 360):
+            raise TableError(f"phi_step_deg: must lie in (0, 360], got {phi_step_deg}")
+        if not (0 <= theta_max_deg < 90):
+            raise TableError(f"theta_max_deg: must lie in [0, 90), got {theta_max_deg}")
         n_phi = 360.0 / phi_step_deg
         if abs(n_phi - round(n_phi)) > 1e-9:
             raise TableError(f"phi_step_deg: {phi_step_deg} does not divide 360")
+        n_theta = math.floor((theta_max_deg + 1e-9) / theta_step_deg) + 1.0
+        n_kappa = float(np.size(kappa))
+        counts = " x ".join(f"{c:.0f}" if c < 1e12 else f"{c:.3g}" for c in (n_kappa, n_phi, n_theta, n_phi, n_theta))
+        limits.check(  # before any axis is built (products of floats: inf, never an exception)
+            "table_samples", n_kappa * n_phi * n_phi * n_theta * n_theta,
+            what=f"regular grid of {counts} samples",
+        )
         theta = np.arange(0.0, theta_max_deg + 1e-9, theta_step_deg)
         phi = np.arange(round(n_phi)) * phi_step_deg
         return cls(kappa=kappa, theta_l=theta, phi_l=phi, theta_v=theta, phi_v=phi)
@@ -197,8 +286,10 @@ class CDBRDF:
     ----------
     values
         Reflectance, shape ``(kappa, phi_l, theta_l, phi_v, theta_v, channel)``;
-        sr^-1 for ``quantity="brdf"``. Stored as float32 or float64 (other
-        dtypes are converted to float64). Must be finite.
+        sr^-1 for ``quantity="brdf"``. Stored as float32 or float64 (integer
+        and other float dtypes are converted to float64; bool, complex, time,
+        object and string dtypes and masked arrays with masked entries are
+        refused). Must be finite.
     kappa
         Curvatures, mm^-1, strictly increasing.
     theta_l, phi_l, theta_v, phi_v
@@ -208,8 +299,10 @@ class CDBRDF:
         measured, False where it was filled. Default: all True.
     fill_source
         Integer array, shape ``values.shape[:-1]``: for a filled sample, the
-        C-order flat index (over the five sample axes) of the sample its value
-        was copied from; -1 for measured samples. Default: -1 where measured.
+        C-order flat index (over the five sample axes) of the measured sample
+        its value was copied from, or -2 when the source is unknown; -1 for
+        (and only for) measured samples. Default: -1 where measured, -2 where
+        filled.
     std
         Optional per-sample standard deviation, same shape as ``values``.
     attrs
@@ -221,6 +314,8 @@ class CDBRDF:
     TableError
         When the shapes, axes, mask or values are inconsistent. The message
         names the argument.
+    LimitError
+        When the table has more values than the ``table_samples`` limit.
 
     Examples
     --------
@@ -267,14 +362,7 @@ class CDBRDF:
     # -- validation -------------------------------------------------------------
     @staticmethod
     def _check_values(name: str, values: ArrayLike, grid: Grid) -> NDArray[np.floating]:
-        try:
-            v = np.asarray(values)
-        except (TypeError, ValueError) as exc:
-            raise TableError(f"{name}: cannot be read as an array ({exc})") from None
-        if v.dtype not in (np.float32, np.float64):
-            if not (np.issubdtype(v.dtype, np.number) or v.dtype == bool):
-                raise TableError(f"{name}: expected numbers, got dtype {v.dtype}")
-            v = v.astype(np.float64)
+        v = _read_array(name, values)
         if v.ndim != 6:
             raise TableError(
                 f"{name}: expected 6 dimensions {AXES}, got shape {v.shape}"
@@ -286,6 +374,10 @@ class CDBRDF:
             )
         if v.shape[5] < 1:
             raise TableError(f"{name}: needs at least one channel")
+        limits.check("table_samples", float(v.size), what=f"{name}: table of shape {v.shape}")
+        if v.dtype not in (np.float32, np.float64):
+            with np.errstate(all="ignore"):  # out-of-range values become inf: refused below
+                v = v.astype(np.float64)
         if not np.all(np.isfinite(v)):
             bad = int(np.count_nonzero(~np.isfinite(v)))
             raise TableError(f"{name}: contains {bad} NaN or infinite value(s)")
@@ -298,41 +390,43 @@ class CDBRDF:
         if measured is None:
             m = np.ones(shape, dtype=bool)
         else:
-            m = np.asarray(measured)
-            if m.dtype != bool:
-                if not np.issubdtype(m.dtype, np.integer) or not np.isin(m, (0, 1)).all():
-                    raise TableError(f"measured: expected booleans, got dtype {m.dtype}")
-                m = m.astype(bool)
+            m = _read_array("measured", measured, kinds="biu", what="booleans")
             if m.shape != shape:
                 raise TableError(f"measured: shape {m.shape} differs from the sample grid {shape}")
+            if m.dtype != bool:
+                if not np.isin(m, (0, 1)).all():
+                    raise TableError(f"measured: expected booleans (or 0/1), got other values of dtype {m.dtype}")
+                m = m.astype(bool)
             m = m.copy()
         m.setflags(write=False)
         return m
 
     @staticmethod
     def _check_fill(fill: ArrayLike | None, measured: NDArray[np.bool_]) -> NDArray[np.int64]:
+        """Fill sources: -1 on measured samples; a measured sample's flat index or -2 on filled ones."""
         if fill is None:
-            if not measured.all():
-                f = np.full(measured.shape, -1, dtype=np.int64)
-                # Unknown sources: mark with -2 ("filled, source not recorded").
-                f[~measured] = -2
-            else:
-                f = np.full(measured.shape, -1, dtype=np.int64)
+            f = np.full(measured.shape, -1, dtype=np.int64)
+            # Unknown sources: mark with -2 ("filled, source not recorded").
+            f[~measured] = -2
         else:
-            f = np.asarray(fill)
-            if not np.issubdtype(f.dtype, np.integer):
-                raise TableError(f"fill_source: expected integers, got dtype {f.dtype}")
+            f = _read_array("fill_source", fill, kinds="iu", what="integers")
             if f.shape != measured.shape:
                 raise TableError(
                     f"fill_source: shape {f.shape} differs from the sample grid {measured.shape}"
+                )
+            if f.size and (f.min() < -2 or f.max() >= measured.size):
+                raise TableError(
+                    f"fill_source: indices must be in [0, {measured.size}) (or -2 = unknown, -1 = measured)"
                 )
             f = f.astype(np.int64)
             if np.any(f[measured] != -1):
                 raise TableError("fill_source: must be -1 wherever the sample is measured")
             src = f[~measured]
-            if np.any((src < -2) | (src >= measured.size)):
+            n_minus1 = int(np.count_nonzero(src == -1))
+            if n_minus1:
                 raise TableError(
-                    f"fill_source: indices must be in [0, {measured.size}) (or -2 = unknown)"
+                    f"fill_source: {n_minus1} filled sample(s) have -1 (measured); give the flat index "
+                    "of the measured sample they were filled from, or -2 = unknown"
                 )
             known = src[src >= 0]
             if known.size and not measured.reshape(-1)[known].all():
