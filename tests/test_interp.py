@@ -354,3 +354,58 @@ def test_drjit_lookup_index_stays_in_the_table():
         ok = np.isfinite(pv) & np.isfinite(pl) & (np.abs(pv) <= 720) & (np.abs(pl) <= 720)
         ref = t.evaluate(tv[ok], pv[ok], tl[ok], pl[ok], k[ok])
         np.testing.assert_allclose(got[ok][:, :t.n_channels], ref, rtol=1e-4, atol=1e-5 * hi)
+
+
+# -- numba caching in a read-only install ------------------------------------------------------
+def _read_only_install(root):
+    """A copy of the package where numba can write no cache, even for root.
+
+    Every package folder gets a regular *file* named ``__pycache__`` (so no
+    cache folder can be made next to the sources) and HOME holds a file
+    ``.cache`` (so no user cache folder either); then everything is made
+    read-only.
+    """
+    import os
+    import shutil
+    from pathlib import Path
+
+    src = Path(cdbrdf.__file__).parent
+    pkg = Path(root) / "site" / "cdbrdf"
+    shutil.copytree(src, pkg, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    for d in [pkg, *(p for p in pkg.rglob("*") if p.is_dir())]:
+        (d / "__pycache__").write_text("")
+    home = Path(root) / "home"
+    home.mkdir()
+    (home / ".cache").write_text("")
+    for p in [*pkg.parent.rglob("*"), pkg.parent, home / ".cache", home]:
+        os.chmod(p, 0o555 if p.is_dir() else 0o444)
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME", "PYTHONPATH")}
+    env.update(HOME=str(home), PYTHONPATH=str(pkg.parent), PYTHONDONTWRITEBYTECODE="1")
+    return pkg.parent, env
+
+
+def test_read_only_install_without_writable_home_compiles_in_memory(tmp_path):
+    import subprocess
+    import sys
+
+    site, env = _read_only_install(tmp_path)
+    code = (
+        "import sys, numpy as np\n"
+        "import cdbrdf.cli\n"
+        "assert cdbrdf.cli.main(['--version']) == 0\n"
+        "assert 'numba' not in sys.modules, 'cdbrdf --version imported numba'\n"
+        "import cdbrdf, cdbrdf.synth, cdbrdf.measure.images, cdbrdf._kernels as k\n"
+        "assert cdbrdf.__file__.startswith(sys.argv[1]), cdbrdf.__file__\n"
+        "assert k.lookup_generic._cache.__class__.__name__ == 'NullCache'\n"
+        "g = cdbrdf.Grid(kappa=[0.0], theta_l=[0.0, 40.0], phi_l=[0.0, 180.0], theta_v=[0.0, 40.0], phi_v=[0.0, 180.0])\n"
+        "t = cdbrdf.CDBRDF(np.full(g.shape + (1,), 0.25), **g.axes())\n"
+        "assert np.allclose(t.evaluate(30.0, 1e30, 20.0, 10.0), 0.25)\n"
+        "print('ok')\n"
+    )
+    try:
+        r = subprocess.run([sys.executable, "-c", code, str(site)], capture_output=True, text=True, env=env,
+                           cwd=tmp_path, timeout=600)
+    finally:
+        for p in [site, *site.rglob("*"), tmp_path / "home"]:
+            p.chmod(0o755 if p.is_dir() else 0o644)
+    assert r.returncode == 0 and r.stdout.strip().endswith("ok"), r.stderr[-3000:]

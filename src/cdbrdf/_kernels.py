@@ -22,8 +22,10 @@ from __future__ import annotations
 
 import numpy as np
 from llvmlite import ir
-from numba import njit, prange, types
+from numba import prange, types
 from numba.core.extending import intrinsic
+
+from ._jit import njit
 
 __all__: list[str] = []
 

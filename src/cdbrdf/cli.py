@@ -74,8 +74,14 @@ def _join_negative_lists(argv: Sequence[str]) -> list[str]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
+    argv = _join_negative_lists(sys.argv[1:] if argv is None else argv)
+    if argv == ["--version"]:  # answered without importing the sub-commands (and numba)
+        from . import __version__
+
+        print(f"cdbrdf {__version__}")
+        return 0
     parser = build_parser()
-    args = parser.parse_args(_join_negative_lists(sys.argv[1:] if argv is None else argv))
+    args = parser.parse_args(argv)
     logging.basicConfig(
         level=logging.DEBUG if args.debug else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",

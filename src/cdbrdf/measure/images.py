@@ -37,9 +37,9 @@ from os import PathLike
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from .._jit import njit
 from ..errors import CDBRDFError, ImageError
 
 __all__ = [

@@ -10,8 +10,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from .._jit import njit
 from .fibre import P_B, P_G, P_INK, P_R, _terms
 
 __all__: list[str] = []

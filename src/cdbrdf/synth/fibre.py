@@ -42,8 +42,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 from numpy.typing import NDArray
+
+from .._jit import njit
 
 __all__ = ["FibreLobes", "lobe_norms", "local_albedo_max", "fresnel_dielectric"]
 
