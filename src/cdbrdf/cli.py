@@ -79,7 +79,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         from . import __version__
 
         print(f"cdbrdf {__version__}")
-        return 0
+        sys.exit(0)  # as argparse's version action
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(
