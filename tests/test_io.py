@@ -387,3 +387,16 @@ def test_unreadable_file(tmp_path, small_grid):
     p.chmod(0)
     with pytest.raises(FormatError, match=r"t\.h5: cannot be read"):
         cdbrdf.load(p)
+
+
+def test_damaged_string_reference_in_channel(tmp_path, small_grid):
+    # a 4-byte change in the raw heap reference of a channel name made HDF5 spin (fuzz input #323)
+    p = tmp_path / "t.h5"
+    make_table(small_grid).save(p)
+    with h5py.File(p, "r") as f:
+        offset = f["channel"].id.get_offset()
+    b = bytearray(p.read_bytes())
+    b[offset + 16 : offset + 20] = (0xFFFF7F01).to_bytes(4, "little")  # length of the 2nd name
+    p.write_bytes(bytes(b))
+    with pytest.raises(FormatError, match=r"t\.h5: 'channel' entry 1 points at no stored string"):
+        cdbrdf.load(p)

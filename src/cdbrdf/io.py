@@ -23,10 +23,12 @@ import hashlib
 import json
 import logging
 import math
+import mmap
 import pickle
 import re
 import subprocess
 import sys
+from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -270,7 +272,23 @@ def superblock_version(path: str | PathLike[str]) -> int | None:
     return None
 
 
-def _check_global_heaps(path: Path) -> str:
+class _Unsure(Exception):
+    """The in-process reader met something only the time-limited child may read."""
+
+
+@dataclass
+class _Heaps:
+    """Result of :func:`_check_global_heaps`."""
+
+    #: "ok", "unsure" or a description of the damage
+    status: str
+    #: heap address -> {object index: object size}
+    objects: dict[int, dict[int, int]] = field(default_factory=dict)
+    #: size of file addresses (superblock)
+    n_off: int = 8
+
+
+def _check_global_heaps(path: Path) -> _Heaps:
     """Whether every HDF5 global heap collection in the file parses to its end.
 
     Global heaps (which hold variable-length strings and the dimension lists of
@@ -281,19 +299,24 @@ def _check_global_heaps(path: Path) -> str:
 
     Returns
     -------
-    str
-        ``"ok"``; ``"unsure"`` when something may or may not be a damaged
-        heap (or the superblock is not v2/v3); otherwise a description of the
-        damage, for the error message.
+    _Heaps
+        ``status`` ``"ok"`` (with every heap object's size); ``"unsure"``
+        when something may or may not be a damaged heap (or the superblock is
+        not v2/v3); otherwise a description of the damage, for the message.
     """
-    with open(path, "rb") as fh:
-        buf = fh.read()
+    with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as buf:
+        return _walk_global_heaps(buf)
+
+
+def _walk_global_heaps(buf: Any) -> _Heaps:
+    """:func:`_check_global_heaps` on the file's bytes (``bytes`` or ``mmap``)."""
     sb = buf.find(_HDF5_SIGNATURE)
     if sb < 0 or sb + 11 > len(buf) or buf[sb + 8] not in (2, 3):
-        return "unsure"
-    n_len = buf[sb + 10]  # size of lengths in the v2/v3 superblock
-    if n_len not in (2, 4, 8):
-        return "unsure"
+        return _Heaps("unsure")
+    n_off, n_len = buf[sb + 9], buf[sb + 10]  # sizes of addresses and lengths (v2/v3 superblock)
+    if n_len not in (2, 4, 8) or n_off not in (2, 4, 8):
+        return _Heaps("unsure")
+    heaps = _Heaps("ok", n_off=n_off)
     obj_hdr = 8 + n_len
     pos = buf.find(b"GCOL\x01")
     while pos >= 0:
@@ -308,6 +331,7 @@ def _check_global_heaps(path: Path) -> str:
         elif size < 4096:
             bad = f"the global heap at byte {pos} declares an impossible size {size}"
         p = pos + 8 + n_len
+        objects: dict[int, int] = {}
         while not bad and p < end:
             if p + obj_hdr > end:
                 break  # a tail too small for an object header is free space
@@ -316,11 +340,40 @@ def _check_global_heaps(path: Path) -> str:
             need = osize if idx == 0 else obj_hdr + ((osize + 7) & ~7)
             if need <= 0 or p + need > end:
                 bad = f"the global heap at byte {pos} has a damaged object at byte {p}"
+            elif idx:
+                objects[idx] = osize
             p += need
         if bad:
-            return bad if certain else "unsure"
+            return _Heaps(bad if certain else "unsure")
+        heaps.objects[pos - sb] = objects  # heap addresses are relative to the superblock
         pos = buf.find(b"GCOL\x01", pos + 1)
-    return "ok"
+    return heaps
+
+
+def _check_vlen_refs(path: Path, ds: Any, name: str, heaps: _Heaps) -> None:
+    """Check the global-heap references of a variable-length string dataset before HDF5 follows them.
+
+    Its raw data (length, heap address, object index per element) has no
+    checksum; a damaged length or address makes HDF5 allocate gigabytes or
+    read a heap that was never checked.
+    """
+    offset = ds.id.get_offset()
+    if offset is None or ds.id.get_storage_size() != ds.size * (8 + heaps.n_off):
+        raise _Unsure(name)  # not contiguous as save() writes it: let the child read it
+    with open(path, "rb") as fh:
+        fh.seek(offset)
+        raw = fh.read(ds.size * (8 + heaps.n_off))
+    step = 8 + heaps.n_off
+    if len(raw) != ds.size * step:
+        raise _fail(path, f"{name!r} has data stored beyond the end of the file: the file is truncated or damaged")
+    for i in range(ds.size):
+        e = raw[i * step : (i + 1) * step]
+        length = int.from_bytes(e[:4], "little")
+        addr = int.from_bytes(e[4 : 4 + heaps.n_off], "little")
+        idx = int.from_bytes(e[4 + heaps.n_off :], "little")
+        size = heaps.objects.get(addr, {}).get(idx)
+        if size is None or length > size:
+            raise _fail(path, f"{name!r} entry {i} points at no stored string: the file is damaged")
 
 
 def _check_storage(path: Path, ds: Any, name: str, file_size: int) -> None:
@@ -402,8 +455,11 @@ def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
             raise _fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
 
 
-def _read_parts(path: Path) -> dict[str, Any]:
-    """Read and check everything of a CDBRDF file; the arguments of :class:`CDBRDF`."""
+def _read_parts(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
+    """Read and check everything of a CDBRDF file; the arguments of :class:`CDBRDF`.
+
+    ``heaps``: the checked global heaps, when reading in this process.
+    """
     import h5py
 
     try:
@@ -466,6 +522,8 @@ def _read_parts(path: Path) -> dict[str, Any]:
 
         # -- metadata
         axes = {name: _read_ds(path, axis_ds[name], name).astype(np.float64) for name in _SAMPLE_DIMS}
+        if heaps is not None:
+            _check_vlen_refs(path, axis_ds["channel"], "channel", heaps)
         channels = [_as_str(path, "a 'channel' name", c) for c in _read_ds(path, axis_ds["channel"], "channel")]
         text = gattrs["cdbrdf_attrs"]
         limits.check("json_bytes", len(text.encode("utf-8")), what=f"{path}: attribute 'cdbrdf_attrs'")
@@ -514,11 +572,11 @@ def _read_parts(path: Path) -> dict[str, Any]:
     return dict(values=values, **axes, measured=mvals.astype(bool), fill_source=fill, std=std, attrs=attrs)
 
 
-def _read_guarded(path: Path) -> dict[str, Any]:
+def _read_guarded(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
     """:func:`_read_parts`, with every unexpected exception turned into FormatError."""
     try:
-        return _read_parts(path)
-    except (FormatError, LimitError):
+        return _read_parts(path, heaps)
+    except (FormatError, LimitError, _Unsure):
         raise
     except MemoryError:
         raise _fail(path, "not enough memory to read it") from None
@@ -620,15 +678,22 @@ def load(path: str | PathLike[str]) -> CDBRDF:
         raise _fail(p, f"cannot be read ({exc.strerror or _one_line(exc)})") from None
     if version is None:
         raise _fail(p, "not an HDF5 file (a CDBRDF file is HDF5 / NetCDF-4)")
-    heaps = "unsure"
+    heaps = _Heaps("unsure")
     if version >= 2:
         try:
             heaps = _check_global_heaps(p)
         except OSError as exc:
             raise _fail(p, f"cannot be read ({exc.strerror or _one_line(exc)})") from None
-        if heaps not in ("ok", "unsure"):
-            raise _fail(p, f"{heaps}: the file is truncated or damaged")
-    parts = _read_guarded(p) if heaps == "ok" else _read_in_child(p)
+        if heaps.status not in ("ok", "unsure"):
+            raise _fail(p, f"{heaps.status}: the file is truncated or damaged")
+    parts = None
+    if heaps.status == "ok":
+        try:
+            parts = _read_guarded(p, heaps)
+        except _Unsure:
+            pass
+    if parts is None:
+        parts = _read_in_child(p)
     try:
         return CDBRDF(**parts)
     except TableError as exc:
