@@ -154,7 +154,8 @@ def test_other_hdf5(tmp_path):
         (lambda f: f["kappa"].__setitem__(0, 1.0), "kappa: must be strictly increasing"),
         (lambda f: f["theta_v"].__setitem__(2, 95.0), r"theta_v: elevations must lie in \[0, 90\)"),
         (lambda f: f["measured"].__setitem__((0, 0, 0, 0, 0), 7), "'measured' holds values other than 0 and 1"),
-        (lambda f: f.attrs.__setitem__("cdbrdf_attrs", "{not json"), "not valid JSON"),
+        (lambda f: (f.attrs.__setitem__("cdbrdf_attrs", "{not json"), f.attrs.__delitem__("cdbrdf_sha256")),
+         "not valid JSON"),
     ],
 )
 def test_bad_files(tmp_path, small_grid, edit, match):
@@ -199,3 +200,203 @@ def test_saved_file_has_umask_permissions(tmp_path, small_grid):
         assert (p.stat().st_mode & 0o777) == 0o644
     finally:
         os.umask(old)
+
+
+# -- hardening: hangs, memory, error classes, checksums, spec enforcement -------------------------
+
+from pathlib import Path  # noqa: E402
+
+from cdbrdf import io  # noqa: E402
+from cdbrdf.errors import LimitError  # noqa: E402
+
+
+def _zero_global_heap(p: Path) -> None:
+    b = bytearray(p.read_bytes())
+    i = b.find(b"GCOL")
+    assert i > 0
+    b[i + 700 : i + 1724] = bytes(1024)  # object headers of zero size: HDF5 loops forever on them
+    p.write_bytes(bytes(b))
+
+
+def test_written_files_have_checksummed_metadata_and_fletcher32(tmp_path, rich_table):
+    p = tmp_path / "t.h5"
+    rich_table.save(p)
+    assert io.superblock_version(p) == 3
+    with h5py.File(p, "r") as f:
+        for name, ds in f.items():
+            if name != "channel":
+                assert ds.fletcher32, name
+        assert f["reflectance"].compression == "gzip" and f["reflectance"].shuffle
+
+
+@pytest.mark.parametrize("legacy", [False, True])
+def test_damaged_global_heap_ends_in_format_error(tmp_path, small_grid, monkeypatch, legacy):
+    # zeroed bytes in a global heap made load spin forever inside an attribute read
+    if legacy:  # a file with the old superblock, as format 1.0 wrote
+        monkeypatch.setattr(io, "_LIBVER", ("earliest", "v110"))
+    p = tmp_path / "t.h5"
+    make_table(small_grid, attrs={"material": "m"}).save(p)
+    monkeypatch.undo()
+    assert (io.superblock_version(p) == 0) == legacy
+    _zero_global_heap(p)
+    monkeypatch.setattr(io, "LEGACY_READ_TIMEOUT_S", 3.0)
+    match = r"reading it took longer than 3 s" if legacy else r"the global heap at byte \d+ has a damaged object"
+    with pytest.raises(FormatError, match=r"t\.h5: " + match):
+        cdbrdf.load(p)
+
+
+def test_legacy_file_is_read_in_a_child_and_equal(tmp_path, rich_table, monkeypatch):
+    monkeypatch.setattr(io, "_LIBVER", ("earliest", "v110"))
+    p = tmp_path / "old.h5"
+    rich_table.save(p)
+    monkeypatch.undo()
+    assert io.superblock_version(p) == 0
+    assert cdbrdf.load(p) == rich_table
+
+
+def test_xarray_reads_written_files(tmp_path, rich_table):
+    xr = pytest.importorskip("xarray")
+    p = tmp_path / "t.h5"
+    rich_table.save(p)
+    with xr.open_dataset(p, engine="h5netcdf") as ds:
+        np.testing.assert_array_equal(ds["reflectance"].values, rich_table.values)
+        np.testing.assert_array_equal(ds["reflectance_std"].values, rich_table.std)
+
+
+def test_flipped_byte_in_a_chunk_is_a_checksum_error(tmp_path, small_grid):
+    p = tmp_path / "t.h5"
+    make_table(small_grid).save(p, compression=None)
+    with h5py.File(p, "r") as f:
+        info = f["reflectance"].id.get_chunk_info(5)
+    b = bytearray(p.read_bytes())
+    b[info.byte_offset + info.size // 2] ^= 0x10
+    p.write_bytes(bytes(b))
+    with pytest.raises(FormatError, match=r"t\.h5: checksum mismatch in 'reflectance': the file is damaged"):
+        cdbrdf.load(p)
+
+
+def test_huge_declared_reflectance_is_refused_before_reading(tmp_path, small_grid):
+    def edit(f):
+        for name in io._SAMPLE_DIMS:
+            del f[name]
+            f.create_dataset(name, shape=(100,), dtype="f8", chunks=(100,))  # declared, never written
+
+    p = _write_then_edit(tmp_path, small_grid, edit)
+    assert p.stat().st_size < 100_000
+    with pytest.raises(LimitError, match=r"t\.h5: 'reflectance' of shape \(100, 100, 100, 100, 100, 3\)"):
+        cdbrdf.load(p)
+
+
+def test_table_samples_limit_applies(tmp_path, small_grid, monkeypatch):
+    p = tmp_path / "t.h5"
+    make_table(small_grid).save(p)
+    monkeypatch.setenv("CDBRDF_MAX_TABLE_SAMPLES", "100")
+    with pytest.raises(LimitError, match="CDBRDF_MAX_TABLE_SAMPLES"):
+        cdbrdf.load(p)
+
+
+@pytest.mark.parametrize("keep", [100, 5000, -2000, -7])
+def test_truncated_file(tmp_path, small_grid, keep):
+    p = tmp_path / "t.h5"
+    make_table(small_grid).save(p)
+    p.write_bytes(p.read_bytes()[:keep])
+    with pytest.raises(FormatError, match=r"t\.h5: "):
+        cdbrdf.load(p)
+
+
+@pytest.mark.parametrize("name", io._REQUIRED_ATTRS)
+def test_missing_required_attribute(tmp_path, small_grid, name):
+    p = _write_then_edit(tmp_path, small_grid, lambda f: f.attrs.__delitem__(name))
+    with pytest.raises(FormatError, match=f"t\\.h5: .*{name}"):
+        cdbrdf.load(p)
+
+
+def _set_attrs_json(f, attrs):
+    f.attrs["cdbrdf_attrs"] = json.dumps(attrs)
+    del f.attrs["cdbrdf_sha256"]
+
+
+def _attrs_of(f):
+    return json.loads(f.attrs["cdbrdf_attrs"])
+
+
+@pytest.mark.parametrize(
+    "edit, match",
+    [
+        (lambda f: f.__delitem__("channel"), "missing the variable 'channel'"),
+        (lambda f: _set_attrs_json(f, {**_attrs_of(f), "channels": list("ABCDEFG")}),
+         "names the channels .* but the 'channel' variable holds"),
+        (lambda f: _set_attrs_json(f, {**_attrs_of(f), "quantity": "brdf"}),
+         "'quantity' disagrees with its entry in 'cdbrdf_attrs'"),
+        (lambda f: f.attrs.__setitem__("material", "other"), "'material' disagrees"),
+        (lambda f: f.attrs.__setitem__("cdbrdf_attrs", "x" * 10), "checksum mismatch in 'cdbrdf_attrs'"),
+        (lambda f: f.attrs.__setitem__("format_version", 1.0), "'format_version' is not a string"),
+        (lambda f: f.attrs.__setitem__("format_version", np.bytes_(b"1.\xff")), "not valid UTF-8"),
+        (lambda f: f.attrs.__setitem__("format_version", "1.0.3"), "unreadable format_version"),
+        (lambda f: _replace(f, "kappa", np.array([-0.2, 0, 0.05, 0.3]) + 0j), "axis 'kappa' has dtype complex128"),
+        (lambda f: _replace(f, "theta_l", np.array([0, 20, 50])), "axis 'theta_l' has dtype int64"),
+        (lambda f: _replace(f, "fill_source", np.full(f["fill_source"].shape, 2**64 - 1, np.uint64)),
+         "'fill_source' holds indices outside"),
+        (lambda f: _replace(f, "reflectance", f["reflectance"][()].astype(np.int32)), "'reflectance' has dtype int32"),
+        (lambda f: _replace(f, "measured", f["measured"][()].astype(np.float32)), "'measured' has dtype float32"),
+        (lambda f: _replace(f, "channel", np.array([1, 2, 3])), "'channel' has dtype int64"),
+        (lambda f: _replace(f, "reflectance_std", np.ones(f["reflectance"].shape[:5] + (2,))),
+         "'reflectance_std' has shape"),
+    ],
+)
+def test_spec_is_enforced(tmp_path, small_grid, edit, match):
+    p = tmp_path / "t.h5"
+    make_table(small_grid, attrs={"material": "m"}, std=np.full(small_grid.shape + (3,), 0.1)).save(p)
+    with h5py.File(p, "r+") as f:
+        edit(f)
+    with pytest.raises(FormatError, match=match) as info:
+        cdbrdf.load(p)
+    assert str(info.value).startswith(str(p) + ": ")
+    assert "\n" not in str(info.value)
+
+
+def _replace(f, name, data):
+    """Replace a variable keeping its dimension scales (as a NetCDF writer would)."""
+    old = f[name]
+    dims = [d[0] for d in old.dims if len(d)] if name not in io.AXES else []
+    is_scale = name in io.AXES
+    del f[name]
+    new = f.create_dataset(name, data=data)
+    if is_scale:
+        new.make_scale(name)
+        return
+    for i, scale in enumerate(dims):
+        new.dims[i].attach_scale(scale)
+
+
+def test_save_refuses_channel_names_of_the_wrong_length(tmp_path, small_grid):
+    with pytest.raises(cdbrdf.TableError, match=r"attrs\['channels'\]"):
+        make_table(small_grid, attrs={"channels": list("ABCDEFG")}).save(tmp_path / "t.h5")
+
+
+def test_other_channel_names_round_trip(tmp_path, small_grid):
+    t = make_table(small_grid, channels=2, attrs={"channels": ["nir", "uv"]})
+    t.save(tmp_path / "t.h5")
+    assert cdbrdf.load(tmp_path / "t.h5") == t
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root reads every file")
+def test_unreadable_file(tmp_path, small_grid):
+    p = tmp_path / "t.h5"
+    make_table(small_grid).save(p)
+    p.chmod(0)
+    with pytest.raises(FormatError, match=r"t\.h5: cannot be read"):
+        cdbrdf.load(p)
+
+
+def test_damaged_string_reference_in_channel(tmp_path, small_grid):
+    # a 4-byte change in the raw heap reference of a channel name made HDF5 spin (fuzz input #323)
+    p = tmp_path / "t.h5"
+    make_table(small_grid).save(p)
+    with h5py.File(p, "r") as f:
+        offset = f["channel"].id.get_offset()
+    b = bytearray(p.read_bytes())
+    b[offset + 16 : offset + 20] = (0xFFFF7F01).to_bytes(4, "little")  # length of the 2nd name
+    p.write_bytes(bytes(b))
+    with pytest.raises(FormatError, match=r"t\.h5: 'channel' entry 1 points at no stored string"):
+        cdbrdf.load(p)

@@ -4,33 +4,64 @@
 dimensions ``(kappa, phi_l, theta_l, phi_v, theta_v, channel)``. Files are
 written with :mod:`h5netcdf` (so the dimension scales are exactly what NetCDF
 readers expect) to a temporary file in the destination folder that is renamed
-over the destination only once complete. They are read with :mod:`h5py` and
-checked thoroughly; any problem raises :class:`~cdbrdf.errors.FormatError`
-naming the file.
+over the destination only once complete, with HDF5's checksummed metadata
+(superblock v3, v2 object headers) and the Fletcher-32 checksum on every
+chunked dataset. They are read with :mod:`h5py` and checked thoroughly before
+anything big is read; any problem raises :class:`~cdbrdf.errors.FormatError`
+naming the file (or :class:`~cdbrdf.errors.LimitError` for a file that asks for
+more memory than :mod:`cdbrdf.limits` allows).
+
+Files without metadata checksums (format 1.0, or HDF5 written by other tools
+with the old superblock) can hold damaged structures that make the HDF5
+library loop forever with the interpreter lock held, where Ctrl-C does not
+help. Those are read in a child process under a time limit.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
+import math
+import mmap
+import pickle
+import re
+import subprocess
+import sys
+from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .errors import FormatError, TableError
+from . import limits
+from .errors import FormatError, LimitError, TableError
 from .fsutil import atomic_path
 from .table import AXES, CDBRDF
 
-__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "save", "load", "atomic_path"]
+__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "LEGACY_READ_TIMEOUT_S", "save", "load", "superblock_version", "atomic_path"]
 
 _LOG = logging.getLogger(__name__)
 
 #: Value of the global attribute ``format``.
 FORMAT_NAME = "cdbrdf"
 #: ``MAJOR.MINOR``: readers accept any minor version of their major version.
-FORMAT_VERSION = "1.0"
+FORMAT_VERSION = "1.1"
+
+#: HDF5 file-format bounds of written files: "v110" gives superblock v3 and
+#: v2 object headers, whose Jenkins checksums make damaged metadata an error
+#: instead of an endless loop; HDF5 >= 1.10 (and NetCDF-C built on it) reads it.
+_LIBVER = ("v110", "v110")
+#: Global attributes every file has (docs/format.md), all strings.
+_REQUIRED_ATTRS = ("format", "format_version", "quantity", "colour_space", "software", "cdbrdf_attrs", "Conventions")
+#: Global attribute with the SHA-256 of ``cdbrdf_attrs`` and the channel names (1.1).
+_DIGEST_ATTR = "cdbrdf_sha256"
+#: Attributes written by :func:`save` itself, never mirrors of table attrs.
+_OWN_ATTRS = frozenset(("format", "format_version", "software", "Conventions", "cdbrdf_attrs", _DIGEST_ATTR))
+#: Seconds a file without metadata checksums may take to read (plus 1 s per 20 MB).
+LEGACY_READ_TIMEOUT_S = 30.0
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
 _SAMPLE_DIMS = AXES[:-1]
 _UNITS = {
@@ -57,6 +88,15 @@ def _jsonable(name: str, value: Any) -> str:
         raise TableError(f"attrs[{name!r}]: cannot be stored in the file ({exc})") from None
 
 
+def _digest(attrs_json: str, channels: list[str]) -> np.ndarray:
+    """SHA-256 over ``cdbrdf_attrs`` and the channel names, as 32 uint8."""
+    h = hashlib.sha256(b"cdbrdf-1.1\0")
+    h.update(attrs_json.encode("utf-8"))
+    for c in channels:
+        h.update(b"\0" + c.encode("utf-8"))
+    return np.frombuffer(h.digest(), dtype=np.uint8).copy()
+
+
 def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
     """Write ``table`` to ``path`` (HDF5 / NetCDF-4), atomically.
 
@@ -68,12 +108,15 @@ def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = 
         Destination; its folder must exist. An existing file is replaced only
         once the new one is complete.
     compression
-        ``"gzip"`` (default, with the shuffle filter) or ``None``.
+        ``"gzip"`` (default, with the shuffle filter) or ``None``. Every
+        variable but ``channel`` is chunked and carries the Fletcher-32
+        checksum either way.
 
     Raises
     ------
     TableError
-        When an attribute cannot be stored (not JSON-serialisable).
+        When an attribute cannot be stored (not JSON-serialisable), or
+        ``attrs["channels"]`` does not name every channel.
     """
     import h5py
     import h5netcdf
@@ -85,15 +128,26 @@ def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = 
     attrs_json = _jsonable("*", table.attrs)
     for k, v in table.attrs.items():
         _jsonable(k, v)
-    comp: dict[str, Any] = {"track_times": False}
+    names = table.attrs.get("channels")
+    if names is not None and (
+        not isinstance(names, (list, tuple))
+        or len(names) != table.n_channels
+        or not all(isinstance(n, str) for n in names)
+    ):
+        raise TableError(
+            f"attrs['channels']: {names!r} is not a list of {table.n_channels} channel name(s)"
+        )
+    comp: dict[str, Any] = {"track_times": False, "fletcher32": True}
     if compression:
         comp.update(compression="gzip", compression_opts=4, shuffle=True)
     k, pl, tl, pv, tv, c = table.shape
     with atomic_path(path) as tmp:
-        with h5netcdf.File(tmp, "w") as f:
+        with h5netcdf.File(str(tmp), "w", libver=_LIBVER) as f:
             f.dimensions = dict(zip(AXES, table.shape))
             for name, axis in table.grid.axes().items():
-                var = f.create_variable(name, (name,), "f8", data=axis, track_times=False)
+                var = f.create_variable(
+                    name, (name,), "f8", data=axis, chunks=(axis.size,), fletcher32=True, track_times=False
+                )
                 var.attrs["units"] = _UNITS[name]
                 var.attrs["long_name"] = _LONG_NAMES[name]
             ch = f.create_variable(
@@ -147,6 +201,7 @@ def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = 
                 elif key not in f.attrs:
                     f.attrs[key] = _jsonable(key, value)
             f.attrs["cdbrdf_attrs"] = attrs_json
+            f.attrs[_DIGEST_ATTR] = _digest(attrs_json, list(table.channels))
     _LOG.debug("wrote %s (%s)", path, table)
 
 
@@ -154,19 +209,38 @@ def _fail(path: Path, msg: str) -> FormatError:
     return FormatError(f"{path}: {msg}")
 
 
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text[:200]}" if text else type(exc).__name__
+
+
+def _as_str(path: Path, what: str, v: Any) -> str:
+    """``v`` (str, UTF-8 bytes or a one-element array of them) as str; FormatError otherwise."""
+    if isinstance(v, np.ndarray) and v.size == 1 and v.dtype.kind in "OSU":
+        v = v.reshape(()).item()
+    if isinstance(v, (bytes, np.bytes_)):
+        try:
+            v = bytes(v).decode("utf-8")
+        except UnicodeDecodeError:
+            raise _fail(path, f"{what} is not valid UTF-8 text") from None
+    if not isinstance(v, str):
+        raise _fail(path, f"{what} is not a string (got {type(v).__name__})")
+    return v
+
+
+def _attr(path: Path, attrs: Any, name: str) -> Any:
+    try:
+        return attrs[name]
+    except UnicodeDecodeError:
+        raise _fail(path, f"global attribute {name!r} is not valid UTF-8 text") from None
+    except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:
+        raise _fail(path, f"global attribute {name!r} cannot be read ({_one_line(exc)}): the file is damaged") from None
+
+
 def _attr_str(path: Path, attrs: Any, name: str) -> str:
     if name not in attrs:
         raise _fail(path, f"missing the global attribute {name!r}")
-    v = attrs[name]
-    if isinstance(v, bytes):
-        v = v.decode("utf-8", "replace")
-    if isinstance(v, np.ndarray) and v.size == 1:
-        v = v.reshape(()).item()
-        if isinstance(v, bytes):
-            v = v.decode("utf-8", "replace")
-    if not isinstance(v, str):
-        raise _fail(path, f"global attribute {name!r} is not a string")
-    return v
+    return _as_str(path, f"global attribute {name!r}", _attr(path, attrs, name))
 
 
 def _dims_of(ds: Any) -> tuple[str, ...]:
@@ -179,122 +253,448 @@ def _dims_of(ds: Any) -> tuple[str, ...]:
     return tuple(names)
 
 
+def superblock_version(path: str | PathLike[str]) -> int | None:
+    """The HDF5 superblock version of ``path``, or None when it is not HDF5.
+
+    The superblock is searched where HDF5 searches it: at byte 0, 512, 1024,
+    2048... Versions 2 and 3 carry checksums of all file metadata; 0 and 1
+    (HDF5 < 1.8 layout, the default of most writers) do not.
+    """
+    with open(path, "rb") as fh:
+        size = fh.seek(0, 2)
+        offset = 0
+        while offset + 9 <= size:
+            fh.seek(offset)
+            head = fh.read(9)
+            if head[:8] == _HDF5_SIGNATURE:
+                return head[8]
+            offset = 512 if offset == 0 else offset * 2
+    return None
+
+
+class _Unsure(Exception):
+    """The in-process reader met something only the time-limited child may read."""
+
+
+@dataclass
+class _Heaps:
+    """Result of :func:`_check_global_heaps`."""
+
+    #: "ok", "unsure" or a description of the damage
+    status: str
+    #: heap address -> {object index: object size}
+    objects: dict[int, dict[int, int]] = field(default_factory=dict)
+    #: size of file addresses (superblock)
+    n_off: int = 8
+
+
+def _check_global_heaps(path: Path) -> _Heaps:
+    """Whether every HDF5 global heap collection in the file parses to its end.
+
+    Global heaps (which hold variable-length strings and the dimension lists of
+    NetCDF-4 files) have no checksum even in the newest HDF5 format, and HDF5
+    loops forever on a collection whose object sizes do not advance (e.g. a
+    zeroed block). This walks every ``GCOL`` block as HDF5 does, in Python,
+    without trusting it.
+
+    Returns
+    -------
+    _Heaps
+        ``status`` ``"ok"`` (with every heap object's size); ``"unsure"``
+        when something may or may not be a damaged heap (or the superblock is
+        not v2/v3); otherwise a description of the damage, for the message.
+    """
+    with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as buf:
+        return _walk_global_heaps(buf)
+
+
+def _walk_global_heaps(buf: Any) -> _Heaps:
+    """:func:`_check_global_heaps` on the file's bytes (``bytes`` or ``mmap``)."""
+    sb = buf.find(_HDF5_SIGNATURE)
+    if sb < 0 or sb + 11 > len(buf) or buf[sb + 8] not in (2, 3):
+        return _Heaps("unsure")
+    n_off, n_len = buf[sb + 9], buf[sb + 10]  # sizes of addresses and lengths (v2/v3 superblock)
+    if n_len not in (2, 4, 8) or n_off not in (2, 4, 8):
+        return _Heaps("unsure")
+    heaps = _Heaps("ok", n_off=n_off)
+    obj_hdr = 8 + n_len
+    pos = buf.find(b"GCOL\x01")
+    while pos >= 0:
+        # HDF5 takes any "GCOL", version 1 as a heap; with the zero reserved
+        # bytes too it is certainly one (and not a chance match in the data)
+        certain = buf[pos + 5 : pos + 8] == b"\0\0\0"
+        bad = ""
+        size = int.from_bytes(buf[pos + 8 : pos + 8 + n_len], "little")
+        end = pos + size
+        if pos + 8 + n_len > len(buf) or end > len(buf):
+            bad = f"the global heap at byte {pos} runs past the end of the file"
+        elif size < 4096:
+            bad = f"the global heap at byte {pos} declares an impossible size {size}"
+        p = pos + 8 + n_len
+        objects: dict[int, int] = {}
+        while not bad and p < end:
+            if p + obj_hdr > end:
+                break  # a tail too small for an object header is free space
+            idx = int.from_bytes(buf[p : p + 2], "little")
+            osize = int.from_bytes(buf[p + 8 : p + 8 + n_len], "little")
+            need = osize if idx == 0 else obj_hdr + ((osize + 7) & ~7)
+            if need <= 0 or p + need > end:
+                bad = f"the global heap at byte {pos} has a damaged object at byte {p}"
+            elif idx:
+                objects[idx] = osize
+            p += need
+        if bad:
+            return _Heaps(bad if certain else "unsure")
+        heaps.objects[pos - sb] = objects  # heap addresses are relative to the superblock
+        pos = buf.find(b"GCOL\x01", pos + 1)
+    return heaps
+
+
+def _check_vlen_refs(path: Path, ds: Any, name: str, heaps: _Heaps) -> None:
+    """Check the global-heap references of a variable-length string dataset before HDF5 follows them.
+
+    Its raw data (length, heap address, object index per element) has no
+    checksum; a damaged length or address makes HDF5 allocate gigabytes or
+    read a heap that was never checked.
+    """
+    offset = ds.id.get_offset()
+    if offset is None or ds.id.get_storage_size() != ds.size * (8 + heaps.n_off):
+        raise _Unsure(name)  # not contiguous as save() writes it: let the child read it
+    with open(path, "rb") as fh:
+        fh.seek(offset)
+        raw = fh.read(ds.size * (8 + heaps.n_off))
+    step = 8 + heaps.n_off
+    if len(raw) != ds.size * step:
+        raise _fail(path, f"{name!r} has data stored beyond the end of the file: the file is truncated or damaged")
+    for i in range(ds.size):
+        e = raw[i * step : (i + 1) * step]
+        length = int.from_bytes(e[:4], "little")
+        addr = int.from_bytes(e[4 : 4 + heaps.n_off], "little")
+        idx = int.from_bytes(e[4 + heaps.n_off :], "little")
+        size = heaps.objects.get(addr, {}).get(idx)
+        if size is None or length > size:
+            raise _fail(path, f"{name!r} entry {i} points at no stored string: the file is damaged")
+
+
+def _check_storage(path: Path, ds: Any, name: str, file_size: int) -> None:
+    """Refuse a dataset whose stored pieces lie outside the file (before reading them)."""
+    dsid = ds.id
+    if ds.chunks is not None:
+        expected = math.prod(-(-n // c) for n, c in zip(ds.shape, ds.chunks))
+        pieces: list[tuple[int, int]] = []
+        if hasattr(dsid, "chunk_iter"):
+            dsid.chunk_iter(lambda info: pieces.append((info.byte_offset, info.size)))
+        else:  # pragma: no cover - old HDF5
+            n = dsid.get_num_chunks()
+            if n > expected:
+                raise _fail(path, f"{name!r} has {n} chunks stored, at most {expected} fit its shape")
+            for i in range(n):
+                info = dsid.get_chunk_info(i)
+                pieces.append((info.byte_offset, info.size))
+        if len(pieces) > expected:
+            raise _fail(path, f"{name!r} has {len(pieces)} chunks stored, at most {expected} fit its shape")
+    else:
+        offset = dsid.get_offset()
+        pieces = [] if offset is None else [(offset, dsid.get_storage_size())]
+    for offset, size in pieces:
+        if offset is None or offset < 0 or size < 0 or offset + size > file_size:
+            raise _fail(path, f"{name!r} has data stored beyond the end of the file: the file is truncated or damaged")
+
+
+def _read_ds(path: Path, ds: Any, name: str) -> np.ndarray:
+    try:
+        return np.asarray(ds[()])
+    except UnicodeDecodeError:
+        raise _fail(path, f"{name!r} holds text that is not valid UTF-8") from None
+    except (OSError, RuntimeError, ValueError, TypeError) as exc:
+        if "filter" in str(exc) and getattr(ds, "fletcher32", False):
+            raise _fail(path, f"checksum mismatch in {name!r}: the file is damaged") from None
+        raise _fail(path, f"{name!r} cannot be read ({_one_line(exc)}): the file is damaged") from None
+
+
+def _dataset(path: Path, f: Any, name: str, *, required: bool) -> Any:
+    import h5py
+
+    if name not in f:
+        if required:
+            raise _fail(path, f"missing the variable {name!r}")
+        return None
+    obj = f[name]
+    if not isinstance(obj, h5py.Dataset):
+        raise _fail(path, f"{name!r} is not a variable (HDF5 dataset)")
+    return obj
+
+
+def _expect(path: Path, ds: Any, name: str, shape: tuple[int, ...], dims: tuple[str, ...], kinds: str) -> None:
+    """Check a variable's declared shape, dimension names and dtype kind (nothing is read)."""
+    if ds.shape != shape:
+        raise _fail(path, f"{name!r} has shape {ds.shape}, but the axes give {shape}")
+    got = _dims_of(ds)
+    if got != dims:
+        raise _fail(path, f"{name!r} has dimensions {got}, expected {dims}")
+    if ds.dtype.kind not in kinds or ds.dtype.itemsize > 8:
+        raise _fail(path, f"{name!r} has dtype {ds.dtype}, which the format does not allow")
+
+
+def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
+    """The global attributes that mirror ``cdbrdf_attrs`` entries must agree with them."""
+    for key, value in attrs.items():
+        if key in _OWN_ATTRS or key not in f.attrs:
+            continue
+        stored = _attr(path, f.attrs, key)
+        if isinstance(value, str):
+            ok = _as_str(path, f"global attribute {key!r}", stored) == value
+        elif isinstance(value, (bool, int, float)):
+            s = stored.reshape(()).item() if isinstance(stored, np.ndarray) and stored.size == 1 else stored
+            if isinstance(s, np.generic):
+                s = s.item()
+            ok = isinstance(s, (bool, int, float)) and type(s) is type(value) and s == value
+        else:
+            ok = _as_str(path, f"global attribute {key!r}", stored) == _jsonable(key, value)
+        if not ok:
+            raise _fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
+
+
+def _read_parts(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
+    """Read and check everything of a CDBRDF file; the arguments of :class:`CDBRDF`.
+
+    ``heaps``: the checked global heaps, when reading in this process.
+    """
+    import h5py
+
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise _fail(path, f"cannot be opened as HDF5 ({_one_line(exc)})") from None
+    with f:
+        file_size = path.stat().st_size
+        fmt = _attr_str(path, f.attrs, "format") if "format" in f.attrs else None
+        if fmt != FORMAT_NAME:
+            raise _fail(
+                path, f"not a CDBRDF file (global attribute 'format' is {fmt!r}, expected {FORMAT_NAME!r})"
+            )
+        version = _attr_str(path, f.attrs, "format_version")
+        m = re.fullmatch(r"(\d{1,6})\.(\d{1,6})", version)
+        if m is None:
+            raise _fail(path, f"unreadable format_version {version!r} (expected MAJOR.MINOR)")
+        major = int(m[1])
+        own_major = int(FORMAT_VERSION.split(".")[0])
+        if major > own_major:
+            raise _fail(
+                path, f"format version {version} is newer than this cdbrdf reads ({own_major}.x); upgrade cdbrdf"
+            )
+        if major < 1:
+            raise _fail(path, f"unsupported format version {version}")
+        gattrs = {name: _attr_str(path, f.attrs, name) for name in _REQUIRED_ATTRS}
+
+        # -- declared shapes, dims and dtypes of every variable, before reading any data
+        axis_ds = {name: _dataset(path, f, name, required=True) for name in AXES}
+        for name, ds in axis_ds.items():
+            if ds.ndim != 1:
+                raise _fail(path, f"axis {name!r} is not 1-D (shape {ds.shape})")
+            limits.check("table_samples", ds.size, what=f"{path}: axis {name!r}")
+            if name != "channel" and (ds.dtype.kind != "f" or ds.dtype.itemsize not in (4, 8)):
+                raise _fail(path, f"axis {name!r} has dtype {ds.dtype}, expected float64")
+        if h5py.check_string_dtype(axis_ds["channel"].dtype) is None:
+            raise _fail(path, f"'channel' has dtype {axis_ds['channel'].dtype}, expected strings")
+        grid_shape = tuple(axis_ds[n].size for n in _SAMPLE_DIMS)
+        shape = (*grid_shape, axis_ds["channel"].size)
+        limits.check("table_samples", math.prod(shape), what=f"{path}: 'reflectance' of shape {shape}")
+        refl = _dataset(path, f, "reflectance", required=True)
+        if refl.ndim != 6:
+            raise _fail(path, f"'reflectance' has {refl.ndim} dimensions, expected 6 {AXES}")
+        _expect(path, refl, "reflectance", shape, AXES, "f")
+        measured = _dataset(path, f, "measured", required=True)
+        _expect(path, measured, "measured", grid_shape, _SAMPLE_DIMS, "uib")
+        fill_ds = _dataset(path, f, "fill_source", required=False)
+        if fill_ds is not None:
+            _expect(path, fill_ds, "fill_source", grid_shape, _SAMPLE_DIMS, "iu")
+        std_ds = _dataset(path, f, "reflectance_std", required=False)
+        if std_ds is not None:
+            _expect(path, std_ds, "reflectance_std", shape, AXES, "f")
+        datasets = {**axis_ds, "reflectance": refl, "measured": measured}
+        if fill_ds is not None:
+            datasets["fill_source"] = fill_ds
+        if std_ds is not None:
+            datasets["reflectance_std"] = std_ds
+        for name, ds in datasets.items():
+            _check_storage(path, ds, name, file_size)
+
+        # -- metadata
+        axes = {name: _read_ds(path, axis_ds[name], name).astype(np.float64) for name in _SAMPLE_DIMS}
+        if heaps is not None:
+            _check_vlen_refs(path, axis_ds["channel"], "channel", heaps)
+        channels = [_as_str(path, "a 'channel' name", c) for c in _read_ds(path, axis_ds["channel"], "channel")]
+        text = gattrs["cdbrdf_attrs"]
+        limits.check("json_bytes", len(text.encode("utf-8")), what=f"{path}: attribute 'cdbrdf_attrs'")
+        if _DIGEST_ATTR in f.attrs:
+            stored = np.asarray(_attr(path, f.attrs, _DIGEST_ATTR))
+            if stored.dtype != np.uint8 or stored.shape != (32,):
+                raise _fail(path, f"global attribute {_DIGEST_ATTR!r} is not 32 bytes")
+            if not np.array_equal(stored, _digest(text, channels)):
+                raise _fail(path, "checksum mismatch in 'cdbrdf_attrs' or 'channel': the file is damaged")
+        try:
+            attrs = json.loads(text)
+        except (ValueError, RecursionError) as exc:
+            raise _fail(path, f"attribute 'cdbrdf_attrs' is not valid JSON ({_one_line(exc)})") from None
+        if not isinstance(attrs, dict):
+            raise _fail(path, "attribute 'cdbrdf_attrs' is not a JSON object")
+        for key in ("quantity", "colour_space"):
+            if attrs.get(key) != gattrs[key]:
+                raise _fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
+        _check_mirrors(path, f, attrs)
+        n = len(channels)
+        if "channels" in attrs:
+            if attrs["channels"] != channels:
+                raise _fail(
+                    path,
+                    f"'cdbrdf_attrs' names the channels {attrs['channels']!r} but the 'channel' variable "
+                    f"holds {channels!r}",
+                )
+        elif channels != (["R", "G", "B"] if n == 3 else [f"c{i}" for i in range(n)]):
+            attrs["channels"] = channels
+
+        # -- data
+        values = _read_ds(path, refl, "reflectance")
+        if not np.all(np.isfinite(values)):
+            bad = int(np.count_nonzero(~np.isfinite(values)))
+            raise _fail(path, f"'reflectance' holds {bad} NaN or infinite value(s)")
+        mvals = _read_ds(path, measured, "measured")
+        if not np.isin(mvals, (0, 1)).all():
+            raise _fail(path, "'measured' holds values other than 0 and 1")
+        fill = None
+        if fill_ds is not None:
+            fill = _read_ds(path, fill_ds, "fill_source")
+            if fill.size and (fill.min() < -2 or fill.max() >= fill.size):
+                raise _fail(path, f"'fill_source' holds indices outside [-2, {fill.size})")
+            fill = fill.astype(np.int64)
+        std = None if std_ds is None else _read_ds(path, std_ds, "reflectance_std")
+    return dict(values=values, **axes, measured=mvals.astype(bool), fill_source=fill, std=std, attrs=attrs)
+
+
+def _read_guarded(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
+    """:func:`_read_parts`, with every unexpected exception turned into FormatError."""
+    try:
+        return _read_parts(path, heaps)
+    except (FormatError, LimitError, _Unsure):
+        raise
+    except MemoryError:
+        raise _fail(path, "not enough memory to read it") from None
+    except (OSError, RuntimeError, KeyError, ValueError, TypeError, AttributeError, IndexError, RecursionError,
+            OverflowError, UnicodeError) as exc:
+        if "checksum" in str(exc):
+            raise _fail(path, "metadata checksum mismatch: the file is damaged") from None
+        raise _fail(path, f"damaged or not a valid CDBRDF file ({_one_line(exc)})") from None
+
+
+_CHILD = """\
+import pickle, sys
+sys.path.insert(0, sys.argv[1])
+from pathlib import Path
+from cdbrdf import io
+from cdbrdf.errors import FormatError, LimitError
+try:
+    out = ("ok", io._read_guarded(Path(sys.argv[2])))
+except (FormatError, LimitError) as exc:
+    out = (type(exc).__name__, str(exc))
+sys.stdout.buffer.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))
+"""
+
+
+def _read_in_child(path: Path) -> dict[str, Any]:
+    """:func:`_read_guarded` in a child process killed after a time limit.
+
+    For files without metadata checksums, where a damaged structure can make
+    the HDF5 library loop forever. Ctrl-C in the parent stops the child.
+    """
+    timeout = LEGACY_READ_TIMEOUT_S + path.stat().st_size / 20e6
+    pkg_root = str(Path(__file__).resolve().parent.parent)
+    with subprocess.Popen(
+        [sys.executable, "-c", _CHILD, pkg_root, str(path)],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    ) as proc:
+        try:
+            out, err = proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.communicate()
+            raise _fail(
+                path, f"reading it took longer than {timeout:.0f} s and was stopped: its HDF5 structure is damaged"
+            ) from None
+        except BaseException:  # Ctrl-C: stop the child too
+            proc.kill()
+            raise
+    if proc.returncode != 0:
+        last = err.decode("utf-8", "replace").strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
+        raise _fail(path, f"the reader stopped on it ({last[0][:200]}): the file is damaged")
+    kind, payload = pickle.loads(out)
+    if kind == "ok":
+        return payload
+    raise (LimitError if kind == "LimitError" else FormatError)(payload)
+
+
 def load(path: str | PathLike[str]) -> CDBRDF:
     """Read a CDBRDF file written by :func:`save` (any 1.x version).
+
+    Files with HDF5 metadata checksums (superblock v2/v3, as written by format
+    1.1) whose global heaps (unchecksummed) parse are read in this process.
+    Others (format 1.0, other writers, damaged heaps) are read in a child process that is stopped after :data:`LEGACY_READ_TIMEOUT_S`
+    seconds (plus one per 20 MB), because damaged unchecksummed metadata can
+    make the HDF5 library loop forever; re-saving such a file makes it fast.
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    CDBRDF
+        The table, equal to the one that was saved.
 
     Raises
     ------
     FileNotFoundError
         When ``path`` does not exist.
     FormatError
-        When the file is not HDF5, not a CDBRDF file, of a newer major version,
-        or has missing variables, inconsistent shapes, non-monotonic axes or
-        non-finite values. The message names the file and the problem.
+        For any problem with an existing file: not HDF5, not a CDBRDF file, a
+        newer major version, missing variables or attributes, inconsistent
+        shapes, attributes or dtypes, non-monotonic axes, non-finite values,
+        checksum mismatches, damaged HDF5 structures, unreadable permissions.
+        The message starts with the file's path.
+    LimitError
+        When the file declares more samples than the ``table_samples`` limit.
     """
-    import h5py
-
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"{p}: no such file")
     if p.is_dir():
         raise _fail(p, "is a folder, not a CDBRDF file")
-    if not h5py.is_hdf5(p):
-        raise _fail(p, "not an HDF5 file (a CDBRDF file is HDF5 / NetCDF-4)")
     try:
-        f = h5py.File(p, "r")
+        version = superblock_version(p)
     except OSError as exc:
-        raise _fail(p, f"cannot be opened as HDF5 ({exc})") from None
-    with f:
-        fmt = _attr_str(p, f.attrs, "format") if "format" in f.attrs else None
-        if fmt != FORMAT_NAME:
-            raise _fail(
-                p,
-                "not a CDBRDF file (global attribute 'format' is "
-                f"{fmt!r}, expected {FORMAT_NAME!r})",
-            )
-        version = _attr_str(p, f.attrs, "format_version")
+        raise _fail(p, f"cannot be read ({exc.strerror or _one_line(exc)})") from None
+    if version is None:
+        raise _fail(p, "not an HDF5 file (a CDBRDF file is HDF5 / NetCDF-4)")
+    heaps = _Heaps("unsure")
+    if version >= 2:
         try:
-            major, minor = (int(x) for x in version.split(".")[:2])
-        except ValueError:
-            raise _fail(p, f"unreadable format_version {version!r}") from None
-        own_major = int(FORMAT_VERSION.split(".")[0])
-        if major > own_major:
-            raise _fail(
-                p,
-                f"format version {version} is newer than this cdbrdf reads "
-                f"({own_major}.x); upgrade cdbrdf",
-            )
-        if major < 1:
-            raise _fail(p, f"unsupported format version {version}")
-        for name in (*AXES, "reflectance", "measured"):
-            if name not in f or not isinstance(f[name], h5py.Dataset):
-                raise _fail(p, f"missing the variable {name!r}")
-        axes = {}
-        for name in _SAMPLE_DIMS:
-            a = f[name][()]
-            if a.ndim != 1:
-                raise _fail(p, f"axis {name!r} is not 1-D (shape {a.shape})")
-            axes[name] = a
-        grid_shape = tuple(axes[n].size for n in _SAMPLE_DIMS)
-        refl = f["reflectance"]
-        if refl.ndim != 6:
-            raise _fail(p, f"'reflectance' has {refl.ndim} dimensions, expected 6 {AXES}")
-        dims = _dims_of(refl)
-        if dims != AXES:
-            raise _fail(p, f"'reflectance' has dimensions {dims}, expected {AXES}")
-        if refl.shape[:5] != grid_shape:
-            raise _fail(
-                p, f"'reflectance' has shape {refl.shape} but the axes give {grid_shape} + (channel,)"
-            )
-        if f["channel"].shape != (refl.shape[5],):
-            raise _fail(p, f"'channel' has {f['channel'].shape} entries, 'reflectance' {refl.shape[5]}")
-        if refl.dtype not in (np.float32, np.float64):
-            raise _fail(p, f"'reflectance' has dtype {refl.dtype}, expected float32 or float64")
-        values = refl[()]
-        if not np.all(np.isfinite(values)):
-            bad = int(np.count_nonzero(~np.isfinite(values)))
-            raise _fail(p, f"'reflectance' holds {bad} NaN or infinite value(s)")
-        measured = f["measured"]
-        if measured.shape != grid_shape:
-            raise _fail(p, f"'measured' has shape {measured.shape}, expected {grid_shape}")
-        mvals = measured[()]
-        if not np.isin(mvals, (0, 1)).all():
-            raise _fail(p, "'measured' holds values other than 0 and 1")
-        fill = None
-        if "fill_source" in f:
-            if f["fill_source"].shape != grid_shape:
-                raise _fail(p, f"'fill_source' has shape {f['fill_source'].shape}, expected {grid_shape}")
-            fill = f["fill_source"][()]
-        std = None
-        if "reflectance_std" in f:
-            if f["reflectance_std"].shape != refl.shape:
-                raise _fail(p, f"'reflectance_std' has shape {f['reflectance_std'].shape}, expected {refl.shape}")
-            std = f["reflectance_std"][()]
-        if "cdbrdf_attrs" in f.attrs:
-            try:
-                attrs = json.loads(_attr_str(p, f.attrs, "cdbrdf_attrs"))
-            except json.JSONDecodeError as exc:
-                raise _fail(p, f"attribute 'cdbrdf_attrs' is not valid JSON ({exc})") from None
-            if not isinstance(attrs, dict):
-                raise _fail(p, "attribute 'cdbrdf_attrs' is not a JSON object")
-        else:
-            attrs = {}
-            for key in ("quantity", "colour_space", "material"):
-                if key in f.attrs:
-                    attrs[key] = _attr_str(p, f.attrs, key)
-        channels = [c.decode() if isinstance(c, bytes) else str(c) for c in f["channel"][()]]
-    n = len(channels)
-    default = ["R", "G", "B"] if n == 3 else [f"c{i}" for i in range(n)]
-    if channels != default:
-        attrs.setdefault("channels", channels)
+            heaps = _check_global_heaps(p)
+        except OSError as exc:
+            raise _fail(p, f"cannot be read ({exc.strerror or _one_line(exc)})") from None
+        if heaps.status not in ("ok", "unsure"):
+            raise _fail(p, f"{heaps.status}: the file is truncated or damaged")
+    parts = None
+    if heaps.status == "ok":
+        try:
+            parts = _read_guarded(p, heaps)
+        except _Unsure:
+            pass
+    if parts is None:
+        parts = _read_in_child(p)
     try:
-        return CDBRDF(
-            values,
-            **axes,
-            measured=mvals.astype(bool),
-            fill_source=fill,
-            std=std,
-            attrs=attrs,
-        )
+        return CDBRDF(**parts)
     except TableError as exc:
         raise _fail(p, str(exc)) from None
