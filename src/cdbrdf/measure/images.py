@@ -410,34 +410,38 @@ def write_tiff(path: str | PathLike[str], image: ArrayLike, *, compression: str 
 
 # --------------------------------------------------------------------------- EXR
 def _exr_read(path: Path) -> tuple[NDArray, ImageInfo]:
-    import Imath
+    """Decode the first part of an OpenEXR file, after checking its header.
+
+    Uses the ``OpenEXR.File`` API: the legacy ``InputFile.header()`` crashes
+    the interpreter (segmentation fault) on an attribute name that is not
+    UTF-8, where ``File`` raises.
+    """
     import OpenEXR
 
-    f = OpenEXR.InputFile(str(path))
-    try:
+    with OpenEXR.File(str(path), header_only=True) as f:  # the header is valid while open
         header = f.header()
-        dw = header["dataWindow"]
-        width = int(dw.max.x) - int(dw.min.x) + 1
-        height = int(dw.max.y) - int(dw.min.y) + 1
-        _check_size(path, width, height, "exr")
-        names = list(header["channels"].keys())
-        if all(c in names for c in "RGB"):
-            chans = ["R", "G", "B"]
-        elif "Y" in names:
-            chans = ["Y"]
-        elif len(names) == 1:
-            chans = names
-        else:
-            raise ImageError(f"{path}: OpenEXR channels {names} are neither R,G,B nor Y")
-        pt = Imath.PixelType(Imath.PixelType.FLOAT)
+        window = [np.array(v, dtype=np.int64) for v in header["dataWindow"]]
+        names = [str(c.name) for c in header["channels"]]
+    (xmin, ymin), (xmax, ymax) = window
+    width, height = int(xmax - xmin + 1), int(ymax - ymin + 1)
+    _check_size(path, width, height, "exr")
+    if all(c in names for c in "RGB"):
+        chans = ["R", "G", "B"]
+    elif "Y" in names:
+        chans = ["Y"]
+    elif len(names) == 1:
+        chans = names
+    else:
+        raise ImageError(f"{path}: OpenEXR channels {names} are neither R,G,B nor Y")
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        channels = f.channels()
         out = np.empty((height, width, len(chans)), dtype=np.float32)
         for i, c in enumerate(chans):
-            rows = np.frombuffer(f.channel(c, pt), dtype=np.float32)
-            if rows.size != width * height:
-                raise ImageError(f"{path}: truncated OpenEXR data")
-            out[..., i] = rows.reshape(height, width)
-    finally:
-        f.close()
+            px = np.asarray(channels[c].pixels)
+            if px.shape != (height, width):
+                raise ImageError(f"{path}: OpenEXR channel {c} has {px.shape} pixels, "
+                                 f"not {height} x {width}")
+            out[..., i] = px
     return out, ImageInfo(width, height, len(chans), None, True)
 
 
