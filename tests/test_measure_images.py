@@ -151,7 +151,7 @@ def test_corrupt_png_crc(tmp_path, rgb16):
     p, data = _corrupt(tmp_path, rgb16)
     data[60] ^= 0xFF  # inside the IDAT body
     p.write_bytes(bytes(data))
-    with pytest.raises(ImageError, match=r"c\.png.*CRC"):
+    with pytest.raises(ImageError, match=r"c\.png: corrupt"):
         read_image(p)
 
 

@@ -22,8 +22,8 @@ The formats are decoded by libraries: PNG by libpng through
 Pillow reduce 16-bit RGB PNG to 8 bit), TIFF by :mod:`tifffile`, OpenEXR by
 the ``OpenEXR`` bindings. Before any decoding the declared size is checked
 against the ``image_pixels`` limit (:mod:`cdbrdf.limits`); a PNG's chunk
-structure and every chunk's CRC are checked first too, so that libpng only
-sees well-formed files (its error path in :mod:`imagecodecs` is costly; see
+structure and CRCs are checked first too, so that libpng mostly sees
+well-formed files (its error path in :mod:`imagecodecs` needs a repair; see
 :func:`_png_decode`).
 
 Every problem with a file raises :class:`ImageError` (a :class:`ValueError`)
@@ -206,8 +206,9 @@ _PNG_DEPTHS = {0: (1, 2, 4, 8, 16), 2: (8, 16), 3: (1, 2, 4, 8), 4: (8, 16), 6: 
 def _png_check(path: Path, data: bytes) -> tuple[int, int]:
     """Check a PNG's structure before libpng sees it; its ``(width, height)``.
 
-    The signature, that every chunk lies inside the file with a matching CRC
-    (critical and ancillary alike), that IHDR comes first and is valid, that
+    The signature, that every chunk lies inside the file, the CRC of every
+    chunk but IDAT (critical and ancillary alike; libpng checks IDAT's as it
+    reads, and so refuses it too), that IHDR comes first and is valid, that
     there is image data and an IEND chunk, and the size against the limit.
     This is not a decoder: libpng inflates and unfilters (and checks the
     zlib stream's Adler-32).
@@ -235,7 +236,9 @@ def _png_check(path: Path, data: bytes) -> tuple[int, int]:
         if length > 2**31 - 1 or body_end + 4 > n:
             break
         kind = bytes(data[pos + 4 : pos + 8])
-        if zlib.crc32(mv[pos + 4 : body_end]) != struct.unpack(">I", data[body_end : body_end + 4])[0]:
+        # libpng checks the IDAT CRCs as it inflates (an error, as for every critical chunk)
+        crc = struct.unpack(">I", data[body_end : body_end + 4])[0]
+        if kind != b"IDAT" and zlib.crc32(mv[pos + 4 : body_end]) != crc:
             raise ImageError(f"{path}: corrupt PNG (CRC mismatch in chunk {kind!r})")
         if kind == b"IHDR":
             raise ImageError(f"{path}: corrupt PNG (second IHDR chunk)")
