@@ -150,6 +150,9 @@ def _run(fmt: str, n: int, seed: int):
     report = fuzz(f"tests.test_fuzz_images:target_{fmt}", seeds, n=n, seed=seed,
                   per_input_s=10.0, allowed=_ALLOWED)
     print(f"\n{fmt}: {report.summary()}")
+    for i, outcome, detail in report.bad:
+        if outcome != "changed":
+            print(f"  #{i} {outcome}: {detail}")
     assert report.n == n
     bad = [b for b in report.bad if fmt.startswith("png") or b[1] != "changed"]
     assert not bad, report.summary()

@@ -426,3 +426,18 @@ def test_writers_are_atomic(tmp_path, rgb16):
         write_png(p, rgb16.astype(np.float32))
     np.testing.assert_array_equal(read_image(p)[0], rgb16)
     assert sorted(f.name for f in tmp_path.iterdir()) == ["a.png"]
+
+
+def test_png_adler_mismatch_refused(tmp_path, rgb16):
+    """libpng only warns about a wrong Adler-32 once the rows are complete; the reader refuses it."""
+    p = tmp_path / "a.png"
+    write_png(p, rgb16)
+    data = bytearray(p.read_bytes())
+    pos = data.index(b"IEND") - 4 - 4  # the last IDAT's CRC
+    data[pos - 1] ^= 0x01  # last byte of the zlib stream: the Adler-32
+    start = data.rindex(b"IDAT")
+    data[pos : pos + 4] = struct.pack(">I", zlib.crc32(bytes(data[start:pos])))
+    p.write_bytes(bytes(data))
+    for read in (read_image, lambda q: read_window(q, (0, 0, 2, 2))):
+        with pytest.raises(ImageError, match=r"a\.png: .*IDAT: incorrect data check"):
+            read(p)

@@ -36,10 +36,12 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import logging
 import os
 import stat
 import struct
 import sys
+import threading
 import zlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -265,8 +267,34 @@ else:  # pragma: no cover
         pass
 
 
+class _PngWarnings(logging.Filter):
+    """Collects, per thread, the libpng warnings that imagecodecs logs during a decode."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.local = threading.local()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        seen = getattr(self.local, "seen", None)
+        if seen is None:
+            return True
+        seen.append(record.getMessage())
+        return False  # reported as the ImageError instead
+
+
+_PNG_WARNINGS = _PngWarnings()
+logging.getLogger("imagecodecs").addFilter(_PNG_WARNINGS)
+
+
 def _png_decode(data: bytes) -> NDArray:
-    """:func:`imagecodecs.png_decode`, repairing the damage of its error path.
+    """:func:`imagecodecs.png_decode`, made strict and repairing the damage of its error path.
+
+    libpng treats a zlib stream whose Adler-32 does not match as a mere
+    warning when the last row was complete before the check (imagecodecs
+    never calls ``png_read_end``): a crafted IDAT with a recomputed CRC then
+    decodes to changed pixels. imagecodecs logs that warning ("IDAT:
+    incorrect data check") on its logger; any warning about IDAT during the
+    decode makes it an error here.
 
     Each libpng error that ``png_decode`` raises as ``PngError`` (corrupt
     zlib stream, bad filter byte...) drops one reference to ``None`` too many
@@ -278,11 +306,18 @@ def _png_decode(data: bytes) -> NDArray:
     """
     import imagecodecs
 
+    _PNG_WARNINGS.local.seen = seen = []
     try:
-        return imagecodecs.png_decode(data)
+        out = imagecodecs.png_decode(data)
     except imagecodecs.PngError:
         _restore_none()
         raise
+    finally:
+        _PNG_WARNINGS.local.seen = None
+    bad = [m for m in seen if "IDAT" in m]
+    if bad:
+        raise ValueError(bad[0])
+    return out
 
 
 def _png_read(path: Path) -> tuple[NDArray, ImageInfo]:
