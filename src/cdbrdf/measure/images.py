@@ -392,8 +392,11 @@ def _tiff_page(path: Path, tf: Any) -> tuple[Any, ImageInfo]:
         if count and (off < 0 or off + count > size):
             raise ImageError(f"{path}: truncated TIFF (image data {off}+{count} past the end "
                              f"of the {size}-byte file)")
-    if not any(page.databytecounts):
-        raise ImageError(f"{path}: TIFF without image data")
+    want = int(np.prod(page.chunked))
+    if len(page.dataoffsets) != want or not all(page.databytecounts):
+        # tifffile would fill missing strips or tiles with zeros
+        raise ImageError(f"{path}: truncated TIFF ({sum(map(bool, page.databytecounts))} of "
+                         f"{want} strips or tiles present)")
     return page, ImageInfo(width, height, _channels_kept(samples), max_code, linear)
 
 
