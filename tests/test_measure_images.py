@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import struct
 import zlib
 
 import numpy as np
 import pytest
 
+from cdbrdf.errors import LimitError
 from cdbrdf.measure.images import (
     ImageError,
     image_format,
@@ -37,7 +39,7 @@ def test_png16_keeps_16_bits(tmp_path, rgb16):
 
 
 def test_png16_from_pillow_reader_would_lose_bits(tmp_path, rgb16):
-    """Pillow opens 16-bit RGB PNG as 8-bit RGB: the reason for our own decoder."""
+    """Pillow opens 16-bit RGB PNG as 8-bit RGB: the reason for reading with libpng (imagecodecs)."""
     PIL = pytest.importorskip("PIL.Image")
     p = tmp_path / "a.png"
     write_png(p, rgb16)
@@ -73,7 +75,7 @@ def test_png_all_filter_types(tmp_path):
     np.testing.assert_array_equal(a, img)
 
 
-def test_png_window_decodes_only_needed_rows(tmp_path, rgb16):
+def test_png_window(tmp_path, rgb16):
     p = tmp_path / "w.png"
     write_png(p, rgb16)
     a, info = read_window(p, (4, 6, 5, 3))
@@ -149,7 +151,7 @@ def test_corrupt_png_crc(tmp_path, rgb16):
     p, data = _corrupt(tmp_path, rgb16)
     data[60] ^= 0xFF  # inside the IDAT body
     p.write_bytes(bytes(data))
-    with pytest.raises(ImageError, match=r"c\.png.*CRC"):
+    with pytest.raises(ImageError, match=r"c\.png: corrupt"):
         read_image(p)
 
 
@@ -171,7 +173,7 @@ def test_png_bad_stream(tmp_path):
     body += chunk(b"IDAT", b"not zlib at all") + chunk(b"IEND", b"")
     p = tmp_path / "z.png"
     p.write_bytes(body)
-    with pytest.raises(ImageError, match=r"z\.png.*corrupt PNG data"):
+    with pytest.raises(ImageError, match=r"z\.png: corrupt or unsupported PNG file \(PngError"):
         read_image(p)
 
 
@@ -192,19 +194,29 @@ def test_window_outside_image(tmp_path, rgb16):
 
 @pytest.mark.parametrize("byteorder", ["<", ">"])
 @pytest.mark.parametrize("rowsperstrip", [1, 4, None])
-def test_tiff_strips_and_byte_order(tmp_path, rgb16, byteorder, rowsperstrip):
-    """The fast uncompressed path: several strips, either byte order, 8 and 16 bit."""
+def test_tiff_strips_and_byte_order(tmp_path, rgb16, byteorder, rowsperstrip, monkeypatch):
+    """Uncompressed contiguous TIFF: the window is memory-mapped, either byte order, 8 and 16 bit."""
     import tifffile
 
-    from cdbrdf.measure.images import _tiff_fast_window
+    from cdbrdf.measure import images
 
     for img in (rgb16, (rgb16 >> 8).astype(np.uint8)):
         p = tmp_path / "s.tif"
         tifffile.imwrite(p, img, photometric="rgb", byteorder=byteorder, rowsperstrip=rowsperstrip)
-        got = _tiff_fast_window(p, (2, 3, 11, 13))
-        assert got is not None  # handled by the fast path
-        np.testing.assert_array_equal(got[0], img[3:16, 2:13])
-        assert got[1].max_code == np.iinfo(img.dtype).max
+        with monkeypatch.context() as m:
+            m.setattr(tifffile.TiffPage, "asarray", lambda *a, **k: pytest.fail("decoded the whole TIFF"))
+            a, info = read_window(p, (2, 3, 11, 13))
+        np.testing.assert_array_equal(a, img[3:16, 2:13])
+        assert a.dtype.isnative and info.max_code == np.iinfo(img.dtype).max
+
+
+def test_tiff_planar_separate(tmp_path, rgb16):
+    import tifffile
+
+    p = tmp_path / "p.tif"
+    tifffile.imwrite(p, np.moveaxis(rgb16, -1, 0), photometric="rgb", planarconfig="separate")
+    np.testing.assert_array_equal(read_image(p)[0], rgb16)
+    np.testing.assert_array_equal(read_window(p, (3, 4, 5, 6))[0], rgb16[4:10, 3:8])
 
 
 def test_palette_png_falls_back(tmp_path):
@@ -221,16 +233,12 @@ def test_palette_png_falls_back(tmp_path):
 
 @pytest.mark.parametrize("compression", ["zlib", "lzw", "zstd"])
 @pytest.mark.parametrize("layout", [{"tile": (16, 16)}, {"rowsperstrip": 8}])
-def test_compressed_tiff_decodes_only_needed_segments(tmp_path, rgb16, compression, layout, monkeypatch):
+def test_compressed_tiff_window(tmp_path, rgb16, compression, layout):
     import tifffile
 
     p = tmp_path / "c.tif"
     # imagecodecs (a dependency) provides every codec here: a missing one is a failure
     tifffile.imwrite(p, rgb16, photometric="rgb", compression=compression, predictor=True, **layout)
-    from cdbrdf.measure import images
-
-    # a full decode would be a failure of the partial path
-    monkeypatch.setattr(images, "_tiff_full", lambda *a: pytest.fail("decoded the whole TIFF"))
     for win in [(3, 5, 7, 7), (14, 14, 5, 6), (0, 30, 29, 7)]:
         x0, y0, nx, ny = win
         a, _ = read_window(p, win)
@@ -247,3 +255,211 @@ def test_truncated_tiff_and_exr(tmp_path):
         p.write_bytes(data[: len(data) // 3])
         with pytest.raises(ImageError, match=name):
             read_window(p, (30, 30, 7, 7))
+
+
+# --------------------------------------------------------------------------- hardening
+def _chunk(kind: bytes, body: bytes) -> bytes:
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+
+def _png_with_size(w: int, h: int) -> bytes:
+    """A valid-looking PNG declaring ``w x h`` (8-bit grey) with a tiny IDAT."""
+    return (b"\x89PNG\r\n\x1a\n" + _chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
+            + _chunk(b"IDAT", zlib.compress(b"\x00" * 64)) + _chunk(b"IEND", b""))
+
+
+@pytest.mark.parametrize("size", [(0, 10), (10, 0), (2**32 - 1, 1), (1, 2**32 - 1), (2**31, 2**31)])
+def test_png_impossible_sizes_refused(tmp_path, size):
+    p = tmp_path / "s.png"
+    p.write_bytes(_png_with_size(*size))
+    with pytest.raises(ImageError, match=r"s\.png"):
+        read_image(p)
+    with pytest.raises(ImageError, match=r"s\.png"):
+        read_window(p, (0, 0, 1, 1))
+
+
+def test_png_bomb_refused_before_decoding(tmp_path, monkeypatch):
+    """12000 x 12000 in a few hundred bytes: refused by the limit, libpng never called."""
+    from cdbrdf.measure import images
+
+    p = tmp_path / "bomb.png"
+    p.write_bytes(_png_with_size(12000, 12000))
+    monkeypatch.setattr(images, "_png_decode", lambda d: pytest.fail("decoded"))
+    with pytest.raises(LimitError, match=r"bomb\.png: 12000 x 12000 image: 144,000,000 pixels .*CDBRDF_MAX_IMAGE_PIXELS"):
+        read_image(p)
+    monkeypatch.setenv("CDBRDF_MAX_IMAGE_PIXELS", "100")
+    q = tmp_path / "small.png"
+    write_png(q, np.zeros((11, 10), np.uint8))
+    with pytest.raises(LimitError, match=r"small\.png: 10 x 11 image"):
+        read_window(q, (0, 0, 1, 1))
+
+
+def test_tiff_and_exr_sizes_refused(tmp_path, monkeypatch):
+    write_tiff(tmp_path / "a.tif", np.zeros((20, 30, 3), np.uint16))
+    write_exr(tmp_path / "a.exr", np.zeros((20, 30, 3), np.float32))
+    monkeypatch.setenv("CDBRDF_MAX_IMAGE_PIXELS", "599")
+    for name in ("a.tif", "a.exr"):
+        with pytest.raises(LimitError, match=rf"{name}: 30 x 20 image: 600 pixels"):
+            read_image(tmp_path / name)
+    monkeypatch.setenv("CDBRDF_MAX_IMAGE_PIXELS", "600")
+    for name in ("a.tif", "a.exr"):
+        assert read_image(tmp_path / name)[0].shape == (20, 30, 3)
+
+
+def test_tiff_declared_huge_size_refused(tmp_path):
+    """Width and length tags rewritten to 65535 x 65535 (a 4-billion-pixel page)."""
+    import tifffile
+
+    p = tmp_path / "h.tif"
+    tifffile.imwrite(p, np.zeros((4, 4), np.uint8))
+    data = bytearray(p.read_bytes())
+    with tifffile.TiffFile(p) as tf:
+        tags = tf.pages.first.tags
+        offs = [tags[256].valueoffset, tags[257].valueoffset]
+    for o in offs:
+        data[o : o + 2] = b"\xff\xff"
+    p.write_bytes(bytes(data))
+    with pytest.raises((LimitError, ImageError), match=r"h\.tif"):
+        read_image(p)
+
+
+def test_png_idat_bit_flip_with_recomputed_crc(tmp_path, rgb16):
+    """A flipped bit in the zlib stream whose chunk CRC was recomputed: the Adler-32 catches it,
+    and read_window rejects the file exactly as read_image does."""
+    p = tmp_path / "f.png"
+    write_png(p, rgb16)
+    data = p.read_bytes()
+    pos = data.index(b"IDAT") - 4
+    (n,) = struct.unpack(">I", data[pos : pos + 4])
+    rng = np.random.default_rng(0)
+    for k in rng.integers(16, 8 * n, 40):
+        b = bytearray(data)
+        b[pos + 8 + k // 8] ^= 1 << int(k % 8)
+        b[pos + 8 + n : pos + 12 + n] = struct.pack(">I", zlib.crc32(bytes(b[pos + 4 : pos + 8 + n])))
+        p.write_bytes(bytes(b))
+        outcomes = []
+        for read in (read_image, lambda q: read_window(q, (10, 10, 7, 7))):
+            try:
+                a, _ = read(p)
+                outcomes.append("ok")
+                np.testing.assert_array_equal(a, rgb16 if a.shape == rgb16.shape else rgb16[10:17, 10:17])
+            except ImageError:
+                outcomes.append("error")
+        assert outcomes[0] == outcomes[1]
+
+
+def test_libpng_errors_do_not_leak_none(tmp_path, rgb16):
+    """imagecodecs' png_decode drops a reference to None on each error; the reader gives it back."""
+    import sys
+
+    p = tmp_path / "f.png"
+    write_png(p, rgb16)
+    data = bytearray(p.read_bytes())
+    pos = data.index(b"IDAT") - 4
+    (n,) = struct.unpack(">I", data[pos : pos + 4])
+    data[pos + 8 + n // 2] ^= 0x55
+    data[pos + 8 + n : pos + 12 + n] = struct.pack(">I", zlib.crc32(bytes(data[pos + 4 : pos + 8 + n])))
+    p.write_bytes(bytes(data))
+    import gc
+
+    gc.collect()
+    before = sys.getrefcount(None)
+    for _ in range(2000):
+        try:
+            read_image(p)
+        except ImageError as exc:
+            assert "PngError" in str(exc)
+    gc.collect()
+    assert sys.getrefcount(None) >= before - 500  # without the repair: before - 2000
+
+
+def test_every_failure_is_image_error(tmp_path, rgb16):
+    import os
+
+    folder = tmp_path / "dir.png"
+    folder.mkdir()
+    loop = tmp_path / "loop.tif"
+    loop.symlink_to(tmp_path / "loop2.tif")
+    (tmp_path / "loop2.tif").symlink_to(loop)
+    cases = {folder: "is a folder", loop: "cannot open image file"}
+    for ext in ("png", "tif", "exr"):
+        empty = tmp_path / f"empty.{ext}"
+        empty.write_bytes(b"")
+        cases[empty] = f"empty.{ext}"
+        foreign = tmp_path / f"foreign.{ext}"
+        write_png(tmp_path / "x.png", rgb16) if ext != "png" else write_tiff(tmp_path / "x.tif", rgb16)
+        foreign.write_bytes((tmp_path / ("x.png" if ext != "png" else "x.tif")).read_bytes())
+        cases[foreign] = f"foreign.{ext}"
+    if os.geteuid() != 0:  # root reads anything
+        locked = tmp_path / "locked.png"
+        write_png(locked, rgb16)
+        locked.chmod(0)
+        cases[locked] = "permission denied"
+    for path, msg in cases.items():
+        for read in (read_image, lambda q: read_window(q, (0, 0, 1, 1))):
+            with pytest.raises(ImageError, match=msg) as info:
+                read(path)
+            assert "\n" not in str(info.value)
+
+
+def test_unsupported_png_kinds(tmp_path):
+    """Palette, low bit depth and interlaced PNG decode through libpng; 16-bit grey too."""
+    Image = pytest.importorskip("PIL.Image")
+    img = (np.arange(12 * 10).reshape(12, 10) % 7 * 30).astype(np.uint8)
+    p = tmp_path / "i.png"
+    Image.fromarray(img).save(p, interlace=1)
+    assert np.array_equal(read_image(p)[0][..., 0], img)
+    Image.fromarray(img > 100).save(p)  # 1 bit
+    a, info = read_image(p)
+    assert info.max_code == 255 and set(np.unique(a)) <= {0, 255}
+
+
+def test_window_errors_keep_their_type(tmp_path, rgb16):
+    p = tmp_path / "w.png"
+    write_png(p, rgb16)
+
+    def bad(info):
+        raise KeyError("mine")
+
+    with pytest.raises(KeyError, match="mine"):
+        read_window(p, bad)
+
+
+def test_writers_are_atomic(tmp_path, rgb16):
+    p = tmp_path / "a.png"
+    write_png(p, rgb16)
+    with pytest.raises(ValueError, match="expected uint8 or uint16"):
+        write_png(p, rgb16.astype(np.float32))
+    np.testing.assert_array_equal(read_image(p)[0], rgb16)
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["a.png"]
+
+
+def test_png_adler_mismatch_refused(tmp_path, rgb16):
+    """libpng only warns about a wrong Adler-32 once the rows are complete; the reader refuses it."""
+    p = tmp_path / "a.png"
+    write_png(p, rgb16)
+    data = bytearray(p.read_bytes())
+    pos = data.index(b"IEND") - 4 - 4  # the last IDAT's CRC
+    data[pos - 1] ^= 0x01  # last byte of the zlib stream: the Adler-32
+    start = data.rindex(b"IDAT")
+    data[pos : pos + 4] = struct.pack(">I", zlib.crc32(bytes(data[start:pos])))
+    p.write_bytes(bytes(data))
+    for read in (read_image, lambda q: read_window(q, (0, 0, 2, 2))):
+        with pytest.raises(ImageError, match=r"a\.png: .*IDAT: incorrect data check"):
+            read(p)
+
+
+def test_tiff_missing_strips_refused(tmp_path):
+    """A TIFF declaring more rows than its strips hold: tifffile would pad with zeros; refused."""
+    import tifffile
+
+    p = tmp_path / "m.tif"
+    tifffile.imwrite(p, np.ones((10, 12), np.uint8), compression="zlib")
+    data = bytearray(p.read_bytes())
+    with tifffile.TiffFile(p) as tf:
+        o = tf.pages.first.tags[257].valueoffset  # ImageLength
+    data[o : o + 2] = struct.pack("<H", 40)
+    p.write_bytes(bytes(data))
+    for read in (read_image, lambda q: read_window(q, (0, 0, 2, 2))):
+        with pytest.raises(ImageError, match=r"m\.tif: truncated TIFF \(1 of 4 strips"):
+            read(p)

@@ -221,6 +221,29 @@ def test_other_image_kinds(tmp_path, kind):
     np.testing.assert_allclose(table.values, _expected(mat, g, size=16, field_mm=1.0), rtol=tol)
 
 
+def test_plan_png_names_rendered_as_tiff_get_tif_names(tmp_path):
+    """A plan's .png names rendered as TIFF/EXR: files and capture.csv carry the format's extension."""
+    import csv
+
+    from cdbrdf.measure.images import read_image
+
+    mat = material()
+    g = Grid(kappa=[0.0], theta_l=[0.0], phi_l=[0.0], theta_v=[0.0, 45.0], phi_v=[0.0, 180.0])
+    simulate_capture(mat, tmp_path / "plan", grid=g, size=16, field_mm=1.0, noise=NoiseModel(0, 0))
+    for kind, ext in (("tif16", ".tif"), ("exr", ".exr")):
+        cap = tmp_path / kind
+        simulate_capture(mat, cap, plan=tmp_path / "plan" / "capture.csv", size=16, field_mm=1.0,
+                         noise=NoiseModel(0, 0), image_kind=kind)
+        with open(cap / "capture.csv", newline="") as fh:
+            names = [r["file"] for r in csv.DictReader(fh)]
+        assert names and all(n.endswith(ext) for n in names)
+        assert not list(cap.rglob("*.png"))
+        for n in names:
+            read_image(cap / n)
+        table, _ = measure(cap)
+        assert table.measured.all()
+
+
 def test_noise_model_parse():
     assert NoiseModel.parse("none").enabled is False
     assert NoiseModel.parse("1000,2") == NoiseModel(1000.0, 2.0)

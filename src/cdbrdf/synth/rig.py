@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..measure.images import linear_to_srgb, write_exr, write_png, write_tiff
+from ..measure.images import FORMATS, linear_to_srgb, write_exr, write_png, write_tiff
 from ..measure.plan import (
     CAPTURE_FILE,
     STAND_FILE,
@@ -550,7 +550,13 @@ def simulate_capture(
         rows = _read_plan_rows(plan_path)
         src_stands = plan_path.parent / STAND_FILE
         stand_map = read_stands(src_stands) if src_stands.is_file() else {}
-        if plan_path.resolve() != (out / CAPTURE_FILE).resolve():
+        if _match_extension(plan_path, rows, ext):
+            # file names renamed to the image kind's extension: write the plan as rendered
+            with open(out / CAPTURE_FILE, "w", newline="", encoding="utf-8") as fh:
+                wr = csv.DictWriter(fh, fieldnames=list(rows[0].keys()))
+                wr.writeheader()
+                wr.writerows(rows)
+        elif plan_path.resolve() != (out / CAPTURE_FILE).resolve():
             shutil.copyfile(plan_path, out / CAPTURE_FILE)
         kappas = sorted({float(r["kappa"]) for r in rows if (r.get("kind") or "sample") == "sample"})
         for k in kappas:
@@ -624,6 +630,28 @@ def simulate_capture(
                 progress(done, total)
     rep.seconds_rendering = time.perf_counter() - t0
     return rep
+
+
+def _match_extension(plan: Path, rows: list[dict[str, str]], ext: str) -> bool:
+    """Give every row's file the extension of the image kind (``a.png`` -> ``a.tif``); True if any changed.
+
+    A plan names its photographs ``.png`` (``cdbrdf plan``'s default): rendered
+    as TIFF or EXR they must not be written under a name whose extension
+    selects another format. Refuses renames that would make two rows share a file.
+    """
+    want = FORMATS["." + ext]
+    changed = False
+    for r in rows:
+        name = r["file"]
+        if FORMATS.get(Path(name).suffix.lower()) != want:
+            r["file"] = str(Path(name).with_suffix("." + ext).as_posix())
+            changed = True
+    if changed:
+        names = [r["file"] for r in rows]
+        if len(set(names)) != len(names):
+            dup = next(n for n in names if names.count(n) > 1)
+            raise ValueError(f"{plan}: giving the files the .{ext} extension makes two rows share {dup}")
+    return changed
 
 
 def _read_plan_rows(path: Path) -> list[dict[str, str]]:
