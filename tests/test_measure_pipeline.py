@@ -288,12 +288,23 @@ def test_extra_columns_kept_as_provenance(tmp_path):
     (lambda r: r.update(theta_v=95), "outside"),
     (lambda r: r.update(file="x.jpg"), "unsupported extension"),
     (lambda r: r.update(exposure=-1), "exposure must be positive"),
+    (lambda r: r.update(exposure=1e-320), r"exposure 9.99989e-321 is outside \[1e-9, 1e9\]"),
 ])
 def test_capture_table_errors(tmp_path, edit, msg):
     r = dict(file="a.png", kappa=0, theta_v=0, phi_v=0, theta_l=0, phi_l=0)
     edit(r)
     write_csv(tmp_path / "capture.csv", [r])
     with pytest.raises(CaptureError, match=msg):
+        measure(tmp_path)
+
+
+def test_curvature_without_a_measured_sample_names_the_capture(tmp_path):
+    rows = make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    for r in rows:
+        if r["kappa"] == 0.2:
+            r["hidden"] = "view"
+    write_csv(tmp_path / "capture.csv", rows)
+    with pytest.raises(CaptureError, match=f"{tmp_path}: kappa = 0.2 1/mm: no sample was measured"):
         measure(tmp_path)
 
 

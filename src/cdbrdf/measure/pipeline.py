@@ -473,6 +473,8 @@ def _parse_row(csv_path: Path, line: int, rec: dict, extra_cols: list[str]) -> C
         exposure = 1.0
     if exposure <= 0:
         raise CaptureError(f"{where}: exposure must be positive, got {exposure:g}")
+    if not 1e-9 <= exposure <= 1e9:  # a denormal exposure overflows the bracket merge
+        raise CaptureError(f"{where}: exposure {exposure:g} is outside [1e-9, 1e9]")
     cxy = []
     for c in ("cx", "cy"):
         v = _num(where, c, rec.get(c, ""), blank_ok=True)
@@ -1303,7 +1305,10 @@ def _assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear:
     rep.n_skipped_samples = int(skipped.sum())
     rep.n_not_photographed = int((~photographed).sum())
     rep.n_images = n_used + rep.n_white + rep.n_dark
-    filled, fill_src, filled_std = fill_nearest(values, valid, grid, std=std)
+    try:
+        filled, fill_src, filled_std = fill_nearest(values, valid, grid, std=std)
+    except TableError as exc:
+        raise CaptureError(f"{cap.folder}: {exc}") from None
 
     provenance: dict[str, Any] = {
         "method": "measured",
