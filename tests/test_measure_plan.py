@@ -131,3 +131,43 @@ def test_cli_plan(tmp_path, capsys):
     assert "kappa -0.22 1/mm" in text and (out / "plan.png").stat().st_size > 0
     assert main(["plan", "-o", str(out)]) == 2  # exists
     assert "already exists" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text,msg", [
+    ('{"stands": [{"kappa": NaN}]}', "NaN is not a number JSON allows"),
+    ('{"stands": [{"kappa": 0.1, "face_width_mm": 0}]}', "stand 0: .*must be positive"),
+    ('{"stands": [{"kappa": 0.1, "face_width_mm": -2}]}', "must be positive"),
+    ('{"stands": [{"kappa": 0.1, "wall_height_mm": -1}]}', "non-negative"),
+    ('{"stands": [{"kappa": 0.1, "length_mm": 1e999}]}', "stand 0 length_mm: must be finite"),
+    ('{"stands": [{"kappa": true}]}', "stand 0 kappa: expected a number, got True"),
+    ('{"stands": [{"kappa": "0.1"}]}', "expected a number"),
+    ('{"stands": [{"kappa": 0.1}, {"kappa": 0.1}]}', "stand 1: a second stand for kappa 0.1"),
+    ('{"stands": []}', "non-empty list"),
+    ('[1, 2]', "expected a JSON object, got list"),
+    ('{"stands": [{"kappa": 1' + "0" * 5000 + '}]}', "not valid JSON"),
+    ('{"stands": ' + "[" * 100_000 + "]" * 100_000 + "}", "nested too deeply"),
+    ('{"stands": [{"kappa": 0.1}]', "line 1: not valid JSON"),
+])
+def test_read_stands_refuses_bad_values(tmp_path, text, msg):
+    from cdbrdf.errors import CaptureError
+
+    p = tmp_path / "stands.json"
+    p.write_text(text)
+    with pytest.raises(CaptureError, match=msg) as exc:
+        read_stands(p)
+    assert str(p) in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_read_stands_encoding_and_size_limit(tmp_path, monkeypatch):
+    from cdbrdf.errors import CaptureError, LimitError
+
+    p = tmp_path / "stands.json"
+    p.write_bytes(b"\xef\xbb\xbf" + json.dumps({"stands": [{"kappa": 0.1}]}).encode())  # UTF-8 BOM is fine
+    assert set(read_stands(p)) == {0.1}
+    p.write_bytes(b'{"stands": [{"kappa": 0.1}], "material": "d\xe9nim"}')
+    with pytest.raises(CaptureError, match="line 1: not UTF-8"):
+        read_stands(p)
+    p.write_text(json.dumps({"stands": [{"kappa": 0.1}], "pad": "x" * 5000}))
+    monkeypatch.setenv("CDBRDF_MAX_JSON_BYTES", "4096")
+    with pytest.raises(LimitError, match="CDBRDF_MAX_JSON_BYTES"):
+        read_stands(p)

@@ -24,7 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--patch", type=int, default=7, help="patch size N in pixels (7)")
     p.add_argument("--linear", action="store_true", help="integer images hold linear values, not sRGB")
     p.add_argument("--skip-bad", action="store_true",
-                   help="fill the samples of missing or unreadable photographs instead of stopping")
+                   help="fill the samples of photographs that cannot be used (missing, not a file, "
+                   "unreadable, corrupt, of another size) instead of stopping; without it the run "
+                   "stops before any work and lists them all in FILE.bad.txt")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="Dask scheduler address (tcp://host:port) or threads/processes/synchronous; "
                    "default: local threads")
@@ -32,7 +34,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="albedo of the white reference (default: stands.json's, else 1)")
     p.add_argument("--material", default=None, help="material name written to the file")
     p.add_argument("--workers", type=int, default=None, help="local threads/processes")
-    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite an existing output file (never one of the capture's own files)")
     p.set_defaults(func=run)
 
 
@@ -40,8 +43,6 @@ def run(args: argparse.Namespace) -> int:
     from ..measure.pipeline import measure
 
     out = Path(args.output)
-    if out.exists() and not args.force:
-        raise FileExistsError(f"{out}: already exists (use --force to overwrite)")
     bar = None
     if not args.quiet:
         from tqdm import tqdm
@@ -57,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         table, report = measure(
             args.capture, out, patch=args.patch, linear=args.linear, skip_bad=args.skip_bad,
             scheduler=args.scheduler, white_albedo=args.white_albedo, material=args.material,
-            num_workers=args.workers, progress=progress,
+            num_workers=args.workers, progress=progress, overwrite=args.force,
         )
     except KeyboardInterrupt:
         import sys

@@ -45,6 +45,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .. import limits
+from ..errors import CaptureError
 from ..frames import direction_from_angles
 from ..table import Grid
 
@@ -56,6 +58,8 @@ __all__ = [
     "plan_rows",
     "write_plan",
     "read_stands",
+    "parse_stands",
+    "load_json_object",
     "write_stands",
     "STAND_FILE",
     "CAPTURE_FILE",
@@ -286,38 +290,127 @@ def write_stands(path: str | PathLike[str], stands: Iterable[Stand], **extra: An
     Path(path).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
 
 
+def load_json_object(path: str | PathLike[str]) -> dict[str, Any]:
+    """Read a small JSON object file (``stands.json``) defensively.
+
+    The file's size is checked against the ``json_bytes`` limit before it is
+    read; bytes that are not UTF-8, invalid JSON, nesting too deep for the
+    parser, integers too long to convert and a top level that is not an object
+    are refused.
+
+    Raises
+    ------
+    CaptureError
+        One line naming the file and the problem.
+    LimitError
+        When the file is larger than the ``json_bytes`` limit.
+    """
+    p = Path(path)
+    try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise CaptureError(f"{p}: cannot be read ({exc.strerror or exc})") from None
+    limits.check("json_bytes", size, what=f"{p}: JSON file")
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise CaptureError(f"{p}: cannot be read ({exc.strerror or exc})") from None
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise CaptureError(f"{p}: line {line}: not UTF-8 text (byte 0x{raw[exc.start]:02x})") from None
+    try:
+        doc = json.loads(text, parse_constant=_reject_constant)
+    except json.JSONDecodeError as exc:
+        raise CaptureError(f"{p}: line {exc.lineno}: not valid JSON ({exc.msg})") from None
+    except RecursionError:
+        raise CaptureError(f"{p}: not valid JSON (nested too deeply)") from None
+    except ValueError as exc:  # NaN/Infinity literals, integers too long to convert
+        raise CaptureError(f"{p}: not valid JSON ({str(exc).splitlines()[0]})") from None
+    if not isinstance(doc, dict):
+        raise CaptureError(f"{p}: expected a JSON object, got {type(doc).__name__}")
+    return doc
+
+
+def _reject_constant(name: str) -> float:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _number(where: str, key: str, v: object) -> float:
+    """A finite JSON number (not a boolean) or :class:`CaptureError`."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise CaptureError(f"{where}: {key}: expected a number, got {_short(v)}")
+    try:
+        f = float(v)
+    except OverflowError:
+        raise CaptureError(f"{where}: {key}: {_short(v)} is out of range") from None
+    if not math.isfinite(f):
+        raise CaptureError(f"{where}: {key}: must be finite, got {_short(v)}")
+    return f
+
+
+def _short(v: object) -> str:
+    r = repr(v)
+    return r if len(r) <= 40 else r[:37] + "..."
+
+
+def parse_stands(doc: Mapping[str, Any], where: str | PathLike[str]) -> dict[float, Stand]:
+    """The ``stands`` list of a parsed ``stands.json``, by curvature.
+
+    Parameters
+    ----------
+    doc
+        The file's top-level object.
+    where
+        The file, for messages.
+
+    Raises
+    ------
+    CaptureError
+        When ``stands`` is not a non-empty list of stand objects, a key is
+        unknown, a value is not a finite number (booleans, NaN and strings
+        are refused), a stand is impossible (zero or negative width or
+        length, negative wall, a trough spanning 180 degrees or more) or two
+        stands share a curvature. The message names the file and the stand.
+    """
+    items = doc.get("stands")
+    if not isinstance(items, list) or not items:
+        raise CaptureError(f"{where}: expected an object with a non-empty list 'stands'")
+    out: dict[float, Stand] = {}
+    fields = ("kappa", "face_width_mm", "wall_height_mm", "length_mm")
+    for i, item in enumerate(items):
+        if not isinstance(item, dict) or "kappa" not in item:
+            raise CaptureError(f"{where}: stand {i} must be an object with at least 'kappa'")
+        unknown = set(item) - set(fields)
+        if unknown:
+            raise CaptureError(
+                f"{where}: stand {i} has unknown keys {sorted(unknown)}; valid: {sorted(fields)}"
+            )
+        vals = {k: _number(where, f"stand {i} {k}", item[k]) for k in fields if k in item}
+        try:
+            st = Stand(**vals)
+        except ValueError as exc:
+            raise CaptureError(f"{where}: stand {i}: {exc}") from None
+        if any(abs(st.kappa - k) <= _KAPPA_TOL for k in out):
+            raise CaptureError(f"{where}: stand {i}: a second stand for kappa {st.kappa:g}")
+        out[st.kappa] = st
+    return out
+
+
 def read_stands(path: str | PathLike[str]) -> dict[float, Stand]:
     """Read a stand file; returns the stands by curvature.
 
     Raises
     ------
-    ValueError
-        When the file is not valid JSON or a stand is malformed (names the file).
+    CaptureError
+        (a :class:`ValueError`) when the file is not valid JSON or a stand is
+        malformed; one line naming the file (:func:`parse_stands`).
+    LimitError
+        When the file is larger than the ``json_bytes`` limit.
     """
     p = Path(path)
-    try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{p}: not valid JSON ({exc})") from None
-    items = doc.get("stands") if isinstance(doc, dict) else None
-    if not isinstance(items, list) or not items:
-        raise ValueError(f"{p}: expected an object with a non-empty list 'stands'")
-    out: dict[float, Stand] = {}
-    fields = {"kappa", "face_width_mm", "wall_height_mm", "length_mm"}
-    for i, item in enumerate(items):
-        if not isinstance(item, dict) or "kappa" not in item:
-            raise ValueError(f"{p}: stand {i} must be an object with at least 'kappa'")
-        unknown = set(item) - fields
-        if unknown:
-            raise ValueError(
-                f"{p}: stand {i} has unknown keys {sorted(unknown)}; valid: {sorted(fields)}"
-            )
-        try:
-            st = Stand(**item)
-        except ValueError as exc:
-            raise ValueError(f"{p}: {exc}") from None
-        out[st.kappa] = st
-    return out
+    return parse_stands(load_json_object(p), p)
 
 
 def write_plan(
