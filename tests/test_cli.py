@@ -102,3 +102,64 @@ def test_negative_comma_lists_are_values():
     # space-separated lists (nargs="+") and plain negative numbers are left alone
     assert _join_negative_lists(["mosaic", "f", "--kappa", "-0.13", "0"]) == ["mosaic", "f", "--kappa", "-0.13", "0"]
     assert _join_negative_lists(["x", "-q", "-0.1,2"]) == ["x", "-q", "-0.1,2"]
+
+
+def test_version_is_fast_and_imports_no_command():
+    code = ("import sys, time; t = time.perf_counter(); from cdbrdf.cli import main\n"
+            "try:\n    main(['--version'])\nexcept SystemExit as e:\n    assert e.code == 0\n"
+            "print(time.perf_counter() - t, any(m.startswith('cdbrdf.commands.') for m in sys.modules))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    first, seconds, imported = r.stdout.splitlines()[0], *r.stdout.split()[-2:]
+    assert first == f"cdbrdf {cdbrdf.__version__}"
+    assert imported == "False" and float(seconds) < 2.0
+
+
+def test_no_command_prints_help(capsys):
+    assert main([]) == 2
+    assert "COMMAND" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv", [["nope"], ["info"], ["info", "x.h5", "--frobnicate"], ["--bogus"]])
+def test_usage_errors_are_one_line(argv, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and ": error: " in err and "usage:" not in err
+
+
+@pytest.mark.parametrize("exc, words", [(MemoryError(), "out of memory while running info"),
+                                        (RecursionError("maximum recursion depth"), "nested too deeply")])
+def test_memory_and_recursion_errors_are_one_line(monkeypatch, capsys, exc, words):
+    import cdbrdf.commands.info as info
+
+    def boom(args):
+        raise exc
+
+    monkeypatch.setattr(info, "run", boom)
+    assert main(["info", "x.h5"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("cdbrdf info: error: ") and words in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_memory_error_names_the_limit(monkeypatch, capsys):
+    import cdbrdf.commands.plan as plan
+
+    def boom(args):
+        raise MemoryError
+
+    monkeypatch.setattr(plan, "run", boom)
+    assert main(["plan", "-o", "x"]) == 2
+    assert "CDBRDF_MAX_CAPTURE_ROWS" in capsys.readouterr().err
+
+
+def test_keyboard_interrupt_exits_130(monkeypatch, capsys):
+    import cdbrdf.commands.info as info
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(info, "run", interrupted)
+    assert main(["info", "x.h5"]) == 130
+    assert capsys.readouterr().err == "cdbrdf: interrupted\n"

@@ -6,6 +6,7 @@ import json
 import os
 import re
 import shutil
+import time
 from pathlib import Path
 
 import numpy as np
@@ -159,3 +160,49 @@ def test_configs_state_their_cost():
     assert CONFIGS["full"].grid == Grid.paper()
     assert CONFIGS["full"].n_photos == 72 * 72 * 5 + 72
     assert CONFIGS["quick"].expected_seconds(2) < CONFIGS["full"].expected_seconds(2)
+
+
+def test_work_folder_is_inside_the_partial_output(tmp_path, monkeypatch):
+    """Intermediate files live in the pid-tagged partial folder (swept after a kill), not in the system temp."""
+    import tempfile
+
+    import cdbrdf.demo as demo
+    import cdbrdf.render as render
+
+    systmp = tmp_path / "systmp"
+    systmp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(systmp))
+    monkeypatch.setattr(render, "set_variant", lambda *a, **k: None)
+    monkeypatch.setattr(demo, "_curvature_figure", lambda path: None)
+    seen = []
+
+    def material(name, folder, work, cfg, progress):
+        seen.append((folder, work))
+        (work / "capture-x").mkdir()
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(demo, "_material", material)
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt):
+        run_demo(out, materials=["denim"], config=_tiny_config())
+    (folder, work), = seen
+    assert work.parent == folder and folder.parent == tmp_path
+    assert re.fullmatch(rf"\.out\.{os.getpid()}\.[0-9a-f]{{8}}\.[0-9a-f]{{8}}\.partial", folder.name)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["systmp"]  # all removed on interrupt
+    assert list(systmp.iterdir()) == []
+
+
+def test_cli_demo_into_the_current_folder_fails_at_once(tmp_path, monkeypatch, capsys):
+    from cdbrdf.cli import main
+    from cdbrdf.report import output_folder
+
+    with output_folder(tmp_path / "earlier") as tmp:
+        (tmp / "report.html").write_text("old\n")
+    monkeypatch.chdir(tmp_path / "earlier")
+    t0 = time.perf_counter()
+    assert main(["demo", "-o", ".", "--quick"]) == 2
+    assert time.perf_counter() - t0 < 1.0
+    err = capsys.readouterr().err
+    assert err.startswith("cdbrdf demo: error:") and "current folder" in err and err.count("\n") == 1
+    assert (tmp_path / "earlier" / "report.html").read_text() == "old\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["earlier"]

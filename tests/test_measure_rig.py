@@ -279,3 +279,77 @@ def test_expected_patch_value_limits():
         np.testing.assert_allclose(tiny, node, rtol=1e-6)
     flat = expected_patch_value(mat, Stand(0.0), 45.0, 30.0, 30.0, 200.0, size=16, field_mm=5.0)
     np.testing.assert_allclose(flat, mat.evaluate(45.0, 30.0, 30.0, 200.0, 0.0), rtol=1e-12)
+
+
+TINY_GRID = Grid(kappa=[0.0], theta_l=[0.0], phi_l=[0.0], theta_v=[0.0, 30.0], phi_v=[0.0])
+
+
+def _tiny(folder, **kw):
+    return simulate_capture(material(), folder, grid=TINY_GRID, size=8, spp=1, field_mm=1.0,
+                            noise=NoiseModel(0, 0), **kw)
+
+
+def test_simulate_capture_refuses_a_foreign_folder(tmp_path):
+    cap = tmp_path / "cap"
+    cap.mkdir()
+    (cap / "mine.txt").write_text("user data\n")
+    with pytest.raises(FileExistsError, match="not written by cdbrdf"):
+        _tiny(cap)
+    assert sorted(p.name for p in cap.iterdir()) == ["mine.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
+
+
+def test_simulate_capture_cli_refuses_a_foreign_folder_at_once(tmp_path, capsys):
+    cap = tmp_path / "cap"
+    cap.mkdir()
+    (cap / "photo.png").write_bytes(b"x")
+    assert main(["-q", "simulate-capture", "denim", "-o", str(cap)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not written by cdbrdf" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
+
+
+def test_simulate_capture_replaces_an_earlier_capture_whole(tmp_path):
+    cap = tmp_path / "cap"
+    rep = _tiny(cap)
+    assert rep.folder == cap and (cap / "capture.csv").is_file()
+    (cap / "stale.png").write_bytes(b"from the first run")
+    _tiny(cap, exposures=(1.0, 0.5))
+    names = {p.name for p in cap.rglob("*")}
+    assert "stale.png" not in names and any("_e1." in n for n in names)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]  # no partial folder left
+
+
+@pytest.mark.parametrize("exc", [RuntimeError("boom"), KeyboardInterrupt()])
+def test_simulate_capture_failure_leaves_the_old_folder(tmp_path, exc):
+    cap = tmp_path / "cap"
+    _tiny(cap)
+    before = sorted(str(p.relative_to(cap)) for p in cap.rglob("*"))
+
+    def progress(done, total):
+        if done == 1:
+            raise exc
+
+    with pytest.raises(type(exc)):
+        _tiny(cap, exposures=(1.0, 0.5), progress=progress)
+    assert sorted(str(p.relative_to(cap)) for p in cap.rglob("*")) == before  # no "_e0" photograph mixed in
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
+
+
+def test_simulate_capture_cli_interrupt_leaves_nothing(tmp_path, monkeypatch, capsys):
+    import cdbrdf.synth.rig as rig
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(rig, "_write", interrupted)
+    mat = tmp_path / "mat.h5"
+    material().save(mat)
+    assert main(["-q", "simulate-capture", str(mat), "-o", str(tmp_path / "cap"), "--size", "8"]) == 130
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mat.h5"]
+
+
+def test_simulate_capture_large_seed(tmp_path):
+    """Seeds up to 2**32 - 1 are accepted (Mitsuba's seed is derived modulo 2**32)."""
+    _tiny(tmp_path / "cap", seed=2**32 - 1)
+    assert (tmp_path / "cap" / "capture.csv").is_file()

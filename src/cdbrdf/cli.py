@@ -2,9 +2,12 @@
 
 Each sub-command lives in :mod:`cdbrdf.commands` as a module ``NAME`` with
 ``register(subparsers)`` (adds its parser and ``set_defaults(func=run)``) and
-``run(args) -> int``. User errors (:class:`ValueError`, :class:`OSError`,
-:class:`cdbrdf.CDBRDFError`) print one line to stderr and exit with status 2;
-``--debug`` shows the traceback instead.
+``run(args) -> int``. Options are validated while they are parsed by the
+types of :mod:`cdbrdf.commands._args`. Bad arguments and user errors
+(:class:`ValueError`, :class:`OSError`, :class:`cdbrdf.CDBRDFError`) print one
+line ``cdbrdf COMMAND: error: MESSAGE`` to stderr and exit with status 2; so do
+:class:`MemoryError` and :class:`RecursionError` (naming the limits that bound
+the work). ``--debug`` shows the traceback instead.
 """
 
 from __future__ import annotations
@@ -15,8 +18,9 @@ import logging
 import re
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
-__all__ = ["main", "build_parser", "COMMANDS"]
+__all__ = ["main", "build_parser", "COMMANDS", "Parser"]
 
 #: Sub-command modules under :mod:`cdbrdf.commands`, in ``--help`` order.
 COMMANDS: tuple[str, ...] = (
@@ -35,11 +39,27 @@ EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
 
 
+class Parser(argparse.ArgumentParser):
+    """An :class:`argparse.ArgumentParser` whose errors are one line, not usage + message.
+
+    :meth:`error` prints ``cdbrdf COMMAND: error: MESSAGE`` to stderr and exits
+    with status 2. Sub-parsers are of the same class (argparse creates them
+    with the parent's class).
+    """
+
+    def error(self, message: str) -> NoReturn:  # noqa: D102 - argparse API
+        self.exit(EXIT_USER_ERROR, f"{self.prog}: error: {_one_line(message)}\n")
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every sub-command registered."""
     from . import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="cdbrdf",
         description="Measure and render curvature-dependent BRDFs (CDBRDF) of fabrics.",
     )
@@ -72,16 +92,50 @@ def _join_negative_lists(argv: Sequence[str]) -> list[str]:
     return out
 
 
+#: Limits that bound the memory of each command, named when it runs out of memory.
+_MEMORY_HINTS: dict[str, str] = {
+    "render": "CDBRDF_MAX_RENDER_PIXELS, CDBRDF_MAX_MESH_FACES",
+    "curvature": "CDBRDF_MAX_MESH_FACES",
+    "plan": "CDBRDF_MAX_CAPTURE_ROWS",
+    "simulate-capture": "CDBRDF_MAX_CAPTURE_ROWS, CDBRDF_MAX_RENDER_PIXELS",
+    "synth": "CDBRDF_MAX_TABLE_SAMPLES",
+    "measure": "CDBRDF_MAX_IMAGE_PIXELS, CDBRDF_MAX_TABLE_SAMPLES",
+}
+
+
+def _version_only(argv: Sequence[str]) -> bool:
+    """``--version`` before any command: answered without importing the commands."""
+    for a in argv:
+        if a == "--version":
+            return True
+        if not a.startswith("-"):
+            return False
+    return False
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status."""
-    argv = _join_negative_lists(sys.argv[1:] if argv is None else argv)
-    if argv == ["--version"]:  # answered without importing the sub-commands (and numba)
+    """Run the command line; returns the exit status.
+
+    Parameters
+    ----------
+    argv
+        Arguments without the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 on success, 2 for a user error, 130 when interrupted. Bad arguments,
+        ``--help`` and ``--version`` exit through :class:`SystemExit` (status
+        2, 0 and 0).
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if _version_only(argv):
         from . import __version__
 
         print(f"cdbrdf {__version__}")
-        sys.exit(0)  # as argparse's version action
+        raise SystemExit(0)
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_join_negative_lists(argv))
     logging.basicConfig(
         level=logging.DEBUG if args.debug else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",
@@ -100,7 +154,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         from .errors import CDBRDFError
 
         kind = "" if isinstance(exc, CDBRDFError) else f"{type(exc).__name__}: "
-        print(f"cdbrdf {args.command}: error: {kind}{exc}", file=sys.stderr)
+        print(f"cdbrdf {args.command}: error: {kind}{_one_line(str(exc))}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except (MemoryError, RecursionError) as exc:
+        if args.debug:
+            raise
+        what = "out of memory" if isinstance(exc, MemoryError) else "input nested too deeply"
+        hint = _MEMORY_HINTS.get(args.command, "")
+        hint = f"; lower the sizes asked for{' or the limits ' + hint if hint else ''}"
+        print(f"cdbrdf {args.command}: error: {what} while running {args.command}{hint}",
+              file=sys.stderr)
         return EXIT_USER_ERROR
 
 

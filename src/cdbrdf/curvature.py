@@ -27,12 +27,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import MeshError
+from .limits import check
 
 __all__ = [
     "MeshError",
     "PrincipalCurvatures",
     "principal_curvatures",
     "max_curvature",
+    "neighbourhood_cost",
+    "IGL_RADIUS",
+    "MAX_RADIUS",
     "weld",
     "sine_sheet_height",
     "sine_sheet_curvature",
@@ -42,6 +46,9 @@ _LOG = logging.getLogger(__name__)
 
 #: Neighbourhood radius of libigl's estimator, in average edge lengths.
 IGL_RADIUS = 2
+
+#: Largest neighbourhood radius accepted, in average edge lengths.
+MAX_RADIUS = 32
 
 #: Relative tolerance (of the bounding-box diagonal) under which vertices are welded.
 WELD_TOLERANCE = 1e-7
@@ -177,6 +184,17 @@ def _umbrella_mean_curvature(v, f, n) -> NDArray[np.float64]:
     return np.divide(s, c, out=np.zeros_like(s), where=c > 0)
 
 
+def neighbourhood_cost(n_faces: int, radius: int) -> int:
+    """Work of libigl's estimator in face-equivalents: ``n_faces * (radius / IGL_RADIUS)**2``.
+
+    A neighbourhood of ``radius`` average edge lengths holds about ``radius**2``
+    times as many vertices as one of radius 1, so at the default radius the
+    cost is the number of faces and it is bounded by the ``mesh_faces`` limit
+    (:mod:`cdbrdf.limits`) like the mesh itself.
+    """
+    return int(n_faces) * int(radius) ** 2 // IGL_RADIUS**2
+
+
 def principal_curvatures(
     vertices: ArrayLike,
     faces: ArrayLike,
@@ -197,7 +215,9 @@ def principal_curvatures(
         shades with); where one points against the winding normal the sign of
         that vertex's curvatures is relative to it instead.
     radius
-        libigl's neighbourhood radius in average edge lengths (>= 2).
+        libigl's neighbourhood radius in average edge lengths, ``IGL_RADIUS``
+        (2) to :data:`MAX_RADIUS`; :func:`neighbourhood_cost` of the mesh must
+        be within the ``mesh_faces`` limit.
 
     Returns
     -------
@@ -208,15 +228,23 @@ def principal_curvatures(
     Raises
     ------
     MeshError
-        For bad arrays, no or only degenerate faces, or inconsistent winding.
+        For bad arrays, no or only degenerate faces, inconsistent winding or
+        a radius out of range.
+    LimitError
+        When the radius would make the estimate too costly for the mesh
+        (raise ``CDBRDF_MAX_MESH_FACES`` to allow it).
     """
     import igl
 
     v_in, f_in = _check_arrays(vertices, faces)
     if v_in.shape[0] < 3:
         raise MeshError(f"the mesh has {v_in.shape[0]} vertices; at least 3 are needed")
-    if int(radius) < 2:
-        raise MeshError(f"radius: libigl needs at least 2 average edge lengths, got {radius}")
+    if not IGL_RADIUS <= int(radius) <= MAX_RADIUS:
+        raise MeshError(
+            f"radius: expected {IGL_RADIUS} to {MAX_RADIUS} average edge lengths, got {radius}")
+    check("mesh_faces", neighbourhood_cost(f_in.shape[0], int(radius)),
+          what=f"curvature of {f_in.shape[0]:,} faces with radius {int(radius)} (work grows as "
+          f"faces x (radius / {IGL_RADIUS})^2)")
     v, f, index = weld(v_in, f_in)
     f = _clean_faces(v, f)
     _check_orientation(f, v.shape[0])

@@ -20,14 +20,18 @@ For each material (denim and shot fabric by default):
 
 The output folder is built beside the destination and swapped in whole at
 the end (:func:`cdbrdf.report.output_folder`), so results of different runs
-are never mixed and a failed run leaves the previous one intact.
+are never mixed and a failed run leaves the previous one intact. The
+intermediate files (capture plans, and the photographs unless kept) are
+written to a work folder inside that partial folder, so a killed run leaves
+nothing in the system's temporary folder and its partial folder is removed
+by the next run.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import tempfile
+import shutil
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -39,7 +43,10 @@ import numpy as np
 
 from .table import CDBRDF, Grid, PAPER_KAPPA
 
-__all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth"]
+__all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth", "WORK_DIR"]
+
+#: Work folder for intermediate files, inside the partial output folder (removed on success).
+WORK_DIR = ".work"
 
 #: ``progress(stage, done, total)``: stage is a short label such as "denim: photographs".
 Progress = Callable[[str, int, int], None]
@@ -288,11 +295,12 @@ def _material(
     res = MaterialResult(name=name, truth_attrs=dict(truth.attrs), measured_path=folder / f"{name}-measured.h5",
                          photos=config.n_photos)
     capture = (folder if config.keep_capture else work) / f"capture-{name}"
+    plan = work / f"plan-{name}"
     stands = [default_stand(float(k)) for k in config.grid.kappa]
 
     t0 = time.perf_counter()
-    write_plan(capture, config.grid, stands)
-    simulate_capture(truth, capture, plan=capture / "capture.csv", size=config.image_px,
+    write_plan(plan, config.grid, stands)
+    simulate_capture(truth, capture, plan=plan / "capture.csv", size=config.image_px,
                      spp=config.capture_spp, seed=1, progress=_stage(progress, f"{name}: photographs"))
     res.seconds["photographs"] = time.perf_counter() - t0
 
@@ -464,7 +472,7 @@ def run_demo(
     """
     from . import materials as mats
     from .render import set_variant
-    from .report import output_folder
+    from .report import check_output_folder, output_folder
 
     cfg = config or CONFIGS["quick" if quick else "full"]
     unknown = [m for m in materials if m not in mats.names()]
@@ -472,13 +480,19 @@ def run_demo(
         raise ValueError(f"materials: {unknown} unknown; valid: {', '.join(mats.names())}")
     if not materials:
         raise ValueError("materials: give at least one")
+    check_output_folder(output)  # fail now, not after the whole run
     set_variant()  # checks libLLVM before anything long starts
     t0 = time.perf_counter()
     results = []
-    with output_folder(output) as folder, tempfile.TemporaryDirectory(prefix="cdbrdf-demo-") as work:
+    with output_folder(output) as folder:
+        # intermediate files live inside the partial folder, so that a killed run's
+        # leftovers are swept with it by the next run (cdbrdf.fsutil.sweep_stale)
+        work = folder / WORK_DIR
+        work.mkdir()
         _curvature_figure(folder / "surfaces-curvature.png")
         for name in materials:
-            results.append(_material(name, folder, Path(work), cfg, progress))
+            results.append(_material(name, folder, work, cfg, progress))
+        shutil.rmtree(work)
         seconds = time.perf_counter() - t0
         (folder / "results.json").write_text(json.dumps({
             "config": cfg.name,

@@ -20,7 +20,7 @@ from typing import Any
 
 from .fsutil import is_owned, mark_owned, sweep_stale, temp_sibling
 
-__all__ = ["Figure", "Section", "Report", "output_folder"]
+__all__ = ["Figure", "Section", "Report", "output_folder", "check_output_folder", "provenance_text"]
 
 _MARKER = ".cdbrdf-output"
 _KIND = "output"
@@ -151,15 +151,17 @@ class Report:
         return path
 
 
-@contextmanager
-def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
-    """Build an output folder beside ``path`` and swap it in only on success.
+def check_output_folder(path: str | PathLike[str]) -> Path:
+    """Refuse, before any work, an output folder that :func:`output_folder` would refuse.
 
-    Old results are never mixed with new ones: the new folder replaces a
-    previous cdbrdf output folder whole. A folder that exists, is not empty
-    and was not made by cdbrdf is refused (nothing of the user's is deleted).
-    On failure the partial folder is removed and the old one left as it was;
-    partial folders of killed runs are removed by the next run.
+    Cheap (no file is written), so that a command fails at once instead of
+    after its computation. Returns the folder as a :class:`~pathlib.Path`.
+
+    Raises
+    ------
+    FileExistsError
+        When ``path`` is a file or a link, a non-empty folder cdbrdf did not
+        make, or the current folder (or one that holds it).
     """
     dest = Path(path)
     if dest.exists() or dest.is_symlink():
@@ -176,6 +178,27 @@ def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
                 f"{dest}: is the current folder (or holds it) and would be replaced whole; "
                 "run from another folder or choose another output folder"
             )
+    return dest
+
+
+@contextmanager
+def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
+    """Build an output folder beside ``path`` and swap it in only on success.
+
+    Old results are never mixed with new ones: the new folder replaces a
+    previous cdbrdf output folder whole. A folder that exists, is not empty
+    and was not made by cdbrdf is refused (nothing of the user's is deleted),
+    as is the current folder (:func:`check_output_folder`).
+    On failure (or interrupt) the partial folder is removed and the old one
+    left as it was; partial folders of killed runs (``.NAME.<pid>...partial``,
+    with everything inside them) are removed by the next run.
+
+    Yields
+    ------
+    pathlib.Path
+        The partial folder to fill (marked as cdbrdf's own).
+    """
+    dest = check_output_folder(path)
     parent = dest.parent if str(dest.parent) else Path(".")
     parent.mkdir(parents=True, exist_ok=True)
     sweep_stale(dest)

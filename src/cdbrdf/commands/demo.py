@@ -8,6 +8,14 @@ import sys
 __all__ = ["register", "run"]
 
 
+def _material(text: str) -> str:
+    from ..materials import names
+
+    if text not in names():
+        raise argparse.ArgumentTypeError(f"expected one of {', '.join(names())}, got {text!r}")
+    return text
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "demo",
@@ -20,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (replaced whole if it "
                    "holds an earlier cdbrdf output)")
     p.add_argument("--quick", action="store_true", help="coarse grid and small images: a few minutes")
-    p.add_argument("--material", action="append", dest="materials", metavar="NAME",
+    p.add_argument("--material", action="append", dest="materials", metavar="NAME", type=_material,
                    help="bundled material to run (repeatable; default: denim and shot)")
     p.set_defaults(func=run)
 
@@ -29,7 +37,9 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from ..demo import CONFIGS, run_demo
+    from ..report import check_output_folder
 
+    check_output_folder(args.output)  # refuse at once, before the estimate and the run
     cfg = CONFIGS["quick" if args.quick else "full"]
     materials = args.materials or ["denim", "shot"]
     est = cfg.expected_seconds(len(materials))

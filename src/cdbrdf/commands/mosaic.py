@@ -12,30 +12,16 @@ __all__ = ["register", "run", "FORMATS"]
 FORMATS: dict[str, str] = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
 
 
-def _exposure(text: str) -> float | str:
+def _exposure_type():  # noqa: ANN202 - an argparse type
     from ..plot import EXPOSURE_MODES  # light: numpy only, matplotlib is imported lazily
+    from ._args import finite_float, keyword
 
-    if text in EXPOSURE_MODES:
-        return text
-    try:
-        return _positive(text)
-    except argparse.ArgumentTypeError:
-        raise argparse.ArgumentTypeError(
-            f"expected a positive number or one of {', '.join(EXPOSURE_MODES)}, got {text!r}"
-        ) from None
-
-
-def _positive(text: str) -> float:
-    try:
-        x = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (x > 0 and x < float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
-    return x
+    return keyword(EXPOSURE_MODES, finite_float(0, lo_open=True))
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._args import finite_float, name_or_index
+
     p = sub.add_parser(
         "mosaic",
         help="draw the Fig. 7 mosaic (one image per curvature + differences) of a file",
@@ -52,10 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("file", metavar="FILE", help="a CDBRDF file (.h5)")
     p.add_argument("-o", "--output", metavar="OUT", required=True,
                    help="the image to write (.png, .pdf or .svg); replaced if it exists")
-    p.add_argument("--kappa", metavar="K", type=float, nargs="+", action="extend",
+    p.add_argument("--kappa", metavar="K", type=finite_float(-100, 100, unit="1/mm"), nargs="+", action="extend",
                    help="curvatures to show, mm^-1, as sampled in the file "
                    "(default: all; e.g. --kappa -0.13 0 0.13)")
-    p.add_argument("--exposure", metavar="X", type=_exposure, default="auto",
+    p.add_argument("--exposure", metavar="X", type=_exposure_type(), default="auto",
                    help="linear exposure factor before sRGB encoding, or 'auto' (default: "
                    "the 99.5th percentile of the luminance over all panels maps to white) "
                    "or 'white' (x pi: a white Lambertian reflector maps to white; "
@@ -64,11 +50,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="leave out the row of differences against kappa = 0")
     p.add_argument("--no-marks", dest="mark_filled", action="store_false",
                    help="do not hatch filled (unmeasured) samples")
-    p.add_argument("--channel", metavar="C",
+    p.add_argument("--channel", metavar="C", type=name_or_index(),
                    help="show one channel (index or name, e.g. G) in grey instead of RGB")
     p.add_argument("--title", help="figure title (default: material and quantity)")
-    p.add_argument("--dpi", type=_positive, default=150.0,
-                   help="resolution of a PNG in dots per inch (default: 150)")
+    p.add_argument("--dpi", type=finite_float(10, 1200), default=150.0,
+                   help="resolution of a PNG in dots per inch, 10 to 1200 (default: 150)")
     p.set_defaults(func=run)
 
 
@@ -95,12 +81,6 @@ def _umask() -> int:
     return mask
 
 
-def _channel(text: str | None) -> int | str | None:
-    if text is None:
-        return None
-    return int(text) if text.lstrip("-").isdigit() else text
-
-
 def run(args: argparse.Namespace) -> int:
     from ..io import atomic_path, load
     from ..plot import plot_mosaic
@@ -112,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
         kappa=args.kappa,
         exposure=args.exposure,
         diff=args.diff,
-        channel=_channel(args.channel),
+        channel=args.channel,
         mark_filled=args.mark_filled,
         title=args.title,
         dpi=args.dpi,

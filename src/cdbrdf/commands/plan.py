@@ -7,17 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["register", "run", "plot_hidden"]
-
-
-def _floats(text: str) -> list[float]:
-    try:
-        return [float(x) for x in text.replace(" ", "").split(",") if x]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+__all__ = ["register", "run", "plot_hidden", "check_grid_rows"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._args import finite_float, float_list, int_range
+
     p = sub.add_parser(
         "plan",
         help="write a capture plan (capture.csv, stands.json) marking directions the stands hide",
@@ -28,23 +23,51 @@ def register(sub: argparse._SubParsersAction) -> None:
         "(plan.png, Fig. 7 layout). See docs/capture.md.",
     )
     p.add_argument("-o", "--output", required=True, help="capture folder to create")
-    p.add_argument("--kappa", type=_floats, default=None,
+    p.add_argument("--kappa", type=float_list(-100, 100, unique=True, unit="1/mm"), default=None,
                    help="stand curvatures in 1/mm, comma-separated (default -0.22,-0.13,0,0.13,0.22)")
-    p.add_argument("--theta-step", type=float, default=15.0, help="elevation step, degrees (15)")
-    p.add_argument("--theta-max", type=float, default=75.0, help="largest elevation, degrees (75)")
-    p.add_argument("--phi-step", type=float, default=30.0, help="azimuth step, degrees (30)")
-    p.add_argument("--face-width", type=float, default=None, help="fabric face width (arc), mm (6)")
-    p.add_argument("--wall-height", type=float, default=None,
+    p.add_argument("--theta-step", type=finite_float(0, 90, lo_open=True, unit="deg"), default=15.0,
+                   help="elevation step, degrees (15)")
+    p.add_argument("--theta-max", type=finite_float(0, 90, hi_open=True, unit="deg"), default=75.0,
+                   help="largest elevation, degrees, below 90 (75)")
+    p.add_argument("--phi-step", type=finite_float(0, 360, lo_open=True, unit="deg"), default=30.0,
+                   help="azimuth step, degrees, dividing 360 (30)")
+    p.add_argument("--face-width", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None, help="fabric face width (arc), mm (6)")
+    p.add_argument("--wall-height", type=finite_float(0, 1000, unit="mm"), default=None,
                    help="concave stands: wall height above the face's edges, mm (1)")
-    p.add_argument("--pixel-mm", type=float, default=0.0,
+    p.add_argument("--pixel-mm", type=finite_float(0, 1000, unit="mm"), default=0.0,
                    help="size of a camera pixel at the stand, mm: hidden marks then cover the "
                    "whole patch, not only its centre (default 0: centre only)")
-    p.add_argument("--patch", type=int, default=7, help="patch size N for --pixel-mm (7)")
+    p.add_argument("--patch", type=int_range(1, 999), default=7, help="patch size N for --pixel-mm, 1 to 999 (7)")
     p.add_argument("--format", default="png", choices=("png", "tif", "exr"), help="image format (png)")
     p.add_argument("--no-white", action="store_true", help="no white-reference rows")
     p.add_argument("--no-picture", action="store_true", help="do not write plan.png")
     p.add_argument("--force", action="store_true", help="overwrite an existing capture.csv")
     p.set_defaults(func=run)
+
+
+def check_grid_rows(grid, *, white: bool = True, brackets: int = 1) -> None:  # noqa: ANN001
+    """Refuse a grid whose capture plan would exceed the ``capture_rows`` limit.
+
+    Parameters
+    ----------
+    grid
+        A :class:`cdbrdf.Grid`.
+    white
+        Whether white-reference rows (one per light direction) are added.
+    brackets
+        Photographs per sample (exposure brackets).
+
+    Raises
+    ------
+    cdbrdf.errors.LimitError
+        Before anything is allocated or written.
+    """
+    from ..limits import check
+
+    k, pl, tl, pv, tv = grid.shape
+    rows = (k * pl * tl * pv * tv + (pl * tl if white else 0)) * brackets
+    check("capture_rows", rows,
+          what=f"a grid of {k} x {pl * tl} x {pv * tv} (kappa x light x view) samples")
 
 
 def plot_hidden(grid, hidden, path) -> None:  # noqa: ANN001
@@ -85,14 +108,13 @@ def run(args: argparse.Namespace) -> int:
     kappa = PAPER_KAPPA if args.kappa is None else np.array(sorted(args.kappa))
     grid = Grid.regular(theta_step_deg=args.theta_step, phi_step_deg=args.phi_step,
                         theta_max_deg=args.theta_max, kappa=kappa)
+    check_grid_rows(grid, white=not args.no_white)
     stands = [
         Stand(kappa=float(k),
               face_width_mm=DEFAULT_FACE_WIDTH_MM if args.face_width is None else args.face_width,
               wall_height_mm=DEFAULT_WALL_HEIGHT_MM if args.wall_height is None else args.wall_height)
         for k in grid.kappa
     ]
-    if args.pixel_mm < 0:
-        raise ValueError(f"--pixel-mm: must be non-negative, got {args.pixel_mm:g}")
     rows = write_plan(out, grid, stands, extension=args.format, white=not args.no_white,
                       pixel_mm=args.pixel_mm, patch_px=args.patch)
     hid = hidden_mask(grid, stands, pixel_mm=args.pixel_mm, patch_px=args.patch)

@@ -22,18 +22,14 @@ import numpy as np
 __all__ = ["register", "run", "encode_png", "write_image", "compare_figure"]
 
 
-def _pair(text: str, name: str, cast=float) -> tuple:
-    parts = text.replace("x", ",").split(",")
-    if len(parts) != 2:
-        raise ValueError(f"{name}: expected two numbers like 45,0 (got {text!r})")
-    try:
-        return tuple(cast(p) for p in parts)
-    except ValueError:
-        raise ValueError(f"{name}: expected two numbers like 45,0 (got {text!r})") from None
+#: Largest --spp; the passes of a render use seeds ``seed .. seed + spp // 16``.
+MAX_SPP = 65536
 
+_SEED_MAX = 2**32 - 1 - MAX_SPP
 
 def register(sub: argparse._SubParsersAction) -> None:
     from ..render.scenes import UNITS_MM
+    from ._args import existing_file, finite_float, float_list, int_range, output_file, seed, size_wxh
 
     p = sub.add_parser(
         "render",
@@ -45,31 +41,43 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("file", help="a CDBRDF file (.h5)")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument("--scene", choices=["sine"], help="built-in scene: the paper's sine sheet")
-    what.add_argument("--mesh", metavar="MESH", help="a .ply/.obj mesh with UVs (lengths in --units)")
+    what.add_argument("--mesh", metavar="MESH", type=existing_file(".ply", ".obj"), help="a .ply/.obj mesh with UVs (lengths in --units)")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--brdf", action="store_true", help="render the plain BRDF (kappa = 0 slice)")
     mode.add_argument("--compare", action="store_true",
                       help="write a figure BRDF | CDBRDF | difference (PNG/PDF/SVG output)")
-    p.add_argument("-o", "--output", required=True, metavar="OUT", help="output .png or .exr")
-    p.add_argument("--spp", type=int, default=64, help="samples per pixel (default: 64)")
-    p.add_argument("--size", default="512x384", metavar="WxH", help="image size (default: 512x384)")
-    p.add_argument("--light", default="45,0", metavar="THETA,PHI",
+    p.add_argument("-o", "--output", required=True, metavar="OUT",
+                   type=output_file(),
+                   help="output .png or .exr (--compare: .png, .pdf or .svg)")
+    p.add_argument("--spp", type=int_range(1, MAX_SPP), default=64,
+                   help=f"samples per pixel, 1 to {MAX_SPP} (default: 64)")
+    p.add_argument("--size", type=size_wxh(), default="512x384", metavar="WxH",
+                   help="image size (default: 512x384; at most CDBRDF_MAX_RENDER_PIXELS pixels)")
+    p.add_argument("--light", type=float_list(-360, 360, min_len=2, max_len=2, example="45,0", unit="deg"),
+                   default="45,0", metavar="THETA,PHI",
                    help="direction towards the directional light, degrees: elevation from +z, "
                    "azimuth from +x (the sheet's bending direction) (default: 45,0)")
-    p.add_argument("--irradiance", type=float, default=math.pi,
+    p.add_argument("--irradiance", type=finite_float(0, 1e9, lo_open=True, unit="W/m^2"), default=math.pi,
                    help="irradiance of the light, W/m^2 (default: pi)")
     p.add_argument("--no-light", action="store_true", help="no directional light (use with --envmap)")
-    p.add_argument("--envmap", metavar="FILE", help="environment map (.exr/.hdr) for --mesh")
+    p.add_argument("--envmap", metavar="FILE", type=existing_file(".exr", ".hdr"), help="environment map (.exr/.hdr) for --mesh")
     p.add_argument("--units", choices=sorted(UNITS_MM), default="mm", help="length unit of --mesh")
-    p.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in EV (default: 0)")
-    p.add_argument("--amplitude", type=float, default=2.0, help="sine sheet amplitude, mm (default: 2)")
-    p.add_argument("--wavelength", type=float, default=20.0, help="sine sheet wavelength, mm (default: 20)")
-    p.add_argument("--sheet-size", default="60x60", metavar="WxD", help="sine sheet size, mm (default: 60x60)")
-    p.add_argument("--max-depth", type=int, default=3,
-                   help="Mitsuba path length: 2 = direct light only (default: 3)")
-    p.add_argument("--view", default="40,-90", metavar="ELEV,AZIM",
+    p.add_argument("--exposure", type=finite_float(-64, 64, unit="EV"), default=0.0,
+                   help="PNG exposure in EV, -64 to 64 (default: 0)")
+    p.add_argument("--amplitude", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=2.0,
+                   help="sine sheet amplitude, mm (default: 2)")
+    p.add_argument("--wavelength", type=finite_float(0.01, 1e5, unit="mm"), default=20.0,
+                   help="sine sheet wavelength, mm (default: 20)")
+    p.add_argument("--sheet-size", type=float_list(0, 1e5, lo_open=True, min_len=2, max_len=2, sep="x",
+                                                  example="60x60", unit="mm"),
+                   default="60x60", metavar="WxD", help="sine sheet size, mm (default: 60x60)")
+    p.add_argument("--max-depth", type=int_range(2, 64), default=3,
+                   help="Mitsuba path length, 2 to 64: 2 = direct light only (default: 3)")
+    p.add_argument("--view", type=float_list(-360, 360, min_len=2, max_len=2, example="40,-90", unit="deg"),
+                   default="40,-90", metavar="ELEV,AZIM",
                    help="camera elevation and azimuth, degrees (default: 40,-90)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    p.add_argument("--seed", type=seed(_SEED_MAX), default=0,
+                   help=f"random seed, 0 to {_SEED_MAX} (default: 0)")
     p.add_argument("--variant", choices=["llvm_ad_rgb", "scalar_rgb"], default="llvm_ad_rgb",
                    help="Mitsuba variant (scalar_rgb: one Python call per ray, debugging only)")
     p.set_defaults(func=run)
@@ -116,6 +124,18 @@ def compare_figure(brdf_img: np.ndarray, cdbrdf_img: np.ndarray, path: str | Pat
         fig.savefig(tmp, dpi=150, format=p.suffix.lower().lstrip("."))
 
 
+def _check_sheet(sheet) -> None:  # noqa: ANN001 - a SineSheet
+    """Refuse a sine sheet whose tessellation would exceed the ``mesh_faces`` limit."""
+    from ..limits import check
+
+    nx = round(sheet.width_mm / sheet.wavelength_mm * sheet.vertices_per_wavelength) + 1
+    dx = sheet.width_mm / max(nx - 1, 1)
+    ny = min(round(sheet.depth_mm / dx) + 1, 4 * nx)
+    check("mesh_faces", 2 * max(nx - 1, 1) * max(ny - 1, 1),
+          what=f"--wavelength {sheet.wavelength_mm:g} and --sheet-size "
+          f"{sheet.width_mm:g}x{sheet.depth_mm:g}: sine sheet mesh")
+
+
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
@@ -130,23 +150,21 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"{out}: --compare writes a figure; use .png, .pdf or .svg")
     elif ext not in (".png", ".exr"):
         raise ValueError(f"{out}: unknown image type {ext!r}; use .png or .exr")
-    if args.spp < 1:
-        raise ValueError(f"--spp: must be >= 1, got {args.spp}")
-    width, height = _pair(args.size, "--size", int)
-    if width < 1 or height < 1:
-        raise ValueError(f"--size: must be positive, got {args.size}")
-    theta, phi = _pair(args.light, "--light")
-    elev, azim = _pair(args.view, "--view")
+    width, height = args.size
+    theta, phi = args.light
+    elev, azim = args.view
     light = None if args.no_light else (theta, phi, args.irradiance)
+    if args.scene == "sine":
+        if args.envmap:
+            raise ValueError("--envmap: only for --mesh scenes")
+        sw, sd = args.sheet_size
+        sheet = SineSheet(amplitude_mm=args.amplitude, wavelength_mm=args.wavelength, width_mm=sw, depth_mm=sd)
+        _check_sheet(sheet)
     table = load(args.file)
     cr.set_variant(args.variant)
     common = dict(light=light, size=(width, height), spp=args.spp, max_depth=args.max_depth,
                   elevation_deg=elev, azimuth_deg=azim)
     if args.scene == "sine":
-        if args.envmap:
-            raise ValueError("--envmap: only for --mesh scenes")
-        sw, sd = _pair(args.sheet_size, "--sheet-size")
-        sheet = SineSheet(amplitude_mm=args.amplitude, wavelength_mm=args.wavelength, width_mm=sw, depth_mm=sd)
 
         def build(mode):
             return sine_scene(table, mode=mode, sheet=sheet, **common)

@@ -7,14 +7,40 @@ import argparse
 __all__ = ["register", "run"]
 
 
-def _floats(text: str) -> list[float]:
+def _noise(text: str):  # noqa: ANN202 - an argparse type returning a NoiseModel
+    """``none`` or ``FULL_WELL[,READ]`` electrons, both finite (full well > 0, read >= 0)."""
+    from ..synth.rig import NoiseModel
+    from ._args import float_list
+
+    t = text.strip().lower()
+    if t in ("none", "off", "0"):
+        return NoiseModel(0.0, 0.0)
     try:
-        return [float(x) for x in text.split(",") if x.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+        vals = float_list(0, 1e12, min_len=1, max_len=2, example="20000,3")(t)
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"expected 'none' or FULL_WELL[,READ] electrons: {exc}") from None
+    if vals[0] <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive full well, got {text!r}")
+    return NoiseModel(vals[0], vals[1] if len(vals) == 2 else NoiseModel.read_e)
+
+
+def _material(text: str) -> str:
+    """A preset name or an existing CDBRDF file."""
+    from ..materials import names
+    from ._args import existing_file
+
+    if text in names():
+        return text
+    try:
+        return existing_file()(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(
+            f"{text}: neither a material preset ({', '.join(names())}) nor an existing file") from None
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ._args import existing_file, finite_float, float_list, int_range, seed, square_size
+
     p = sub.add_parser(
         "simulate-capture",
         help="render a capture folder of a material with the simulated rig (Mitsuba 3)",
@@ -24,27 +50,29 @@ def register(sub: argparse._SubParsersAction) -> None:
         "and read noise, plus white references. The folder can then be measured with "
         "`cdbrdf measure`. See docs/capture.md.",
     )
-    p.add_argument("material", help="preset name (see cdbrdf.materials) or a CDBRDF file")
-    p.add_argument("-o", "--output", required=True, metavar="DIR", help="capture folder to write")
-    p.add_argument("--plan", default=None, help="capture.csv to render (default: the material's grid, "
+    p.add_argument("material", type=_material, help="preset name (see cdbrdf.materials) or a CDBRDF file")
+    p.add_argument("-o", "--output", required=True, metavar="DIR",
+                   help="capture folder to write (new, empty, or an earlier simulated capture, replaced whole)")
+    p.add_argument("--plan", type=existing_file(".csv"), default=None, help="capture.csv to render (default: the material's grid, "
                    "the paper's stands, white references)")
-    p.add_argument("--size", type=int, default=64, help="image size in pixels (64)")
-    p.add_argument("--field", type=float, default=2.0, help="camera field width at the stand, mm (2)")
-    p.add_argument("--spp", type=int, default=4, help="samples per pixel (4)")
-    p.add_argument("--noise", default="20000,3",
+    p.add_argument("--size", type=square_size(lo=8, hi=8192), default=64, help="image size in pixels, 8 to 8192 (64)")
+    p.add_argument("--field", type=finite_float(0, 1e4, lo_open=True, unit="mm"), default=2.0, help="camera field width at the stand, mm (2)")
+    p.add_argument("--spp", type=int_range(1, 65536), default=4, help="samples per pixel (4)")
+    p.add_argument("--noise", type=_noise, default="20000,3",
                    help="'none' or FULL_WELL[,READ] electrons (default 20000,3)")
-    p.add_argument("--gain", type=float, default=2.0, help="pixel value per unit radiance (2)")
-    p.add_argument("--exposures", type=_floats, default=[1.0],
+    p.add_argument("--gain", type=finite_float(0, 1e12, lo_open=True), default=2.0, help="pixel value per unit radiance (2)")
+    p.add_argument("--exposures", type=float_list(0, 1e6, lo_open=True, max_len=16), default=[1.0],
                    help="exposure brackets of each sample photograph, e.g. 1,0.25 (default 1)")
     p.add_argument("--image", choices=("exr", "png16", "png8", "tif16"), default="png16",
                    help="image kind (png16)")
-    p.add_argument("--white-albedo", type=float, default=0.99, help="white reference albedo (0.99)")
-    p.add_argument("--seed", type=int, default=0, help="noise seed (0)")
+    p.add_argument("--white-albedo", type=finite_float(0, 1, lo_open=True), default=0.99,
+                   help="white reference albedo, in (0, 1] (0.99)")
+    p.add_argument("--seed", type=seed(), default=0, help="noise seed, 0 to 2**32-1 (0)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..synth.rig import NoiseModel, simulate_capture
+    from ..synth.rig import simulate_capture
 
     bar = None
     if not args.quiet:
@@ -60,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         rep = simulate_capture(
             args.material, args.output, plan=args.plan, size=args.size, field_mm=args.field,
-            spp=args.spp, noise=NoiseModel.parse(args.noise), gain=args.gain,
+            spp=args.spp, noise=args.noise, gain=args.gain,
             exposures=args.exposures, image_kind=args.image, white_albedo=args.white_albedo,
             seed=args.seed, progress=progress,
         )

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import math
 import time
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -12,8 +14,34 @@ __all__ = ["register", "run", "parse_grid", "parse_sets"]
 _GRIDS = "paper | regular:THETA_STEP,PHI_STEP"
 
 
+def _grid(text: str) -> str:
+    """A ``--grid`` spec, checked (``paper`` or ``regular:THETA_STEP,PHI_STEP``)."""
+    _parse_grid_spec(text)
+    return text
+
+
+def _parse_grid_spec(spec: str) -> tuple[float, float] | None:
+    """None for ``paper``, else the two steps of ``regular:T,P`` (degrees)."""
+    from ._args import float_list, output_file
+
+    s = spec.strip()
+    if s == "paper":
+        return None
+    if s.startswith("regular:"):
+        try:
+            t, p = float_list(0, 360, lo_open=True, min_len=2, max_len=2, example="15,30",
+                              unit="deg")(s.split(":", 1)[1])
+        except argparse.ArgumentTypeError as exc:
+            raise argparse.ArgumentTypeError(f"regular:THETA_STEP,PHI_STEP: {exc}") from None
+        if t > 90:
+            raise argparse.ArgumentTypeError(f"regular: THETA_STEP must be at most 90, got {t:g}")
+        return t, p
+    raise argparse.ArgumentTypeError(f"unknown grid {spec!r}; valid: {_GRIDS}")
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     from ..synth.presets import names
+    from ._args import float_list, output_file
 
     p = sub.add_parser(
         "synth",
@@ -32,17 +60,22 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="override a parameter, e.g. --set thickness_mm=0.8 --set warp_rgb=0.1,0.1,0.4 "
         "(repeatable)",
     )
-    p.add_argument("--grid", default="paper", help=f"sample grid: {_GRIDS} (default paper)")
+    p.add_argument("--grid", type=_grid, default="paper", help=f"sample grid: {_GRIDS} (default paper)")
     p.add_argument(
         "--kappa",
+        type=float_list(-100, 100, unique=True, unit="1/mm"),
         help="curvatures in 1/mm, comma-separated (default the paper's -0.22,-0.13,0,0.13,0.22)",
     )
-    p.add_argument("-o", "--output", required=True, help="output file (.h5)")
+    p.add_argument("-o", "--output", required=True, type=output_file(), help="output file (.h5)")
     p.set_defaults(func=run)
 
 
 def parse_sets(items: list[str]) -> dict:
-    """``["name=value", ...]`` -> typed overrides (validated names)."""
+    """``["name=value", ...]`` -> typed overrides (validated names, finite numbers).
+
+    Checked when the command runs, before anything is computed or written
+    (the values depend on the cloth model's parameter types).
+    """
     from ..synth.cloth import ClothParams
 
     out = {}
@@ -51,31 +84,49 @@ def parse_sets(items: list[str]) -> dict:
             raise ValueError(f"--set: expected NAME=VALUE, got {item!r}")
         name, value = item.split("=", 1)
         name = name.strip()
-        out[name] = ClothParams.parse_value(name, value)
+        parsed = ClothParams.parse_value(name, value)
+        numbers = parsed if isinstance(parsed, tuple) else (parsed,)
+        if any(isinstance(x, float) and not math.isfinite(x) for x in numbers):
+            raise ValueError(f"--set: {name}: expected finite numbers, got {value!r}")
+        out[name] = parsed
     return out
 
 
-def parse_grid(spec: str, kappa: str | None = None):
-    """A :class:`cdbrdf.Grid` from ``--grid`` and ``--kappa``."""
-    from ..table import PAPER_KAPPA, Grid
+def parse_grid(spec: str, kappa: str | Sequence[float] | None = None):  # noqa: ANN201 - a Grid
+    """A :class:`cdbrdf.Grid` from ``--grid`` and ``--kappa`` (text or numbers).
 
-    if kappa is None:
-        k = PAPER_KAPPA
-    else:
-        try:
-            k = np.array([float(x) for x in kappa.split(",") if x.strip()])
-        except ValueError:
-            raise ValueError(f"--kappa: expected numbers separated by commas, got {kappa!r}") from None
-    s = spec.strip()
-    if s == "paper":
+    Raises
+    ------
+    ValueError
+        For an unreadable spec (message naming the option).
+    cdbrdf.errors.LimitError
+        When the table would exceed the ``table_samples`` limit.
+    """
+    from ..limits import check
+    from ..table import PAPER_KAPPA, Grid
+    from ._args import float_list, output_file
+
+    try:
+        if kappa is None:
+            k = PAPER_KAPPA
+        elif isinstance(kappa, str):
+            k = np.array(float_list(-100, 100, unique=True, unit="1/mm")(kappa))
+        else:
+            k = np.asarray(kappa, dtype=float)
+    except argparse.ArgumentTypeError as exc:
+        raise ValueError(f"--kappa: {exc}") from None
+    try:
+        steps = _parse_grid_spec(spec)
+    except argparse.ArgumentTypeError as exc:
+        raise ValueError(f"--grid: {exc}") from None
+    if steps is None:
         return Grid.paper(kappa=k)
-    if s.startswith("regular:"):
-        try:
-            t, p = (float(x) for x in s.split(":", 1)[1].split(","))
-        except ValueError:
-            raise ValueError(f"--grid: expected regular:THETA_STEP,PHI_STEP, got {spec!r}") from None
-        return Grid.regular(theta_step_deg=t, phi_step_deg=p, kappa=k)
-    raise ValueError(f"--grid: unknown grid {spec!r}; valid: {_GRIDS}")
+    t, p = steps
+    n_theta = int(75.0 // t) + 1
+    n_phi = int(round(360.0 / p))
+    check("table_samples", k.size * (n_theta * n_phi) ** 2 * 3,
+          what=f"--grid {spec.strip()}: {k.size} x {n_theta * n_phi} x {n_theta * n_phi} x 3 table")
+    return Grid.regular(theta_step_deg=t, phi_step_deg=p, kappa=k)
 
 
 def run(args: argparse.Namespace) -> int:

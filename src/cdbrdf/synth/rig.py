@@ -495,8 +495,11 @@ def simulate_capture(
     material
         A :class:`CDBRDF`, a CDBRDF file, or a preset name.
     folder
-        Output capture folder (created; an existing ``capture.csv`` there is
-        replaced).
+        Output capture folder. It is built as a partial folder beside it and
+        swapped in whole once complete (:func:`cdbrdf.report.output_folder`):
+        an earlier capture written by cdbrdf is replaced, a non-empty folder
+        cdbrdf did not make is refused, and an error or interrupt leaves no
+        half-written folder.
     plan
         A ``capture.csv`` to render (its ``stands.json``, if beside it, gives
         the stand geometry). Default: a plan for ``grid`` (default the
@@ -531,17 +534,50 @@ def simulate_capture(
     progress
         ``progress(done, total)`` after each photograph.
     """
-    import time
-
     if image_kind not in IMAGE_KINDS:
         raise ValueError(f"image_kind: {image_kind!r} is not one of {', '.join(IMAGE_KINDS)}")
     if size < 8:
         raise ValueError(f"size: must be at least 8 pixels, got {size}")
     if not (field_mm > 0 and gain > 0 and spp >= 1):
         raise ValueError("field_mm, gain and spp must be positive")
+    from ..report import check_output_folder, output_folder
+
+    final = check_output_folder(folder)  # refuse a foreign folder before any work
     table = load_material(material)
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
+    with output_folder(final) as partial:
+        rep = _fill_capture(
+            partial, table, plan=plan, grid=grid, stands=stands, size=size, field_mm=field_mm,
+            spp=spp, noise=noise, gain=gain, exposures=exposures, image_kind=image_kind,
+            white_albedo=white_albedo, white=white, patch_px=patch_px, seed=seed,
+            progress=progress,
+        )
+    rep.folder = final
+    return rep
+
+
+def _fill_capture(
+    out: Path,
+    table: CDBRDF,
+    *,
+    plan: str | PathLike[str] | None,
+    grid: Grid | None,
+    stands: Sequence[Stand] | None,
+    size: int,
+    field_mm: float,
+    spp: int,
+    noise: NoiseModel,
+    gain: float,
+    exposures: Sequence[float],
+    image_kind: str,
+    white_albedo: float,
+    white: bool,
+    patch_px: int,
+    seed: int,
+    progress: Callable[[int, int], None] | None,
+) -> SimulationReport:
+    """Write the capture into the (empty, partial) folder ``out``; see :func:`simulate_capture`."""
+    import time
+
     ext = _ext(image_kind)
     if plan is not None:
         plan_path = Path(plan)
@@ -614,7 +650,7 @@ def simulate_capture(
                 params["sensor.to_world"] = _sensor_to_world(mi, v, size, field_mm)
                 params["light.to_world"] = _light_to_world(mi, light)
                 params.update()
-                img = np.asarray(mi.render(scene, seed=seed * 1000003 + i), dtype=np.float64)
+                img = np.asarray(mi.render(scene, seed=(seed * 1000003 + i) % 2**32), dtype=np.float64)
                 lin = img[..., :3] * gain * exposure
                 if key == "white":
                     rep.n_white += 1

@@ -1,0 +1,357 @@
+"""The command line's one argument-validation layer: argparse ``type=`` factories.
+
+Every option of every ``cdbrdf`` sub-command is parsed by one of the
+factories below, so that a bad value is refused while the arguments are
+parsed, before anything is read, computed or written. Each factory returns
+a callable for ``add_argument(type=...)`` that raises
+:class:`argparse.ArgumentTypeError` with a one-line message stating the
+allowed values; argparse prefixes it with the option's name
+(``argument --exposure: ...``) and :class:`cdbrdf.cli.Parser` prints it as
+one line and exits with status 2.
+
+A command adopts a factory with one line per option, e.g.::
+
+    p.add_argument("--patch", type=int_range(1, 999), default=7)
+
+The callables are also usable outside argparse (they raise
+:class:`argparse.ArgumentTypeError`, a plain :class:`Exception`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "SEED_MAX",
+    "finite_float",
+    "int_range",
+    "float_list",
+    "size_wxh",
+    "square_size",
+    "existing_file",
+    "output_file",
+    "seed",
+    "name_or_index",
+    "keyword",
+]
+
+#: Largest seed Mitsuba and numpy both accept (Mitsuba's seeds are 32-bit unsigned).
+SEED_MAX = 2**32 - 1
+
+_Type = Callable[[str], Any]
+
+
+def _fmt(x: float) -> str:
+    """A bound for messages: ``1e+06`` -> ``1e+06``, ``90.0`` -> ``90``."""
+    return f"{x:g}"
+
+
+def _interval(lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) -> str:
+    if lo is None and hi is None:
+        return "a finite number"
+    if hi is None and lo == 0 and lo_open:
+        return "a positive number"
+    if hi is None:
+        return f"a number {'>' if lo_open else '>='} {_fmt(lo)}"  # type: ignore[arg-type]
+    if lo is None:
+        return f"a number {'<' if hi_open else '<='} {_fmt(hi)}"
+    return f"a number in {'(' if lo_open else '['}{_fmt(lo)}, {_fmt(hi)}{')' if hi_open else ']'}"
+
+
+def _named(func: _Type, name: str) -> _Type:
+    func.__name__ = name  # argparse names the type in some messages
+    return func
+
+
+def _parse_float(text: str, expect: str) -> float:
+    try:
+        x = float(text)
+    except (TypeError, ValueError):
+        raise argparse.ArgumentTypeError(f"expected {expect}, got {text!r}") from None
+    return x
+
+
+def _check_float(x: float, text: str, lo: float | None, hi: float | None, lo_open: bool,
+                 hi_open: bool, unit: str) -> float:
+    ok = math.isfinite(x)
+    if ok and lo is not None:
+        ok = x > lo if lo_open else x >= lo
+    if ok and hi is not None:
+        ok = x < hi if hi_open else x <= hi
+    if not ok:
+        what = _interval(lo, hi, lo_open, hi_open) + (f" {unit}" if unit else "")
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+    return x
+
+
+def finite_float(
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_open: bool = False,
+    hi_open: bool = False,
+    unit: str = "",
+) -> _Type:
+    """A finite float in ``[lo, hi]`` (bounds optional, either end may be open).
+
+    Parameters
+    ----------
+    lo, hi
+        Bounds; ``None`` for none (the value must still be finite: ``nan`` and
+        ``inf`` are always refused).
+    lo_open, hi_open
+        Exclude the bound itself (``lo=0, lo_open=True``: strictly positive).
+    unit
+        Unit named in the message (``"mm"``, ``"EV"``).
+
+    Returns
+    -------
+    callable
+        ``str -> float`` raising :class:`argparse.ArgumentTypeError`.
+    """
+    expect = _interval(lo, hi, lo_open, hi_open) + (f" {unit}" if unit else "")
+
+    def parse(text: str) -> float:
+        return _check_float(_parse_float(text, expect), text, lo, hi, lo_open, hi_open, unit)
+
+    return _named(parse, "number")
+
+
+def _parse_int(text: str, lo: int, hi: int) -> int:
+    expect = f"an integer in [{lo}, {hi}]"
+    t = str(text).strip()
+    if not re.fullmatch(r"[+-]?\d{1,40}", t):
+        raise argparse.ArgumentTypeError(f"expected {expect}, got {text!r}")
+    v = int(t)
+    if not lo <= v <= hi:
+        raise argparse.ArgumentTypeError(f"expected {expect}, got {text!r}")
+    return v
+
+
+def int_range(lo: int, hi: int) -> _Type:
+    """An integer in ``[lo, hi]`` (no fractions, no exponents).
+
+    Returns
+    -------
+    callable
+        ``str -> int`` raising :class:`argparse.ArgumentTypeError`.
+    """
+    if lo > hi:
+        raise ValueError(f"int_range: lo {lo} > hi {hi}")
+
+    def parse(text: str) -> int:
+        return _parse_int(text, lo, hi)
+
+    return _named(parse, "integer")
+
+
+def seed(hi: int = SEED_MAX) -> _Type:
+    """A random seed: an integer in ``[0, hi]`` (default ``2**32 - 1``, Mitsuba's largest).
+
+    Commands that derive further seeds by adding an offset pass a smaller ``hi``.
+    """
+    return _named(int_range(0, hi), "seed")
+
+
+def float_list(
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_open: bool = False,
+    hi_open: bool = False,
+    min_len: int = 1,
+    max_len: int = 64,
+    sep: str = ",",
+    unique: bool = False,
+    unit: str = "",
+    example: str = "",
+) -> _Type:
+    """Numbers separated by ``sep`` (``"-0.22,0,0.22"``), each a :func:`finite_float`.
+
+    Parameters
+    ----------
+    lo, hi, lo_open, hi_open, unit
+        Range of every number (see :func:`finite_float`).
+    min_len, max_len
+        How many numbers are allowed (``2, 2`` for a pair).
+    sep
+        Separator (``","``; ``"x"`` also accepted when ``sep="x"``, e.g. ``60x60``).
+    unique
+        Refuse repeated numbers.
+    example
+        Shown in the message (e.g. ``"45,0"``).
+
+    Returns
+    -------
+    callable
+        ``str -> list[float]`` raising :class:`argparse.ArgumentTypeError`.
+    """
+    count = f"{min_len}" if min_len == max_len else f"{min_len} to {max_len}"
+    each = _interval(lo, hi, lo_open, hi_open) + (f" {unit}" if unit else "")
+    shape = f"{count} number{'s' * (max_len != 1)} separated by {sep!r}" + (
+        f" like {example}" if example else "")
+
+    def parse(text: str) -> list[float]:
+        parts = [p.strip() for p in str(text).split(sep)]
+        if parts and parts[-1] == "" and len(parts) > 1:  # tolerate a trailing separator
+            parts = parts[:-1]
+        if not min_len <= len(parts) <= max_len or any(p == "" for p in parts):
+            raise argparse.ArgumentTypeError(f"expected {shape}, got {text!r}")
+        out = []
+        for p in parts:
+            x = _parse_float(p, shape)
+            try:
+                out.append(_check_float(x, p, lo, hi, lo_open, hi_open, unit))
+            except argparse.ArgumentTypeError:
+                raise argparse.ArgumentTypeError(
+                    f"expected {shape}, each {each}; got {text!r}") from None
+        if unique and len(set(out)) != len(out):
+            raise argparse.ArgumentTypeError(f"expected distinct numbers, got {text!r}")
+        return out
+
+    return _named(parse, "list")
+
+
+def _limit(name: str, amount: float, what: str) -> None:
+    """:func:`cdbrdf.limits.check` as an :class:`argparse.ArgumentTypeError`."""
+    from ..errors import LimitError
+    from ..limits import check
+
+    try:
+        check(name, amount, what=what)
+    except LimitError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def size_wxh(*, lo: int = 1, hi: int = 65536, limit: str = "render_pixels") -> _Type:
+    """An image size ``WxH`` (or ``W,H``) of integers in ``[lo, hi]``, ``W*H`` within a limit.
+
+    Parameters
+    ----------
+    lo, hi
+        Range of each side in pixels.
+    limit
+        :mod:`cdbrdf.limits` name bounding ``W * H`` (default ``render_pixels``).
+
+    Returns
+    -------
+    callable
+        ``str -> tuple[int, int]`` raising :class:`argparse.ArgumentTypeError`.
+    """
+
+    def parse(text: str) -> tuple[int, int]:
+        parts = str(text).lower().replace(",", "x").split("x")
+        if len(parts) != 2:
+            raise argparse.ArgumentTypeError(f"expected WxH like 512x384, got {text!r}")
+        try:
+            w, h = (_parse_int(p, lo, hi) for p in parts)
+        except argparse.ArgumentTypeError:
+            raise argparse.ArgumentTypeError(
+                f"expected WxH like 512x384 with sides in [{lo}, {hi}] pixels, got {text!r}") from None
+        _limit(limit, w * h, f"{w} x {h} image")
+        return w, h
+
+    return _named(parse, "size")
+
+
+def square_size(*, lo: int = 8, hi: int = 65536, limit: str = "render_pixels") -> _Type:
+    """A square image's side in pixels, in ``[lo, hi]``, its area within a limit."""
+    side = int_range(lo, hi)
+
+    def parse(text: str) -> int:
+        n = side(text)
+        _limit(limit, n * n, f"{n} x {n} image")
+        return n
+
+    return _named(parse, "size")
+
+
+def _suffixes(kinds: Iterable[str]) -> tuple[str, ...]:
+    return tuple(k.lower() if k.startswith(".") else f".{k.lower()}" for k in kinds)
+
+
+def existing_file(*kinds: str) -> _Type:
+    """A file that exists (and is not a folder), with one of the suffixes ``kinds`` if given.
+
+    Examples
+    --------
+    ``existing_file(".exr", ".hdr")`` for an environment map;
+    ``existing_file()`` for any file.
+    """
+    suffixes = _suffixes(kinds)
+
+    def parse(text: str) -> str:
+        p = Path(text)
+        if suffixes and p.suffix.lower() not in suffixes:
+            got = repr(p.suffix) if p.suffix else "no suffix"
+            raise argparse.ArgumentTypeError(
+                f"{text}: expected a {' or '.join(suffixes)} file, got {got}")
+        if p.is_dir():
+            raise argparse.ArgumentTypeError(f"{text}: is a folder, expected a file")
+        if not p.is_file():
+            raise argparse.ArgumentTypeError(f"{text}: no such file")
+        return text
+
+    return _named(parse, "file")
+
+
+def output_file(*kinds: str) -> _Type:
+    """A file to write: suffix among ``kinds`` (if given), in an existing folder, not a folder."""
+    suffixes = _suffixes(kinds)
+
+    def parse(text: str) -> str:
+        p = Path(text)
+        if suffixes and p.suffix.lower() not in suffixes:
+            got = repr(p.suffix) if p.suffix else "no suffix"
+            raise argparse.ArgumentTypeError(
+                f"{text}: cannot write {got}; use {', '.join(suffixes)}")
+        folder = p.parent if str(p.parent) else Path(".")
+        if not folder.is_dir():
+            raise argparse.ArgumentTypeError(f"{text}: the folder {folder} does not exist")
+        if p.is_dir():
+            raise argparse.ArgumentTypeError(f"{text}: is a folder, give a file name")
+        return text
+
+    return _named(parse, "file")
+
+
+def name_or_index(*, hi: int = 63, pattern: str = r"[A-Za-z_][A-Za-z0-9_]{0,31}") -> _Type:
+    """A non-negative index in ``[0, hi]`` (returned as :class:`int`) or a name matching ``pattern``."""
+
+    def parse(text: str) -> int | str:
+        t = str(text).strip()
+        if re.fullmatch(r"[+-]?\d+", t):
+            return _parse_int(t, 0, hi)
+        if re.fullmatch(pattern, t):
+            return t
+        raise argparse.ArgumentTypeError(
+            f"expected an index in [0, {hi}] or a name like G, got {text!r}")
+
+    return _named(parse, "channel")
+
+
+def keyword(words: Iterable[str], otherwise: _Type | None = None) -> _Type:
+    """One of ``words`` (returned as given), else the value parsed by ``otherwise``.
+
+    ``keyword(("auto", "white"), finite_float(0, lo_open=True))`` is the
+    mosaic's ``--exposure``.
+    """
+    allowed = tuple(words)
+
+    def parse(text: str) -> Any:
+        if text in allowed:
+            return text
+        if otherwise is not None:
+            try:
+                return otherwise(text)
+            except argparse.ArgumentTypeError as exc:
+                raise argparse.ArgumentTypeError(
+                    f"{exc} (or one of {', '.join(allowed)})") from None
+        raise argparse.ArgumentTypeError(f"expected one of {', '.join(allowed)}, got {text!r}")
+
+    return _named(parse, "value")
