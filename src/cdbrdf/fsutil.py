@@ -43,7 +43,7 @@ _LOG = logging.getLogger(__name__)
 #: Name of the marker file in every folder cdbrdf creates.
 OWNER_MARK = ".cdbrdf-owned"
 
-_TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<host>[0-9a-f]{8})\.[0-9a-f]{8}\.(?P<kind>[a-z]+)$")
+_TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<host>[0-9a-f]{8})\.[0-9a-f]{8}\.(?P<kind>[a-z]+)(?:\.[A-Za-z0-9]+)?$")
 
 
 def _host_tag() -> str:
@@ -88,8 +88,9 @@ def sweep_stale(dest: str | PathLike[str]) -> list[Path]:
     """Remove temporaries beside ``dest`` left by runs that no longer exist.
 
     Only names made by :func:`temp_sibling` for ``dest`` on this host whose
-    process id is not running are removed (files, or folders that carry
-    :data:`OWNER_MARK` or are empty). Returns what was removed.
+    process id is not running are removed, files and folders alike (a
+    half-deleted folder may already have lost its :data:`OWNER_MARK`).
+    Returns what was removed.
     """
     d = Path(dest)
     folder = d.parent if str(d.parent) else Path(".")
@@ -107,10 +108,10 @@ def sweep_stale(dest: str | PathLike[str]) -> list[Path]:
             if p.is_symlink() or p.is_file():
                 p.unlink()
             elif p.is_dir():
-                if (p / OWNER_MARK).is_file() or not any(p.iterdir()):
-                    shutil.rmtree(p)
-                else:
-                    continue
+                # only cdbrdf makes folders with these names (mkdir of a partial
+                # folder, or the rename of an owned one before it is deleted), so
+                # the marker may already be gone from a half-deleted one
+                shutil.rmtree(p)
             removed.append(p)
             _LOG.info("removed %s, left by an interrupted run", p)
         except OSError as exc:  # pragma: no cover - races with another cleaner
