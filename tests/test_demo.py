@@ -27,6 +27,7 @@ def quick_demo(tmp_path_factory):
     return run_demo(out, quick=True)
 
 
+@pytest.mark.slow
 def test_quick_demo_report_is_complete(quick_demo):
     folder = quick_demo.folder
     page = (folder / "report.html").read_text()
@@ -47,6 +48,7 @@ def test_quick_demo_report_is_complete(quick_demo):
     assert [m["name"] for m in results["materials"]] == ["denim", "shot"]
 
 
+@pytest.mark.slow
 def test_quick_demo_measures_the_ground_truth(quick_demo):
     for m in quick_demo.materials:
         t = cdbrdf.load(m.measured_path)
@@ -66,6 +68,7 @@ def test_quick_demo_measures_the_ground_truth(quick_demo):
         assert m.error["p95_rel_error_measured"] < 0.15, m.error
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"),
                     reason="Debian's chromium is not installed (scripts/setup.sh --test installs it; required in CI)")
 def test_report_opens_in_headless_chromium(quick_demo):
@@ -104,6 +107,7 @@ def _tiny_config() -> DemoConfig:
                       render_spp=1, keep_capture=False)
 
 
+@pytest.mark.slow
 def test_rerun_replaces_old_results(tmp_path):
     out = tmp_path / "out"
     run_demo(out, materials=["denim"], config=_tiny_config())

@@ -139,6 +139,7 @@ def _seeds() -> list[bytes]:
     return seeds
 
 
+@pytest.mark.slow
 def test_seed_inputs_pass_in_process():
     rng = np.random.default_rng(1)
     for s in _seeds():

@@ -384,6 +384,7 @@ def _read_only_install(root):
     return pkg.parent, env
 
 
+@pytest.mark.slow
 def test_read_only_install_without_writable_home_compiles_in_memory(tmp_path):
     import subprocess
     import sys

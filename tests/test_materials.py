@@ -33,6 +33,7 @@ def test_bundled_table(tables, name):
     assert materials.path(name).stat().st_size < 2_000_000
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["denim", "shot"])
 def test_regenerates_identically(tables, name):
     """A sub-grid recomputed from the preset equals the bundled values exactly."""

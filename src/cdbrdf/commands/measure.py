@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ._args import finite_float, int_range
+
 __all__ = ["register", "run"]
 
 
@@ -21,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("capture", metavar="CAPTURE_DIR", help="capture folder with capture.csv")
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="CDBRDF file to write (.h5)")
-    p.add_argument("--patch", type=int, default=7, help="patch size N in pixels (7)")
+    p.add_argument("--patch", type=int_range(1, 999), default=7, help="patch size N in pixels, 1 to 999 (7)")
     p.add_argument("--linear", action="store_true", help="integer images hold linear values, not sRGB")
     p.add_argument("--skip-bad", action="store_true",
                    help="fill the samples of photographs that cannot be used (missing, not a file, "
@@ -30,10 +32,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="Dask scheduler address (tcp://host:port) or threads/processes/synchronous; "
                    "default: local threads")
-    p.add_argument("--white-albedo", type=float, default=None,
+    p.add_argument("--white-albedo", type=finite_float(0, 1, lo_open=True), default=None,
                    help="albedo of the white reference (default: stands.json's, else 1)")
     p.add_argument("--material", default=None, help="material name written to the file")
-    p.add_argument("--workers", type=int, default=None, help="local threads/processes")
+    p.add_argument("--workers", type=int_range(1, 1024), default=None, help="local threads/processes, 1 to 1024")
     p.add_argument("--force", action="store_true",
                    help="overwrite an existing output file (never one of the capture's own files)")
     p.set_defaults(func=run)
