@@ -15,16 +15,10 @@ The public surface is small:
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version as _version
-
+from ._version import __version__
 from .errors import CDBRDFError, FormatError, QueryError, TableError
 from .io import load
 from .table import CDBRDF, Grid
-
-try:
-    __version__ = _version("cdbrdf")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree
-    __version__ = "0.0.0+unknown"
 
 __all__ = [
     "CDBRDF",

@@ -57,7 +57,7 @@ def _one_line(text: str) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every sub-command registered."""
-    from . import __version__
+    from ._version import __version__
 
     parser = Parser(
         prog="cdbrdf",
@@ -130,7 +130,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     if _version_only(argv):
-        from . import __version__
+        from ._version import __version__
 
         print(f"cdbrdf {__version__}")
         raise SystemExit(0)

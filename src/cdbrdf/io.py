@@ -121,7 +121,7 @@ def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = 
     import h5py
     import h5netcdf
 
-    from . import __version__
+    from ._version import __version__
 
     if compression not in ("gzip", None):
         raise ValueError(f"compression: {compression!r} is not one of 'gzip', None")
