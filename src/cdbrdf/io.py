@@ -11,6 +11,11 @@ anything big is read; any problem raises :class:`~cdbrdf.errors.FormatError`
 naming the file (or :class:`~cdbrdf.errors.LimitError` for a file that asks for
 more memory than :mod:`cdbrdf.limits` allows).
 
+The names, dimensions, units and attributes come from :mod:`cdbrdf.schema`.
+This module exchanges a table as :class:`~cdbrdf.schema.TableParts` and does
+not know the table class: :func:`cdbrdf.load` (in :mod:`cdbrdf.table`) calls
+:func:`read` and builds the table; :meth:`cdbrdf.CDBRDF.save` calls :func:`save`.
+
 Files without metadata checksums (format 1.0, or HDF5 written by other tools
 with the old superblock) can hold damaged structures that make the HDF5
 library loop forever with the interpreter lock held, where Ctrl-C does not
@@ -38,47 +43,56 @@ import numpy as np
 from . import limits
 from .errors import FormatError, LimitError, TableError
 from .fsutil import atomic_path
-from .table import AXES, CDBRDF
+from .schema import (
+    ATTRS_JSON_ATTR,
+    AXES,
+    CHANNEL,
+    CHANNELS_ATTR,
+    CONVENTIONS,
+    DATA_VARIABLES,
+    DIGEST_ATTR,
+    FILL_SOURCE,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    MEASURED,
+    MIRRORED_ATTRS,
+    REFLECTANCE,
+    REFLECTANCE_STD,
+    REQUIRED_ATTRS,
+    REQUIRED_VARIABLES,
+    SAMPLE_AXES,
+    WRITER_ATTRS,
+    TableParts,
+    check_channel_names,
+    variable_attrs,
+    with_channel_names,
+)
 
-__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "LEGACY_READ_TIMEOUT_S", "save", "load", "superblock_version", "atomic_path"]
+__all__ = [
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "LEGACY_READ_TIMEOUT_S",
+    "write",
+    "save",
+    "read",
+    "superblock_version",
+    "atomic_path",
+]
 
 _LOG = logging.getLogger(__name__)
-
-#: Value of the global attribute ``format``.
-FORMAT_NAME = "cdbrdf"
-#: ``MAJOR.MINOR``: readers accept any minor version of their major version.
-FORMAT_VERSION = "1.1"
 
 #: HDF5 file-format bounds of written files: "v110" gives superblock v3 and
 #: v2 object headers, whose Jenkins checksums make damaged metadata an error
 #: instead of an endless loop; HDF5 >= 1.10 (and NetCDF-C built on it) reads it.
 _LIBVER = ("v110", "v110")
-#: Global attributes every file has (docs/format.md), all strings.
-_REQUIRED_ATTRS = ("format", "format_version", "quantity", "colour_space", "software", "cdbrdf_attrs", "Conventions")
-#: Global attribute with the SHA-256 of ``cdbrdf_attrs`` and the channel names (1.1).
-_DIGEST_ATTR = "cdbrdf_sha256"
-#: Attributes written by :func:`save` itself, never mirrors of table attrs.
-_OWN_ATTRS = frozenset(("format", "format_version", "software", "Conventions", "cdbrdf_attrs", _DIGEST_ATTR))
 #: Seconds a file without metadata checksums may take to read (plus 1 s per 20 MB).
 LEGACY_READ_TIMEOUT_S = 30.0
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
-_SAMPLE_DIMS = AXES[:-1]
-_UNITS = {
-    "kappa": "1/mm",
-    "phi_l": "degree",
-    "theta_l": "degree",
-    "phi_v": "degree",
-    "theta_v": "degree",
-}
-_LONG_NAMES = {
-    "kappa": "surface curvature (> 0 convex, < 0 concave)",
-    "phi_l": "light azimuth from the reference tangent x towards y",
-    "theta_l": "light elevation from the surface normal",
-    "phi_v": "view azimuth from the reference tangent x towards y",
-    "theta_v": "view elevation from the surface normal",
-    "channel": "colour channel",
-}
+#: dtypes the file stores variables in when not the array's own (docs/format.md).
+_FILE_DTYPES = {MEASURED: "u1", FILL_SOURCE: "i8"}
+#: dtype kinds the reader accepts for each data variable.
+_FILE_KINDS = {REFLECTANCE: "f", MEASURED: "uib", FILL_SOURCE: "iu", REFLECTANCE_STD: "f"}
 
 
 def _jsonable(name: str, value: Any) -> str:
@@ -97,13 +111,23 @@ def _digest(attrs_json: str, channels: list[str]) -> np.ndarray:
     return np.frombuffer(h.digest(), dtype=np.uint8).copy()
 
 
-def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
-    """Write ``table`` to ``path`` (HDF5 / NetCDF-4), atomically.
+def save(table: Any, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
+    """Write ``table`` (a :class:`cdbrdf.CDBRDF`, or anything with its attributes) to ``path``.
+
+    :meth:`cdbrdf.CDBRDF.save` is the usual way to call it; see :func:`write`
+    for the parameters and errors.
+    """
+    write(TableParts.of(table), path, compression=compression)
+
+
+def write(parts: TableParts, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
+    """Write a table given as parts to ``path`` (HDF5 / NetCDF-4), atomically.
 
     Parameters
     ----------
-    table
-        The table to write.
+    parts
+        The table's arrays and attributes (:meth:`TableParts.of` a table),
+        with every variable the file requires.
     path
         Destination; its folder must exist. An existing file is replaced only
         once the new one is complete.
@@ -115,8 +139,9 @@ def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = 
     Raises
     ------
     TableError
-        When an attribute cannot be stored (not JSON-serialisable), or
-        ``attrs["channels"]`` does not name every channel.
+        When an attribute cannot be stored (not JSON-serialisable),
+        ``attrs["channels"]`` does not name every channel, ``attrs["quantity"]``
+        is not a valid quantity or a required variable is missing.
     """
     import h5py
     import h5netcdf
@@ -125,84 +150,62 @@ def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = 
 
     if compression not in ("gzip", None):
         raise ValueError(f"compression: {compression!r} is not one of 'gzip', None")
-    attrs_json = _jsonable("*", table.attrs)
-    for k, v in table.attrs.items():
+    attrs = parts.attrs
+    attrs_json = _jsonable("*", attrs)
+    for k, v in attrs.items():
         _jsonable(k, v)
-    names = table.attrs.get("channels")
-    if names is not None and (
-        not isinstance(names, (list, tuple))
-        or len(names) != table.n_channels
-        or not all(isinstance(n, str) for n in names)
-    ):
-        raise TableError(
-            f"attrs['channels']: {names!r} is not a list of {table.n_channels} channel name(s)"
-        )
+    shape = tuple(np.shape(parts.values))
+    check_channel_names(attrs, shape[-1])
+    quantity = parts.quantity
+    variables = parts.variables()
+    for name in REQUIRED_VARIABLES:
+        if name not in variables:
+            raise TableError(f"{name}: a CDBRDF file needs this variable")
     comp: dict[str, Any] = {"track_times": False, "fletcher32": True}
     if compression:
         comp.update(compression="gzip", compression_opts=4, shuffle=True)
-    k, pl, tl, pv, tv, c = table.shape
+    chunks = (1, 1, *shape[2:])  # one (kappa, phi_l) pair at a time
     with atomic_path(path) as tmp:
         with h5netcdf.File(str(tmp), "w", libver=_LIBVER) as f:
-            f.dimensions = dict(zip(AXES, table.shape))
-            for name, axis in table.grid.axes().items():
+            f.dimensions = dict(zip(AXES, shape))
+            for name in SAMPLE_AXES:
+                axis = np.asarray(parts.axes[name])
                 var = f.create_variable(
                     name, (name,), "f8", data=axis, chunks=(axis.size,), fletcher32=True, track_times=False
                 )
-                var.attrs["units"] = _UNITS[name]
-                var.attrs["long_name"] = _LONG_NAMES[name]
+                _set_attrs(var, variable_attrs(name, quantity))
             ch = f.create_variable(
-                "channel",
-                ("channel",),
+                CHANNEL,
+                (CHANNEL,),
                 h5py.string_dtype(),
-                data=np.array(table.channels, dtype=object),
+                data=np.array(parts.channels, dtype=object),
                 track_times=False,
             )
-            ch.attrs["long_name"] = _LONG_NAMES["channel"]
-            chunks = (1, 1, tl, pv, tv, c)
-            var = f.create_variable(
-                "reflectance", AXES, table.values.dtype, data=table.values, chunks=chunks, **comp
-            )
-            var.attrs["units"] = "1/sr" if table.quantity == "brdf" else "1"
-            var.attrs["long_name"] = (
-                "BRDF, cosine of the light direction not included"
-                if table.quantity == "brdf"
-                else "relative reflectance (BRDF up to an unknown scale)"
-            )
-            m = f.create_variable(
-                "measured",
-                _SAMPLE_DIMS,
-                "u1",
-                data=table.measured.astype(np.uint8),
-                chunks=chunks[:-1],
-                **comp,
-            )
-            m.attrs["flag_values"] = np.array([0, 1], dtype=np.uint8)
-            m.attrs["flag_meanings"] = "filled measured"
-            s = f.create_variable(
-                "fill_source", _SAMPLE_DIMS, "i8", data=table.fill_source, chunks=chunks[:-1], **comp
-            )
-            s.attrs["long_name"] = (
-                "C-order flat index over (kappa, phi_l, theta_l, phi_v, theta_v) of the "
-                "sample a filled value was copied from; -1 measured, -2 source unknown"
-            )
-            if table.std is not None:
-                d = f.create_variable(
-                    "reflectance_std", AXES, table.std.dtype, data=table.std, chunks=chunks, **comp
+            _set_attrs(ch, variable_attrs(CHANNEL, quantity))
+            for name, data in variables.items():
+                dims = DATA_VARIABLES[name]
+                data = np.asarray(data, dtype=_FILE_DTYPES.get(name))
+                var = f.create_variable(
+                    name, dims, _FILE_DTYPES.get(name, data.dtype), data=data, chunks=chunks[: len(dims)], **comp
                 )
-                d.attrs["units"] = var.attrs["units"]
-                d.attrs["long_name"] = "per-sample standard deviation of the reflectance"
+                _set_attrs(var, variable_attrs(name, quantity))
             f.attrs["format"] = FORMAT_NAME
             f.attrs["format_version"] = FORMAT_VERSION
             f.attrs["software"] = f"cdbrdf {__version__}"
-            f.attrs["Conventions"] = "CF-1.10"
-            for key, value in table.attrs.items():
+            f.attrs["Conventions"] = CONVENTIONS
+            for key, value in attrs.items():
                 if isinstance(value, (str, bool, int, float)) and key not in f.attrs:
                     f.attrs[key] = value
                 elif key not in f.attrs:
                     f.attrs[key] = _jsonable(key, value)
-            f.attrs["cdbrdf_attrs"] = attrs_json
-            f.attrs[_DIGEST_ATTR] = _digest(attrs_json, list(table.channels))
-    _LOG.debug("wrote %s (%s)", path, table)
+            f.attrs[ATTRS_JSON_ATTR] = attrs_json
+            f.attrs[DIGEST_ATTR] = _digest(attrs_json, parts.channels)
+    _LOG.debug("wrote %s (%s values)", path, "x".join(str(n) for n in shape))
+
+
+def _set_attrs(var: Any, attrs: dict[str, Any]) -> None:
+    for key, value in attrs.items():
+        var.attrs[key] = value
 
 
 def _fail(path: Path, msg: str) -> FormatError:
@@ -439,7 +442,7 @@ def _expect(path: Path, ds: Any, name: str, shape: tuple[int, ...], dims: tuple[
 def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
     """The global attributes that mirror ``cdbrdf_attrs`` entries must agree with them."""
     for key, value in attrs.items():
-        if key in _OWN_ATTRS or key not in f.attrs:
+        if key in WRITER_ATTRS or key not in f.attrs:
             continue
         stored = _attr(path, f.attrs, key)
         if isinstance(value, str):
@@ -455,8 +458,8 @@ def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
             raise _fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
 
 
-def _read_parts(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
-    """Read and check everything of a CDBRDF file; the arguments of :class:`CDBRDF`.
+def _read_parts(path: Path, heaps: _Heaps | None = None) -> TableParts:
+    """Read and check everything of a CDBRDF file, as the parts of a table.
 
     ``heaps``: the checked global heaps, when reading in this process.
     """
@@ -485,7 +488,7 @@ def _read_parts(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
             )
         if major < 1:
             raise _fail(path, f"unsupported format version {version}")
-        gattrs = {name: _attr_str(path, f.attrs, name) for name in _REQUIRED_ATTRS}
+        gattrs = {name: _attr_str(path, f.attrs, name) for name in REQUIRED_ATTRS}
 
         # -- declared shapes, dims and dtypes of every variable, before reading any data
         axis_ds = {name: _dataset(path, f, name, required=True) for name in AXES}
@@ -493,86 +496,78 @@ def _read_parts(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
             if ds.ndim != 1:
                 raise _fail(path, f"axis {name!r} is not 1-D (shape {ds.shape})")
             limits.check("table_samples", ds.size, what=f"{path}: axis {name!r}")
-            if name != "channel" and (ds.dtype.kind != "f" or ds.dtype.itemsize not in (4, 8)):
+            if name != CHANNEL and (ds.dtype.kind != "f" or ds.dtype.itemsize not in (4, 8)):
                 raise _fail(path, f"axis {name!r} has dtype {ds.dtype}, expected float64")
-        if h5py.check_string_dtype(axis_ds["channel"].dtype) is None:
-            raise _fail(path, f"'channel' has dtype {axis_ds['channel'].dtype}, expected strings")
-        grid_shape = tuple(axis_ds[n].size for n in _SAMPLE_DIMS)
-        shape = (*grid_shape, axis_ds["channel"].size)
-        limits.check("table_samples", math.prod(shape), what=f"{path}: 'reflectance' of shape {shape}")
-        refl = _dataset(path, f, "reflectance", required=True)
-        if refl.ndim != 6:
-            raise _fail(path, f"'reflectance' has {refl.ndim} dimensions, expected 6 {AXES}")
-        _expect(path, refl, "reflectance", shape, AXES, "f")
-        measured = _dataset(path, f, "measured", required=True)
-        _expect(path, measured, "measured", grid_shape, _SAMPLE_DIMS, "uib")
-        fill_ds = _dataset(path, f, "fill_source", required=False)
-        if fill_ds is not None:
-            _expect(path, fill_ds, "fill_source", grid_shape, _SAMPLE_DIMS, "iu")
-        std_ds = _dataset(path, f, "reflectance_std", required=False)
-        if std_ds is not None:
-            _expect(path, std_ds, "reflectance_std", shape, AXES, "f")
-        datasets = {**axis_ds, "reflectance": refl, "measured": measured}
-        if fill_ds is not None:
-            datasets["fill_source"] = fill_ds
-        if std_ds is not None:
-            datasets["reflectance_std"] = std_ds
+        if h5py.check_string_dtype(axis_ds[CHANNEL].dtype) is None:
+            raise _fail(path, f"{CHANNEL!r} has dtype {axis_ds[CHANNEL].dtype}, expected strings")
+        grid_shape = tuple(axis_ds[n].size for n in SAMPLE_AXES)
+        shape = (*grid_shape, axis_ds[CHANNEL].size)
+        limits.check("table_samples", math.prod(shape), what=f"{path}: {REFLECTANCE!r} of shape {shape}")
+        shapes = {AXES: shape, SAMPLE_AXES: grid_shape}
+        datasets = dict(axis_ds)
+        for name, dims in DATA_VARIABLES.items():
+            ds = _dataset(path, f, name, required=name in REQUIRED_VARIABLES)
+            if ds is None:
+                continue
+            if name == REFLECTANCE and ds.ndim != len(AXES):
+                raise _fail(path, f"{name!r} has {ds.ndim} dimensions, expected {len(AXES)} {AXES}")
+            _expect(path, ds, name, shapes[dims], dims, _FILE_KINDS[name])
+            datasets[name] = ds
         for name, ds in datasets.items():
             _check_storage(path, ds, name, file_size)
 
         # -- metadata
-        axes = {name: _read_ds(path, axis_ds[name], name).astype(np.float64) for name in _SAMPLE_DIMS}
+        axes = {name: _read_ds(path, axis_ds[name], name).astype(np.float64) for name in SAMPLE_AXES}
         if heaps is not None:
-            _check_vlen_refs(path, axis_ds["channel"], "channel", heaps)
-        channels = [_as_str(path, "a 'channel' name", c) for c in _read_ds(path, axis_ds["channel"], "channel")]
-        text = gattrs["cdbrdf_attrs"]
-        limits.check("json_bytes", len(text.encode("utf-8")), what=f"{path}: attribute 'cdbrdf_attrs'")
-        if _DIGEST_ATTR in f.attrs:
-            stored = np.asarray(_attr(path, f.attrs, _DIGEST_ATTR))
+            _check_vlen_refs(path, axis_ds[CHANNEL], CHANNEL, heaps)
+        channels = [_as_str(path, f"a {CHANNEL!r} name", c) for c in _read_ds(path, axis_ds[CHANNEL], CHANNEL)]
+        text = gattrs[ATTRS_JSON_ATTR]
+        limits.check("json_bytes", len(text.encode("utf-8")), what=f"{path}: attribute {ATTRS_JSON_ATTR!r}")
+        if DIGEST_ATTR in f.attrs:
+            stored = np.asarray(_attr(path, f.attrs, DIGEST_ATTR))
             if stored.dtype != np.uint8 or stored.shape != (32,):
-                raise _fail(path, f"global attribute {_DIGEST_ATTR!r} is not 32 bytes")
+                raise _fail(path, f"global attribute {DIGEST_ATTR!r} is not 32 bytes")
             if not np.array_equal(stored, _digest(text, channels)):
-                raise _fail(path, "checksum mismatch in 'cdbrdf_attrs' or 'channel': the file is damaged")
+                raise _fail(path, f"checksum mismatch in {ATTRS_JSON_ATTR!r} or {CHANNEL!r}: the file is damaged")
         try:
             attrs = json.loads(text)
         except (ValueError, RecursionError) as exc:
-            raise _fail(path, f"attribute 'cdbrdf_attrs' is not valid JSON ({_one_line(exc)})") from None
+            raise _fail(path, f"attribute {ATTRS_JSON_ATTR!r} is not valid JSON ({_one_line(exc)})") from None
         if not isinstance(attrs, dict):
-            raise _fail(path, "attribute 'cdbrdf_attrs' is not a JSON object")
-        for key in ("quantity", "colour_space"):
+            raise _fail(path, f"attribute {ATTRS_JSON_ATTR!r} is not a JSON object")
+        for key in MIRRORED_ATTRS:
             if attrs.get(key) != gattrs[key]:
-                raise _fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
+                raise _fail(path, f"global attribute {key!r} disagrees with its entry in {ATTRS_JSON_ATTR!r}")
         _check_mirrors(path, f, attrs)
-        n = len(channels)
-        if "channels" in attrs:
-            if attrs["channels"] != channels:
-                raise _fail(
-                    path,
-                    f"'cdbrdf_attrs' names the channels {attrs['channels']!r} but the 'channel' variable "
-                    f"holds {channels!r}",
-                )
-        elif channels != (["R", "G", "B"] if n == 3 else [f"c{i}" for i in range(n)]):
-            attrs["channels"] = channels
+        if CHANNELS_ATTR in attrs and attrs[CHANNELS_ATTR] != channels:
+            raise _fail(
+                path,
+                f"{ATTRS_JSON_ATTR!r} names the channels {attrs[CHANNELS_ATTR]!r} but the {CHANNEL!r} variable "
+                f"holds {channels!r}",
+            )
+        attrs = with_channel_names(attrs, channels)
 
         # -- data
-        values = _read_ds(path, refl, "reflectance")
+        values = _read_ds(path, datasets[REFLECTANCE], REFLECTANCE)
         if not np.all(np.isfinite(values)):
             bad = int(np.count_nonzero(~np.isfinite(values)))
-            raise _fail(path, f"'reflectance' holds {bad} NaN or infinite value(s)")
-        mvals = _read_ds(path, measured, "measured")
+            raise _fail(path, f"{REFLECTANCE!r} holds {bad} NaN or infinite value(s)")
+        mvals = _read_ds(path, datasets[MEASURED], MEASURED)
         if not np.isin(mvals, (0, 1)).all():
-            raise _fail(path, "'measured' holds values other than 0 and 1")
+            raise _fail(path, f"{MEASURED!r} holds values other than 0 and 1")
         fill = None
-        if fill_ds is not None:
-            fill = _read_ds(path, fill_ds, "fill_source")
+        if FILL_SOURCE in datasets:
+            fill = _read_ds(path, datasets[FILL_SOURCE], FILL_SOURCE)
             if fill.size and (fill.min() < -2 or fill.max() >= fill.size):
-                raise _fail(path, f"'fill_source' holds indices outside [-2, {fill.size})")
+                raise _fail(path, f"{FILL_SOURCE!r} holds indices outside [-2, {fill.size})")
             fill = fill.astype(np.int64)
-        std = None if std_ds is None else _read_ds(path, std_ds, "reflectance_std")
-    return dict(values=values, **axes, measured=mvals.astype(bool), fill_source=fill, std=std, attrs=attrs)
+        std = None
+        if REFLECTANCE_STD in datasets:
+            std = _read_ds(path, datasets[REFLECTANCE_STD], REFLECTANCE_STD)
+    return TableParts(values=values, axes=axes, measured=mvals.astype(bool), fill_source=fill, std=std, attrs=attrs)
 
 
-def _read_guarded(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
+def _read_guarded(path: Path, heaps: _Heaps | None = None) -> TableParts:
     """:func:`_read_parts`, with every unexpected exception turned into FormatError."""
     try:
         return _read_parts(path, heaps)
@@ -601,7 +596,7 @@ sys.stdout.buffer.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))
 """
 
 
-def _read_in_child(path: Path) -> dict[str, Any]:
+def _read_in_child(path: Path) -> TableParts:
     """:func:`_read_guarded` in a child process killed after a time limit.
 
     For files without metadata checksums, where a damaged structure can make
@@ -630,13 +625,16 @@ def _read_in_child(path: Path) -> dict[str, Any]:
         last = err.decode("utf-8", "replace").strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
         raise _fail(path, f"the reader stopped on it ({last[0][:200]}): the file is damaged")
     kind, payload = pickle.loads(out)
-    if kind == "ok":
+    if kind == "ok" and isinstance(payload, TableParts):
         return payload
     raise (LimitError if kind == "LimitError" else FormatError)(payload)
 
 
-def load(path: str | PathLike[str]) -> CDBRDF:
-    """Read a CDBRDF file written by :func:`save` (any 1.x version).
+def read(path: str | PathLike[str]) -> TableParts:
+    """Read and check a CDBRDF file written by :func:`write` (any 1.x version), as parts.
+
+    :func:`cdbrdf.load` (which builds the table from the parts) is the usual
+    way to call it.
 
     Files with HDF5 metadata checksums (superblock v2/v3, as written by format
     1.1) whose global heaps (unchecksummed) parse are read in this process.
@@ -651,8 +649,10 @@ def load(path: str | PathLike[str]) -> CDBRDF:
 
     Returns
     -------
-    CDBRDF
-        The table, equal to the one that was saved.
+    TableParts
+        The arrays and attributes of the table that was saved; the sample
+        axes and the relations between mask and fill sources are checked
+        when the table is built from them (:class:`cdbrdf.CDBRDF`).
 
     Raises
     ------
@@ -661,9 +661,10 @@ def load(path: str | PathLike[str]) -> CDBRDF:
     FormatError
         For any problem with an existing file: not HDF5, not a CDBRDF file, a
         newer major version, missing variables or attributes, inconsistent
-        shapes, attributes or dtypes, non-monotonic axes, non-finite values,
+        shapes, attributes or dtypes, non-finite values,
         checksum mismatches, damaged HDF5 structures, unreadable permissions.
-        The message starts with the file's path.
+        The message starts with the file's path. (:func:`cdbrdf.load` adds
+        non-monotonic or out-of-range axes and inconsistent fill sources.)
     LimitError
         When the file declares more samples than the ``table_samples`` limit.
     """
@@ -694,7 +695,4 @@ def load(path: str | PathLike[str]) -> CDBRDF:
             pass
     if parts is None:
         parts = _read_in_child(p)
-    try:
-        return CDBRDF(**parts)
-    except TableError as exc:
-        raise _fail(p, str(exc)) from None
+    return parts
