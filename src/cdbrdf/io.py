@@ -19,7 +19,9 @@ not know the table class: :func:`cdbrdf.load` (in :mod:`cdbrdf.table`) calls
 Files without metadata checksums (format 1.0, or HDF5 written by other tools
 with the old superblock) can hold damaged structures that make the HDF5
 library loop forever with the interpreter lock held, where Ctrl-C does not
-help. Those are read in a child process under a time limit.
+help. Those are read in a child process under a time limit. The checks of
+HDF5 structures that the library would trust (global heaps, string
+references, chunk addresses) are in :mod:`cdbrdf._hdf5`.
 """
 
 from __future__ import annotations
@@ -28,12 +30,10 @@ import hashlib
 import json
 import logging
 import math
-import mmap
 import pickle
 import re
 import subprocess
 import sys
-from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -41,6 +41,16 @@ from typing import Any
 import numpy as np
 
 from . import limits
+from ._hdf5 import (
+    Heaps,
+    UnsureError,
+    check_global_heaps,
+    check_storage,
+    check_vlen_refs,
+    fail,
+    one_line,
+    superblock_version,
+)
 from .errors import FormatError, LimitError, TableError
 from .fsutil import atomic_path
 from .schema import (
@@ -87,7 +97,6 @@ _LOG = logging.getLogger(__name__)
 _LIBVER = ("v110", "v110")
 #: Seconds a file without metadata checksums may take to read (plus 1 s per 20 MB).
 LEGACY_READ_TIMEOUT_S = 30.0
-_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
 #: dtypes the file stores variables in when not the array's own (docs/format.md).
 _FILE_DTYPES = {MEASURED: "u1", FILL_SOURCE: "i8"}
@@ -143,8 +152,8 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
         ``attrs["channels"]`` does not name every channel, ``attrs["quantity"]``
         is not a valid quantity or a required variable is missing.
     """
-    import h5py
     import h5netcdf
+    import h5py
 
     from ._version import __version__
 
@@ -167,7 +176,7 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
     chunks = (1, 1, *shape[2:])  # one (kappa, phi_l) pair at a time
     with atomic_path(path) as tmp:
         with h5netcdf.File(str(tmp), "w", libver=_LIBVER) as f:
-            f.dimensions = dict(zip(AXES, shape))
+            f.dimensions = dict(zip(AXES, shape, strict=True))
             for name in SAMPLE_AXES:
                 axis = np.asarray(parts.axes[name])
                 var = f.create_variable(
@@ -208,15 +217,6 @@ def _set_attrs(var: Any, attrs: dict[str, Any]) -> None:
         var.attrs[key] = value
 
 
-def _fail(path: Path, msg: str) -> FormatError:
-    return FormatError(f"{path}: {msg}")
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return f"{type(exc).__name__}: {text[:200]}" if text else type(exc).__name__
-
-
 def _as_str(path: Path, what: str, v: Any) -> str:
     """``v`` (str, UTF-8 bytes or a one-element array of them) as str; FormatError otherwise."""
     if isinstance(v, np.ndarray) and v.size == 1 and v.dtype.kind in "OSU":
@@ -225,9 +225,9 @@ def _as_str(path: Path, what: str, v: Any) -> str:
         try:
             v = bytes(v).decode("utf-8")
         except UnicodeDecodeError:
-            raise _fail(path, f"{what} is not valid UTF-8 text") from None
+            raise fail(path, f"{what} is not valid UTF-8 text") from None
     if not isinstance(v, str):
-        raise _fail(path, f"{what} is not a string (got {type(v).__name__})")
+        raise fail(path, f"{what} is not a string (got {type(v).__name__})")
     return v
 
 
@@ -235,14 +235,14 @@ def _attr(path: Path, attrs: Any, name: str) -> Any:
     try:
         return attrs[name]
     except UnicodeDecodeError:
-        raise _fail(path, f"global attribute {name!r} is not valid UTF-8 text") from None
+        raise fail(path, f"global attribute {name!r} is not valid UTF-8 text") from None
     except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:
-        raise _fail(path, f"global attribute {name!r} cannot be read ({_one_line(exc)}): the file is damaged") from None
+        raise fail(path, f"global attribute {name!r} cannot be read ({one_line(exc)}): the file is damaged") from None
 
 
 def _attr_str(path: Path, attrs: Any, name: str) -> str:
     if name not in attrs:
-        raise _fail(path, f"missing the global attribute {name!r}")
+        raise fail(path, f"missing the global attribute {name!r}")
     return _as_str(path, f"global attribute {name!r}", _attr(path, attrs, name))
 
 
@@ -256,163 +256,15 @@ def _dims_of(ds: Any) -> tuple[str, ...]:
     return tuple(names)
 
 
-def superblock_version(path: str | PathLike[str]) -> int | None:
-    """The HDF5 superblock version of ``path``, or None when it is not HDF5.
-
-    The superblock is searched where HDF5 searches it: at byte 0, 512, 1024,
-    2048... Versions 2 and 3 carry checksums of all file metadata; 0 and 1
-    (HDF5 < 1.8 layout, the default of most writers) do not.
-    """
-    with open(path, "rb") as fh:
-        size = fh.seek(0, 2)
-        offset = 0
-        while offset + 9 <= size:
-            fh.seek(offset)
-            head = fh.read(9)
-            if head[:8] == _HDF5_SIGNATURE:
-                return head[8]
-            offset = 512 if offset == 0 else offset * 2
-    return None
-
-
-class _Unsure(Exception):
-    """The in-process reader met something only the time-limited child may read."""
-
-
-@dataclass
-class _Heaps:
-    """Result of :func:`_check_global_heaps`."""
-
-    #: "ok", "unsure" or a description of the damage
-    status: str
-    #: heap address -> {object index: object size}
-    objects: dict[int, dict[int, int]] = field(default_factory=dict)
-    #: size of file addresses (superblock)
-    n_off: int = 8
-
-
-def _check_global_heaps(path: Path) -> _Heaps:
-    """Whether every HDF5 global heap collection in the file parses to its end.
-
-    Global heaps (which hold variable-length strings and the dimension lists of
-    NetCDF-4 files) have no checksum even in the newest HDF5 format, and HDF5
-    loops forever on a collection whose object sizes do not advance (e.g. a
-    zeroed block). This walks every ``GCOL`` block as HDF5 does, in Python,
-    without trusting it.
-
-    Returns
-    -------
-    _Heaps
-        ``status`` ``"ok"`` (with every heap object's size); ``"unsure"``
-        when something may or may not be a damaged heap (or the superblock is
-        not v2/v3); otherwise a description of the damage, for the message.
-    """
-    with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as buf:
-        return _walk_global_heaps(buf)
-
-
-def _walk_global_heaps(buf: Any) -> _Heaps:
-    """:func:`_check_global_heaps` on the file's bytes (``bytes`` or ``mmap``)."""
-    sb = buf.find(_HDF5_SIGNATURE)
-    if sb < 0 or sb + 11 > len(buf) or buf[sb + 8] not in (2, 3):
-        return _Heaps("unsure")
-    n_off, n_len = buf[sb + 9], buf[sb + 10]  # sizes of addresses and lengths (v2/v3 superblock)
-    if n_len not in (2, 4, 8) or n_off not in (2, 4, 8):
-        return _Heaps("unsure")
-    heaps = _Heaps("ok", n_off=n_off)
-    obj_hdr = 8 + n_len
-    pos = buf.find(b"GCOL\x01")
-    while pos >= 0:
-        # HDF5 takes any "GCOL", version 1 as a heap; with the zero reserved
-        # bytes too it is certainly one (and not a chance match in the data)
-        certain = buf[pos + 5 : pos + 8] == b"\0\0\0"
-        bad = ""
-        size = int.from_bytes(buf[pos + 8 : pos + 8 + n_len], "little")
-        end = pos + size
-        if pos + 8 + n_len > len(buf) or end > len(buf):
-            bad = f"the global heap at byte {pos} runs past the end of the file"
-        elif size < 4096:
-            bad = f"the global heap at byte {pos} declares an impossible size {size}"
-        p = pos + 8 + n_len
-        objects: dict[int, int] = {}
-        while not bad and p < end:
-            if p + obj_hdr > end:
-                break  # a tail too small for an object header is free space
-            idx = int.from_bytes(buf[p : p + 2], "little")
-            osize = int.from_bytes(buf[p + 8 : p + 8 + n_len], "little")
-            need = osize if idx == 0 else obj_hdr + ((osize + 7) & ~7)
-            if need <= 0 or p + need > end:
-                bad = f"the global heap at byte {pos} has a damaged object at byte {p}"
-            elif idx:
-                objects[idx] = osize
-            p += need
-        if bad:
-            return _Heaps(bad if certain else "unsure")
-        heaps.objects[pos - sb] = objects  # heap addresses are relative to the superblock
-        pos = buf.find(b"GCOL\x01", pos + 1)
-    return heaps
-
-
-def _check_vlen_refs(path: Path, ds: Any, name: str, heaps: _Heaps) -> None:
-    """Check the global-heap references of a variable-length string dataset before HDF5 follows them.
-
-    Its raw data (length, heap address, object index per element) has no
-    checksum; a damaged length or address makes HDF5 allocate gigabytes or
-    read a heap that was never checked.
-    """
-    offset = ds.id.get_offset()
-    if offset is None or ds.id.get_storage_size() != ds.size * (8 + heaps.n_off):
-        raise _Unsure(name)  # not contiguous as save() writes it: let the child read it
-    with open(path, "rb") as fh:
-        fh.seek(offset)
-        raw = fh.read(ds.size * (8 + heaps.n_off))
-    step = 8 + heaps.n_off
-    if len(raw) != ds.size * step:
-        raise _fail(path, f"{name!r} has data stored beyond the end of the file: the file is truncated or damaged")
-    for i in range(ds.size):
-        e = raw[i * step : (i + 1) * step]
-        length = int.from_bytes(e[:4], "little")
-        addr = int.from_bytes(e[4 : 4 + heaps.n_off], "little")
-        idx = int.from_bytes(e[4 + heaps.n_off :], "little")
-        size = heaps.objects.get(addr, {}).get(idx)
-        if size is None or length > size:
-            raise _fail(path, f"{name!r} entry {i} points at no stored string: the file is damaged")
-
-
-def _check_storage(path: Path, ds: Any, name: str, file_size: int) -> None:
-    """Refuse a dataset whose stored pieces lie outside the file (before reading them)."""
-    dsid = ds.id
-    if ds.chunks is not None:
-        expected = math.prod(-(-n // c) for n, c in zip(ds.shape, ds.chunks))
-        pieces: list[tuple[int, int]] = []
-        if hasattr(dsid, "chunk_iter"):
-            dsid.chunk_iter(lambda info: pieces.append((info.byte_offset, info.size)))
-        else:  # pragma: no cover - old HDF5
-            n = dsid.get_num_chunks()
-            if n > expected:
-                raise _fail(path, f"{name!r} has {n} chunks stored, at most {expected} fit its shape")
-            for i in range(n):
-                info = dsid.get_chunk_info(i)
-                pieces.append((info.byte_offset, info.size))
-        if len(pieces) > expected:
-            raise _fail(path, f"{name!r} has {len(pieces)} chunks stored, at most {expected} fit its shape")
-    else:
-        offset = dsid.get_offset()
-        pieces = [] if offset is None else [(offset, dsid.get_storage_size())]
-    for offset, size in pieces:
-        if offset is None or offset < 0 or size < 0 or offset + size > file_size:
-            raise _fail(path, f"{name!r} has data stored beyond the end of the file: the file is truncated or damaged")
-
-
 def _read_ds(path: Path, ds: Any, name: str) -> np.ndarray:
     try:
         return np.asarray(ds[()])
     except UnicodeDecodeError:
-        raise _fail(path, f"{name!r} holds text that is not valid UTF-8") from None
+        raise fail(path, f"{name!r} holds text that is not valid UTF-8") from None
     except (OSError, RuntimeError, ValueError, TypeError) as exc:
         if "filter" in str(exc) and getattr(ds, "fletcher32", False):
-            raise _fail(path, f"checksum mismatch in {name!r}: the file is damaged") from None
-        raise _fail(path, f"{name!r} cannot be read ({_one_line(exc)}): the file is damaged") from None
+            raise fail(path, f"checksum mismatch in {name!r}: the file is damaged") from None
+        raise fail(path, f"{name!r} cannot be read ({one_line(exc)}): the file is damaged") from None
 
 
 def _dataset(path: Path, f: Any, name: str, *, required: bool) -> Any:
@@ -420,23 +272,23 @@ def _dataset(path: Path, f: Any, name: str, *, required: bool) -> Any:
 
     if name not in f:
         if required:
-            raise _fail(path, f"missing the variable {name!r}")
+            raise fail(path, f"missing the variable {name!r}")
         return None
     obj = f[name]
     if not isinstance(obj, h5py.Dataset):
-        raise _fail(path, f"{name!r} is not a variable (HDF5 dataset)")
+        raise fail(path, f"{name!r} is not a variable (HDF5 dataset)")
     return obj
 
 
 def _expect(path: Path, ds: Any, name: str, shape: tuple[int, ...], dims: tuple[str, ...], kinds: str) -> None:
     """Check a variable's declared shape, dimension names and dtype kind (nothing is read)."""
     if ds.shape != shape:
-        raise _fail(path, f"{name!r} has shape {ds.shape}, but the axes give {shape}")
+        raise fail(path, f"{name!r} has shape {ds.shape}, but the axes give {shape}")
     got = _dims_of(ds)
     if got != dims:
-        raise _fail(path, f"{name!r} has dimensions {got}, expected {dims}")
+        raise fail(path, f"{name!r} has dimensions {got}, expected {dims}")
     if ds.dtype.kind not in kinds or ds.dtype.itemsize > 8:
-        raise _fail(path, f"{name!r} has dtype {ds.dtype}, which the format does not allow")
+        raise fail(path, f"{name!r} has dtype {ds.dtype}, which the format does not allow")
 
 
 def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
@@ -455,10 +307,10 @@ def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
         else:
             ok = _as_str(path, f"global attribute {key!r}", stored) == _jsonable(key, value)
         if not ok:
-            raise _fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
+            raise fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
 
 
-def _read_parts(path: Path, heaps: _Heaps | None = None) -> TableParts:
+def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
     """Read and check everything of a CDBRDF file, as the parts of a table.
 
     ``heaps``: the checked global heaps, when reading in this process.
@@ -468,38 +320,38 @@ def _read_parts(path: Path, heaps: _Heaps | None = None) -> TableParts:
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
-        raise _fail(path, f"cannot be opened as HDF5 ({_one_line(exc)})") from None
+        raise fail(path, f"cannot be opened as HDF5 ({one_line(exc)})") from None
     with f:
         file_size = path.stat().st_size
         fmt = _attr_str(path, f.attrs, "format") if "format" in f.attrs else None
         if fmt != FORMAT_NAME:
-            raise _fail(
+            raise fail(
                 path, f"not a CDBRDF file (global attribute 'format' is {fmt!r}, expected {FORMAT_NAME!r})"
             )
         version = _attr_str(path, f.attrs, "format_version")
         m = re.fullmatch(r"(\d{1,6})\.(\d{1,6})", version)
         if m is None:
-            raise _fail(path, f"unreadable format_version {version!r} (expected MAJOR.MINOR)")
+            raise fail(path, f"unreadable format_version {version!r} (expected MAJOR.MINOR)")
         major = int(m[1])
         own_major = int(FORMAT_VERSION.split(".")[0])
         if major > own_major:
-            raise _fail(
+            raise fail(
                 path, f"format version {version} is newer than this cdbrdf reads ({own_major}.x); upgrade cdbrdf"
             )
         if major < 1:
-            raise _fail(path, f"unsupported format version {version}")
+            raise fail(path, f"unsupported format version {version}")
         gattrs = {name: _attr_str(path, f.attrs, name) for name in REQUIRED_ATTRS}
 
         # -- declared shapes, dims and dtypes of every variable, before reading any data
         axis_ds = {name: _dataset(path, f, name, required=True) for name in AXES}
         for name, ds in axis_ds.items():
             if ds.ndim != 1:
-                raise _fail(path, f"axis {name!r} is not 1-D (shape {ds.shape})")
+                raise fail(path, f"axis {name!r} is not 1-D (shape {ds.shape})")
             limits.check("table_samples", ds.size, what=f"{path}: axis {name!r}")
             if name != CHANNEL and (ds.dtype.kind != "f" or ds.dtype.itemsize not in (4, 8)):
-                raise _fail(path, f"axis {name!r} has dtype {ds.dtype}, expected float64")
+                raise fail(path, f"axis {name!r} has dtype {ds.dtype}, expected float64")
         if h5py.check_string_dtype(axis_ds[CHANNEL].dtype) is None:
-            raise _fail(path, f"{CHANNEL!r} has dtype {axis_ds[CHANNEL].dtype}, expected strings")
+            raise fail(path, f"{CHANNEL!r} has dtype {axis_ds[CHANNEL].dtype}, expected strings")
         grid_shape = tuple(axis_ds[n].size for n in SAMPLE_AXES)
         shape = (*grid_shape, axis_ds[CHANNEL].size)
         limits.check("table_samples", math.prod(shape), what=f"{path}: {REFLECTANCE!r} of shape {shape}")
@@ -510,37 +362,37 @@ def _read_parts(path: Path, heaps: _Heaps | None = None) -> TableParts:
             if ds is None:
                 continue
             if name == REFLECTANCE and ds.ndim != len(AXES):
-                raise _fail(path, f"{name!r} has {ds.ndim} dimensions, expected {len(AXES)} {AXES}")
+                raise fail(path, f"{name!r} has {ds.ndim} dimensions, expected {len(AXES)} {AXES}")
             _expect(path, ds, name, shapes[dims], dims, _FILE_KINDS[name])
             datasets[name] = ds
         for name, ds in datasets.items():
-            _check_storage(path, ds, name, file_size)
+            check_storage(path, ds, name, file_size)
 
         # -- metadata
         axes = {name: _read_ds(path, axis_ds[name], name).astype(np.float64) for name in SAMPLE_AXES}
         if heaps is not None:
-            _check_vlen_refs(path, axis_ds[CHANNEL], CHANNEL, heaps)
+            check_vlen_refs(path, axis_ds[CHANNEL], CHANNEL, heaps)
         channels = [_as_str(path, f"a {CHANNEL!r} name", c) for c in _read_ds(path, axis_ds[CHANNEL], CHANNEL)]
         text = gattrs[ATTRS_JSON_ATTR]
         limits.check("json_bytes", len(text.encode("utf-8")), what=f"{path}: attribute {ATTRS_JSON_ATTR!r}")
         if DIGEST_ATTR in f.attrs:
             stored = np.asarray(_attr(path, f.attrs, DIGEST_ATTR))
             if stored.dtype != np.uint8 or stored.shape != (32,):
-                raise _fail(path, f"global attribute {DIGEST_ATTR!r} is not 32 bytes")
+                raise fail(path, f"global attribute {DIGEST_ATTR!r} is not 32 bytes")
             if not np.array_equal(stored, _digest(text, channels)):
-                raise _fail(path, f"checksum mismatch in {ATTRS_JSON_ATTR!r} or {CHANNEL!r}: the file is damaged")
+                raise fail(path, f"checksum mismatch in {ATTRS_JSON_ATTR!r} or {CHANNEL!r}: the file is damaged")
         try:
             attrs = json.loads(text)
         except (ValueError, RecursionError) as exc:
-            raise _fail(path, f"attribute {ATTRS_JSON_ATTR!r} is not valid JSON ({_one_line(exc)})") from None
+            raise fail(path, f"attribute {ATTRS_JSON_ATTR!r} is not valid JSON ({one_line(exc)})") from None
         if not isinstance(attrs, dict):
-            raise _fail(path, f"attribute {ATTRS_JSON_ATTR!r} is not a JSON object")
+            raise fail(path, f"attribute {ATTRS_JSON_ATTR!r} is not a JSON object")
         for key in MIRRORED_ATTRS:
             if attrs.get(key) != gattrs[key]:
-                raise _fail(path, f"global attribute {key!r} disagrees with its entry in {ATTRS_JSON_ATTR!r}")
+                raise fail(path, f"global attribute {key!r} disagrees with its entry in {ATTRS_JSON_ATTR!r}")
         _check_mirrors(path, f, attrs)
         if CHANNELS_ATTR in attrs and attrs[CHANNELS_ATTR] != channels:
-            raise _fail(
+            raise fail(
                 path,
                 f"{ATTRS_JSON_ATTR!r} names the channels {attrs[CHANNELS_ATTR]!r} but the {CHANNEL!r} variable "
                 f"holds {channels!r}",
@@ -551,15 +403,15 @@ def _read_parts(path: Path, heaps: _Heaps | None = None) -> TableParts:
         values = _read_ds(path, datasets[REFLECTANCE], REFLECTANCE)
         if not np.all(np.isfinite(values)):
             bad = int(np.count_nonzero(~np.isfinite(values)))
-            raise _fail(path, f"{REFLECTANCE!r} holds {bad} NaN or infinite value(s)")
+            raise fail(path, f"{REFLECTANCE!r} holds {bad} NaN or infinite value(s)")
         mvals = _read_ds(path, datasets[MEASURED], MEASURED)
         if not np.isin(mvals, (0, 1)).all():
-            raise _fail(path, f"{MEASURED!r} holds values other than 0 and 1")
+            raise fail(path, f"{MEASURED!r} holds values other than 0 and 1")
         fill = None
         if FILL_SOURCE in datasets:
             fill = _read_ds(path, datasets[FILL_SOURCE], FILL_SOURCE)
             if fill.size and (fill.min() < -2 or fill.max() >= fill.size):
-                raise _fail(path, f"{FILL_SOURCE!r} holds indices outside [-2, {fill.size})")
+                raise fail(path, f"{FILL_SOURCE!r} holds indices outside [-2, {fill.size})")
             fill = fill.astype(np.int64)
         std = None
         if REFLECTANCE_STD in datasets:
@@ -567,19 +419,19 @@ def _read_parts(path: Path, heaps: _Heaps | None = None) -> TableParts:
     return TableParts(values=values, axes=axes, measured=mvals.astype(bool), fill_source=fill, std=std, attrs=attrs)
 
 
-def _read_guarded(path: Path, heaps: _Heaps | None = None) -> TableParts:
+def _read_guarded(path: Path, heaps: Heaps | None = None) -> TableParts:
     """:func:`_read_parts`, with every unexpected exception turned into FormatError."""
     try:
         return _read_parts(path, heaps)
-    except (FormatError, LimitError, _Unsure):
+    except (FormatError, LimitError, UnsureError):
         raise
     except MemoryError:
-        raise _fail(path, "not enough memory to read it") from None
+        raise fail(path, "not enough memory to read it") from None
     except (OSError, RuntimeError, KeyError, ValueError, TypeError, AttributeError, IndexError, RecursionError,
             OverflowError, UnicodeError) as exc:
         if "checksum" in str(exc):
-            raise _fail(path, "metadata checksum mismatch: the file is damaged") from None
-        raise _fail(path, f"damaged or not a valid CDBRDF file ({_one_line(exc)})") from None
+            raise fail(path, "metadata checksum mismatch: the file is damaged") from None
+        raise fail(path, f"damaged or not a valid CDBRDF file ({one_line(exc)})") from None
 
 
 _CHILD = """\
@@ -615,7 +467,7 @@ def _read_in_child(path: Path) -> TableParts:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.communicate()
-            raise _fail(
+            raise fail(
                 path, f"reading it took longer than {timeout:.0f} s and was stopped: its HDF5 structure is damaged"
             ) from None
         except BaseException:  # Ctrl-C: stop the child too
@@ -623,7 +475,7 @@ def _read_in_child(path: Path) -> TableParts:
             raise
     if proc.returncode != 0:
         last = err.decode("utf-8", "replace").strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
-        raise _fail(path, f"the reader stopped on it ({last[0][:200]}): the file is damaged")
+        raise fail(path, f"the reader stopped on it ({last[0][:200]}): the file is damaged")
     kind, payload = pickle.loads(out)
     if kind == "ok" and isinstance(payload, TableParts):
         return payload
@@ -638,8 +490,9 @@ def read(path: str | PathLike[str]) -> TableParts:
 
     Files with HDF5 metadata checksums (superblock v2/v3, as written by format
     1.1) whose global heaps (unchecksummed) parse are read in this process.
-    Others (format 1.0, other writers, damaged heaps) are read in a child process that is stopped after :data:`LEGACY_READ_TIMEOUT_S`
-    seconds (plus one per 20 MB), because damaged unchecksummed metadata can
+    Others (format 1.0, other writers, damaged heaps) are read in a child
+    process that is stopped after :data:`LEGACY_READ_TIMEOUT_S` seconds (plus
+    one per 20 MB), because damaged unchecksummed metadata can
     make the HDF5 library loop forever; re-saving such a file makes it fast.
 
     Parameters
@@ -672,26 +525,26 @@ def read(path: str | PathLike[str]) -> TableParts:
     if not p.exists():
         raise FileNotFoundError(f"{p}: no such file")
     if p.is_dir():
-        raise _fail(p, "is a folder, not a CDBRDF file")
+        raise fail(p, "is a folder, not a CDBRDF file")
     try:
         version = superblock_version(p)
     except OSError as exc:
-        raise _fail(p, f"cannot be read ({exc.strerror or _one_line(exc)})") from None
+        raise fail(p, f"cannot be read ({exc.strerror or one_line(exc)})") from None
     if version is None:
-        raise _fail(p, "not an HDF5 file (a CDBRDF file is HDF5 / NetCDF-4)")
-    heaps = _Heaps("unsure")
+        raise fail(p, "not an HDF5 file (a CDBRDF file is HDF5 / NetCDF-4)")
+    heaps = Heaps("unsure")
     if version >= 2:
         try:
-            heaps = _check_global_heaps(p)
+            heaps = check_global_heaps(p)
         except OSError as exc:
-            raise _fail(p, f"cannot be read ({exc.strerror or _one_line(exc)})") from None
+            raise fail(p, f"cannot be read ({exc.strerror or one_line(exc)})") from None
         if heaps.status not in ("ok", "unsure"):
-            raise _fail(p, f"{heaps.status}: the file is truncated or damaged")
+            raise fail(p, f"{heaps.status}: the file is truncated or damaged")
     parts = None
     if heaps.status == "ok":
         try:
             parts = _read_guarded(p, heaps)
-        except _Unsure:
+        except UnsureError:
             pass
     if parts is None:
         parts = _read_in_child(p)
