@@ -11,7 +11,7 @@ import pytest
 
 import cdbrdf
 from cdbrdf import CDBRDF, FormatError, Grid
-from cdbrdf.io import FORMAT_VERSION
+from cdbrdf.schema import FORMAT_VERSION
 
 from .conftest import make_table
 
@@ -206,7 +206,7 @@ def test_saved_file_has_umask_permissions(tmp_path, small_grid):
 
 from pathlib import Path  # noqa: E402
 
-from cdbrdf import io  # noqa: E402
+from cdbrdf import io, schema  # noqa: E402
 from cdbrdf.errors import LimitError  # noqa: E402
 
 
@@ -277,7 +277,7 @@ def test_flipped_byte_in_a_chunk_is_a_checksum_error(tmp_path, small_grid):
 
 def test_huge_declared_reflectance_is_refused_before_reading(tmp_path, small_grid):
     def edit(f):
-        for name in io._SAMPLE_DIMS:
+        for name in schema.SAMPLE_AXES:
             del f[name]
             f.create_dataset(name, shape=(100,), dtype="f8", chunks=(100,))  # declared, never written
 
@@ -304,7 +304,7 @@ def test_truncated_file(tmp_path, small_grid, keep):
         cdbrdf.load(p)
 
 
-@pytest.mark.parametrize("name", io._REQUIRED_ATTRS)
+@pytest.mark.parametrize("name", schema.REQUIRED_ATTRS)
 def test_missing_required_attribute(tmp_path, small_grid, name):
     p = _write_then_edit(tmp_path, small_grid, lambda f: f.attrs.__delitem__(name))
     with pytest.raises(FormatError, match=f"t\\.h5: .*{name}"):
@@ -358,8 +358,8 @@ def test_spec_is_enforced(tmp_path, small_grid, edit, match):
 def _replace(f, name, data):
     """Replace a variable keeping its dimension scales (as a NetCDF writer would)."""
     old = f[name]
-    dims = [d[0] for d in old.dims if len(d)] if name not in io.AXES else []
-    is_scale = name in io.AXES
+    dims = [d[0] for d in old.dims if len(d)] if name not in schema.AXES else []
+    is_scale = name in schema.AXES
     del f[name]
     new = f.create_dataset(name, data=data)
     if is_scale:

@@ -6,7 +6,8 @@ The public surface is small:
 - :func:`load` / :meth:`CDBRDF.save` the HDF5 file (``docs/format.md``);
 - :meth:`CDBRDF.evaluate` the 5-D lookup;
 - submodules for each stage, imported on demand: :mod:`cdbrdf.interp` (the
-  lookup), :mod:`cdbrdf.io` (the file), :mod:`cdbrdf.materials` (bundled
+  lookup), :mod:`cdbrdf.io` (the file), :mod:`cdbrdf.schema` (the names of
+  the file and xarray layout), :mod:`cdbrdf.materials` (bundled
   fabrics), :mod:`cdbrdf.synth` (fabric model, simulated capture rig),
   :mod:`cdbrdf.measure` (photographs to a table), :mod:`cdbrdf.curvature`,
   :mod:`cdbrdf.render` (Mitsuba 3 plug-in and scenes), :mod:`cdbrdf.plot`,
@@ -17,8 +18,7 @@ from __future__ import annotations
 
 from ._version import __version__
 from .errors import CDBRDFError, FormatError, QueryError, TableError
-from .io import load
-from .table import CDBRDF, Grid
+from .table import CDBRDF, Grid, load
 
 __all__ = [
     "CDBRDF",

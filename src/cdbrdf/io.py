@@ -11,10 +11,17 @@ anything big is read; any problem raises :class:`~cdbrdf.errors.FormatError`
 naming the file (or :class:`~cdbrdf.errors.LimitError` for a file that asks for
 more memory than :mod:`cdbrdf.limits` allows).
 
+The names, dimensions, units and attributes come from :mod:`cdbrdf.schema`.
+This module exchanges a table as :class:`~cdbrdf.schema.TableParts` and does
+not know the table class: :func:`cdbrdf.load` (in :mod:`cdbrdf.table`) calls
+:func:`read` and builds the table; :meth:`cdbrdf.CDBRDF.save` calls :func:`save`.
+
 Files without metadata checksums (format 1.0, or HDF5 written by other tools
 with the old superblock) can hold damaged structures that make the HDF5
 library loop forever with the interpreter lock held, where Ctrl-C does not
-help. Those are read in a child process under a time limit.
+help. Those are read in a child process under a time limit. The checks of
+HDF5 structures that the library would trust (global heaps, string
+references, chunk addresses) are in :mod:`cdbrdf._hdf5`.
 """
 
 from __future__ import annotations
@@ -23,12 +30,10 @@ import hashlib
 import json
 import logging
 import math
-import mmap
 import pickle
 import re
 import subprocess
 import sys
-from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -36,49 +41,67 @@ from typing import Any
 import numpy as np
 
 from . import limits
+from ._hdf5 import (
+    Heaps,
+    UnsureError,
+    check_global_heaps,
+    check_storage,
+    check_vlen_refs,
+    fail,
+    one_line,
+    superblock_version,
+)
 from .errors import FormatError, LimitError, TableError
 from .fsutil import atomic_path
-from .table import AXES, CDBRDF
+from .schema import (
+    ATTRS_JSON_ATTR,
+    AXES,
+    CHANNEL,
+    CHANNELS_ATTR,
+    CONVENTIONS,
+    DATA_VARIABLES,
+    DIGEST_ATTR,
+    FILL_SOURCE,
+    FORMAT_NAME,
+    FORMAT_VERSION,
+    MEASURED,
+    MIRRORED_ATTRS,
+    REFLECTANCE,
+    REFLECTANCE_STD,
+    REQUIRED_ATTRS,
+    REQUIRED_VARIABLES,
+    SAMPLE_AXES,
+    WRITER_ATTRS,
+    TableParts,
+    check_channel_names,
+    variable_attrs,
+    with_channel_names,
+)
 
-__all__ = ["FORMAT_NAME", "FORMAT_VERSION", "LEGACY_READ_TIMEOUT_S", "save", "load", "superblock_version", "atomic_path"]
+__all__ = [
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "LEGACY_READ_TIMEOUT_S",
+    "write",
+    "save",
+    "read",
+    "superblock_version",
+    "atomic_path",
+]
 
 _LOG = logging.getLogger(__name__)
-
-#: Value of the global attribute ``format``.
-FORMAT_NAME = "cdbrdf"
-#: ``MAJOR.MINOR``: readers accept any minor version of their major version.
-FORMAT_VERSION = "1.1"
 
 #: HDF5 file-format bounds of written files: "v110" gives superblock v3 and
 #: v2 object headers, whose Jenkins checksums make damaged metadata an error
 #: instead of an endless loop; HDF5 >= 1.10 (and NetCDF-C built on it) reads it.
 _LIBVER = ("v110", "v110")
-#: Global attributes every file has (docs/format.md), all strings.
-_REQUIRED_ATTRS = ("format", "format_version", "quantity", "colour_space", "software", "cdbrdf_attrs", "Conventions")
-#: Global attribute with the SHA-256 of ``cdbrdf_attrs`` and the channel names (1.1).
-_DIGEST_ATTR = "cdbrdf_sha256"
-#: Attributes written by :func:`save` itself, never mirrors of table attrs.
-_OWN_ATTRS = frozenset(("format", "format_version", "software", "Conventions", "cdbrdf_attrs", _DIGEST_ATTR))
 #: Seconds a file without metadata checksums may take to read (plus 1 s per 20 MB).
 LEGACY_READ_TIMEOUT_S = 30.0
-_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
-_SAMPLE_DIMS = AXES[:-1]
-_UNITS = {
-    "kappa": "1/mm",
-    "phi_l": "degree",
-    "theta_l": "degree",
-    "phi_v": "degree",
-    "theta_v": "degree",
-}
-_LONG_NAMES = {
-    "kappa": "surface curvature (> 0 convex, < 0 concave)",
-    "phi_l": "light azimuth from the reference tangent x towards y",
-    "theta_l": "light elevation from the surface normal",
-    "phi_v": "view azimuth from the reference tangent x towards y",
-    "theta_v": "view elevation from the surface normal",
-    "channel": "colour channel",
-}
+#: dtypes the file stores variables in when not the array's own (docs/format.md).
+_FILE_DTYPES = {MEASURED: "u1", FILL_SOURCE: "i8"}
+#: dtype kinds the reader accepts for each data variable.
+_FILE_KINDS = {REFLECTANCE: "f", MEASURED: "uib", FILL_SOURCE: "iu", REFLECTANCE_STD: "f"}
 
 
 def _jsonable(name: str, value: Any) -> str:
@@ -97,13 +120,23 @@ def _digest(attrs_json: str, channels: list[str]) -> np.ndarray:
     return np.frombuffer(h.digest(), dtype=np.uint8).copy()
 
 
-def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
-    """Write ``table`` to ``path`` (HDF5 / NetCDF-4), atomically.
+def save(table: Any, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
+    """Write ``table`` (a :class:`cdbrdf.CDBRDF`, or anything with its attributes) to ``path``.
+
+    :meth:`cdbrdf.CDBRDF.save` is the usual way to call it; see :func:`write`
+    for the parameters and errors.
+    """
+    write(TableParts.of(table), path, compression=compression)
+
+
+def write(parts: TableParts, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
+    """Write a table given as parts to ``path`` (HDF5 / NetCDF-4), atomically.
 
     Parameters
     ----------
-    table
-        The table to write.
+    parts
+        The table's arrays and attributes (:meth:`TableParts.of` a table),
+        with every variable the file requires.
     path
         Destination; its folder must exist. An existing file is replaced only
         once the new one is complete.
@@ -115,103 +148,73 @@ def save(table: CDBRDF, path: str | PathLike[str], *, compression: str | None = 
     Raises
     ------
     TableError
-        When an attribute cannot be stored (not JSON-serialisable), or
-        ``attrs["channels"]`` does not name every channel.
+        When an attribute cannot be stored (not JSON-serialisable),
+        ``attrs["channels"]`` does not name every channel, ``attrs["quantity"]``
+        is not a valid quantity or a required variable is missing.
     """
-    import h5py
     import h5netcdf
+    import h5py
 
     from ._version import __version__
 
     if compression not in ("gzip", None):
         raise ValueError(f"compression: {compression!r} is not one of 'gzip', None")
-    attrs_json = _jsonable("*", table.attrs)
-    for k, v in table.attrs.items():
+    attrs = parts.attrs
+    attrs_json = _jsonable("*", attrs)
+    for k, v in attrs.items():
         _jsonable(k, v)
-    names = table.attrs.get("channels")
-    if names is not None and (
-        not isinstance(names, (list, tuple))
-        or len(names) != table.n_channels
-        or not all(isinstance(n, str) for n in names)
-    ):
-        raise TableError(
-            f"attrs['channels']: {names!r} is not a list of {table.n_channels} channel name(s)"
-        )
+    shape = tuple(np.shape(parts.values))
+    check_channel_names(attrs, shape[-1])
+    quantity = parts.quantity
+    variables = parts.variables()
+    for name in REQUIRED_VARIABLES:
+        if name not in variables:
+            raise TableError(f"{name}: a CDBRDF file needs this variable")
     comp: dict[str, Any] = {"track_times": False, "fletcher32": True}
     if compression:
         comp.update(compression="gzip", compression_opts=4, shuffle=True)
-    k, pl, tl, pv, tv, c = table.shape
+    chunks = (1, 1, *shape[2:])  # one (kappa, phi_l) pair at a time
     with atomic_path(path) as tmp:
         with h5netcdf.File(str(tmp), "w", libver=_LIBVER) as f:
-            f.dimensions = dict(zip(AXES, table.shape))
-            for name, axis in table.grid.axes().items():
+            f.dimensions = dict(zip(AXES, shape, strict=True))
+            for name in SAMPLE_AXES:
+                axis = np.asarray(parts.axes[name])
                 var = f.create_variable(
                     name, (name,), "f8", data=axis, chunks=(axis.size,), fletcher32=True, track_times=False
                 )
-                var.attrs["units"] = _UNITS[name]
-                var.attrs["long_name"] = _LONG_NAMES[name]
+                _set_attrs(var, variable_attrs(name, quantity))
             ch = f.create_variable(
-                "channel",
-                ("channel",),
+                CHANNEL,
+                (CHANNEL,),
                 h5py.string_dtype(),
-                data=np.array(table.channels, dtype=object),
+                data=np.array(parts.channels, dtype=object),
                 track_times=False,
             )
-            ch.attrs["long_name"] = _LONG_NAMES["channel"]
-            chunks = (1, 1, tl, pv, tv, c)
-            var = f.create_variable(
-                "reflectance", AXES, table.values.dtype, data=table.values, chunks=chunks, **comp
-            )
-            var.attrs["units"] = "1/sr" if table.quantity == "brdf" else "1"
-            var.attrs["long_name"] = (
-                "BRDF, cosine of the light direction not included"
-                if table.quantity == "brdf"
-                else "relative reflectance (BRDF up to an unknown scale)"
-            )
-            m = f.create_variable(
-                "measured",
-                _SAMPLE_DIMS,
-                "u1",
-                data=table.measured.astype(np.uint8),
-                chunks=chunks[:-1],
-                **comp,
-            )
-            m.attrs["flag_values"] = np.array([0, 1], dtype=np.uint8)
-            m.attrs["flag_meanings"] = "filled measured"
-            s = f.create_variable(
-                "fill_source", _SAMPLE_DIMS, "i8", data=table.fill_source, chunks=chunks[:-1], **comp
-            )
-            s.attrs["long_name"] = (
-                "C-order flat index over (kappa, phi_l, theta_l, phi_v, theta_v) of the "
-                "sample a filled value was copied from; -1 measured, -2 source unknown"
-            )
-            if table.std is not None:
-                d = f.create_variable(
-                    "reflectance_std", AXES, table.std.dtype, data=table.std, chunks=chunks, **comp
+            _set_attrs(ch, variable_attrs(CHANNEL, quantity))
+            for name, data in variables.items():
+                dims = DATA_VARIABLES[name]
+                data = np.asarray(data, dtype=_FILE_DTYPES.get(name))
+                var = f.create_variable(
+                    name, dims, _FILE_DTYPES.get(name, data.dtype), data=data, chunks=chunks[: len(dims)], **comp
                 )
-                d.attrs["units"] = var.attrs["units"]
-                d.attrs["long_name"] = "per-sample standard deviation of the reflectance"
+                _set_attrs(var, variable_attrs(name, quantity))
             f.attrs["format"] = FORMAT_NAME
             f.attrs["format_version"] = FORMAT_VERSION
             f.attrs["software"] = f"cdbrdf {__version__}"
-            f.attrs["Conventions"] = "CF-1.10"
-            for key, value in table.attrs.items():
+            f.attrs["Conventions"] = CONVENTIONS
+            for key, value in attrs.items():
                 if isinstance(value, (str, bool, int, float)) and key not in f.attrs:
                     f.attrs[key] = value
                 elif key not in f.attrs:
                     f.attrs[key] = _jsonable(key, value)
-            f.attrs["cdbrdf_attrs"] = attrs_json
-            f.attrs[_DIGEST_ATTR] = _digest(attrs_json, list(table.channels))
-    _LOG.debug("wrote %s (%s)", path, table)
+            f.attrs[ATTRS_JSON_ATTR] = attrs_json
+            f.attrs[DIGEST_ATTR] = _digest(attrs_json, parts.channels)
+    _LOG.debug("wrote %s (%s values)", path, "x".join(str(n) for n in shape))
 
 
-def _fail(path: Path, msg: str) -> FormatError:
-    return FormatError(f"{path}: {msg}")
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return f"{type(exc).__name__}: {text[:200]}" if text else type(exc).__name__
+def _set_attrs(var: Any, attrs: dict[str, Any]) -> None:
+    for key, value in attrs.items():
+        var.attrs[key] = value
 
 
 def _as_str(path: Path, what: str, v: Any) -> str:
@@ -222,9 +225,9 @@ def _as_str(path: Path, what: str, v: Any) -> str:
         try:
             v = bytes(v).decode("utf-8")
         except UnicodeDecodeError:
-            raise _fail(path, f"{what} is not valid UTF-8 text") from None
+            raise fail(path, f"{what} is not valid UTF-8 text") from None
     if not isinstance(v, str):
-        raise _fail(path, f"{what} is not a string (got {type(v).__name__})")
+        raise fail(path, f"{what} is not a string (got {type(v).__name__})")
     return v
 
 
@@ -232,14 +235,14 @@ def _attr(path: Path, attrs: Any, name: str) -> Any:
     try:
         return attrs[name]
     except UnicodeDecodeError:
-        raise _fail(path, f"global attribute {name!r} is not valid UTF-8 text") from None
+        raise fail(path, f"global attribute {name!r} is not valid UTF-8 text") from None
     except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:
-        raise _fail(path, f"global attribute {name!r} cannot be read ({_one_line(exc)}): the file is damaged") from None
+        raise fail(path, f"global attribute {name!r} cannot be read ({one_line(exc)}): the file is damaged") from None
 
 
 def _attr_str(path: Path, attrs: Any, name: str) -> str:
     if name not in attrs:
-        raise _fail(path, f"missing the global attribute {name!r}")
+        raise fail(path, f"missing the global attribute {name!r}")
     return _as_str(path, f"global attribute {name!r}", _attr(path, attrs, name))
 
 
@@ -253,163 +256,15 @@ def _dims_of(ds: Any) -> tuple[str, ...]:
     return tuple(names)
 
 
-def superblock_version(path: str | PathLike[str]) -> int | None:
-    """The HDF5 superblock version of ``path``, or None when it is not HDF5.
-
-    The superblock is searched where HDF5 searches it: at byte 0, 512, 1024,
-    2048... Versions 2 and 3 carry checksums of all file metadata; 0 and 1
-    (HDF5 < 1.8 layout, the default of most writers) do not.
-    """
-    with open(path, "rb") as fh:
-        size = fh.seek(0, 2)
-        offset = 0
-        while offset + 9 <= size:
-            fh.seek(offset)
-            head = fh.read(9)
-            if head[:8] == _HDF5_SIGNATURE:
-                return head[8]
-            offset = 512 if offset == 0 else offset * 2
-    return None
-
-
-class _Unsure(Exception):
-    """The in-process reader met something only the time-limited child may read."""
-
-
-@dataclass
-class _Heaps:
-    """Result of :func:`_check_global_heaps`."""
-
-    #: "ok", "unsure" or a description of the damage
-    status: str
-    #: heap address -> {object index: object size}
-    objects: dict[int, dict[int, int]] = field(default_factory=dict)
-    #: size of file addresses (superblock)
-    n_off: int = 8
-
-
-def _check_global_heaps(path: Path) -> _Heaps:
-    """Whether every HDF5 global heap collection in the file parses to its end.
-
-    Global heaps (which hold variable-length strings and the dimension lists of
-    NetCDF-4 files) have no checksum even in the newest HDF5 format, and HDF5
-    loops forever on a collection whose object sizes do not advance (e.g. a
-    zeroed block). This walks every ``GCOL`` block as HDF5 does, in Python,
-    without trusting it.
-
-    Returns
-    -------
-    _Heaps
-        ``status`` ``"ok"`` (with every heap object's size); ``"unsure"``
-        when something may or may not be a damaged heap (or the superblock is
-        not v2/v3); otherwise a description of the damage, for the message.
-    """
-    with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as buf:
-        return _walk_global_heaps(buf)
-
-
-def _walk_global_heaps(buf: Any) -> _Heaps:
-    """:func:`_check_global_heaps` on the file's bytes (``bytes`` or ``mmap``)."""
-    sb = buf.find(_HDF5_SIGNATURE)
-    if sb < 0 or sb + 11 > len(buf) or buf[sb + 8] not in (2, 3):
-        return _Heaps("unsure")
-    n_off, n_len = buf[sb + 9], buf[sb + 10]  # sizes of addresses and lengths (v2/v3 superblock)
-    if n_len not in (2, 4, 8) or n_off not in (2, 4, 8):
-        return _Heaps("unsure")
-    heaps = _Heaps("ok", n_off=n_off)
-    obj_hdr = 8 + n_len
-    pos = buf.find(b"GCOL\x01")
-    while pos >= 0:
-        # HDF5 takes any "GCOL", version 1 as a heap; with the zero reserved
-        # bytes too it is certainly one (and not a chance match in the data)
-        certain = buf[pos + 5 : pos + 8] == b"\0\0\0"
-        bad = ""
-        size = int.from_bytes(buf[pos + 8 : pos + 8 + n_len], "little")
-        end = pos + size
-        if pos + 8 + n_len > len(buf) or end > len(buf):
-            bad = f"the global heap at byte {pos} runs past the end of the file"
-        elif size < 4096:
-            bad = f"the global heap at byte {pos} declares an impossible size {size}"
-        p = pos + 8 + n_len
-        objects: dict[int, int] = {}
-        while not bad and p < end:
-            if p + obj_hdr > end:
-                break  # a tail too small for an object header is free space
-            idx = int.from_bytes(buf[p : p + 2], "little")
-            osize = int.from_bytes(buf[p + 8 : p + 8 + n_len], "little")
-            need = osize if idx == 0 else obj_hdr + ((osize + 7) & ~7)
-            if need <= 0 or p + need > end:
-                bad = f"the global heap at byte {pos} has a damaged object at byte {p}"
-            elif idx:
-                objects[idx] = osize
-            p += need
-        if bad:
-            return _Heaps(bad if certain else "unsure")
-        heaps.objects[pos - sb] = objects  # heap addresses are relative to the superblock
-        pos = buf.find(b"GCOL\x01", pos + 1)
-    return heaps
-
-
-def _check_vlen_refs(path: Path, ds: Any, name: str, heaps: _Heaps) -> None:
-    """Check the global-heap references of a variable-length string dataset before HDF5 follows them.
-
-    Its raw data (length, heap address, object index per element) has no
-    checksum; a damaged length or address makes HDF5 allocate gigabytes or
-    read a heap that was never checked.
-    """
-    offset = ds.id.get_offset()
-    if offset is None or ds.id.get_storage_size() != ds.size * (8 + heaps.n_off):
-        raise _Unsure(name)  # not contiguous as save() writes it: let the child read it
-    with open(path, "rb") as fh:
-        fh.seek(offset)
-        raw = fh.read(ds.size * (8 + heaps.n_off))
-    step = 8 + heaps.n_off
-    if len(raw) != ds.size * step:
-        raise _fail(path, f"{name!r} has data stored beyond the end of the file: the file is truncated or damaged")
-    for i in range(ds.size):
-        e = raw[i * step : (i + 1) * step]
-        length = int.from_bytes(e[:4], "little")
-        addr = int.from_bytes(e[4 : 4 + heaps.n_off], "little")
-        idx = int.from_bytes(e[4 + heaps.n_off :], "little")
-        size = heaps.objects.get(addr, {}).get(idx)
-        if size is None or length > size:
-            raise _fail(path, f"{name!r} entry {i} points at no stored string: the file is damaged")
-
-
-def _check_storage(path: Path, ds: Any, name: str, file_size: int) -> None:
-    """Refuse a dataset whose stored pieces lie outside the file (before reading them)."""
-    dsid = ds.id
-    if ds.chunks is not None:
-        expected = math.prod(-(-n // c) for n, c in zip(ds.shape, ds.chunks))
-        pieces: list[tuple[int, int]] = []
-        if hasattr(dsid, "chunk_iter"):
-            dsid.chunk_iter(lambda info: pieces.append((info.byte_offset, info.size)))
-        else:  # pragma: no cover - old HDF5
-            n = dsid.get_num_chunks()
-            if n > expected:
-                raise _fail(path, f"{name!r} has {n} chunks stored, at most {expected} fit its shape")
-            for i in range(n):
-                info = dsid.get_chunk_info(i)
-                pieces.append((info.byte_offset, info.size))
-        if len(pieces) > expected:
-            raise _fail(path, f"{name!r} has {len(pieces)} chunks stored, at most {expected} fit its shape")
-    else:
-        offset = dsid.get_offset()
-        pieces = [] if offset is None else [(offset, dsid.get_storage_size())]
-    for offset, size in pieces:
-        if offset is None or offset < 0 or size < 0 or offset + size > file_size:
-            raise _fail(path, f"{name!r} has data stored beyond the end of the file: the file is truncated or damaged")
-
-
 def _read_ds(path: Path, ds: Any, name: str) -> np.ndarray:
     try:
         return np.asarray(ds[()])
     except UnicodeDecodeError:
-        raise _fail(path, f"{name!r} holds text that is not valid UTF-8") from None
+        raise fail(path, f"{name!r} holds text that is not valid UTF-8") from None
     except (OSError, RuntimeError, ValueError, TypeError) as exc:
         if "filter" in str(exc) and getattr(ds, "fletcher32", False):
-            raise _fail(path, f"checksum mismatch in {name!r}: the file is damaged") from None
-        raise _fail(path, f"{name!r} cannot be read ({_one_line(exc)}): the file is damaged") from None
+            raise fail(path, f"checksum mismatch in {name!r}: the file is damaged") from None
+        raise fail(path, f"{name!r} cannot be read ({one_line(exc)}): the file is damaged") from None
 
 
 def _dataset(path: Path, f: Any, name: str, *, required: bool) -> Any:
@@ -417,29 +272,29 @@ def _dataset(path: Path, f: Any, name: str, *, required: bool) -> Any:
 
     if name not in f:
         if required:
-            raise _fail(path, f"missing the variable {name!r}")
+            raise fail(path, f"missing the variable {name!r}")
         return None
     obj = f[name]
     if not isinstance(obj, h5py.Dataset):
-        raise _fail(path, f"{name!r} is not a variable (HDF5 dataset)")
+        raise fail(path, f"{name!r} is not a variable (HDF5 dataset)")
     return obj
 
 
 def _expect(path: Path, ds: Any, name: str, shape: tuple[int, ...], dims: tuple[str, ...], kinds: str) -> None:
     """Check a variable's declared shape, dimension names and dtype kind (nothing is read)."""
     if ds.shape != shape:
-        raise _fail(path, f"{name!r} has shape {ds.shape}, but the axes give {shape}")
+        raise fail(path, f"{name!r} has shape {ds.shape}, but the axes give {shape}")
     got = _dims_of(ds)
     if got != dims:
-        raise _fail(path, f"{name!r} has dimensions {got}, expected {dims}")
+        raise fail(path, f"{name!r} has dimensions {got}, expected {dims}")
     if ds.dtype.kind not in kinds or ds.dtype.itemsize > 8:
-        raise _fail(path, f"{name!r} has dtype {ds.dtype}, which the format does not allow")
+        raise fail(path, f"{name!r} has dtype {ds.dtype}, which the format does not allow")
 
 
 def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
     """The global attributes that mirror ``cdbrdf_attrs`` entries must agree with them."""
     for key, value in attrs.items():
-        if key in _OWN_ATTRS or key not in f.attrs:
+        if key in WRITER_ATTRS or key not in f.attrs:
             continue
         stored = _attr(path, f.attrs, key)
         if isinstance(value, str):
@@ -452,11 +307,11 @@ def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
         else:
             ok = _as_str(path, f"global attribute {key!r}", stored) == _jsonable(key, value)
         if not ok:
-            raise _fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
+            raise fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
 
 
-def _read_parts(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
-    """Read and check everything of a CDBRDF file; the arguments of :class:`CDBRDF`.
+def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
+    """Read and check everything of a CDBRDF file, as the parts of a table.
 
     ``heaps``: the checked global heaps, when reading in this process.
     """
@@ -465,126 +320,118 @@ def _read_parts(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
-        raise _fail(path, f"cannot be opened as HDF5 ({_one_line(exc)})") from None
+        raise fail(path, f"cannot be opened as HDF5 ({one_line(exc)})") from None
     with f:
         file_size = path.stat().st_size
         fmt = _attr_str(path, f.attrs, "format") if "format" in f.attrs else None
         if fmt != FORMAT_NAME:
-            raise _fail(
+            raise fail(
                 path, f"not a CDBRDF file (global attribute 'format' is {fmt!r}, expected {FORMAT_NAME!r})"
             )
         version = _attr_str(path, f.attrs, "format_version")
         m = re.fullmatch(r"(\d{1,6})\.(\d{1,6})", version)
         if m is None:
-            raise _fail(path, f"unreadable format_version {version!r} (expected MAJOR.MINOR)")
+            raise fail(path, f"unreadable format_version {version!r} (expected MAJOR.MINOR)")
         major = int(m[1])
         own_major = int(FORMAT_VERSION.split(".")[0])
         if major > own_major:
-            raise _fail(
+            raise fail(
                 path, f"format version {version} is newer than this cdbrdf reads ({own_major}.x); upgrade cdbrdf"
             )
         if major < 1:
-            raise _fail(path, f"unsupported format version {version}")
-        gattrs = {name: _attr_str(path, f.attrs, name) for name in _REQUIRED_ATTRS}
+            raise fail(path, f"unsupported format version {version}")
+        gattrs = {name: _attr_str(path, f.attrs, name) for name in REQUIRED_ATTRS}
 
         # -- declared shapes, dims and dtypes of every variable, before reading any data
         axis_ds = {name: _dataset(path, f, name, required=True) for name in AXES}
         for name, ds in axis_ds.items():
             if ds.ndim != 1:
-                raise _fail(path, f"axis {name!r} is not 1-D (shape {ds.shape})")
+                raise fail(path, f"axis {name!r} is not 1-D (shape {ds.shape})")
             limits.check("table_samples", ds.size, what=f"{path}: axis {name!r}")
-            if name != "channel" and (ds.dtype.kind != "f" or ds.dtype.itemsize not in (4, 8)):
-                raise _fail(path, f"axis {name!r} has dtype {ds.dtype}, expected float64")
-        if h5py.check_string_dtype(axis_ds["channel"].dtype) is None:
-            raise _fail(path, f"'channel' has dtype {axis_ds['channel'].dtype}, expected strings")
-        grid_shape = tuple(axis_ds[n].size for n in _SAMPLE_DIMS)
-        shape = (*grid_shape, axis_ds["channel"].size)
-        limits.check("table_samples", math.prod(shape), what=f"{path}: 'reflectance' of shape {shape}")
-        refl = _dataset(path, f, "reflectance", required=True)
-        if refl.ndim != 6:
-            raise _fail(path, f"'reflectance' has {refl.ndim} dimensions, expected 6 {AXES}")
-        _expect(path, refl, "reflectance", shape, AXES, "f")
-        measured = _dataset(path, f, "measured", required=True)
-        _expect(path, measured, "measured", grid_shape, _SAMPLE_DIMS, "uib")
-        fill_ds = _dataset(path, f, "fill_source", required=False)
-        if fill_ds is not None:
-            _expect(path, fill_ds, "fill_source", grid_shape, _SAMPLE_DIMS, "iu")
-        std_ds = _dataset(path, f, "reflectance_std", required=False)
-        if std_ds is not None:
-            _expect(path, std_ds, "reflectance_std", shape, AXES, "f")
-        datasets = {**axis_ds, "reflectance": refl, "measured": measured}
-        if fill_ds is not None:
-            datasets["fill_source"] = fill_ds
-        if std_ds is not None:
-            datasets["reflectance_std"] = std_ds
+            if name != CHANNEL and (ds.dtype.kind != "f" or ds.dtype.itemsize not in (4, 8)):
+                raise fail(path, f"axis {name!r} has dtype {ds.dtype}, expected float64")
+        if h5py.check_string_dtype(axis_ds[CHANNEL].dtype) is None:
+            raise fail(path, f"{CHANNEL!r} has dtype {axis_ds[CHANNEL].dtype}, expected strings")
+        grid_shape = tuple(axis_ds[n].size for n in SAMPLE_AXES)
+        shape = (*grid_shape, axis_ds[CHANNEL].size)
+        limits.check("table_samples", math.prod(shape), what=f"{path}: {REFLECTANCE!r} of shape {shape}")
+        shapes = {AXES: shape, SAMPLE_AXES: grid_shape}
+        datasets = dict(axis_ds)
+        for name, dims in DATA_VARIABLES.items():
+            ds = _dataset(path, f, name, required=name in REQUIRED_VARIABLES)
+            if ds is None:
+                continue
+            if name == REFLECTANCE and ds.ndim != len(AXES):
+                raise fail(path, f"{name!r} has {ds.ndim} dimensions, expected {len(AXES)} {AXES}")
+            _expect(path, ds, name, shapes[dims], dims, _FILE_KINDS[name])
+            datasets[name] = ds
         for name, ds in datasets.items():
-            _check_storage(path, ds, name, file_size)
+            check_storage(path, ds, name, file_size)
 
         # -- metadata
-        axes = {name: _read_ds(path, axis_ds[name], name).astype(np.float64) for name in _SAMPLE_DIMS}
+        axes = {name: _read_ds(path, axis_ds[name], name).astype(np.float64) for name in SAMPLE_AXES}
         if heaps is not None:
-            _check_vlen_refs(path, axis_ds["channel"], "channel", heaps)
-        channels = [_as_str(path, "a 'channel' name", c) for c in _read_ds(path, axis_ds["channel"], "channel")]
-        text = gattrs["cdbrdf_attrs"]
-        limits.check("json_bytes", len(text.encode("utf-8")), what=f"{path}: attribute 'cdbrdf_attrs'")
-        if _DIGEST_ATTR in f.attrs:
-            stored = np.asarray(_attr(path, f.attrs, _DIGEST_ATTR))
+            check_vlen_refs(path, axis_ds[CHANNEL], CHANNEL, heaps)
+        channels = [_as_str(path, f"a {CHANNEL!r} name", c) for c in _read_ds(path, axis_ds[CHANNEL], CHANNEL)]
+        text = gattrs[ATTRS_JSON_ATTR]
+        limits.check("json_bytes", len(text.encode("utf-8")), what=f"{path}: attribute {ATTRS_JSON_ATTR!r}")
+        if DIGEST_ATTR in f.attrs:
+            stored = np.asarray(_attr(path, f.attrs, DIGEST_ATTR))
             if stored.dtype != np.uint8 or stored.shape != (32,):
-                raise _fail(path, f"global attribute {_DIGEST_ATTR!r} is not 32 bytes")
+                raise fail(path, f"global attribute {DIGEST_ATTR!r} is not 32 bytes")
             if not np.array_equal(stored, _digest(text, channels)):
-                raise _fail(path, "checksum mismatch in 'cdbrdf_attrs' or 'channel': the file is damaged")
+                raise fail(path, f"checksum mismatch in {ATTRS_JSON_ATTR!r} or {CHANNEL!r}: the file is damaged")
         try:
             attrs = json.loads(text)
         except (ValueError, RecursionError) as exc:
-            raise _fail(path, f"attribute 'cdbrdf_attrs' is not valid JSON ({_one_line(exc)})") from None
+            raise fail(path, f"attribute {ATTRS_JSON_ATTR!r} is not valid JSON ({one_line(exc)})") from None
         if not isinstance(attrs, dict):
-            raise _fail(path, "attribute 'cdbrdf_attrs' is not a JSON object")
-        for key in ("quantity", "colour_space"):
+            raise fail(path, f"attribute {ATTRS_JSON_ATTR!r} is not a JSON object")
+        for key in MIRRORED_ATTRS:
             if attrs.get(key) != gattrs[key]:
-                raise _fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
+                raise fail(path, f"global attribute {key!r} disagrees with its entry in {ATTRS_JSON_ATTR!r}")
         _check_mirrors(path, f, attrs)
-        n = len(channels)
-        if "channels" in attrs:
-            if attrs["channels"] != channels:
-                raise _fail(
-                    path,
-                    f"'cdbrdf_attrs' names the channels {attrs['channels']!r} but the 'channel' variable "
-                    f"holds {channels!r}",
-                )
-        elif channels != (["R", "G", "B"] if n == 3 else [f"c{i}" for i in range(n)]):
-            attrs["channels"] = channels
+        if CHANNELS_ATTR in attrs and attrs[CHANNELS_ATTR] != channels:
+            raise fail(
+                path,
+                f"{ATTRS_JSON_ATTR!r} names the channels {attrs[CHANNELS_ATTR]!r} but the {CHANNEL!r} variable "
+                f"holds {channels!r}",
+            )
+        attrs = with_channel_names(attrs, channels)
 
         # -- data
-        values = _read_ds(path, refl, "reflectance")
+        values = _read_ds(path, datasets[REFLECTANCE], REFLECTANCE)
         if not np.all(np.isfinite(values)):
             bad = int(np.count_nonzero(~np.isfinite(values)))
-            raise _fail(path, f"'reflectance' holds {bad} NaN or infinite value(s)")
-        mvals = _read_ds(path, measured, "measured")
+            raise fail(path, f"{REFLECTANCE!r} holds {bad} NaN or infinite value(s)")
+        mvals = _read_ds(path, datasets[MEASURED], MEASURED)
         if not np.isin(mvals, (0, 1)).all():
-            raise _fail(path, "'measured' holds values other than 0 and 1")
+            raise fail(path, f"{MEASURED!r} holds values other than 0 and 1")
         fill = None
-        if fill_ds is not None:
-            fill = _read_ds(path, fill_ds, "fill_source")
+        if FILL_SOURCE in datasets:
+            fill = _read_ds(path, datasets[FILL_SOURCE], FILL_SOURCE)
             if fill.size and (fill.min() < -2 or fill.max() >= fill.size):
-                raise _fail(path, f"'fill_source' holds indices outside [-2, {fill.size})")
+                raise fail(path, f"{FILL_SOURCE!r} holds indices outside [-2, {fill.size})")
             fill = fill.astype(np.int64)
-        std = None if std_ds is None else _read_ds(path, std_ds, "reflectance_std")
-    return dict(values=values, **axes, measured=mvals.astype(bool), fill_source=fill, std=std, attrs=attrs)
+        std = None
+        if REFLECTANCE_STD in datasets:
+            std = _read_ds(path, datasets[REFLECTANCE_STD], REFLECTANCE_STD)
+    return TableParts(values=values, axes=axes, measured=mvals.astype(bool), fill_source=fill, std=std, attrs=attrs)
 
 
-def _read_guarded(path: Path, heaps: _Heaps | None = None) -> dict[str, Any]:
+def _read_guarded(path: Path, heaps: Heaps | None = None) -> TableParts:
     """:func:`_read_parts`, with every unexpected exception turned into FormatError."""
     try:
         return _read_parts(path, heaps)
-    except (FormatError, LimitError, _Unsure):
+    except (FormatError, LimitError, UnsureError):
         raise
     except MemoryError:
-        raise _fail(path, "not enough memory to read it") from None
+        raise fail(path, "not enough memory to read it") from None
     except (OSError, RuntimeError, KeyError, ValueError, TypeError, AttributeError, IndexError, RecursionError,
             OverflowError, UnicodeError) as exc:
         if "checksum" in str(exc):
-            raise _fail(path, "metadata checksum mismatch: the file is damaged") from None
-        raise _fail(path, f"damaged or not a valid CDBRDF file ({_one_line(exc)})") from None
+            raise fail(path, "metadata checksum mismatch: the file is damaged") from None
+        raise fail(path, f"damaged or not a valid CDBRDF file ({one_line(exc)})") from None
 
 
 _CHILD = """\
@@ -601,7 +448,7 @@ sys.stdout.buffer.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))
 """
 
 
-def _read_in_child(path: Path) -> dict[str, Any]:
+def _read_in_child(path: Path) -> TableParts:
     """:func:`_read_guarded` in a child process killed after a time limit.
 
     For files without metadata checksums, where a damaged structure can make
@@ -620,7 +467,7 @@ def _read_in_child(path: Path) -> dict[str, Any]:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.communicate()
-            raise _fail(
+            raise fail(
                 path, f"reading it took longer than {timeout:.0f} s and was stopped: its HDF5 structure is damaged"
             ) from None
         except BaseException:  # Ctrl-C: stop the child too
@@ -628,20 +475,24 @@ def _read_in_child(path: Path) -> dict[str, Any]:
             raise
     if proc.returncode != 0:
         last = err.decode("utf-8", "replace").strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
-        raise _fail(path, f"the reader stopped on it ({last[0][:200]}): the file is damaged")
+        raise fail(path, f"the reader stopped on it ({last[0][:200]}): the file is damaged")
     kind, payload = pickle.loads(out)
-    if kind == "ok":
+    if kind == "ok" and isinstance(payload, TableParts):
         return payload
     raise (LimitError if kind == "LimitError" else FormatError)(payload)
 
 
-def load(path: str | PathLike[str]) -> CDBRDF:
-    """Read a CDBRDF file written by :func:`save` (any 1.x version).
+def read(path: str | PathLike[str]) -> TableParts:
+    """Read and check a CDBRDF file written by :func:`write` (any 1.x version), as parts.
+
+    :func:`cdbrdf.load` (which builds the table from the parts) is the usual
+    way to call it.
 
     Files with HDF5 metadata checksums (superblock v2/v3, as written by format
     1.1) whose global heaps (unchecksummed) parse are read in this process.
-    Others (format 1.0, other writers, damaged heaps) are read in a child process that is stopped after :data:`LEGACY_READ_TIMEOUT_S`
-    seconds (plus one per 20 MB), because damaged unchecksummed metadata can
+    Others (format 1.0, other writers, damaged heaps) are read in a child
+    process that is stopped after :data:`LEGACY_READ_TIMEOUT_S` seconds (plus
+    one per 20 MB), because damaged unchecksummed metadata can
     make the HDF5 library loop forever; re-saving such a file makes it fast.
 
     Parameters
@@ -651,8 +502,10 @@ def load(path: str | PathLike[str]) -> CDBRDF:
 
     Returns
     -------
-    CDBRDF
-        The table, equal to the one that was saved.
+    TableParts
+        The arrays and attributes of the table that was saved; the sample
+        axes and the relations between mask and fill sources are checked
+        when the table is built from them (:class:`cdbrdf.CDBRDF`).
 
     Raises
     ------
@@ -661,9 +514,10 @@ def load(path: str | PathLike[str]) -> CDBRDF:
     FormatError
         For any problem with an existing file: not HDF5, not a CDBRDF file, a
         newer major version, missing variables or attributes, inconsistent
-        shapes, attributes or dtypes, non-monotonic axes, non-finite values,
+        shapes, attributes or dtypes, non-finite values,
         checksum mismatches, damaged HDF5 structures, unreadable permissions.
-        The message starts with the file's path.
+        The message starts with the file's path. (:func:`cdbrdf.load` adds
+        non-monotonic or out-of-range axes and inconsistent fill sources.)
     LimitError
         When the file declares more samples than the ``table_samples`` limit.
     """
@@ -671,30 +525,27 @@ def load(path: str | PathLike[str]) -> CDBRDF:
     if not p.exists():
         raise FileNotFoundError(f"{p}: no such file")
     if p.is_dir():
-        raise _fail(p, "is a folder, not a CDBRDF file")
+        raise fail(p, "is a folder, not a CDBRDF file")
     try:
         version = superblock_version(p)
     except OSError as exc:
-        raise _fail(p, f"cannot be read ({exc.strerror or _one_line(exc)})") from None
+        raise fail(p, f"cannot be read ({exc.strerror or one_line(exc)})") from None
     if version is None:
-        raise _fail(p, "not an HDF5 file (a CDBRDF file is HDF5 / NetCDF-4)")
-    heaps = _Heaps("unsure")
+        raise fail(p, "not an HDF5 file (a CDBRDF file is HDF5 / NetCDF-4)")
+    heaps = Heaps("unsure")
     if version >= 2:
         try:
-            heaps = _check_global_heaps(p)
+            heaps = check_global_heaps(p)
         except OSError as exc:
-            raise _fail(p, f"cannot be read ({exc.strerror or _one_line(exc)})") from None
+            raise fail(p, f"cannot be read ({exc.strerror or one_line(exc)})") from None
         if heaps.status not in ("ok", "unsure"):
-            raise _fail(p, f"{heaps.status}: the file is truncated or damaged")
+            raise fail(p, f"{heaps.status}: the file is truncated or damaged")
     parts = None
     if heaps.status == "ok":
         try:
             parts = _read_guarded(p, heaps)
-        except _Unsure:
+        except UnsureError:
             pass
     if parts is None:
         parts = _read_in_child(p)
-    try:
-        return CDBRDF(**parts)
-    except TableError as exc:
-        raise _fail(p, str(exc)) from None
+    return parts

@@ -61,7 +61,7 @@ def load(name: str) -> CDBRDF:
     FileNotFoundError
         When the package was installed without its data files.
     """
-    from .io import load as _load
+    from .table import load as _load
 
     p = path(name)
     if not p.is_file():

@@ -38,17 +38,35 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from os import PathLike
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import io as _io
 from . import limits
-from .errors import TableError
+from .errors import FormatError, TableError
+from .schema import (
+    AXES,
+    CHANNEL,
+    DATA_VARIABLES,
+    FILL_SOURCE,
+    MEASURED,
+    QUANTITIES,
+    REFLECTANCE,
+    REFLECTANCE_STD,
+    SAMPLE_AXES,
+    TableParts,
+    channel_names,
+    variable_attrs,
+    with_channel_names,
+)
 
 __all__ = [
     "Grid",
     "CDBRDF",
+    "load",
     "AXES",
     "QUANTITIES",
     "PAPER_KAPPA",
@@ -57,12 +75,6 @@ __all__ = [
     "MAX_ABS_KAPPA",
     "MIN_AXIS_STEP",
 ]
-
-#: Axis names of :attr:`CDBRDF.values`, in storage order.
-AXES: tuple[str, ...] = ("kappa", "phi_l", "theta_l", "phi_v", "theta_v", "channel")
-
-#: Valid values of ``attrs["quantity"]``.
-QUANTITIES: tuple[str, ...] = ("brdf", "relative")
 
 #: The paper's curvatures, mm^-1.
 PAPER_KAPPA = np.array([-0.22, -0.13, 0.0, 0.13, 0.22])
@@ -499,13 +511,8 @@ class CDBRDF:
 
     @property
     def channels(self) -> list[str]:
-        """Channel names (``attrs['channels']`` or R, G, B)."""
-        names = self._attrs.get("channels")
-        if names is not None and len(names) == self.n_channels:
-            return [str(n) for n in names]
-        if self.n_channels == 3:
-            return ["R", "G", "B"]
-        return [f"c{i}" for i in range(self.n_channels)]
+        """Channel names (``attrs['channels']`` or :func:`cdbrdf.schema.default_channels`: R, G, B)."""
+        return channel_names(self._attrs, self.n_channels)
 
     @property
     def quantity(self) -> str:
@@ -597,10 +604,8 @@ class CDBRDF:
         )
 
     def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
-        """Write the table to an HDF5 file (atomically); see ``docs/format.md``."""
-        from .io import save
-
-        save(self, path, compression=compression)
+        """Write the table to an HDF5 file (atomically); see ``docs/format.md`` and :func:`cdbrdf.io.write`."""
+        _io.write(TableParts.of(self), path, compression=compression)
 
     def fig7(self) -> NDArray[np.floating]:
         """The values in the paper's Fig. 7 layout.
@@ -615,56 +620,48 @@ class CDBRDF:
         k, pl, tl, pv, tv, c = self.shape
         return self._values.reshape(k, pl * tl, pv * tv, c)
 
-    def to_xarray(self):
+    def to_xarray(self) -> Any:
         """The table as an :class:`xarray.Dataset` with named dimensions.
 
-        Variables ``reflectance`` (kappa, phi_l, theta_l, phi_v, theta_v,
-        channel), ``measured``, ``fill_source`` and, when present,
-        ``reflectance_std``; coordinates with ``units``; ``attrs`` copied
-        (non-scalar values as they are). Needs xarray.
+        The layout of the file (:mod:`cdbrdf.schema`): variables
+        ``reflectance`` (kappa, phi_l, theta_l, phi_v, theta_v, channel),
+        ``measured``, ``fill_source`` and, when present, ``reflectance_std``;
+        coordinates; ``units``, ``long_name`` and flag attributes as in the
+        file; ``attrs`` copied (non-scalar values as they are). Needs xarray.
         """
         import xarray as xr
 
-        coords = {name: (name, axis, {"units": "1/mm" if name == "kappa" else "degree"})
-                  for name, axis in self._grid.axes().items()}
-        coords["channel"] = ("channel", np.array(self.channels))
-        data = {
-            "reflectance": (AXES, self._values, {"units": "1/sr" if self.quantity == "brdf" else "1"}),
-            "measured": (AXES[:-1], self._measured),
-            "fill_source": (AXES[:-1], self._fill_source),
-        }
-        if self._std is not None:
-            data["reflectance_std"] = (AXES, self._std)
+        parts = TableParts.of(self)
+        q = parts.quantity
+        coords = {name: (name, axis, variable_attrs(name, q)) for name, axis in parts.axes.items()}
+        coords[CHANNEL] = (CHANNEL, np.array(parts.channels), variable_attrs(CHANNEL, q))
+        data = {name: (DATA_VARIABLES[name], a, variable_attrs(name, q)) for name, a in parts.variables().items()}
         return xr.Dataset(data, coords=coords, attrs=copy.deepcopy(self._attrs))
 
     @classmethod
-    def from_xarray(cls, ds) -> "CDBRDF":
+    def from_xarray(cls, ds: Any) -> "CDBRDF":
         """A table from a :class:`xarray.Dataset` laid out as :meth:`to_xarray` makes.
 
         Dimensions are transposed into the table's order when needed; values
-        are validated as by the constructor.
+        are validated as by the constructor. Channel names that are not the
+        defaults become ``attrs["channels"]`` (unless the attrs name them).
         """
-        for name in ("reflectance",) + AXES[:-1]:
+        for name in (REFLECTANCE, *SAMPLE_AXES):
             if name not in ds.variables:
                 raise TableError(f"ds: the dataset has no variable {name!r}")
-        refl = ds["reflectance"].transpose(*AXES)
-        measured = ds["measured"].transpose(*AXES[:-1]).values if "measured" in ds else None
-        fill = ds["fill_source"].transpose(*AXES[:-1]).values if "fill_source" in ds else None
-        std = ds["reflectance_std"].transpose(*AXES).values if "reflectance_std" in ds else None
+        arrays = {name: ds[name].transpose(*dims).values for name, dims in DATA_VARIABLES.items() if name in ds}
         attrs = dict(ds.attrs)
-        if "channel" in ds.coords:
-            names = [str(c) for c in ds["channel"].values]
-            default = ["R", "G", "B"] if len(names) == 3 else [f"c{i}" for i in range(len(names))]
-            if names != default:
-                attrs.setdefault("channels", names)
-        return cls(
-            refl.values,
-            **{name: ds[name].values for name in AXES[:-1]},
-            measured=measured,
-            fill_source=fill,
-            std=std,
+        if CHANNEL in ds.coords:
+            attrs = with_channel_names(attrs, [str(c) for c in ds[CHANNEL].values])
+        parts = TableParts(
+            values=arrays[REFLECTANCE],
+            axes={name: ds[name].values for name in SAMPLE_AXES},
+            measured=arrays.get(MEASURED),
+            fill_source=arrays.get(FILL_SOURCE),
+            std=arrays.get(REFLECTANCE_STD),
             attrs=attrs,
         )
+        return cls(parts.values, **parts.table_kwargs())
 
     def with_attrs(self, **attrs: Any) -> "CDBRDF":
         """A copy with ``attrs`` updated."""
@@ -707,3 +704,41 @@ class CDBRDF:
             f"CDBRDF(material={self._attrs.get('material', '?')!r}, quantity={self.quantity!r}, "
             f"shape={self.shape}, measured={meas:.1f}%, {self._grid!r})"
         )
+
+
+def load(path: str | PathLike[str]) -> CDBRDF:
+    """Read a CDBRDF file written by :meth:`CDBRDF.save` (any 1.x version).
+
+    Exported as ``cdbrdf.load``. The file is read and checked by
+    :func:`cdbrdf.io.read` (files without HDF5 metadata checksums in a child
+    process stopped after :data:`cdbrdf.io.LEGACY_READ_TIMEOUT_S` seconds plus
+    one per 20 MB; re-saving such a file makes it fast), then the table is built.
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    CDBRDF
+        The table, equal to the one that was saved.
+
+    Raises
+    ------
+    FileNotFoundError
+        When ``path`` does not exist.
+    FormatError
+        For any problem with an existing file: not HDF5, not a CDBRDF file, a
+        newer major version, missing variables or attributes, inconsistent
+        shapes, attributes or dtypes, non-monotonic axes, non-finite values,
+        checksum mismatches, damaged HDF5 structures, unreadable permissions.
+        The message starts with the file's path.
+    LimitError
+        When the file declares more samples than the ``table_samples`` limit.
+    """
+    parts = _io.read(path)
+    try:
+        return CDBRDF(parts.values, **parts.table_kwargs())
+    except TableError as exc:
+        raise FormatError(f"{Path(path)}: {exc}") from None

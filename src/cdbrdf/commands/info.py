@@ -55,7 +55,7 @@ def describe(table) -> dict:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..io import load
+    from ..table import load
 
     table = load(args.file)
     info = describe(table)

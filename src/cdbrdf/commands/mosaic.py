@@ -82,7 +82,8 @@ def _umask() -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..io import atomic_path, load
+    from ..io import atomic_path
+    from ..table import load
     from ..plot import plot_mosaic
 
     out, fmt = _output(args.output)

@@ -140,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from .. import render as cr
-    from ..io import load
+    from ..table import load
     from ..render.scenes import SineSheet, mesh_scene, prepare_mesh, render_scene, sine_scene
 
     out = Path(args.output)

@@ -38,7 +38,7 @@ def load_table(source: Any):
     if isinstance(source, CDBRDF):
         return source
     if isinstance(source, (str, os.PathLike)):
-        from ..io import load
+        from ..table import load
 
         return load(source)
     raise TypeError(

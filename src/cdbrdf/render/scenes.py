@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..curvature import sine_sheet_curvature, sine_sheet_height
+from ..frames import direction_from_angles
 from .meshio import Mesh, read_mesh, write_ply
 
 __all__ = [
@@ -165,15 +166,16 @@ def directional_light(theta_deg: float = 45.0, phi_deg: float = 0.0, irradiance:
         raise ValueError(f"light theta: elevation must lie in [0, 90) degrees, got {theta_deg}")
     if not (math.isfinite(irradiance) and irradiance > 0):
         raise ValueError(f"irradiance: must be positive, got {irradiance}")
-    t, p = math.radians(theta_deg), math.radians(phi_deg)
-    to_light = [math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t)]
+    # The world frame (z up) is the local frame of a horizontal surface: theta from +z, phi from +x towards +y.
+    to_light = direction_from_angles(theta_deg, phi_deg).tolist()
     return {"type": "directional", "direction": [-c for c in to_light], "irradiance": {"type": "rgb", "value": float(irradiance)}}
 
 
 def _camera(mi, lo, hi, width: int, height: int, *, elevation_deg: float, azimuth_deg: float, fov_deg: float, spp: int) -> dict:
     """Perspective camera looking at the box ``[lo, hi]`` from the given direction, framing it."""
-    e, a = math.radians(elevation_deg), math.radians(azimuth_deg)
-    d = np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
+    # Towards the camera in the world frame (z up); its elevation is above the horizontal plane,
+    # i.e. 90 degrees minus the elevation from +z that frames uses.
+    d = direction_from_angles(90.0 - elevation_deg, azimuth_deg)
     center = (np.asarray(lo) + np.asarray(hi)) / 2
     up0 = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.999 else np.array([0.0, 1.0, 0.0])
     right = np.cross(up0, d)

@@ -62,6 +62,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import QueryError
+from ..frames import direction_from_angles
 from ..table import CDBRDF, Grid
 from . import _trace
 from .fibre import FibreLobes
@@ -330,13 +331,6 @@ def _is_real(v: Any) -> bool:
     return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def _dirs(theta_deg: NDArray[np.float64], phi_deg: NDArray[np.float64]) -> NDArray[np.float64]:
-    t = np.radians(theta_deg)
-    p = np.radians(phi_deg)
-    s = np.sin(t)
-    return np.stack([s * np.cos(p), s * np.sin(p), np.cos(t)], axis=-1)
-
-
 class ClothModel:
     """Reflectance of a woven cloth as a function of directions and curvature.
 
@@ -516,8 +510,8 @@ class ClothModel:
             if np.any((a < 0) | (a > 90)):
                 raise QueryError(f"{name}: elevations must lie in [0, 90] degrees")
         # Azimuths reduced to [0, 360) first: equal directions give equal values.
-        v = _dirs(tv, np.mod(pv, 360.0))
-        l = _dirs(tl, np.mod(pl, 360.0))
+        v = direction_from_angles(tv, np.mod(pv, 360.0))
+        l = direction_from_angles(tl, np.mod(pl, 360.0))
         out = np.zeros((tv.size, 3))
         for k in np.unique(kk):
             sel = np.flatnonzero(kk == k)
@@ -550,8 +544,8 @@ class ClothModel:
             raise TypeError(f"grid: expected cdbrdf.Grid, got {type(g).__name__}")
         nk = g.kappa.size
         PL, TL, PV, TV = np.meshgrid(g.phi_l, g.theta_l, g.phi_v, g.theta_v, indexing="ij")
-        v = _dirs(TV.reshape(-1), PV.reshape(-1))
-        l = _dirs(TL.reshape(-1), PL.reshape(-1))
+        v = direction_from_angles(TV.reshape(-1), PV.reshape(-1))
+        l = direction_from_angles(TL.reshape(-1), PL.reshape(-1))
         values = np.empty(g.shape + (3,), dtype=np.float32)
         for i, k in enumerate(g.kappa):
             log.debug("%s: tabulating kappa = %g (%d samples)", self.params.name, k, v.shape[0])

@@ -153,7 +153,7 @@ def load_material(material: CDBRDF | str | PathLike[str]) -> CDBRDF:
         return material
     p = Path(material)
     if p.suffix.lower() in (".h5", ".hdf5", ".nc") or p.exists():
-        from ..io import load
+        from ..table import load
 
         return load(p)
     try:

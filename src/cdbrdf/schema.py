@@ -1,0 +1,337 @@
+"""The names of the CDBRDF data model, written once (see ``docs/format.md``).
+
+The HDF5 file (:mod:`cdbrdf.io`) and the :mod:`xarray` conversion
+(:meth:`cdbrdf.CDBRDF.to_xarray`, :meth:`cdbrdf.CDBRDF.from_xarray`) both lay
+a table out the same way, with the names, dimensions, units and long names
+defined here:
+
+- dimensions :data:`AXES` ``(kappa, phi_l, theta_l, phi_v, theta_v, channel)``,
+  the five sample axes :data:`SAMPLE_AXES` being coordinate variables of the
+  same names (units :data:`AXIS_UNITS`) and ``channel`` the channel names
+  (default :func:`default_channels`);
+- data variables :data:`DATA_VARIABLES` (``reflectance``, ``measured``,
+  ``fill_source``, ``reflectance_std``) with their dimensions;
+- their CF attributes (``units``, ``long_name``, flags) from
+  :func:`variable_attrs`, the units of the reflectance depending on the
+  table's quantity (:data:`QUANTITIES`, :func:`reflectance_units`);
+- the global attributes of a file (:data:`REQUIRED_ATTRS` and the others).
+
+:class:`TableParts` is the plain structure the file reader and writer
+exchange with :mod:`cdbrdf.table`, so that the file code never needs the
+table class.
+
+This module imports nothing of cdbrdf but :mod:`cdbrdf.errors`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from .errors import TableError
+
+__all__ = [
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "AXES",
+    "SAMPLE_AXES",
+    "CHANNEL",
+    "AXIS_UNITS",
+    "QUANTITIES",
+    "REFLECTANCE",
+    "MEASURED",
+    "FILL_SOURCE",
+    "REFLECTANCE_STD",
+    "DATA_VARIABLES",
+    "REQUIRED_VARIABLES",
+    "CHANNELS_ATTR",
+    "REQUIRED_ATTRS",
+    "MIRRORED_ATTRS",
+    "ATTRS_JSON_ATTR",
+    "DIGEST_ATTR",
+    "WRITER_ATTRS",
+    "CONVENTIONS",
+    "check_quantity",
+    "reflectance_units",
+    "variable_attrs",
+    "default_channels",
+    "is_default_channels",
+    "channel_names",
+    "check_channel_names",
+    "with_channel_names",
+    "TableParts",
+]
+
+#: Value of the global attribute ``format``.
+FORMAT_NAME = "cdbrdf"
+#: ``MAJOR.MINOR`` of the layout: readers accept any minor version of their major version.
+FORMAT_VERSION = "1.1"
+
+# -- dimensions -------------------------------------------------------------------------
+#: Dimension names of the reflectance, in storage order (``docs/conventions.md``).
+AXES: tuple[str, ...] = ("kappa", "phi_l", "theta_l", "phi_v", "theta_v", "channel")
+#: The five sample axes (every dimension but the channel), in storage order.
+SAMPLE_AXES: tuple[str, ...] = AXES[:-1]
+#: Name of the channel dimension and of its coordinate (the channel names).
+CHANNEL = AXES[-1]
+#: Units of the sample axes: curvature in mm^-1, angles in degrees.
+AXIS_UNITS: Mapping[str, str] = MappingProxyType({
+    "kappa": "1/mm",
+    "phi_l": "degree",
+    "theta_l": "degree",
+    "phi_v": "degree",
+    "theta_v": "degree",
+})
+
+# -- quantities -------------------------------------------------------------------------
+#: Valid values of the table attribute ``quantity``.
+QUANTITIES: tuple[str, ...] = ("brdf", "relative")
+_REFLECTANCE_UNITS: Mapping[str, str] = MappingProxyType({"brdf": "1/sr", "relative": "1"})
+_REFLECTANCE_LONG_NAMES: Mapping[str, str] = MappingProxyType({
+    "brdf": "BRDF, cosine of the light direction not included",
+    "relative": "relative reflectance (BRDF up to an unknown scale)",
+})
+
+# -- data variables ---------------------------------------------------------------------
+#: The samples, :data:`AXES`.
+REFLECTANCE = "reflectance"
+#: 1 (True) where a sample was measured, 0 where it was filled, :data:`SAMPLE_AXES`.
+MEASURED = "measured"
+#: Flat index of each filled sample's source; -1 measured, -2 unknown, :data:`SAMPLE_AXES`.
+FILL_SOURCE = "fill_source"
+#: Optional per-sample standard deviation, :data:`AXES`.
+REFLECTANCE_STD = "reflectance_std"
+#: Data variables and their dimensions, in the order they are written.
+DATA_VARIABLES: Mapping[str, tuple[str, ...]] = MappingProxyType({
+    REFLECTANCE: AXES,
+    MEASURED: SAMPLE_AXES,
+    FILL_SOURCE: SAMPLE_AXES,
+    REFLECTANCE_STD: AXES,
+})
+#: Data variables a file must hold (the others are optional on read).
+REQUIRED_VARIABLES: tuple[str, ...] = (REFLECTANCE, MEASURED)
+
+_LONG_NAMES: Mapping[str, str] = MappingProxyType({
+    "kappa": "surface curvature (> 0 convex, < 0 concave)",
+    "phi_l": "light azimuth from the reference tangent x towards y",
+    "theta_l": "light elevation from the surface normal",
+    "phi_v": "view azimuth from the reference tangent x towards y",
+    "theta_v": "view elevation from the surface normal",
+    CHANNEL: "colour channel",
+    FILL_SOURCE: (
+        "C-order flat index over (kappa, phi_l, theta_l, phi_v, theta_v) of the "
+        "sample a filled value was copied from; -1 measured, -2 source unknown"
+    ),
+    REFLECTANCE_STD: "per-sample standard deviation of the reflectance",
+})
+
+# -- attributes -------------------------------------------------------------------------
+#: Table attribute naming the channels when they are not :func:`default_channels`.
+CHANNELS_ATTR = "channels"
+#: Global attributes every file has, all strings (``docs/format.md``).
+REQUIRED_ATTRS: tuple[str, ...] = (
+    "format", "format_version", "quantity", "colour_space", "software", "cdbrdf_attrs", "Conventions",
+)
+#: Required global attributes that are table attributes too (and must equal them).
+MIRRORED_ATTRS: tuple[str, ...] = ("quantity", "colour_space")
+#: Global attribute holding every table attribute as a JSON object.
+ATTRS_JSON_ATTR = "cdbrdf_attrs"
+#: Global attribute with the SHA-256 of ``cdbrdf_attrs`` and the channel names (since 1.1).
+DIGEST_ATTR = "cdbrdf_sha256"
+#: Global attributes the writer sets itself, never mirrors of table attributes.
+WRITER_ATTRS: frozenset[str] = frozenset(
+    ("format", "format_version", "software", "Conventions", ATTRS_JSON_ATTR, DIGEST_ATTR)
+)
+#: Value of the global attribute ``Conventions``.
+CONVENTIONS = "CF-1.10"
+
+
+def check_quantity(quantity: Any) -> str:
+    """``quantity`` when it is one of :data:`QUANTITIES`.
+
+    Raises
+    ------
+    TableError
+        Otherwise; the message lists the valid quantities.
+    """
+    if not isinstance(quantity, str) or quantity not in QUANTITIES:
+        raise TableError(f"attrs['quantity']: {quantity!r} is not one of {', '.join(QUANTITIES)}")
+    return quantity
+
+
+def reflectance_units(quantity: str) -> str:
+    """Units of the reflectance (and its standard deviation) of a table of ``quantity``.
+
+    Parameters
+    ----------
+    quantity
+        One of :data:`QUANTITIES`.
+
+    Returns
+    -------
+    str
+        ``"1/sr"`` for ``"brdf"``, ``"1"`` (unknown scale) for ``"relative"``.
+
+    Raises
+    ------
+    TableError
+        For a quantity that is not one of :data:`QUANTITIES` (the message lists them).
+    """
+    return _REFLECTANCE_UNITS[check_quantity(quantity)]
+
+
+def variable_attrs(name: str, quantity: str) -> dict[str, Any]:
+    """The CF attributes of the variable ``name`` of a table of ``quantity``, in writing order.
+
+    Parameters
+    ----------
+    name
+        A dimension of :data:`AXES` or a variable of :data:`DATA_VARIABLES`.
+    quantity
+        The table's quantity, one of :data:`QUANTITIES`.
+
+    Returns
+    -------
+    dict
+        ``units`` and ``long_name`` (axes, reflectance, its standard
+        deviation), ``long_name`` (channel, fill_source), or ``flag_values``
+        (uint8 ``[0, 1]``) and ``flag_meanings`` (measured).
+
+    Raises
+    ------
+    TableError
+        For an unknown variable name or quantity (the message lists the valid ones).
+    """
+    units = reflectance_units(quantity)
+    if name in AXIS_UNITS:
+        return {"units": AXIS_UNITS[name], "long_name": _LONG_NAMES[name]}
+    if name == REFLECTANCE:
+        return {"units": units, "long_name": _REFLECTANCE_LONG_NAMES[quantity]}
+    if name == REFLECTANCE_STD:
+        return {"units": units, "long_name": _LONG_NAMES[name]}
+    if name == MEASURED:
+        return {"flag_values": np.array([0, 1], dtype=np.uint8), "flag_meanings": "filled measured"}
+    if name in (CHANNEL, FILL_SOURCE):
+        return {"long_name": _LONG_NAMES[name]}
+    raise TableError(f"variable {name!r}: not one of {', '.join((*AXES, *DATA_VARIABLES))}")
+
+
+# -- channels ---------------------------------------------------------------------------
+def default_channels(n: int) -> list[str]:
+    """Names of ``n`` channels when the table names none: R, G, B for 3, else c0, c1, ..."""
+    return ["R", "G", "B"] if n == 3 else [f"c{i}" for i in range(n)]
+
+
+def is_default_channels(names: list[str]) -> bool:
+    """Whether ``names`` are the :func:`default_channels` of their number."""
+    return list(names) == default_channels(len(names))
+
+
+def channel_names(attrs: Mapping[str, Any], n: int) -> list[str]:
+    """The names of a table's ``n`` channels: ``attrs["channels"]`` when it has ``n`` entries, else the defaults."""
+    names = attrs.get(CHANNELS_ATTR)
+    if names is not None and len(names) == n:
+        return [str(c) for c in names]
+    return default_channels(n)
+
+
+def check_channel_names(attrs: Mapping[str, Any], n: int) -> None:
+    """Refuse an ``attrs["channels"]`` entry that is not a list of ``n`` strings (writers store it).
+
+    Raises
+    ------
+    TableError
+        Naming the entry and the number of channels.
+    """
+    names = attrs.get(CHANNELS_ATTR)
+    if names is not None and (
+        not isinstance(names, (list, tuple)) or len(names) != n or not all(isinstance(c, str) for c in names)
+    ):
+        raise TableError(f"attrs[{CHANNELS_ATTR!r}]: {names!r} is not a list of {n} channel name(s)")
+
+
+def with_channel_names(attrs: Mapping[str, Any], names: list[str]) -> dict[str, Any]:
+    """``attrs`` with a ``channels`` entry for ``names`` when they are not the defaults.
+
+    An existing ``channels`` entry is kept as it is (readers that require it to
+    agree check that first).
+    """
+    out = dict(attrs)
+    if not is_default_channels(names):
+        out.setdefault(CHANNELS_ATTR, list(names))
+    return out
+
+
+# -- the parts of a table ---------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class TableParts:
+    """A table as plain arrays: what the file reader returns and the writer takes.
+
+    The arrays are not validated here: :class:`cdbrdf.CDBRDF` does that when a
+    table is built from them.
+
+    Parameters
+    ----------
+    values
+        Reflectance, dimensions :data:`AXES`.
+    axes
+        The sample axes by name (:data:`SAMPLE_AXES`): curvature in mm^-1,
+        angles in degrees.
+    measured
+        Measured mask, dimensions :data:`SAMPLE_AXES`; None: all measured.
+    fill_source
+        Fill sources, dimensions :data:`SAMPLE_AXES`; None: not recorded.
+    std
+        Per-sample standard deviation like ``values``, or None.
+    attrs
+        The table's attributes.
+    """
+
+    values: np.ndarray
+    axes: Mapping[str, np.ndarray]
+    measured: np.ndarray | None
+    fill_source: np.ndarray | None
+    std: np.ndarray | None
+    attrs: Mapping[str, Any]
+
+    @classmethod
+    def of(cls, table: Any) -> "TableParts":
+        """The parts of a table: anything with the attributes of :class:`cdbrdf.CDBRDF` (no copies)."""
+        return cls(
+            values=table.values,
+            axes={name: getattr(table, name) for name in SAMPLE_AXES},
+            measured=table.measured,
+            fill_source=table.fill_source,
+            std=table.std,
+            attrs=table.attrs,
+        )
+
+    @property
+    def quantity(self) -> str:
+        """``attrs["quantity"]``, checked by :func:`check_quantity`."""
+        return check_quantity(self.attrs.get("quantity"))
+
+    @property
+    def channels(self) -> list[str]:
+        """The channel names (:func:`channel_names`)."""
+        return channel_names(self.attrs, int(np.shape(self.values)[-1]))
+
+    def variables(self) -> dict[str, np.ndarray]:
+        """The data variables that are present, by name, in the order of :data:`DATA_VARIABLES`."""
+        arrays = {
+            REFLECTANCE: self.values,
+            MEASURED: self.measured,
+            FILL_SOURCE: self.fill_source,
+            REFLECTANCE_STD: self.std,
+        }
+        return {name: a for name, a in arrays.items() if a is not None}
+
+    def table_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :class:`cdbrdf.CDBRDF` besides ``values``."""
+        return dict(
+            **self.axes, measured=self.measured, fill_source=self.fill_source, std=self.std, attrs=self.attrs
+        )
