@@ -394,12 +394,30 @@ def test_render_command_png_exr_and_compare(variant, tmp_path):
 
 
 def test_encode_png_is_srgb_with_exposure():
-    from cdbrdf.commands.render import encode_png
+    from cdbrdf.colour import tonemap_srgb8 as encode_png
 
     x = np.array([0.0, 0.0031308, 0.18, 0.5, 1.0, 2.0])
     out = encode_png(x)
     assert out.tolist() == [0, 10, 118, 188, 255, 255]
     assert encode_png(np.array([0.25]), exposure_ev=1.0)[0] == encode_png(np.array([0.5]))[0]
+
+
+def test_write_render_png_and_exr(tmp_path):
+    from cdbrdf.colour import tonemap_srgb8
+    from cdbrdf.measure.images import read_image
+    from cdbrdf.render.output import write_render
+
+    img = np.linspace(0.0, 2.0, 4 * 6 * 3).reshape(4, 6, 3).astype(np.float32)
+    png, info = read_image(write_render(tmp_path / "a.png", img, exposure_ev=-1.0))
+    assert png.dtype == np.uint8 and info.channels == 3
+    np.testing.assert_array_equal(png, tonemap_srgb8(img, exposure_ev=-1.0))
+    exr, info = read_image(write_render(tmp_path / "a.exr", img, exposure_ev=5.0))
+    assert info.linear
+    np.testing.assert_array_equal(exr, img)  # linear, no exposure
+    assert np.allclose(np.array(mi.Bitmap(str(tmp_path / "a.exr"))), img)
+    with pytest.raises(ValueError, match=r"a\.jpg: unknown image type '\.jpg'; use \.png or \.exr"):
+        write_render(tmp_path / "a.jpg", img)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.exr", "a.png"]
 
 
 @needs_llvm

@@ -347,12 +347,3 @@ def test_cli_synth(tmp_path, capsys):
     with pytest.raises(SystemExit):
         cli_main(["synth", "velvet", "-o", str(tmp_path / "x.h5")])
 
-
-def test_figures_draw():
-    from cdbrdf.synth.figures import plot_kappa_curves, plot_weave
-
-    m = presets.model("shot", **FAST)
-    fig = plot_kappa_curves(m, kappa=[-0.2, 0.0, 0.2])
-    assert len(fig.axes) == 4 and len(fig.axes[0].lines) >= 4
-    fig = plot_weave(m)
-    assert len(fig.axes) >= 6

@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from .colour import auto_exposure_ev, luminance, srgb_to_linear, tonemap_srgb8
 from .table import CDBRDF, Grid, PAPER_KAPPA
 
 __all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth", "WORK_DIR"]
@@ -168,9 +169,9 @@ def compare_with_truth(measured: CDBRDF, truth: CDBRDF) -> tuple[dict[str, float
     g = measured.grid.mesh()
     t = truth.evaluate(g["theta_v"], g["phi_v"], g["theta_l"], g["phi_l"], g["kappa"])
     m = measured.values.astype(np.float64)
-    w = np.array([0.2126, 0.7152, 0.0722])[: m.shape[-1]] if m.shape[-1] == 3 else None
-    ym = m @ w if w is not None else m.mean(axis=-1)
-    yt = t @ w if w is not None else t.mean(axis=-1)
+    rgb = m.shape[-1] == 3
+    ym = luminance(m) if rgb else m.mean(axis=-1)
+    yt = luminance(t) if rgb else t.mean(axis=-1)
     scale = 1.0
     if measured.quantity == "relative":
         # unknown scale: compare after the least-squares scale over measured samples
@@ -207,13 +208,6 @@ def compare_with_truth(measured: CDBRDF, truth: CDBRDF) -> tuple[dict[str, float
 MAX_RENDER_EV = 2.0
 
 
-def _auto_ev(image: np.ndarray, target: float = 0.85, *, max_ev: float = 12.0) -> float:
-    """Exposure (stops) mapping the 99th percentile of luminance to ``target``."""
-    y = image[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
-    p = float(np.percentile(y, 99.0))
-    return float(np.clip(math.log2(target / p), -8.0, max_ev)) if p > 0 else 0.0
-
-
 def _stage(progress: Progress | None, label: str) -> Callable[[int, int], None] | None:
     if progress is None:
         return None
@@ -224,8 +218,8 @@ def _contact_sheet(capture_dir: Path, grid: Grid, path: Path, *, material: str) 
     """Photographs of every stand at one light, normal and grazing views."""
     from matplotlib.figure import Figure
 
-    from .measure.images import read_image, srgb_to_linear
-    from .plot import kappa_label, tonemap_srgb8
+    from .measure.images import read_image
+    from .plot import kappa_label
 
     tl = grid.theta_l[min(1, grid.theta_l.size - 1)]
     pl = grid.phi_l[0]
@@ -245,7 +239,7 @@ def _contact_sheet(capture_dir: Path, grid: Grid, path: Path, *, material: str) 
                 x = img.astype(np.float64) / float(np.iinfo(img.dtype).max) if img.dtype.kind == "u" else img
                 x = x[..., :3] if x.ndim == 3 else np.repeat(x[..., None], 3, axis=-1)
                 lin = srgb_to_linear(x)
-                ev = _auto_ev(lin, 0.7)
+                ev = auto_exposure_ev(lin, target=0.7)
                 ax.imshow(tonemap_srgb8(lin, exposure_ev=ev), interpolation="nearest")
                 h, w = x.shape[:2]
                 ax.add_patch(_rect(w // 2 - 3.5, h // 2 - 3.5, 7, 7))
@@ -327,7 +321,7 @@ def _material(
     images, secs = _render_pair(measured, lambda mode: sine_scene(measured, mode=mode, **common),
                                 config=config, progress=progress, label=f"{name}: sine sheet")
     res.seconds["render_sine"] = secs
-    ev = _auto_ev(images["cdbrdf"], max_ev=MAX_RENDER_EV)
+    ev = auto_exposure_ev(images["cdbrdf"], max_ev=MAX_RENDER_EV)
     res.render_exposure_ev = ev
     fig = plot_render_comparison(images["brdf"], images["cdbrdf"], exposure_ev=ev,
                                  title=f"{name}: sine sheet, light 45 deg from the bending direction")
@@ -339,7 +333,7 @@ def _material(
                                 config=config, progress=progress, label=f"{name}: draped cloth")
     res.seconds["render_drape"] = secs
     fig = plot_render_comparison(images["brdf"], images["cdbrdf"],
-                                 exposure_ev=_auto_ev(images["cdbrdf"], max_ev=MAX_RENDER_EV),
+                                 exposure_ev=auto_exposure_ev(images["cdbrdf"], max_ev=MAX_RENDER_EV),
                                  title=f"{name}: cloth draped over a dome (curvature from the mesh)")
     fig.savefig(folder / f"{name}-drape.png")
     res.figures["drape"] = f"{name}-drape.png"

@@ -2,9 +2,10 @@
 
 Each is a table of the corresponding :mod:`cdbrdf.synth.presets` preset
 tabulated on the paper's grid (:meth:`cdbrdf.Grid.paper`, float32), stored in
-``cdbrdf/data/<name>.h5``. They are regenerated, with the same values, by::
+``cdbrdf/data/<name>.h5``. They are regenerated, with the same values, by
+:func:`regenerate`, or from a source checkout by::
 
-    python -m cdbrdf.materials --regenerate
+    python scripts/regenerate_materials.py
 
 (values are identical on the same platform: every sample is computed
 independently, without reductions across threads).
@@ -19,15 +20,13 @@ Examples
 
 from __future__ import annotations
 
-import argparse
 import logging
-import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from .table import CDBRDF, Grid
 
-__all__ = ["names", "load", "path", "build", "regenerate", "main"]
+__all__ = ["names", "load", "path", "build", "regenerate"]
 
 _NAMES = ("denim", "shot")
 _DATA = Path(__file__).resolve().parent / "data"
@@ -66,8 +65,8 @@ def load(name: str) -> CDBRDF:
     p = path(name)
     if not p.is_file():
         raise FileNotFoundError(
-            f"{p.name}: the bundled table of {name!r} is missing; "
-            "run `python -m cdbrdf.materials --regenerate`"
+            f"{p.name}: the bundled table of {name!r} is missing; reinstall cdbrdf "
+            "or run `python scripts/regenerate_materials.py` in a source checkout"
         )
     return _load(p)
 
@@ -100,55 +99,26 @@ def regenerate(
         Destination folder; default the package's ``data`` folder.
     progress
         Called as ``progress(name, done, total)`` per curvature slice.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (before anything is computed or written).
     """
+    chosen = [_check(n) for n in (which or _NAMES)]
     out = Path(out_dir) if out_dir is not None else _DATA
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    for name in which or _NAMES:
+    for name in chosen:
         cb = None if progress is None else (lambda d, t, _n=name: progress(_n, d, t))
         table = build(name, progress=cb)
-        dest = out / f"{_check(name)}.h5"
+        dest = out / f"{name}.h5"
         table.save(dest)
         log.info("wrote %s", dest)
         written.append(dest)
     return written
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m cdbrdf.materials --regenerate [NAME ...] [--out DIR]``."""
-    parser = argparse.ArgumentParser(
-        prog="python -m cdbrdf.materials", description="List or regenerate the bundled materials."
-    )
-    parser.add_argument("--regenerate", action="store_true", help="recompute the bundled tables")
-    parser.add_argument("names", nargs="*", help=f"materials (default all: {', '.join(_NAMES)})")
-    parser.add_argument("--out", help="write into this folder instead of the package's data folder")
-    args = parser.parse_args(argv)
-    try:
-        for n in args.names:
-            _check(n)
-    except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    if not args.regenerate:
-        for n in names():
-            print(n, path(n), "present" if path(n).is_file() else "missing")
-        return 0
-    from tqdm import tqdm
-
-    bars: dict[str, tqdm] = {}
-
-    def cb(name: str, done: int, total: int) -> None:
-        bar = bars.get(name)
-        if bar is None:
-            bar = bars[name] = tqdm(total=total, desc=name, unit="kappa")
-        bar.update(done - bar.n)
-        if done == total:
-            bar.close()
-
-    for p in regenerate(args.names or None, out_dir=args.out, progress=cb):
-        print(p)
-    return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["register", "run", "plot_hidden", "check_grid_rows"]
+__all__ = ["register", "run", "check_grid_rows"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -70,32 +70,6 @@ def check_grid_rows(grid, *, white: bool = True, brackets: int = 1) -> None:  # 
           what=f"a grid of {k} x {pl * tl} x {pv * tv} (kappa x light x view) samples")
 
 
-def plot_hidden(grid, hidden, path) -> None:  # noqa: ANN001
-    """Save a picture of the hidden samples in the Fig. 7 layout (one panel per kappa)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
-
-    nk = grid.kappa.size
-    k, pl, tl, pv, tv = hidden.shape
-    mos = hidden.reshape(k, pl * tl, pv * tv)
-    fig, axes = plt.subplots(1, nk, figsize=(3.2 * nk, 3.6), squeeze=False)
-    cmap = ListedColormap(["#3b6ea8", "#f2f2f2", "#d98c3a", "#a03030"])
-    for i, ax in enumerate(axes[0]):
-        ax.imshow(mos[i], cmap=cmap, vmin=-0.5, vmax=3.5, interpolation="nearest")
-        ax.set_title(f"kappa = {grid.kappa[i]:g} 1/mm\n{int((mos[i] > 0).sum())} hidden", fontsize=9)
-        ax.set_xlabel("view (azimuth groups, elevation inside)", fontsize=7)
-        ax.set_ylabel("light", fontsize=7)
-        ax.set_xticks(np.arange(pv) * tv - 0.5, [f"{p:g}" for p in grid.phi_v], fontsize=5)
-        ax.set_yticks(np.arange(pl) * tl - 0.5, [f"{p:g}" for p in grid.phi_l], fontsize=5)
-    fig.suptitle("hidden by the stand: white = view, orange = light, red = both", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
 def run(args: argparse.Namespace) -> int:
     from ..measure.plan import (
         CAPTURE_FILE, DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM, Stand, hidden_mask, write_plan,
@@ -119,7 +93,9 @@ def run(args: argparse.Namespace) -> int:
                       pixel_mm=args.pixel_mm, patch_px=args.patch)
     hid = hidden_mask(grid, stands, pixel_mm=args.pixel_mm, patch_px=args.patch)
     if not args.no_picture:
-        plot_hidden(grid, hid, out / "plan.png")
+        from ..plot import plot_hidden, save_figure
+
+        save_figure(plot_hidden(grid, hid), out / "plan.png", dpi=120)
     if not args.quiet:
         n_s = sum(1 for r in rows if r["kind"] == "sample")
         n_w = len(rows) - n_s

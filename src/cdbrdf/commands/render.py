@@ -4,10 +4,11 @@ PNG output is tone-mapped by a fixed exposure and sRGB-encoded:
 ``png = srgb(clip(radiance * 2**exposure, 0, 1))`` with ``--exposure`` in EV
 (default 0). With the default light irradiance (pi) a white Lambertian surface
 facing the light has radiance 1, i.e. just white at 0 EV. EXR output is the
-linear radiance (no exposure applied). ``--compare`` renders the plain BRDF and
-the CDBRDF and writes one figure: BRDF | CDBRDF | difference (heat map of the
-per-pixel RGB distance in linear radiance, with a colour bar), as the paper's
-Figs. 9-10.
+linear radiance (no exposure applied); both are written by
+:func:`cdbrdf.render.output.write_render`. ``--compare`` renders the plain BRDF
+and the CDBRDF and writes one figure: BRDF | CDBRDF | difference (heat map of
+the per-pixel RGB distance in linear radiance, with a colour bar), as the
+paper's Figs. 9-10 (:func:`cdbrdf.plot.plot_render_comparison`).
 """
 
 from __future__ import annotations
@@ -17,9 +18,7 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
-__all__ = ["register", "run", "encode_png", "write_image", "compare_figure"]
+__all__ = ["register", "run"]
 
 
 #: Largest --spp; the passes of a render use seeds ``seed .. seed + spp // 16``.
@@ -83,47 +82,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def encode_png(image: np.ndarray, *, exposure_ev: float = 0.0) -> np.ndarray:
-    """Linear radiance -> 8-bit sRGB: ``srgb(clip(image * 2**exposure_ev, 0, 1))``."""
-    from ..plot import tonemap_srgb8
-
-    return tonemap_srgb8(image, exposure_ev=exposure_ev)
-
-
-def write_image(path: str | Path, image: np.ndarray, *, exposure_ev: float = 0.0) -> None:
-    """Write a linear image: ``.exr`` linear float32, ``.png`` tone-mapped sRGB (atomically)."""
-    from ..io import atomic_path
-
-    p = Path(path)
-    ext = p.suffix.lower()
-    if ext == ".exr":
-        import mitsuba as mi
-
-        with atomic_path(p, suffix=".exr") as tmp:
-            mi.Bitmap(np.ascontiguousarray(image, dtype=np.float32)).write(str(tmp))
-    elif ext == ".png":
-        import matplotlib.image as mpimg
-
-        with atomic_path(p, suffix=".png") as tmp:
-            mpimg.imsave(tmp, encode_png(image, exposure_ev=exposure_ev), format="png")
-    else:
-        raise ValueError(f"{p}: unknown image type {ext!r}; use .png or .exr")
-
-
-def compare_figure(brdf_img: np.ndarray, cdbrdf_img: np.ndarray, path: str | Path, *,
-                   exposure_ev: float = 0.0, title: str | None = None) -> None:
-    """Write the figure BRDF | CDBRDF | difference heat map (with a colour bar), atomically."""
-    from ..io import atomic_path
-    from ..plot import plot_render_comparison
-
-    p = Path(path)
-    if p.suffix.lower() not in (".png", ".pdf", ".svg"):
-        raise ValueError(f"{p}: --compare writes a figure; use .png, .pdf or .svg")
-    fig = plot_render_comparison(brdf_img, cdbrdf_img, exposure_ev=exposure_ev, title=title)
-    with atomic_path(p, suffix=p.suffix) as tmp:
-        fig.savefig(tmp, dpi=150, format=p.suffix.lower().lstrip("."))
-
-
 def _check_sheet(sheet) -> None:  # noqa: ANN001 - a SineSheet
     """Refuse a sine sheet whose tessellation would exceed the ``mesh_faces`` limit."""
     from ..limits import check
@@ -140,16 +98,18 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from .. import render as cr
+    from ..plot import FIGURE_FORMATS, plot_render_comparison, save_figure
+    from ..render.output import IMAGE_FORMATS, write_render
     from ..table import load
     from ..render.scenes import SineSheet, mesh_scene, prepare_mesh, render_scene, sine_scene
 
     out = Path(args.output)
     ext = out.suffix.lower()
     if args.compare:
-        if ext not in (".png", ".pdf", ".svg"):
-            raise ValueError(f"{out}: --compare writes a figure; use .png, .pdf or .svg")
-    elif ext not in (".png", ".exr"):
-        raise ValueError(f"{out}: unknown image type {ext!r}; use .png or .exr")
+        if ext not in FIGURE_FORMATS:
+            raise ValueError(f"{out}: --compare writes a figure; use {', '.join(FIGURE_FORMATS)}")
+    elif ext not in IMAGE_FORMATS:
+        raise ValueError(f"{out}: unknown image type {ext!r}; use {' or '.join(IMAGE_FORMATS)}")
     width, height = args.size
     theta, phi = args.light
     elev, azim = args.view
@@ -190,10 +150,11 @@ def run(args: argparse.Namespace) -> int:
             images[mode] = render_scene(scene, spp=args.spp, seed=args.seed, progress=progress)
     if args.compare:
         name = table.attrs.get("material") or Path(args.file).stem
-        compare_figure(images["brdf"], images["cdbrdf"], out, exposure_ev=args.exposure,
-                       title=f"{name}: light theta={theta:g}, phi={phi:g} deg")
+        fig = plot_render_comparison(images["brdf"], images["cdbrdf"], exposure_ev=args.exposure,
+                                     title=f"{name}: light theta={theta:g}, phi={phi:g} deg")
+        save_figure(fig, out, dpi=150)
     else:
-        write_image(out, images[modes[0]], exposure_ev=args.exposure)
+        write_render(out, images[modes[0]], exposure_ev=args.exposure)
     if not args.quiet:
         print(f"{out}: written ({width}x{height}, {args.spp} spp)", file=sys.stderr)
     return 0

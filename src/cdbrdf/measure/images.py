@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import limits
+from ..colour import linear_to_srgb, srgb_to_linear  # re-exported: the sRGB curves live in cdbrdf.colour
 from ..errors import CDBRDFError, ImageError
 from ..fsutil import atomic_path
 
@@ -117,21 +118,6 @@ def image_format(path: str | PathLike[str]) -> str:
         raise ImageError(
             f"{path}: unsupported image type {ext!r}; valid extensions: {', '.join(FORMATS)}"
         ) from None
-
-
-# --------------------------------------------------------------------------- sRGB
-def srgb_to_linear(x: ArrayLike) -> NDArray[np.float64]:
-    """Decode sRGB-encoded values in [0, 1] to linear (IEC 61966-2-1)."""
-    x = np.asarray(x, dtype=np.float64)
-    return np.where(x <= 0.04045, x / 12.92, ((np.maximum(x, 0.04045) + 0.055) / 1.055) ** 2.4)
-
-
-def linear_to_srgb(x: ArrayLike) -> NDArray[np.float64]:
-    """Encode linear values in [0, 1] to sRGB (IEC 61966-2-1)."""
-    x = np.asarray(x, dtype=np.float64)
-    return np.where(
-        x <= 0.0031308, 12.92 * x, 1.055 * np.maximum(x, 0.0031308) ** (1.0 / 2.4) - 0.055
-    )
 
 
 # --------------------------------------------------------------------------- common

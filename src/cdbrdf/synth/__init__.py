@@ -5,7 +5,8 @@
 - :mod:`cdbrdf.synth.cloth`: the cloth's curvature-dependent BRDF and its
   tabulation (:class:`ClothModel`, :class:`ClothParams`);
 - :mod:`cdbrdf.synth.presets`: ``denim`` and ``shot``;
-- :mod:`cdbrdf.synth.figures`: the documentation's plots.
+- :mod:`cdbrdf.synth.convergence`: the integration-error study (the
+  figures of the model are in :mod:`cdbrdf.plot.fabric`).
 
 Nothing is computed at import time.
 """

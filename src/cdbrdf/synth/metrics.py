@@ -1,6 +1,8 @@
 """Summary numbers of a cloth's appearance, used by the presets' targets.
 
 All take a reflectance array whose last axis is linear Rec. 709 RGB.
+``REC709_Y`` and ``luminance`` are :data:`cdbrdf.colour.LUMINANCE_WEIGHTS`
+and :func:`cdbrdf.colour.luminance`, re-exported.
 """
 
 from __future__ import annotations
@@ -8,17 +10,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..colour import LUMINANCE_WEIGHTS as REC709_Y
+from ..colour import luminance
 from ..table import CDBRDF
 
 __all__ = ["REC709_Y", "luminance", "chromaticity", "low_elevation_slice", "in_plane_luminance"]
-
-#: Rec. 709 luminance weights of linear R, G, B.
-REC709_Y = np.array([0.2126, 0.7152, 0.0722])
-
-
-def luminance(rgb: ArrayLike) -> NDArray[np.float64]:
-    """Rec. 709 relative luminance ``Y`` of linear RGB ``(..., 3)``."""
-    return np.asarray(rgb, dtype=np.float64) @ REC709_Y
 
 
 def chromaticity(rgb: ArrayLike) -> NDArray[np.float64]:

@@ -1,0 +1,279 @@
+"""Colour rules shared by the whole package: sRGB, luminance, exposure, 8-bit display.
+
+Tables, photographs decoded for measuring and renders all hold linear,
+scene-referred RGB with Rec. 709 primaries. This module owns the few rules
+that turn such values into something to look at, so that the figures
+(:mod:`cdbrdf.plot`), the simulated rig, the measurement and the demo apply
+exactly the same numbers:
+
+- the sRGB transfer function and its inverse (IEC 61966-2-1):
+  :func:`linear_to_srgb`, :func:`srgb_to_linear`, and :func:`srgb_encode`
+  (the transfer function of values clipped to [0, 1], for display);
+- the Rec. 709 luminance ``Y = 0.2126 R + 0.7152 G + 0.0722 B``
+  (:data:`LUMINANCE_WEIGHTS`, :func:`luminance`);
+- exposure: a linear factor applied before encoding, either chosen from the
+  data (:func:`auto_exposure` maps a percentile of the luminance to a target;
+  :func:`auto_exposure_ev` is the same rule in stops, clipped, for renders),
+  named (:data:`EXPOSURE_MODES`, resolved by :func:`resolve_exposure`) or in
+  stops (:func:`ev_to_factor`, :func:`factor_to_ev`);
+- 8-bit display encoding of linear radiance (:func:`tonemap_srgb8`).
+
+Only numpy is imported; nothing happens at import time.
+
+References
+----------
+IEC 61966-2-1:1999, Multimedia systems and equipment - Colour measurement and
+management - Default RGB colour space - sRGB.
+ITU-R BT.709-6, Parameter values for the HDTV standards, item 3.3 (luminance).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "LUMINANCE_WEIGHTS",
+    "luminance",
+    "linear_to_srgb",
+    "srgb_to_linear",
+    "srgb_encode",
+    "EXPOSURE_PERCENTILE",
+    "EXPOSURE_MODES",
+    "WHITE_EXPOSURE",
+    "RENDER_EXPOSURE_PERCENTILE",
+    "RENDER_EXPOSURE_TARGET",
+    "RENDER_EV_RANGE",
+    "auto_exposure",
+    "auto_exposure_ev",
+    "resolve_exposure",
+    "ev_to_factor",
+    "factor_to_ev",
+    "tonemap_srgb8",
+]
+
+#: Rec. 709 / sRGB luminance weights of linear R, G, B (read-only).
+LUMINANCE_WEIGHTS: NDArray[np.float64] = np.array([0.2126, 0.7152, 0.0722])
+LUMINANCE_WEIGHTS.setflags(write=False)
+
+#: Linear value at which the sRGB curve changes from the line to the power law.
+_SRGB_LINEAR_KNEE = 0.0031308
+#: The same point on the encoded side.
+_SRGB_ENCODED_KNEE = 0.04045
+
+#: Percentile of the luminance over all shown panels that the automatic
+#: exposure of a table's figure maps to display white.
+EXPOSURE_PERCENTILE = 99.5
+
+#: Named exposures of table figures: ``"auto"`` maps the
+#: :data:`EXPOSURE_PERCENTILE`-th percentile of the shown luminance to 1;
+#: ``"white"`` (``quantity="brdf"`` only) multiplies by :data:`WHITE_EXPOSURE`,
+#: so that a perfect white Lambertian reflector (f = 1/pi sr^-1) is display
+#: white, as next to a white card in a photograph.
+EXPOSURE_MODES: tuple[str, ...] = ("auto", "white")
+
+#: The factor of the ``"white"`` exposure: pi (a white Lambertian BRDF is 1/pi sr^-1).
+WHITE_EXPOSURE = math.pi
+
+#: Percentile of a render's luminance that :func:`auto_exposure_ev` maps to
+#: :data:`RENDER_EXPOSURE_TARGET`.
+RENDER_EXPOSURE_PERCENTILE = 99.0
+
+#: Display value (before encoding) that the automatic render exposure aims at.
+RENDER_EXPOSURE_TARGET = 0.85
+
+#: Default range of :func:`auto_exposure_ev`, in stops (EV).
+RENDER_EV_RANGE: tuple[float, float] = (-8.0, 12.0)
+
+
+# -- luminance -------------------------------------------------------------------------
+def luminance(rgb: ArrayLike) -> NDArray[np.float64]:
+    """Rec. 709 relative luminance ``Y`` of linear RGB.
+
+    Parameters
+    ----------
+    rgb
+        Linear values ``(..., 3)``; the last axis holds R, G, B.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``rgb.shape[:-1]``, float64. NaN propagates; an infinite channel gives
+        an infinite ``Y`` (NaN when infinities of both signs meet).
+
+    Raises
+    ------
+    ValueError
+        When the last axis does not hold 3 channels.
+    """
+    v = np.asarray(rgb, dtype=np.float64)
+    if v.ndim == 0 or v.shape[-1] != 3:
+        raise ValueError(f"rgb: expected linear RGB values (..., 3), got shape {v.shape}")
+    return v @ LUMINANCE_WEIGHTS
+
+
+# -- sRGB ------------------------------------------------------------------------------
+def linear_to_srgb(x: ArrayLike) -> NDArray[np.float64]:
+    """Encode linear values to sRGB (IEC 61966-2-1), without clipping.
+
+    Values in [0, 1] map to [0, 1]; below the knee (0.0031308) the curve is the
+    line ``12.92 x`` (so negative values stay negative), above it the power law
+    ``1.055 x^(1/2.4) - 0.055`` (values above 1 exceed 1). NaN stays NaN.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    return np.where(
+        x <= _SRGB_LINEAR_KNEE,
+        12.92 * x,
+        1.055 * np.maximum(x, _SRGB_LINEAR_KNEE) ** (1.0 / 2.4) - 0.055,
+    )
+
+
+def srgb_to_linear(x: ArrayLike) -> NDArray[np.float64]:
+    """Decode sRGB-encoded values to linear (IEC 61966-2-1), without clipping.
+
+    The inverse of :func:`linear_to_srgb`: ``x / 12.92`` up to the knee
+    (0.04045), ``((x + 0.055) / 1.055)^2.4`` above. NaN stays NaN.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    return np.where(
+        x <= _SRGB_ENCODED_KNEE,
+        x / 12.92,
+        ((np.maximum(x, _SRGB_ENCODED_KNEE) + 0.055) / 1.055) ** 2.4,
+    )
+
+
+def srgb_encode(linear: ArrayLike) -> NDArray[np.float64]:
+    """The sRGB transfer function of values clipped to [0, 1], for display.
+
+    ``linear_to_srgb(clip(linear, 0, 1))``: negative values and -inf show as
+    0, values above 1 and +inf as 1; NaN stays NaN (see :func:`tonemap_srgb8`
+    for an encoding that maps NaN to black).
+    """
+    return linear_to_srgb(np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0))
+
+
+# -- exposure --------------------------------------------------------------------------
+def ev_to_factor(ev: float) -> float:
+    """The linear factor of an exposure in stops: ``2**ev``."""
+    return float(2.0**ev)
+
+
+def factor_to_ev(factor: float) -> float:
+    """The exposure in stops of a positive linear factor: ``log2(factor)``."""
+    return math.log2(factor)
+
+
+def _finite_percentile(values: ArrayLike, percentile: float) -> float | None:
+    """The ``percentile``-th percentile of the finite values; None when there are none."""
+    y = np.asarray(values, dtype=np.float64)
+    y = y[np.isfinite(y)]
+    if y.size == 0:
+        return None
+    return float(np.percentile(y, percentile))
+
+
+def auto_exposure(lum: ArrayLike, *, percentile: float = EXPOSURE_PERCENTILE, target: float = 1.0) -> float:
+    """Exposure factor mapping the ``percentile``-th percentile of ``lum`` to ``target``.
+
+    Non-finite values are ignored. Returns 1 (no change) when that percentile
+    is not positive or no value is finite (an all-black table).
+    """
+    p = _finite_percentile(lum, percentile)
+    return target / p if p is not None and p > 0 else 1.0
+
+
+def auto_exposure_ev(
+    image: ArrayLike,
+    *,
+    target: float = RENDER_EXPOSURE_TARGET,
+    percentile: float = RENDER_EXPOSURE_PERCENTILE,
+    min_ev: float = RENDER_EV_RANGE[0],
+    max_ev: float = RENDER_EV_RANGE[1],
+) -> float:
+    """Exposure in stops mapping a percentile of an image's luminance to ``target``.
+
+    Parameters
+    ----------
+    image
+        Linear image ``(..., >= 3)``: the first three channels are R, G, B
+        (an alpha channel is ignored).
+    target
+        Display value (before sRGB encoding) that the percentile maps to.
+    percentile
+        Percentile of the luminance of the finite pixels.
+    min_ev, max_ev
+        The result is clipped to this range (stops).
+
+    Returns
+    -------
+    float
+        ``clip(log2(target / p), min_ev, max_ev)``; 0 when ``p`` is not
+        positive (a black image).
+    """
+    y = luminance(np.asarray(image, dtype=np.float64)[..., :3])
+    p = _finite_percentile(y, percentile)
+    if p is None or not p > 0:
+        return 0.0
+    return float(np.clip(factor_to_ev(target / p), min_ev, max_ev))
+
+
+def resolve_exposure(exposure: float | str | None, lum: ArrayLike, quantity: str) -> tuple[float, str]:
+    """The exposure factor of a table figure and a note saying how it was chosen.
+
+    Parameters
+    ----------
+    exposure
+        None or ``"auto"`` (:func:`auto_exposure` of ``lum``), ``"white"``
+        (:data:`WHITE_EXPOSURE`, absolute tables only) or a positive number
+        (the factor itself).
+    lum
+        The luminance shown, for the automatic exposure.
+    quantity
+        The table's quantity: ``"brdf"`` (sr^-1) or ``"relative"``.
+
+    Returns
+    -------
+    tuple of (float, str)
+        The linear factor and a short note for the figure.
+
+    Raises
+    ------
+    ValueError
+        For an unknown mode, ``"white"`` on a relative table, or a number that
+        is not positive and finite.
+    """
+    if exposure is None or (isinstance(exposure, str) and exposure == "auto"):
+        return auto_exposure(lum), f"auto: {EXPOSURE_PERCENTILE:g}th percentile → 1"
+    if isinstance(exposure, str):
+        if exposure != "white":
+            raise ValueError(
+                f"exposure: {exposure!r} is not a number nor one of {', '.join(EXPOSURE_MODES)}"
+            )
+        if quantity != "brdf":
+            raise ValueError(
+                "exposure: 'white' needs an absolute table (quantity 'brdf'); "
+                "this one is 'relative': give a number or 'auto'"
+            )
+        return float(WHITE_EXPOSURE), "white: f = 1/π sr⁻¹ → 1"
+    try:
+        x = float(exposure)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"exposure: expected a positive number or one of {', '.join(EXPOSURE_MODES)}, got {exposure!r}"
+        ) from None
+    if not (np.isfinite(x) and x > 0):
+        raise ValueError(f"exposure: must be a positive number, got {exposure!r}")
+    return x, "given"
+
+
+# -- 8-bit display ---------------------------------------------------------------------
+def tonemap_srgb8(image: ArrayLike, *, exposure_ev: float = 0.0) -> NDArray[np.uint8]:
+    """Linear radiance -> 8-bit sRGB: ``srgb(clip(image * 2**exposure_ev, 0, 1))``.
+
+    NaN and negative values show as black, +inf as white.
+    """
+    x = np.asarray(image, dtype=np.float64) * ev_to_factor(exposure_ev)
+    x = np.clip(np.nan_to_num(x, nan=0.0, posinf=1.0, neginf=0.0), 0.0, 1.0)
+    return np.rint(srgb_encode(x) * 255.0).astype(np.uint8)

@@ -1,0 +1,164 @@
+"""Tests of cdbrdf.colour: sRGB, Rec. 709 luminance, exposure, 8-bit display."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from cdbrdf import colour
+from cdbrdf.colour import (
+    LUMINANCE_WEIGHTS,
+    auto_exposure,
+    auto_exposure_ev,
+    ev_to_factor,
+    factor_to_ev,
+    linear_to_srgb,
+    luminance,
+    resolve_exposure,
+    srgb_encode,
+    srgb_to_linear,
+    tonemap_srgb8,
+)
+
+
+# -- sRGB ------------------------------------------------------------------------------
+def test_srgb_reference_values():
+    # IEC 61966-2-1: the line 12.92 x up to 0.0031308, then 1.055 x^(1/2.4) - 0.055
+    x = np.array([0.0, 0.0031308, 0.5, 1.0])
+    expected = [0.0, 0.0031308 * 12.92, 1.055 * 0.5 ** (1 / 2.4) - 0.055, 1.0]
+    np.testing.assert_allclose(linear_to_srgb(x), expected, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(linear_to_srgb(0.5), 0.7353569830524495, rtol=1e-15)
+    np.testing.assert_allclose(linear_to_srgb(0.0031308), 0.040449936, rtol=1e-12)
+    np.testing.assert_allclose(srgb_to_linear([0.0, 0.04045, 0.5, 1.0]),
+                               [0.0, 0.04045 / 12.92, 0.21404114048223255, 1.0], rtol=1e-14)
+    # the two pieces meet at the knee (continuous to ~1e-8)
+    assert abs(linear_to_srgb(np.nextafter(0.0031308, 1.0)) - linear_to_srgb(0.0031308)) < 1e-7
+
+
+def test_srgb_round_trip():
+    x = np.concatenate([np.linspace(0.0, 1.0, 10001), np.geomspace(1e-9, 1.0, 1000)])
+    np.testing.assert_allclose(srgb_to_linear(linear_to_srgb(x)), x, rtol=1e-12, atol=1e-15)
+    e = np.linspace(0.0, 1.0, 10001)
+    np.testing.assert_allclose(linear_to_srgb(srgb_to_linear(e)), e, rtol=1e-12, atol=1e-15)
+    # 8-bit codes survive decode -> encode
+    codes = np.arange(256) / 255.0
+    np.testing.assert_array_equal(np.rint(linear_to_srgb(srgb_to_linear(codes)) * 255), np.arange(256))
+
+
+def test_srgb_encode_is_the_clipped_curve():
+    """srgb_encode (figures) and linear_to_srgb (photographs) are one curve: bit for bit on [0, 1]."""
+    x = np.concatenate([np.linspace(0.0, 1.0, 200001), [0.0031308, np.nextafter(0.0031308, 0), 5e-324]])
+    np.testing.assert_array_equal(srgb_encode(x), linear_to_srgb(x))
+    np.testing.assert_array_equal(srgb_encode(x.astype(np.float32)), linear_to_srgb(x.astype(np.float32)))
+    np.testing.assert_allclose(srgb_encode([-1.0, 2.0, -np.inf, np.inf]), [0.0, 1.0, 0.0, 1.0], rtol=0, atol=2e-16)
+
+
+def test_srgb_outside_the_unit_range_nan_and_inf():
+    with np.errstate(all="raise"):  # no invalid-value warnings on negative or infinite input
+        enc = linear_to_srgb([-0.5, 2.0, np.inf, -np.inf, np.nan])
+        dec = srgb_to_linear([-0.5, 2.0, np.inf, -np.inf, np.nan])
+        disp = srgb_encode([np.nan])
+    np.testing.assert_allclose(enc[:2], [-0.5 * 12.92, 1.055 * 2.0 ** (1 / 2.4) - 0.055])
+    assert enc[2] == np.inf and enc[3] == -np.inf and np.isnan(enc[4])
+    np.testing.assert_allclose(dec[:2], [-0.5 / 12.92, (2.055 / 1.055) ** 2.4])
+    assert dec[2] == np.inf and dec[3] == -np.inf and np.isnan(dec[4])
+    assert np.isnan(disp[0])
+    assert linear_to_srgb(np.zeros((2, 3), np.float32)).dtype == np.float64
+
+
+# -- luminance -------------------------------------------------------------------------
+def test_luminance_of_primaries_is_the_weights():
+    np.testing.assert_array_equal(luminance(np.eye(3)), LUMINANCE_WEIGHTS)
+    np.testing.assert_array_equal(LUMINANCE_WEIGHTS, [0.2126, 0.7152, 0.0722])
+    assert math.fsum(LUMINANCE_WEIGHTS) == pytest.approx(1.0, abs=1e-15)
+    assert luminance([1.0, 1.0, 1.0]) == pytest.approx(1.0)
+    assert luminance(np.ones((4, 5, 3))).shape == (4, 5)
+    with pytest.raises(ValueError):
+        LUMINANCE_WEIGHTS[0] = 1.0  # read-only
+    with pytest.raises(ValueError, match=r"rgb: expected linear RGB values \(\.\.\., 3\), got shape \(2, 4\)"):
+        luminance(np.zeros((2, 4)))
+    with pytest.raises(ValueError, match="rgb"):
+        luminance(1.0)
+
+
+def test_luminance_nan_and_inf():
+    assert np.isnan(luminance([np.nan, 0.0, 0.0]))
+    assert luminance([np.inf, 0.0, 0.0]) == np.inf
+    assert luminance([0.0, -np.inf, 1.0]) == -np.inf
+    with np.errstate(invalid="ignore"):
+        assert np.isnan(luminance([np.inf, -np.inf, 0.0]))
+
+
+def test_other_modules_use_these_rules():
+    from cdbrdf.measure import images
+    from cdbrdf.synth import metrics
+
+    assert images.srgb_to_linear is srgb_to_linear and images.linear_to_srgb is linear_to_srgb
+    assert metrics.luminance is luminance and metrics.REC709_Y is LUMINANCE_WEIGHTS
+
+
+# -- exposure --------------------------------------------------------------------------
+def test_auto_exposure():
+    assert colour.EXPOSURE_PERCENTILE == 99.5
+    assert auto_exposure(np.full(1000, 0.25)) == pytest.approx(4.0)
+    assert auto_exposure(np.full(10, 0.25), target=0.5) == pytest.approx(2.0)
+    assert auto_exposure(np.arange(101.0), percentile=50) == pytest.approx(1 / 50)
+    assert auto_exposure(np.zeros(10)) == 1.0
+    assert auto_exposure([]) == 1.0
+    assert auto_exposure([np.nan, np.inf, 0.5]) == pytest.approx(2.0)  # non-finite values ignored
+    assert auto_exposure([np.nan, -np.inf]) == 1.0
+
+
+def test_auto_exposure_ev():
+    img = np.zeros((10, 10, 3))
+    img[..., :] = 0.85 / 4  # every pixel's luminance 0.2125
+    assert auto_exposure_ev(img) == pytest.approx(2.0)
+    assert auto_exposure_ev(img, target=0.85 / 2) == pytest.approx(1.0)
+    assert auto_exposure_ev(img, max_ev=1.5) == 1.5
+    assert auto_exposure_ev(np.full((2, 2, 3), 1e6)) == colour.RENDER_EV_RANGE[0]
+    assert auto_exposure_ev(np.zeros((3, 3, 3))) == 0.0
+    rgba = np.concatenate([img, np.full((10, 10, 1), 123.0)], axis=-1)
+    assert auto_exposure_ev(rgba) == pytest.approx(2.0)  # alpha ignored
+    # the 99th percentile: one bright pixel in 1000 does not set the exposure
+    img2 = np.full((10, 100, 3), 0.85)
+    img2[0, 0] = 1000.0
+    assert auto_exposure_ev(img2) == pytest.approx(0.0, abs=1e-12)
+    assert ev_to_factor(2.0) == 4.0 and factor_to_ev(0.25) == -2.0
+    assert ev_to_factor(factor_to_ev(3.0)) == pytest.approx(3.0)
+
+
+def test_resolve_exposure():
+    lum = np.full(100, 0.5)
+    assert resolve_exposure(None, lum, "brdf") == (pytest.approx(2.0), "auto: 99.5th percentile → 1")
+    assert resolve_exposure("auto", lum, "relative")[0] == pytest.approx(2.0)
+    assert resolve_exposure("white", lum, "brdf") == (math.pi, "white: f = 1/π sr⁻¹ → 1")
+    assert resolve_exposure(3, lum, "brdf") == (3.0, "given")
+    with pytest.raises(ValueError, match="'white' needs an absolute table"):
+        resolve_exposure("white", lum, "relative")
+    with pytest.raises(ValueError, match="not a number nor one of auto, white"):
+        resolve_exposure("bright", lum, "brdf")
+    for bad in (0, -1.0, np.nan, np.inf):
+        with pytest.raises(ValueError, match="exposure: must be a positive number"):
+            resolve_exposure(bad, lum, "brdf")
+    with pytest.raises(ValueError, match="expected a positive number"):
+        resolve_exposure([1, 2], lum, "brdf")  # type: ignore[arg-type]
+
+
+# -- 8-bit display ---------------------------------------------------------------------
+def test_tonemap_srgb8():
+    x = np.array([0.0, 0.0031308, 0.18, 0.5, 1.0, 2.0])
+    assert tonemap_srgb8(x).tolist() == [0, 10, 118, 188, 255, 255]
+    assert tonemap_srgb8(x).dtype == np.uint8
+    assert tonemap_srgb8([np.nan, -1.0, np.inf, -np.inf]).tolist() == [0, 0, 255, 0]
+    assert tonemap_srgb8([0.25], exposure_ev=1.0)[0] == tonemap_srgb8([0.5])[0]
+    np.testing.assert_array_equal(tonemap_srgb8(x), np.rint(srgb_encode(x) * 255))
+
+
+def test_import_is_numpy_only():
+    code_ = "import sys, cdbrdf.colour\nassert 'matplotlib' not in sys.modules and 'scipy' not in sys.modules\n"
+    r = subprocess.run([sys.executable, "-W", "error", "-c", code_], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
