@@ -203,13 +203,26 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
             f.attrs["software"] = f"cdbrdf {__version__}"
             f.attrs["Conventions"] = CONVENTIONS
             for key, value in attrs.items():
-                if isinstance(value, (str, bool, int, float)) and key not in f.attrs:
-                    f.attrs[key] = value
-                elif key not in f.attrs:
-                    f.attrs[key] = _jsonable(key, value)
+                if key in f.attrs:
+                    continue
+                f.attrs[key] = value if _native_mirror(value) else _jsonable(key, value)
             f.attrs[ATTRS_JSON_ATTR] = attrs_json
             f.attrs[DIGEST_ATTR] = _digest(attrs_json, parts.channels)
     _LOG.debug("wrote %s (%s values)", path, "x".join(str(n) for n in shape))
+
+
+def _native_mirror(value: Any) -> bool:
+    """Whether a global attribute mirrors ``value`` as itself (else as its JSON text).
+
+    NetCDF-4 has no boolean attribute type and HDF5 no integer beyond 64 bits:
+    booleans and such integers are mirrored as JSON text (``true``, ``2**70``
+    in digits), like lists and mappings. ``cdbrdf_attrs`` keeps the value.
+    """
+    if isinstance(value, bool):
+        return False
+    if isinstance(value, int):
+        return -(2**63) <= value < 2**63
+    return isinstance(value, (str, float))
 
 
 def _set_attrs(var: Any, attrs: dict[str, Any]) -> None:
@@ -299,7 +312,7 @@ def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
         stored = _attr(path, f.attrs, key)
         if isinstance(value, str):
             ok = _as_str(path, f"global attribute {key!r}", stored) == value
-        elif isinstance(value, (bool, int, float)):
+        elif _native_mirror(value):
             s = stored.reshape(()).item() if isinstance(stored, np.ndarray) and stored.size == 1 else stored
             if isinstance(s, np.generic):
                 s = s.item()
