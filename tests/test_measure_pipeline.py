@@ -12,7 +12,9 @@ from cdbrdf import Grid
 from cdbrdf.cli import main
 from cdbrdf.measure import CaptureError, MeasurementInterrupted, measure
 from cdbrdf.measure.images import ImageError
-from cdbrdf.measure.pipeline import UnusablePhotographs, checkpoint_path, read_capture
+from cdbrdf.measure.capture import read_capture
+from cdbrdf.measure.checkpoint import checkpoint_path
+from cdbrdf.measure.preflight import UnusablePhotographs
 
 from .measure_helpers import make_capture, write_csv, write_image
 

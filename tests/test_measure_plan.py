@@ -11,7 +11,8 @@ import pytest
 
 from cdbrdf import Grid
 from cdbrdf.cli import main
-from cdbrdf.measure.plan import Stand, hidden_mask, plan_rows, read_stands, write_plan
+from cdbrdf.measure.capture import plan_rows, write_plan
+from cdbrdf.measure.stands import Stand, hidden_mask, read_stands
 
 
 def test_convex_and_flat_hide_nothing():
@@ -53,7 +54,7 @@ def test_patch_margin_analytic():
 
 
 def test_hidden_mask_with_footprint():
-    from cdbrdf.measure.plan import footprint_mm
+    from cdbrdf.measure.stands import footprint_mm
 
     assert footprint_mm(60.0, pixel_mm=0.1, patch_px=7) == pytest.approx(3.5 * math.sqrt(2) * 0.1 / 0.5)
     g = Grid.regular(theta_step_deg=15, phi_step_deg=30, kappa=[-0.13, 0.13])

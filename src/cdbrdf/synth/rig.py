@@ -46,15 +46,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..measure.images import FORMATS, linear_to_srgb, write_exr, write_png, write_tiff
-from ..measure.plan import (
-    CAPTURE_FILE,
-    STAND_FILE,
-    Stand,
-    default_stand,
-    read_stands,
-    write_plan,
-    write_stands,
-)
+from ..measure.capture import CAPTURE_FILE, STAND_FILE, write_plan
+from ..measure.stands import Stand, default_stand, read_stands, write_stands
 from ..table import CDBRDF, Grid
 
 __all__ = [
