@@ -25,8 +25,7 @@ import pytest
 import cdbrdf
 from cdbrdf import CDBRDF, Grid
 from cdbrdf.cli import main
-from cdbrdf.measure import measure
-from cdbrdf.measure import Stand, hidden_mask
+from cdbrdf.measure import Stand, hidden_mask, measure
 
 pytest.importorskip("mitsuba")
 render = pytest.importorskip("cdbrdf.render")
