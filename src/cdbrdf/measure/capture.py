@@ -48,6 +48,7 @@ __all__ = [
     "REQUIRED_COLUMNS",
     "KINDS",
     "HIDDEN_NAMES",
+    "ENCODINGS",
     "CaptureRow",
     "Capture",
     "read_capture",
@@ -71,6 +72,8 @@ REQUIRED_COLUMNS = ("file", "kappa", "theta_v", "phi_v", "theta_l", "phi_l")
 KINDS: tuple[str, ...] = ("sample", "white", "dark")
 #: The ``hidden`` column's words for the codes of :func:`~cdbrdf.measure.stands.hidden_mask`.
 HIDDEN_NAMES: Mapping[int, str] = {0: "", 1: "view", 2: "light", 3: "view+light"}
+#: Values of the ``encoding`` column and setting.
+ENCODINGS: tuple[str, ...] = ("srgb", "linear")
 _KNOWN = REQUIRED_COLUMNS + ("exposure", "cx", "cy", "kind", "hidden", "encoding")
 _AXES = ("kappa", "theta_l", "phi_l", "theta_v", "phi_v")
 _ANGLE_DECIMALS = 6
@@ -171,7 +174,7 @@ def _bool(where: str, col: str, text: str) -> bool:
     t = (text or "").strip().lower()
     if t in ("", "0", "no", "false", "visible"):
         return False
-    if t in ("1", "yes", "true", "view", "light", "view+light", "both", "hidden"):
+    if t in ("1", "yes", "true", "both", "hidden") or t in HIDDEN_NAMES.values():
         return True
     raise CaptureError(f"{where}: column {col!r}: {text!r} is not a yes/no value")
 
@@ -290,8 +293,8 @@ def _settings(doc: dict[str, Any], stand_path: Path) -> dict[str, Any]:
                 f"{stand_path}: pixel_mm: expected a number in [0, {_MAX_PIXEL_MM:g}] mm, got {v!r:.40}"
             )
         out["pixel_mm"] = float(v)
-    if "encoding" in out and out["encoding"] not in ("srgb", "linear"):
-        raise CaptureError(f"{stand_path}: encoding: {out['encoding']!r:.40} is not one of srgb, linear")
+    if "encoding" in out and out["encoding"] not in ENCODINGS:
+        raise CaptureError(f"{stand_path}: encoding: {out['encoding']!r:.40} is not one of {', '.join(ENCODINGS)}")
     if "material" in out:
         m = out["material"]
         if not isinstance(m, str) or not m.strip() or len(m) > 200 or not m.isprintable():
@@ -500,8 +503,8 @@ def _parse_row(csv_path: Path, line: int, rec: dict, extra_cols: list[str]) -> C
             raise CaptureError(f"{where}: {c} must be a pixel index in [0, {_MAX_PIXEL_INDEX}], got {v:g}")
         cxy.append(None if math.isnan(v) else int(v))
     enc = (rec.get("encoding") or "").strip().lower()
-    if enc not in ("", "srgb", "linear"):
-        raise CaptureError(f"{where}: encoding {enc!r:.40} is not one of srgb, linear")
+    if enc and enc not in ENCODINGS:
+        raise CaptureError(f"{where}: encoding {enc!r:.40} is not one of {', '.join(ENCODINGS)}")
     return CaptureRow(
         line=line, file=fname, kind=kind,
         kappa=_round_angle(kappa) if not math.isnan(kappa) else math.nan,
