@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -86,3 +87,33 @@ def write_csv(path: Path, rows: list[dict]) -> None:
         w = csv.DictWriter(fh, fieldnames=cols)
         w.writeheader()
         w.writerows(rows)
+
+
+# --------------------------------------------------------------------------- a known material
+#: The grid of most hand-made captures, and a smaller one.
+GRID = Grid(kappa=[-0.2, 0.0, 0.2], theta_l=[0.0, 40.0], phi_l=[0.0, 180.0],
+            theta_v=[0.0, 30.0, 60.0], phi_v=[0.0, 90.0, 180.0, 270.0])
+SMALL = Grid(kappa=[0.0, 0.2], theta_l=[0.0, 40.0], phi_l=[0.0, 180.0],
+             theta_v=[0.0, 30.0, 60.0], phi_v=[0.0, 90.0, 180.0, 270.0])
+ALBEDO = 0.9
+SCALE = 2.0
+WHITE = ALBEDO / math.pi * SCALE
+
+
+def brdf(k, tv, pv, tl, pl):
+    """A smooth known BRDF (sr^-1), RGB."""
+    return np.array([0.08, 0.12, 0.2]) * (1 + k) * (1 + 0.5 * np.cos(np.radians(tv)))
+
+
+def pixel(k, tv, pv, tl, pl):
+    return brdf(k, tv, pv, tl, pl) * np.cos(np.radians(tl)) * SCALE
+
+
+def truth(grid=GRID):
+    m = grid.mesh()
+    return brdf(m["kappa"][..., None], m["theta_v"][..., None], 0, 0, 0)
+
+
+def same_tables(a, b):
+    assert a == b  # values, mask, fill source, std, attrs: exactly equal
+    np.testing.assert_array_equal(a.values, b.values)

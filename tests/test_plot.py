@@ -88,7 +88,7 @@ def test_no_figure_switches_the_backend(tmp_path):
     code_ = (
         "import sys, numpy as np, matplotlib, cdbrdf\n"
         "matplotlib.use('svg')\n"
-        "from cdbrdf.measure.plan import default_stand, hidden_mask\n"
+        "from cdbrdf.measure.stands import default_stand, hidden_mask\n"
         "from cdbrdf.plot import plot_hidden, plot_render_comparison, save_figure\n"
         "g = cdbrdf.Grid.regular(theta_step_deg=30, phi_step_deg=90, kappa=[-0.22, 0.0])\n"
         "hid = hidden_mask(g, [default_stand(float(k)) for k in g.kappa])\n"

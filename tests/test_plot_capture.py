@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import cdbrdf
-from cdbrdf.measure.plan import default_stand, hidden_mask
+from cdbrdf.measure.stands import default_stand, hidden_mask
 from cdbrdf.plot import plot_hidden, save_figure
 
 from .plot_helpers import png_size

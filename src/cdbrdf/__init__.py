@@ -7,9 +7,9 @@ The public surface is small:
 - :meth:`CDBRDF.evaluate` the 5-D lookup;
 - submodules for each stage, imported on demand: :mod:`cdbrdf.interp` (the
   lookup), :mod:`cdbrdf.io` (the file), :mod:`cdbrdf.schema` (the names of
-  the file and xarray layout), :mod:`cdbrdf.materials` (bundled
-  fabrics), :mod:`cdbrdf.synth` (fabric model, simulated capture rig),
-  :mod:`cdbrdf.measure` (photographs to a table), :mod:`cdbrdf.curvature`,
+  the file and xarray layout), :mod:`cdbrdf.materials` (bundled fabrics),
+  :mod:`cdbrdf.synth` (fabric model), :mod:`cdbrdf.rig` (simulated capture
+  rig), :mod:`cdbrdf.measure` (photographs to a table), :mod:`cdbrdf.curvature`,
   :mod:`cdbrdf.render` (Mitsuba 3 plug-in and scenes), :mod:`cdbrdf.plot`,
   :mod:`cdbrdf.report` and :mod:`cdbrdf.demo` (the paper end to end).
 """

@@ -4,10 +4,10 @@ For each material (denim and shot fabric by default):
 
 1. **plan** the capture: every view x light direction of the grid on a stand
    of every curvature, marking the directions a concave stand hides
-   (:func:`cdbrdf.measure.plan.write_plan`);
+   (:func:`cdbrdf.measure.capture.write_plan`);
 2. **photograph** it with the simulated rig: Mitsuba 3 renders of the fabric on
    its stand, white walls and all, with sensor noise, as 16-bit PNG
-   (:func:`cdbrdf.synth.rig.simulate_capture`);
+   (:func:`cdbrdf.rig.simulate_capture`);
 3. **measure** the photographs into a CDBRDF: 7 x 7 patch means, white
    reference, hidden directions filled from the nearest measured direction
    (:func:`cdbrdf.measure.measure`);
@@ -279,11 +279,12 @@ def _material(
 ) -> MaterialResult:
     from . import materials
     from .measure import measure
-    from .measure.plan import default_stand, write_plan
+    from .measure.capture import write_plan
+    from .measure.stands import default_stand
     from .plot import plot_mosaic, plot_render_comparison
     from .render.meshes import draped_cloth_mesh
     from .render.scenes import mesh_scene, prepare_mesh, sine_scene
-    from .synth.rig import simulate_capture
+    from .rig import simulate_capture
 
     truth = materials.load(name)
     res = MaterialResult(name=name, truth_attrs=dict(truth.attrs), measured_path=folder / f"{name}-measured.h5",

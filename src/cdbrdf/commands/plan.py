@@ -71,9 +71,8 @@ def check_grid_rows(grid, *, white: bool = True, brackets: int = 1) -> None:  # 
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..measure.plan import (
-        CAPTURE_FILE, DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM, Stand, hidden_mask, write_plan,
-    )
+    from ..measure.capture import CAPTURE_FILE, write_plan
+    from ..measure.stands import DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM, Stand, hidden_mask
     from ..table import PAPER_KAPPA, Grid
 
     out = Path(args.output)

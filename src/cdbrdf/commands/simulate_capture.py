@@ -9,7 +9,7 @@ __all__ = ["register", "run"]
 
 def _noise(text: str):  # noqa: ANN202 - an argparse type returning a NoiseModel
     """``none`` or ``FULL_WELL[,READ]`` electrons, both finite (full well > 0, read >= 0)."""
-    from ..synth.rig import NoiseModel
+    from ..rig import NoiseModel
     from ._args import float_list
 
     t = text.strip().lower()
@@ -72,7 +72,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..synth.rig import simulate_capture
+    from ..rig import simulate_capture
 
     bar = None
     if not args.quiet:

@@ -2,19 +2,27 @@
 
 Modules, one per stage:
 
-- :mod:`~cdbrdf.measure.plan`: capture plans, stand geometry, occlusion;
+- :mod:`~cdbrdf.measure.capture`: the capture folder's format: reading
+  ``capture.csv`` (:func:`read_capture`), writing plans, brackets;
+- :mod:`~cdbrdf.measure.stands`: stand geometry, occlusion, ``stands.json``'s stands;
 - :mod:`~cdbrdf.measure.images`: PNG/TIFF/OpenEXR readers (whole or a window);
 - :mod:`~cdbrdf.measure.patch`: the N x N patch, saturation, brackets, dark frames;
+- :mod:`~cdbrdf.measure.preflight`: checks of photographs and outputs before any work;
+- :mod:`~cdbrdf.measure.checkpoint`: results kept between runs (resume);
+- :mod:`~cdbrdf.measure.calibrate`: dark frames, brackets, white reference, fill: the table;
 - :mod:`~cdbrdf.measure.fill`: filling invalid samples from the nearest measured one;
-- :mod:`~cdbrdf.measure.pipeline`: the Dask pipeline with checkpoints.
+- :mod:`~cdbrdf.measure.pipeline`: the Dask pipeline (:func:`measure`).
 
 The main entry point is :func:`measure`.
 """
 
 from __future__ import annotations
 
-from .pipeline import CaptureError, MeasureReport, MeasurementInterrupted, measure, read_capture
-from .plan import Stand, hidden_mask, write_plan
+from ..errors import CaptureError
+from .calibrate import MeasureReport
+from .capture import read_capture, write_plan
+from .pipeline import MeasurementInterrupted, measure
+from .stands import Stand, hidden_mask
 
 __all__ = [
     "measure",

@@ -14,7 +14,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["HIDDEN_COLOURS", "plot_hidden"]
 
-#: Colours of the hidden codes of :func:`cdbrdf.measure.plan.hidden_mask`:
+#: Colours of the hidden codes of :func:`cdbrdf.measure.stands.hidden_mask`:
 #: 0 visible, 1 view hidden, 2 light hidden, 3 both.
 HIDDEN_COLOURS: tuple[str, str, str, str] = ("#3b6ea8", "#f2f2f2", "#d98c3a", "#a03030")
 
@@ -31,7 +31,7 @@ def plot_hidden(grid: Grid, hidden: ArrayLike, *, fig: Figure | None = None, dpi
     grid
         The plan's grid.
     hidden
-        ``grid.shape`` codes of :func:`cdbrdf.measure.plan.hidden_mask`:
+        ``grid.shape`` codes of :func:`cdbrdf.measure.stands.hidden_mask`:
         0 visible, 1 view hidden, 2 light hidden, 3 both
         (colours :data:`HIDDEN_COLOURS`).
     fig

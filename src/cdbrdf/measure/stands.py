@@ -1,4 +1,4 @@
-"""Capture plans and stand geometry: which directions a stand hides from its centre.
+"""Measurement stands: their geometry, which directions they hide, and ``stands.json``.
 
 A stand (``docs/capture.md``) carries the fabric on a cylindrical face whose
 axis is the local y axis; x is the bending direction, z the normal at the
@@ -29,11 +29,17 @@ in its shadow.
 A hidden *view* means the camera sees the trough or the white wall instead
 of the centre; a hidden *light* means the centre is in shadow. Both make the
 photograph useless for that sample (the white lines of the paper's Fig. 7b).
+
+The stands are written to and read from the ``stands`` list of the capture
+folder's ``stands.json`` (:func:`write_stands`, :func:`read_stands`,
+:func:`parse_stands`); the file's other keys are capture settings, read by
+:func:`cdbrdf.measure.capture.read_capture`. Both the planner
+(:func:`cdbrdf.measure.capture.write_plan`) and the simulated rig
+(:mod:`cdbrdf.rig`) take their geometry from here.
 """
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 from collections.abc import Iterable, Mapping, Sequence
@@ -53,33 +59,24 @@ from ..table import Grid
 __all__ = [
     "Stand",
     "default_stand",
+    "stand_for",
     "hidden_mask",
     "footprint_mm",
-    "plan_rows",
-    "write_plan",
-    "read_stands",
-    "parse_stands",
     "load_json_object",
+    "parse_stands",
+    "read_stands",
     "write_stands",
-    "STAND_FILE",
-    "CAPTURE_FILE",
-    "PLAN_COLUMNS",
+    "KAPPA_TOL_PER_MM",
     "DEFAULT_FACE_WIDTH_MM",
     "DEFAULT_WALL_HEIGHT_MM",
     "DEFAULT_LENGTH_MM",
 ]
 
-#: Name of the capture table in a capture folder.
-CAPTURE_FILE = "capture.csv"
-#: Name of the optional stand geometry file beside it.
-STAND_FILE = "stands.json"
-#: Columns written by :func:`write_plan`.
-PLAN_COLUMNS = ("file", "kappa", "theta_v", "phi_v", "theta_l", "phi_l", "exposure", "kind", "hidden")
-
 DEFAULT_FACE_WIDTH_MM = 6.0
 DEFAULT_WALL_HEIGHT_MM = 1.0
 DEFAULT_LENGTH_MM = 40.0
-_KAPPA_TOL = 1e-9
+#: Two curvatures (mm^-1) closer than this name the same stand.
+KAPPA_TOL_PER_MM = 1e-9
 
 
 @dataclass(frozen=True)
@@ -187,10 +184,17 @@ def default_stand(kappa: float) -> Stand:
     return Stand(kappa=float(kappa))
 
 
-def _stand_for(stands: Mapping[float, Stand] | Sequence[Stand], kappa: float) -> Stand:
+def stand_for(stands: Mapping[float, Stand] | Sequence[Stand], kappa: float) -> Stand:
+    """The stand of curvature ``kappa`` (mm^-1, within :data:`KAPPA_TOL_PER_MM`).
+
+    Raises
+    ------
+    ValueError
+        When no stand has that curvature.
+    """
     items = stands.values() if isinstance(stands, Mapping) else stands
     for s in items:
-        if abs(s.kappa - kappa) <= _KAPPA_TOL:
+        if abs(s.kappa - kappa) <= KAPPA_TOL_PER_MM:
             return s
     raise ValueError(f"no stand is described for kappa = {kappa:g} 1/mm")
 
@@ -222,7 +226,7 @@ def hidden_mask(
     """
     out = np.zeros(grid.shape, dtype=np.uint8)
     for k, kappa in enumerate(grid.kappa):
-        st = _stand_for(stands, float(kappa))
+        st = stand_for(stands, float(kappa))
         for j, tv in enumerate(grid.theta_v):
             m = float(footprint_mm(tv, pixel_mm=pixel_mm, patch_px=patch_px)) if pixel_mm else 0.0
             view = st.hides(tv, grid.phi_v, margin_mm=m)  # (n_phi_v,)
@@ -231,65 +235,7 @@ def hidden_mask(
     return out
 
 
-_HIDDEN_NAMES = {0: "", 1: "view", 2: "light", 3: "view+light"}
-
-
-def _fmt(x: float) -> str:
-    return f"{x:g}"
-
-
-def plan_rows(
-    grid: Grid,
-    stands: Sequence[Stand],
-    *,
-    extension: str = "png",
-    white: bool = True,
-    pixel_mm: float = 0.0,
-    patch_px: int = 7,
-) -> list[dict[str, Any]]:
-    """The rows of a capture plan, in table order (kappa, phi_l, theta_l, phi_v, theta_v).
-
-    Each sample row names its photograph ``k<i>/l<theta_l>_<phi_l>_v<theta_v>_<phi_v>.<ext>``
-    and says in ``hidden`` whether (and how) its stand hides it. With
-    ``white`` one white-reference row per light direction follows, with the
-    camera along the normal (``white/l<theta_l>_<phi_l>.<ext>``, blank kappa).
-    """
-    ext = extension.lstrip(".").lower()
-    if f".{ext}" not in (".png", ".tif", ".tiff", ".exr"):
-        raise ValueError(f"extension: {extension!r} is not one of png, tif, tiff, exr")
-    hid = hidden_mask(grid, stands, pixel_mm=pixel_mm, patch_px=patch_px)
-    rows: list[dict[str, Any]] = []
-    for k, kappa in enumerate(grid.kappa):
-        for a, pl in enumerate(grid.phi_l):
-            for b, tl in enumerate(grid.theta_l):
-                for c, pv in enumerate(grid.phi_v):
-                    for d, tv in enumerate(grid.theta_v):
-                        rows.append({
-                            "file": f"k{k}/l{_fmt(tl)}_{_fmt(pl)}_v{_fmt(tv)}_{_fmt(pv)}.{ext}",
-                            "kappa": _fmt(kappa),
-                            "theta_v": _fmt(tv), "phi_v": _fmt(pv),
-                            "theta_l": _fmt(tl), "phi_l": _fmt(pl),
-                            "exposure": "1", "kind": "sample",
-                            "hidden": _HIDDEN_NAMES[int(hid[k, a, b, c, d])],
-                        })
-    if white:
-        for pl in grid.phi_l:
-            for tl in grid.theta_l:
-                rows.append({
-                    "file": f"white/l{_fmt(tl)}_{_fmt(pl)}.{ext}", "kappa": "",
-                    "theta_v": _fmt(grid.theta_v[0]), "phi_v": _fmt(grid.phi_v[0]),
-                    "theta_l": _fmt(tl), "phi_l": _fmt(pl),
-                    "exposure": "1", "kind": "white", "hidden": "",
-                })
-    return rows
-
-
-def write_stands(path: str | PathLike[str], stands: Iterable[Stand], **extra: Any) -> None:
-    """Write ``stands.json``: ``{"stands": [...], ...extra}``."""
-    doc = {"stands": [s.to_dict() for s in stands], **extra}
-    Path(path).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
-
-
+# --------------------------------------------------------------------------- stands.json
 def load_json_object(path: str | PathLike[str]) -> dict[str, Any]:
     """Read a small JSON object file (``stands.json``) defensively.
 
@@ -337,7 +283,7 @@ def _reject_constant(name: str) -> float:
     raise ValueError(f"{name} is not a number JSON allows")
 
 
-def _number(where: str, key: str, v: object) -> float:
+def _number(where: str | PathLike[str], key: str, v: object) -> float:
     """A finite JSON number (not a boolean) or :class:`CaptureError`."""
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise CaptureError(f"{where}: {key}: expected a number, got {_short(v)}")
@@ -392,7 +338,7 @@ def parse_stands(doc: Mapping[str, Any], where: str | PathLike[str]) -> dict[flo
             st = Stand(**vals)
         except ValueError as exc:
             raise CaptureError(f"{where}: stand {i}: {exc}") from None
-        if any(abs(st.kappa - k) <= _KAPPA_TOL for k in out):
+        if any(abs(st.kappa - k) <= KAPPA_TOL_PER_MM for k in out):
             raise CaptureError(f"{where}: stand {i}: a second stand for kappa {st.kappa:g}")
         out[st.kappa] = st
     return out
@@ -413,30 +359,7 @@ def read_stands(path: str | PathLike[str]) -> dict[float, Stand]:
     return parse_stands(load_json_object(p), p)
 
 
-def write_plan(
-    folder: str | PathLike[str],
-    grid: Grid,
-    stands: Sequence[Stand],
-    *,
-    extension: str = "png",
-    white: bool = True,
-    pixel_mm: float = 0.0,
-    patch_px: int = 7,
-) -> list[dict[str, Any]]:
-    """Write ``capture.csv`` and ``stands.json`` into ``folder`` (created if needed).
-
-    ``pixel_mm`` (> 0) is written to ``stands.json`` and makes the hidden
-    marks cover the whole ``patch_px`` patch (:func:`hidden_mask`).
-    Returns the rows written.
-    """
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
-    rows = plan_rows(grid, stands, extension=extension, white=white, pixel_mm=pixel_mm,
-                     patch_px=patch_px)
-    with open(out / CAPTURE_FILE, "w", newline="", encoding="utf-8") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(PLAN_COLUMNS))
-        w.writeheader()
-        w.writerows(rows)
-    extra = {"pixel_mm": float(pixel_mm)} if pixel_mm else {}
-    write_stands(out / STAND_FILE, stands, **extra)
-    return rows
+def write_stands(path: str | PathLike[str], stands: Iterable[Stand], **extra: Any) -> None:
+    """Write ``stands.json``: ``{"stands": [...], ...extra}``."""
+    doc = {"stands": [s.to_dict() for s in stands], **extra}
+    Path(path).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")

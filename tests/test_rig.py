@@ -8,7 +8,7 @@ white reference's (x_w = gain albedo / pi cos(theta_l)), so its relative
 standard error is sigma = sqrt(s(x_s)^2 + s(x_w)^2).
 
 - Against the ideal measurement of the same photograph
-  (:func:`cdbrdf.synth.rig.expected_patch_value`: the table integrated over
+  (:func:`cdbrdf.rig.expected_patch_value`: the table integrated over
   the local directions the patch sees on the curved face): within
   5 sigma + 0.2 % (noise-free, the rig and the pipeline agree to 0.07 %).
 - Against the table's value at the grid node: within 5 sigma + 1 %, the 1 %
@@ -25,8 +25,7 @@ import pytest
 import cdbrdf
 from cdbrdf import CDBRDF, Grid
 from cdbrdf.cli import main
-from cdbrdf.measure import measure
-from cdbrdf.measure.plan import Stand, hidden_mask
+from cdbrdf.measure import Stand, hidden_mask, measure
 
 pytest.importorskip("mitsuba")
 render = pytest.importorskip("cdbrdf.render")
@@ -35,7 +34,7 @@ try:
 except Exception as exc:  # noqa: BLE001 - no usable LLVM: the rig cannot run here
     pytest.skip(f"Mitsuba's LLVM backend unavailable: {exc}", allow_module_level=True)
 
-from cdbrdf.synth.rig import (  # noqa: E402
+from cdbrdf.rig import (  # noqa: E402
     NoiseModel,
     expected_patch_value,
     simulate_capture,
@@ -337,12 +336,12 @@ def test_simulate_capture_failure_leaves_the_old_folder(tmp_path, exc):
 
 
 def test_simulate_capture_cli_interrupt_leaves_nothing(tmp_path, monkeypatch, capsys):
-    import cdbrdf.synth.rig as rig
+    import cdbrdf.rig.simulate as simulate
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(rig, "_write", interrupted)
+    monkeypatch.setattr(simulate, "write_photograph", interrupted)
     mat = tmp_path / "mat.h5"
     material().save(mat)
     assert main(["-q", "simulate-capture", str(mat), "-o", str(tmp_path / "cap"), "--size", "8"]) == 130

@@ -1,8 +1,7 @@
-"""Stand geometry, occlusion and capture plans."""
+"""Stands (cdbrdf.measure.stands): geometry, occlusion, the stands of stands.json."""
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 
@@ -10,8 +9,7 @@ import numpy as np
 import pytest
 
 from cdbrdf import Grid
-from cdbrdf.cli import main
-from cdbrdf.measure.plan import Stand, hidden_mask, plan_rows, read_stands, write_plan
+from cdbrdf.measure.stands import Stand, footprint_mm, hidden_mask, read_stands
 
 
 def test_convex_and_flat_hide_nothing():
@@ -53,8 +51,6 @@ def test_patch_margin_analytic():
 
 
 def test_hidden_mask_with_footprint():
-    from cdbrdf.measure.plan import footprint_mm
-
     assert footprint_mm(60.0, pixel_mm=0.1, patch_px=7) == pytest.approx(3.5 * math.sqrt(2) * 0.1 / 0.5)
     g = Grid.regular(theta_step_deg=15, phi_step_deg=30, kappa=[-0.13, 0.13])
     st = [Stand(-0.13), Stand(0.13)]
@@ -93,20 +89,7 @@ def test_hidden_mask_layout():
     np.testing.assert_array_equal(h[0] & 2 > 0, np.broadcast_to(light[:, :, None, None], h[0].shape))
 
 
-def test_write_plan_and_read_stands(tmp_path):
-    g = Grid.regular(theta_step_deg=30, phi_step_deg=90, theta_max_deg=60, kappa=[-0.22, 0.22])
-    rows = write_plan(tmp_path, g, [Stand(-0.22), Stand(0.22)])
-    with open(tmp_path / "capture.csv") as fh:
-        got = list(csv.DictReader(fh))
-    assert len(got) == len(rows) == 2 * 12 * 12 + 12
-    assert {r["kind"] for r in got} == {"sample", "white"}
-    assert len({r["file"] for r in got}) == len(got)
-    hidden = [r for r in got if r["hidden"]]
-    assert hidden and all(float(r["kappa"]) == -0.22 for r in hidden)
-    stands = read_stands(tmp_path / "stands.json")
-    assert set(stands) == {-0.22, 0.22}
-
-
+# --------------------------------------------------------------------------- stands.json
 def test_read_stands_errors(tmp_path):
     p = tmp_path / "stands.json"
     p.write_text("{not json")
@@ -115,22 +98,6 @@ def test_read_stands_errors(tmp_path):
     p.write_text(json.dumps({"stands": [{"kappa": 0.1, "radius": 3}]}))
     with pytest.raises(ValueError, match="unknown keys"):
         read_stands(p)
-
-
-def test_plan_rows_extension():
-    g = Grid.regular(theta_step_deg=30, phi_step_deg=180, theta_max_deg=30, kappa=[0.0])
-    assert plan_rows(g, [Stand(0.0)], extension="exr")[0]["file"].endswith(".exr")
-    with pytest.raises(ValueError, match="not one of"):
-        plan_rows(g, [Stand(0.0)], extension="jpg")
-
-
-def test_cli_plan(tmp_path, capsys):
-    out = tmp_path / "p"
-    assert main(["plan", "-o", str(out), "--theta-step", "30", "--phi-step", "90"]) == 0
-    text = capsys.readouterr().out
-    assert "kappa -0.22 1/mm" in text and (out / "plan.png").stat().st_size > 0
-    assert main(["plan", "-o", str(out)]) == 2  # exists
-    assert "already exists" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("text,msg", [

@@ -1,0 +1,261 @@
+"""From the patches of the photographs to the table: dark frames, brackets, white reference, fill.
+
+:func:`assemble` is the last stage of :func:`cdbrdf.measure.measure`: for
+every sample it merges the brackets of its photographs
+(:func:`cdbrdf.measure.patch.merge_exposures`, dark frames of the same or
+the nearest exposure subtracted), divides by ``cos(theta_l)``, scales by the
+nearest white reference (``quantity = "brdf"``) and fills the invalid
+samples (:func:`cdbrdf.measure.fill.fill_nearest`); it also counts what
+happened in a :class:`MeasureReport`. ``docs/capture.md`` states the rules.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import CaptureError, TableError
+from ..frames import direction_from_angles
+from ..table import CDBRDF
+from .capture import Capture
+from .fill import angle_between_deg, fill_nearest
+from .patch import merge_exposures, patch_statistics
+from .stands import KAPPA_TOL_PER_MM
+
+__all__ = ["MeasureReport", "assemble", "merged"]
+
+_LOG = logging.getLogger(__name__)
+
+
+@dataclass
+class MeasureReport:
+    """What a measurement did (printed by ``cdbrdf measure``)."""
+
+    n_samples: int = 0
+    n_measured: int = 0
+    n_filled: int = 0
+    n_hidden: int = 0
+    n_saturated: int = 0
+    n_not_photographed: int = 0
+    n_skipped_samples: int = 0
+    n_images: int = 0
+    n_images_resumed: int = 0
+    n_white: int = 0
+    n_dark: int = 0
+    quantity: str = "relative"
+    skipped_files: list[tuple[str, str]] = field(default_factory=list)
+
+    def summary(self) -> str:
+        """A few human-readable lines."""
+        lines = [
+            f"{self.n_images} photographs used ({self.n_images_resumed} from the checkpoint), "
+            f"{self.n_white} white reference(s), {self.n_dark} dark frame(s); quantity {self.quantity}",
+            f"{self.n_samples} samples: {self.n_measured} measured, {self.n_filled} filled "
+            f"({self.n_hidden} hidden by the stand, {self.n_saturated} saturated, "
+            f"{self.n_skipped_samples} unreadable, {self.n_not_photographed} not photographed)",
+        ]
+        if self.skipped_files:
+            lines.append(f"{len(self.skipped_files)} file(s) skipped:")
+            lines += [f"  {f}: {why}" for f, why in self.skipped_files[:20]]
+            if len(self.skipped_files) > 20:
+                lines.append(f"  ... and {len(self.skipped_files) - 20} more")
+        return "\n".join(lines)
+
+
+def _dirs_distance(tv1, pv1, tl1, pl1, tv2, pv2, tl2, pl2) -> NDArray[np.float64]:  # noqa: ANN001
+    """angle(view) + angle(light) in degrees (the fill distance)."""
+    return angle_between_deg(direction_from_angles(tv1, pv1), direction_from_angles(tv2, pv2)) + \
+        angle_between_deg(direction_from_angles(tl1, pl1), direction_from_angles(tl2, pl2))
+
+
+def merged(cap: Capture, idx: list[int], results: dict, darks: dict[float, NDArray] | None
+           ) -> tuple[NDArray, NDArray, bool, list[int]] | None:
+    """Merge the readable rows ``idx`` (the brackets of one condition); None when none is readable.
+
+    Parameters
+    ----------
+    cap
+        The capture (for the rows' exposures).
+    idx
+        Row indices of one condition (:meth:`~cdbrdf.measure.capture.Capture.brackets`).
+    results
+        Per row: ``(status, values, saturated, message)``; status 0 = read.
+    darks
+        Mean dark patch by exposure; each row uses the nearest in log ratio.
+
+    Returns
+    -------
+    tuple or None
+        ``(mean, std, good, rows used)``: the patch mean and standard
+        deviation of the merged radiance, whether it is not saturated.
+    """
+    ok = [i for i in idx if results.get(i, (1,))[0] == 0]
+    if not ok:
+        return None
+    vals = [results[i][1] for i in ok]
+    sats = [results[i][2] for i in ok]
+    exps = [cap.rows[i].exposure for i in ok]
+    dk = None
+    if darks:
+        keys = np.array(sorted(darks))
+        dk = [darks[float(keys[np.argmin(np.abs(np.log(keys / e)))])] for e in exps]
+    rad, valid = merge_exposures(vals, sats, exps, dk)
+    mean, std, good = patch_statistics(rad, valid)
+    return mean, std, good, ok
+
+
+def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: bool,
+             material: str | None) -> tuple[CDBRDF, MeasureReport]:
+    """The table and the report of a measurement from the patches of its photographs.
+
+    Parameters
+    ----------
+    cap
+        The parsed capture folder.
+    results
+        Per row index: ``(status, values, saturated, message)`` (status 0 =
+        read, 1 = missing, 2 = unusable); rows absent were not read.
+    albedo
+        Albedo of the white reference (Lambertian).
+    patch
+        Patch size N (for the provenance).
+    linear
+        Whether integer images were taken as linear (for the provenance).
+    material
+        Material name (default: ``stands.json``'s, else the folder's name).
+
+    Returns
+    -------
+    table : CDBRDF
+    report : MeasureReport
+
+    Raises
+    ------
+    CaptureError
+        Photographs of different channel counts, a black white reference, no
+        white reference for a curvature, or a curvature with nothing measured.
+    """
+    grid = cap.grid
+    rep = MeasureReport()
+    rows = cap.rows
+    for i, (status, _v, _s, msg) in sorted(results.items()):
+        if status != 0:
+            rep.skipped_files.append((rows[i].file, msg))
+    chans = {results[i][1].shape[-1] for i in results if results[i][0] == 0}
+    if len(chans) > 1:
+        raise CaptureError(f"{cap.folder}: photographs have different channel counts {sorted(chans)}")
+    nc = chans.pop() if chans else 3
+
+    # dark frames by exposure (mean of the frames of one exposure)
+    dark_groups: dict[float, list[int]] = {}
+    for i, r in enumerate(rows):
+        if r.kind == "dark" and results.get(i, (1,))[0] == 0:
+            dark_groups.setdefault(r.exposure, []).append(i)
+    darks = {e: np.mean([results[i][1] for i in g], axis=0) for e, g in dark_groups.items()}
+    rep.n_dark = sum(len(g) for g in dark_groups.values())
+
+    # white references: W = mean / cos(theta_l) per geometry
+    whites = []
+    for idx in cap.brackets("white").values():
+        m = merged(cap, idx, results, darks)
+        if m is None:
+            continue
+        mean, _std, good, ok = m
+        r = rows[idx[0]]
+        if not good:
+            _LOG.warning("white reference %s is saturated; not used", r.file)
+            continue
+        w = mean / math.cos(math.radians(r.theta_l))
+        if np.any(w <= 0):
+            raise CaptureError(f"{cap.folder / r.file}: white reference is black (after dark subtraction)")
+        whites.append((r, w))
+        rep.n_white += len(ok)
+    if whites:
+        w_k = np.array([-1e300 if math.isnan(r.kappa) else r.kappa for r, _ in whites])
+        w_dirs = np.array([(r.theta_v, r.phi_v, r.theta_l, r.phi_l) for r, _ in whites])
+        w_vals = np.array([w for _, w in whites])
+        rep.quantity = "brdf"
+
+    values = np.full(grid.shape + (nc,), np.nan)
+    std = np.full(grid.shape + (nc,), np.nan)
+    valid = np.zeros(grid.shape, dtype=bool)
+    photographed = np.zeros(grid.shape, dtype=bool)
+    skipped = np.zeros(grid.shape, dtype=bool)
+    saturated = np.zeros(grid.shape, dtype=bool)
+    n_used = 0
+    for idx in cap.brackets("sample").values():
+        sidx = cap.sample_index[idx[0]]
+        photographed[sidx] = True
+        if cap.hidden[sidx]:
+            continue
+        m = merged(cap, idx, results, darks)
+        if m is None:
+            skipped[sidx] = True
+            continue
+        mean, sd, good, ok = m
+        n_used += len(ok)
+        if not good:
+            saturated[sidx] = True
+            continue
+        r = rows[idx[0]]
+        c = math.cos(math.radians(r.theta_l))
+        scale = np.full(nc, 1.0 / c)
+        if whites:
+            d = _dirs_distance(r.theta_v, r.phi_v, r.theta_l, r.phi_l,
+                               w_dirs[:, 0], w_dirs[:, 1], w_dirs[:, 2], w_dirs[:, 3])
+            d = np.where((w_k == -1e300) | (np.abs(w_k - r.kappa) <= KAPPA_TOL_PER_MM), d, np.inf)
+            if not np.isfinite(d).any():
+                raise CaptureError(f"{cap.folder}: no white reference applies to kappa {r.kappa:g}")
+            j = int(np.flatnonzero(d <= d.min() + 1e-9)[0])
+            scale = scale / w_vals[j] * (albedo / math.pi)
+        values[sidx] = mean * scale
+        std[sidx] = sd * scale
+        valid[sidx] = True
+
+    rep.n_samples = int(np.prod(grid.shape))
+    rep.n_measured = int(valid.sum())
+    rep.n_filled = rep.n_samples - rep.n_measured
+    rep.n_hidden = int(cap.hidden.sum())
+    rep.n_saturated = int(saturated.sum())
+    rep.n_skipped_samples = int(skipped.sum())
+    rep.n_not_photographed = int((~photographed).sum())
+    rep.n_images = n_used + rep.n_white + rep.n_dark
+    try:
+        filled, fill_src, filled_std = fill_nearest(values, valid, grid, std=std)
+    except TableError as exc:
+        raise CaptureError(f"{cap.folder}: {exc}") from None
+
+    provenance: dict[str, Any] = {
+        "method": "measured",
+        "capture": cap.folder.resolve().name,
+        "capture_sha256": cap.digest,
+        "patch_px": patch,
+        "encoding": "linear" if linear else "srgb (unless the capture says linear)",
+        "white_reference": bool(whites),
+        "white_albedo": albedo if whites else None,
+        "dark_frames": rep.n_dark,
+        "stand_geometry": [s.to_dict() for s in cap.stands.values()] if cap.stands else None,
+        "fill": "nearest measured direction at the same curvature "
+                "(angle(view) + angle(light); ties: lowest flat index)",
+        "n_hidden": rep.n_hidden,
+        "n_saturated": rep.n_saturated,
+        "skipped_files": [f for f, _ in rep.skipped_files[:100]],
+    }
+    if cap.extra_columns:
+        prov_cols: dict[str, Any] = {}
+        for col in cap.extra_columns:
+            uniq = sorted({r.extra.get(col, "") for r in rows})
+            prov_cols[col] = uniq if len(uniq) <= 20 else f"{len(uniq)} distinct values"
+        provenance["extra_columns"] = prov_cols
+    mat = material or cap.settings.get("material") or cap.folder.resolve().name
+    table = CDBRDF(
+        filled, **grid.axes(), measured=valid, fill_source=fill_src, std=filled_std,
+        attrs={"quantity": rep.quantity, "material": str(mat), "provenance": provenance,
+               "channels": ["R", "G", "B"] if nc == 3 else ["Y"]},
+    )
+    return table, rep

@@ -1,0 +1,626 @@
+"""The capture folder: ``capture.csv``, the settings of ``stands.json``, plans and brackets.
+
+This module owns the folder's format (``docs/capture.md``); the planner
+(``cdbrdf plan``), the measurement (:func:`cdbrdf.measure.measure`) and the
+simulated rig (:mod:`cdbrdf.rig`) all read and write it through here:
+
+- reading: :func:`read_capture` parses ``capture.csv`` into
+  :class:`CaptureRow` s (one rule per column), derives the grid (refusing
+  stray rows, or checking the rows against the ``grid`` of ``stands.json``),
+  validates the settings of ``stands.json`` and marks the samples the stands
+  hide; the result is a :class:`Capture`. :func:`read_rows` reads the rows
+  as text, unparsed, for a tool that re-writes them (the rig);
+- writing: :func:`plan_rows` / :func:`write_plan` write a plan (one row per
+  photograph, :data:`PLAN_COLUMNS`), :func:`bracket_rows` repeats rows per
+  exposure, :func:`write_rows` writes rows as ``capture.csv``;
+- brackets: rows of one kind with the same curvature, view and light are the
+  brackets of one sample (:meth:`Capture.brackets`).
+
+The stand geometry and the ``stands`` list of ``stands.json`` live in
+:mod:`cdbrdf.measure.stands`.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .. import limits
+from ..errors import CaptureError, TableError
+from ..table import Grid
+from .images import FORMATS
+from .stands import KAPPA_TOL_PER_MM, Stand, hidden_mask, load_json_object, parse_stands, write_stands
+
+__all__ = [
+    "CAPTURE_FILE",
+    "STAND_FILE",
+    "PLAN_COLUMNS",
+    "REQUIRED_COLUMNS",
+    "KINDS",
+    "HIDDEN_NAMES",
+    "ENCODINGS",
+    "CaptureRow",
+    "Capture",
+    "read_capture",
+    "read_rows",
+    "row_kind",
+    "plan_rows",
+    "bracket_rows",
+    "write_rows",
+    "write_plan",
+]
+
+#: Name of the capture table in a capture folder.
+CAPTURE_FILE = "capture.csv"
+#: Name of the optional stand geometry and settings file beside it.
+STAND_FILE = "stands.json"
+#: Columns written by :func:`write_plan`.
+PLAN_COLUMNS = ("file", "kappa", "theta_v", "phi_v", "theta_l", "phi_l", "exposure", "kind", "hidden")
+#: Columns every ``capture.csv`` must have.
+REQUIRED_COLUMNS = ("file", "kappa", "theta_v", "phi_v", "theta_l", "phi_l")
+#: Valid values of the ``kind`` column.
+KINDS: tuple[str, ...] = ("sample", "white", "dark")
+#: The ``hidden`` column's words for the codes of :func:`~cdbrdf.measure.stands.hidden_mask`.
+HIDDEN_NAMES: Mapping[int, str] = {0: "", 1: "view", 2: "light", 3: "view+light"}
+#: Values of the ``encoding`` column and setting.
+ENCODINGS: tuple[str, ...] = ("srgb", "linear")
+_KNOWN = REQUIRED_COLUMNS + ("exposure", "cx", "cy", "kind", "hidden", "encoding")
+_AXES = ("kappa", "theta_l", "phi_l", "theta_v", "phi_v")
+_ANGLE_DECIMALS = 6
+#: An axis value used by fewer sample conditions than this fraction of the axis's median is stray.
+_STRAY_FRACTION = 0.1
+#: Largest ``pixel_mm`` accepted in ``stands.json`` (a 10 mm pixel covers a whole stand).
+_MAX_PIXEL_MM = 10.0
+#: Largest ``cx``/``cy`` accepted (far beyond any camera; keeps the arithmetic in int64).
+_MAX_PIXEL_INDEX = 10_000_000
+
+
+@dataclass(frozen=True)
+class CaptureRow:
+    """One row of ``capture.csv`` (angles in degrees, kappa in mm^-1; NaN where blank)."""
+
+    line: int
+    file: str
+    kind: str
+    kappa: float
+    theta_v: float
+    phi_v: float
+    theta_l: float
+    phi_l: float
+    exposure: float
+    cx: int | None
+    cy: int | None
+    linear: bool | None
+    hidden: bool
+    extra: dict[str, str]
+
+
+@dataclass
+class Capture:
+    """A parsed capture folder.
+
+    Attributes
+    ----------
+    folder
+        The folder.
+    rows
+        All rows, in file order.
+    grid
+        The sample axes the sample rows cover.
+    stands
+        Stand geometry by curvature, or None without ``stands.json``.
+    hidden
+        ``grid.shape`` booleans: samples the stands (or the ``hidden`` column) hide.
+    settings
+        Other keys of ``stands.json`` (``white_albedo``, ``encoding``, ``material``).
+    digest
+        SHA-256 of ``capture.csv`` and ``stands.json`` (identifies the capture).
+    extra_columns
+        Columns beyond the documented ones (kept as provenance).
+    """
+
+    folder: Path
+    rows: list[CaptureRow]
+    grid: Grid
+    stands: dict[float, Stand] | None
+    hidden: NDArray[np.bool_]
+    settings: dict[str, Any]
+    digest: str
+    extra_columns: list[str]
+    sample_index: dict[int, tuple[int, int, int, int, int]] = field(default_factory=dict)
+
+    def brackets(self, kind: str) -> dict[tuple[float, ...], list[int]]:
+        """Row indices of one ``kind`` grouped by condition, in first-row order.
+
+        Rows with the same ``(kappa, theta_v, phi_v, theta_l, phi_l)`` are the
+        exposure brackets of one sample (or white reference); blank values
+        (NaN) compare equal.
+        """
+        out: dict[tuple[float, ...], list[int]] = {}
+        for i, r in enumerate(self.rows):
+            if r.kind == kind:
+                cond = (r.kappa, r.theta_v, r.phi_v, r.theta_l, r.phi_l)
+                out.setdefault(tuple(-1e300 if math.isnan(x) else x for x in cond), []).append(i)
+        return out
+
+
+# --------------------------------------------------------------------------- reading
+def _num(where: str, col: str, text: str, *, blank_ok: bool) -> float:
+    t = (text or "").strip()
+    if not t:
+        if blank_ok:
+            return math.nan
+        raise CaptureError(f"{where}: column {col!r} is empty")
+    try:
+        v = float(t)
+    except ValueError:
+        raise CaptureError(f"{where}: column {col!r}: {t!r} is not a number") from None
+    if not math.isfinite(v):
+        raise CaptureError(f"{where}: column {col!r}: {t!r} is not finite")
+    return v
+
+
+def _bool(where: str, col: str, text: str) -> bool:
+    t = (text or "").strip().lower()
+    if t in ("", "0", "no", "false", "visible"):
+        return False
+    if t in ("1", "yes", "true", "both", "hidden") or t in HIDDEN_NAMES.values():
+        return True
+    raise CaptureError(f"{where}: column {col!r}: {text!r} is not a yes/no value")
+
+
+def _round_angle(x: float) -> float:
+    return round(x, _ANGLE_DECIMALS) + 0.0
+
+
+def _decode_csv(csv_path: Path, data: bytes) -> str:
+    """``capture.csv``'s bytes as text; one-line :class:`CaptureError` naming the line otherwise."""
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise CaptureError(f"{csv_path}: UTF-16 text (byte-order mark); save it as UTF-8")
+    nul = data.find(b"\0")
+    if nul >= 0:
+        line = data[:nul].count(b"\n") + 1
+        raise CaptureError(f"{csv_path}: line {line}: NUL byte; not a text file")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise CaptureError(
+            f"{csv_path}: line {line}: not UTF-8 text (byte 0x{data[exc.start]:02x}); save it as UTF-8"
+        ) from None
+
+
+def _load_table(csv_path: Path) -> tuple[bytes, str]:
+    """``capture.csv``'s bytes and text, within the ``capture_rows`` limit."""
+    try:
+        data = csv_path.read_bytes()
+    except OSError as exc:
+        raise CaptureError(f"{csv_path}: cannot be read ({exc.strerror or exc})") from None
+    text = _decode_csv(csv_path, data)
+    _check_rows_limit(csv_path, text)
+    return data, text
+
+
+def _open_reader(csv_path: Path, text: str) -> csv.DictReader:
+    """A reader of the table's records whose header (names stripped) has the required columns."""
+    reader = csv.DictReader(io.StringIO(text))
+    try:
+        cols = [c.strip() for c in (reader.fieldnames or [])]
+    except csv.Error as exc:
+        raise CaptureError(f"{csv_path}: line 1: not a CSV header ({exc})") from None
+    reader.fieldnames = cols
+    missing = [c for c in REQUIRED_COLUMNS if c not in cols]
+    if missing:
+        have = ", ".join(cols)
+        raise CaptureError(
+            f"{csv_path}: missing column(s) {', '.join(missing)} (have: {have[:200]})"
+        )
+    return reader
+
+
+def _csv_error(csv_path: Path, reader: csv.DictReader, exc: csv.Error) -> CaptureError:
+    # the reader counts a line once parsed: the faulty one is the next
+    return CaptureError(f"{csv_path}: line {reader.line_num + 1}: not valid CSV ({exc})")
+
+
+def row_kind(rec: Mapping[str, str | None]) -> str:
+    """The ``kind`` of a record of ``capture.csv`` (blank: ``"sample"``), lower case, not validated."""
+    return (rec.get("kind") or "sample").strip().lower() or "sample"
+
+
+def read_rows(path: str | PathLike[str]) -> tuple[list[str], list[dict[str, str]]]:
+    """The columns and rows of a ``capture.csv`` as text, unparsed (for a tool that re-writes them).
+
+    The file is decoded and its header checked as by :func:`read_capture`;
+    the values are not. Blank cells are empty strings.
+
+    Raises
+    ------
+    CaptureError
+        When the file is not UTF-8 CSV, lacks a required column or a row has
+        more fields than the header (names the file and line).
+    LimitError
+        When it has more rows than the ``capture_rows`` limit.
+    """
+    csv_path = Path(path)
+    _data, text = _load_table(csv_path)
+    reader = _open_reader(csv_path, text)
+    rows: list[dict[str, str]] = []
+    try:
+        for rec in reader:
+            if None in rec:
+                raise CaptureError(f"{csv_path}: line {reader.line_num}: more fields than columns")
+            rows.append({k: v or "" for k, v in rec.items()})
+    except csv.Error as exc:
+        raise _csv_error(csv_path, reader, exc) from None
+    return list(reader.fieldnames or ()), rows
+
+
+def _check_rows_limit(csv_path: Path, text: str) -> None:
+    """Refuse a table of more rows than the ``capture_rows`` limit (before parsing it)."""
+    cap = limits.limit("capture_rows").value()
+    if text.count("\n") <= cap:  # an upper bound of the data rows: nothing to count
+        return
+    try:
+        n = sum(1 for _ in csv.reader(io.StringIO(text))) - 1
+    except csv.Error:
+        n = text.count("\n")
+    limits.check("capture_rows", n, what=f"{csv_path}: a table of")
+
+
+def _settings(doc: dict[str, Any], stand_path: Path) -> dict[str, Any]:
+    """Validate the settings of ``stands.json`` (every key but ``stands`` and ``grid``)."""
+    out = {k: v for k, v in doc.items() if k not in ("stands", "grid")}
+    if "white_albedo" in out:
+        a = out["white_albedo"]
+        if isinstance(a, bool) or not isinstance(a, (int, float)) or not 0 < a <= 1.5:
+            raise CaptureError(f"{stand_path}: white_albedo: expected a number in (0, 1.5], got {a!r:.40}")
+        out["white_albedo"] = float(a)
+    if "pixel_mm" in out:
+        v = out["pixel_mm"]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= _MAX_PIXEL_MM:
+            raise CaptureError(
+                f"{stand_path}: pixel_mm: expected a number in [0, {_MAX_PIXEL_MM:g}] mm, got {v!r:.40}"
+            )
+        out["pixel_mm"] = float(v)
+    if "encoding" in out and out["encoding"] not in ENCODINGS:
+        raise CaptureError(f"{stand_path}: encoding: {out['encoding']!r:.40} is not one of {', '.join(ENCODINGS)}")
+    if "material" in out:
+        m = out["material"]
+        if not isinstance(m, str) or not m.strip() or len(m) > 200 or not m.isprintable():
+            raise CaptureError(f"{stand_path}: material: expected a printable name (1 to 200 characters)")
+    return out
+
+
+def _explicit_grid(doc: dict[str, Any], stand_path: Path) -> dict[str, NDArray[np.float64]] | None:
+    """The ``grid`` of ``stands.json`` (each axis a list of numbers), normalised like the rows."""
+    g = doc.get("grid")
+    if g is None:
+        return None
+    if not isinstance(g, dict) or set(g) != set(_AXES):
+        raise CaptureError(f"{stand_path}: grid: expected an object with the lists {', '.join(_AXES)}")
+    out: dict[str, NDArray[np.float64]] = {}
+    for name in _AXES:
+        vals = g[name]
+        if not isinstance(vals, list) or not vals:
+            raise CaptureError(f"{stand_path}: grid: {name}: expected a non-empty list of numbers")
+        xs = []
+        for v in vals:
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+                raise CaptureError(f"{stand_path}: grid: {name}: {v!r:.40} is not a finite number")
+            v = float(v)
+            if name.startswith("phi"):
+                v = v % 360.0
+            v = _round_angle(v)
+            xs.append(0.0 if name.startswith("phi") and v >= 360.0 else v)
+        out[name] = np.unique(np.array(xs))
+    return out
+
+
+def _stray_values(csv_path: Path, samples: list[CaptureRow]) -> None:
+    """Refuse an axis value that a stray row adds to a derived grid (see :func:`read_capture`)."""
+    conds = {tuple(getattr(r, a) for a in _AXES): r for r in reversed(samples)}  # first row per condition
+    for ax, name in enumerate(_AXES):
+        count: dict[float, int] = {}
+        for c in conds:
+            count[c[ax]] = count.get(c[ax], 0) + 1
+        if len(count) < 2:
+            continue
+        med = float(np.median(list(count.values())))
+        for v, n in count.items():
+            if n < _STRAY_FRACTION * med:
+                line = min(r.line for c, r in conds.items() if c[ax] == v)
+                raise CaptureError(
+                    f"{csv_path}: line {line}: {name} = {v:g} is used by {n} sample condition(s) only, "
+                    f"the other {name} values by {med:g} (median); a stray row? Fix it, or list the "
+                    f"grid in {STAND_FILE} ('grid') to keep it"
+                )
+
+
+def read_capture(folder: str | PathLike[str], *, csv_name: str = CAPTURE_FILE, patch: int = 7) -> Capture:
+    """Parse a capture folder (``docs/capture.md``).
+
+    ``patch`` (N) sizes the patch whose footprint the stand geometry must
+    leave clear when ``stands.json`` gives ``pixel_mm``.
+
+    The grid is, by default, derived from the sample rows: the sorted
+    distinct values of each axis. A value that only a few rows use - fewer
+    sample conditions than a tenth of the median of that axis's values - is
+    taken for a stray row (a typo would otherwise silently add a whole
+    not-photographed slice to the table) and refused, naming its line.
+    ``stands.json`` may instead list the grid (``"grid": {"kappa": [...],
+    "theta_l": [...], "phi_l": [...], "theta_v": [...], "phi_v": [...]}``):
+    then every sample row must lie on it and any value is accepted.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the folder or its ``capture.csv`` does not exist.
+    CaptureError
+        When a row is malformed (names the file and line), the sample rows
+        do not form a grid, or ``stands.json`` is malformed (names the key).
+    LimitError
+        When ``capture.csv`` has more rows than the ``capture_rows`` limit or
+        ``stands.json`` is larger than ``json_bytes``.
+    """
+    root = Path(folder)
+    if not root.is_dir():
+        raise FileNotFoundError(f"{root}: no such capture folder")
+    csv_path = root / csv_name
+    if not csv_path.is_file():
+        raise FileNotFoundError(f"{csv_path}: the capture folder has no {csv_name}")
+    csv_bytes, text = _load_table(csv_path)
+
+    # stands.json first: its grid decides how the rows are checked
+    stands = None
+    settings: dict[str, Any] = {}
+    stand_bytes = b""
+    stand_path = root / STAND_FILE
+    given_grid = None
+    if stand_path.exists() or stand_path.is_symlink():
+        doc = load_json_object(stand_path)
+        stand_bytes = stand_path.read_bytes()
+        settings = _settings(doc, stand_path)
+        given_grid = _explicit_grid(doc, stand_path)
+        if "stands" in doc:
+            stands = parse_stands(doc, stand_path)
+
+    reader = _open_reader(csv_path, text)
+    extra_cols = [c for c in reader.fieldnames or () if c not in _KNOWN]
+    rows: list[CaptureRow] = []
+    try:
+        for rec in reader:
+            rows.append(_parse_row(csv_path, reader.line_num, rec, extra_cols))
+    except csv.Error as exc:
+        raise _csv_error(csv_path, reader, exc) from None
+    samples = [r for r in rows if r.kind == "sample"]
+    if not samples:
+        raise CaptureError(f"{csv_path}: no sample rows")
+
+    if given_grid is not None:
+        for r in samples:
+            for name in _AXES:
+                v = getattr(r, name)
+                if not np.any(given_grid[name] == v):
+                    raise CaptureError(
+                        f"{csv_path}: line {r.line}: {name} = {v:g} is not on the grid of {STAND_FILE}"
+                    )
+        axes = given_grid
+        where = f"{stand_path}: grid"
+    else:
+        _stray_values(csv_path, samples)
+        axes = {name: np.unique(np.array([getattr(r, name) for r in samples])) for name in _AXES}
+        where = f"{csv_path}: the sample rows"
+    limits.check("table_samples", math.prod(len(v) for v in axes.values()), what=f"{where}: a grid of")
+    try:
+        grid = Grid(**axes)
+    except TableError as exc:
+        raise CaptureError(f"{where} do not form a table grid: {exc}") from None
+
+    if stands is not None:
+        missing_k = [k for k in grid.kappa if not any(abs(k - s) <= KAPPA_TOL_PER_MM for s in stands)]
+        if missing_k:
+            raise CaptureError(
+                f"{stand_path}: no stand for kappa {', '.join(f'{k:g}' for k in missing_k[:10])}"
+            )
+        pixel_mm = settings.get("pixel_mm", 0.0)
+        hidden = hidden_mask(grid, list(stands.values()), pixel_mm=float(pixel_mm), patch_px=patch) > 0
+    else:
+        hidden = np.zeros(grid.shape, dtype=bool)
+    index: dict[int, tuple[int, int, int, int, int]] = {}
+    for i, r in enumerate(rows):
+        if r.kind != "sample":
+            continue
+        idx = (
+            int(np.searchsorted(grid.kappa, r.kappa)),
+            int(np.searchsorted(grid.phi_l, r.phi_l)),
+            int(np.searchsorted(grid.theta_l, r.theta_l)),
+            int(np.searchsorted(grid.phi_v, r.phi_v)),
+            int(np.searchsorted(grid.theta_v, r.theta_v)),
+        )
+        index[i] = idx
+        if stands is None and r.hidden:
+            hidden[idx] = True
+    digest = hashlib.sha256(csv_bytes + b"\0" + stand_bytes).hexdigest()
+    return Capture(root, rows, grid, stands, hidden, settings, digest, extra_cols, index)
+
+
+def _parse_row(csv_path: Path, line: int, rec: dict, extra_cols: list[str]) -> CaptureRow:
+    """One record of ``capture.csv`` (``line``: its last physical line)."""
+    where = f"{csv_path}: line {line}"
+    if None in rec:
+        raise CaptureError(f"{where}: more fields than columns")
+    kind = row_kind(rec)
+    if kind not in KINDS:
+        raise CaptureError(f"{where}: kind {kind!r:.40} is not one of {', '.join(KINDS)}")
+    fname = (rec.get("file") or "").strip()
+    if not fname:
+        raise CaptureError(f"{where}: column 'file' is empty")
+    if not fname.isprintable():
+        raise CaptureError(f"{where}: file {fname!r:.60} contains control characters")
+    if Path(fname).suffix.lower() not in FORMATS:
+        raise CaptureError(
+            f"{where}: {fname!r:.60} has an unsupported extension; valid: {', '.join(FORMATS)}"
+        )
+    blank_dirs = kind == "dark"
+    kappa = _num(where, "kappa", rec.get("kappa", ""), blank_ok=kind != "sample")
+    ang = {
+        c: _num(where, c, rec.get(c, ""), blank_ok=blank_dirs)
+        for c in ("theta_v", "phi_v", "theta_l", "phi_l")
+    }
+    for c in ("theta_v", "theta_l"):
+        if not math.isnan(ang[c]) and not 0 <= ang[c] < 90:
+            raise CaptureError(f"{where}: {c} = {ang[c]:g} is outside [0, 90) degrees")
+    for c in ("phi_v", "phi_l"):
+        if not math.isnan(ang[c]):
+            ang[c] = ang[c] % 360.0
+    for c in ang:
+        if not math.isnan(ang[c]):
+            ang[c] = _round_angle(ang[c])
+            if c.startswith("phi") and ang[c] >= 360.0:
+                ang[c] = 0.0
+    exposure = _num(where, "exposure", rec.get("exposure", ""), blank_ok=True)
+    if math.isnan(exposure):
+        exposure = 1.0
+    if exposure <= 0:
+        raise CaptureError(f"{where}: exposure must be positive, got {exposure:g}")
+    if not 1e-9 <= exposure <= 1e9:  # a denormal exposure overflows the bracket merge
+        raise CaptureError(f"{where}: exposure {exposure:g} is outside [1e-9, 1e9]")
+    cxy = []
+    for c in ("cx", "cy"):
+        v = _num(where, c, rec.get(c, ""), blank_ok=True)
+        if not math.isnan(v) and (v != int(v) or not 0 <= v <= _MAX_PIXEL_INDEX):
+            raise CaptureError(f"{where}: {c} must be a pixel index in [0, {_MAX_PIXEL_INDEX}], got {v:g}")
+        cxy.append(None if math.isnan(v) else int(v))
+    enc = (rec.get("encoding") or "").strip().lower()
+    if enc and enc not in ENCODINGS:
+        raise CaptureError(f"{where}: encoding {enc!r:.40} is not one of {', '.join(ENCODINGS)}")
+    return CaptureRow(
+        line=line, file=fname, kind=kind,
+        kappa=_round_angle(kappa) if not math.isnan(kappa) else math.nan,
+        exposure=exposure, cx=cxy[0], cy=cxy[1],
+        linear=None if not enc else enc == "linear",
+        hidden=_bool(where, "hidden", rec.get("hidden", "")),
+        extra={c: rec.get(c, "") or "" for c in extra_cols},
+        **ang,
+    )
+
+
+# --------------------------------------------------------------------------- writing
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def plan_rows(
+    grid: Grid,
+    stands: Sequence[Stand],
+    *,
+    extension: str = "png",
+    white: bool = True,
+    pixel_mm: float = 0.0,
+    patch_px: int = 7,
+) -> list[dict[str, Any]]:
+    """The rows of a capture plan, in table order (kappa, phi_l, theta_l, phi_v, theta_v).
+
+    Each sample row names its photograph ``k<i>/l<theta_l>_<phi_l>_v<theta_v>_<phi_v>.<ext>``
+    and says in ``hidden`` whether (and how) its stand hides it. With
+    ``white`` one white-reference row per light direction follows, with the
+    camera along the normal (``white/l<theta_l>_<phi_l>.<ext>``, blank kappa).
+    """
+    ext = extension.lstrip(".").lower()
+    if f".{ext}" not in (".png", ".tif", ".tiff", ".exr"):
+        raise ValueError(f"extension: {extension!r} is not one of png, tif, tiff, exr")
+    hid = hidden_mask(grid, stands, pixel_mm=pixel_mm, patch_px=patch_px)
+    rows: list[dict[str, Any]] = []
+    for k, kappa in enumerate(grid.kappa):
+        for a, pl in enumerate(grid.phi_l):
+            for b, tl in enumerate(grid.theta_l):
+                for c, pv in enumerate(grid.phi_v):
+                    for d, tv in enumerate(grid.theta_v):
+                        rows.append({
+                            "file": f"k{k}/l{_fmt(tl)}_{_fmt(pl)}_v{_fmt(tv)}_{_fmt(pv)}.{ext}",
+                            "kappa": _fmt(kappa),
+                            "theta_v": _fmt(tv), "phi_v": _fmt(pv),
+                            "theta_l": _fmt(tl), "phi_l": _fmt(pl),
+                            "exposure": "1", "kind": "sample",
+                            "hidden": HIDDEN_NAMES[int(hid[k, a, b, c, d])],
+                        })
+    if white:
+        for pl in grid.phi_l:
+            for tl in grid.theta_l:
+                rows.append({
+                    "file": f"white/l{_fmt(tl)}_{_fmt(pl)}.{ext}", "kappa": "",
+                    "theta_v": _fmt(grid.theta_v[0]), "phi_v": _fmt(grid.phi_v[0]),
+                    "theta_l": _fmt(tl), "phi_l": _fmt(pl),
+                    "exposure": "1", "kind": "white", "hidden": "",
+                })
+    return rows
+
+
+def bracket_rows(rows: Sequence[Mapping[str, Any]], exposures: Sequence[float]) -> list[dict[str, Any]]:
+    """Repeat every sample and white row once per exposure (``..._e<i>`` file names).
+
+    Row ``j`` of a bracket gets the file name ``<stem>_e<j>.<ext>`` and the
+    exposure ``exposures[j]``; other rows (dark frames) are kept as they are.
+    """
+    out = []
+    for r in rows:
+        if r["kind"] not in ("sample", "white"):
+            out.append(dict(r))
+            continue
+        stem, dot, ext = r["file"].rpartition(".")
+        for j, e in enumerate(exposures):
+            rr = dict(r)
+            rr["file"] = f"{stem}_e{j}.{ext}"
+            rr["exposure"] = f"{float(e):g}"
+            out.append(rr)
+    return out
+
+
+def write_rows(path: str | PathLike[str], rows: Sequence[Mapping[str, Any]],
+               columns: Sequence[str] = PLAN_COLUMNS) -> None:
+    """Write ``rows`` (dicts keyed by column) as a ``capture.csv`` with the header ``columns``."""
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(columns))
+        w.writeheader()
+        w.writerows(rows)
+
+
+def write_plan(
+    folder: str | PathLike[str],
+    grid: Grid,
+    stands: Sequence[Stand],
+    *,
+    extension: str = "png",
+    white: bool = True,
+    pixel_mm: float = 0.0,
+    patch_px: int = 7,
+    exposures: Sequence[float] = (1.0,),
+) -> list[dict[str, Any]]:
+    """Write ``capture.csv`` and ``stands.json`` into ``folder`` (created if needed).
+
+    ``pixel_mm`` (> 0) is written to ``stands.json`` and makes the hidden
+    marks cover the whole ``patch_px`` patch (:func:`hidden_mask`).
+    ``exposures`` other than the single exposure 1 make each sample and white
+    photograph a bracket (:func:`bracket_rows`). Returns the rows written.
+    """
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = plan_rows(grid, stands, extension=extension, white=white, pixel_mm=pixel_mm,
+                     patch_px=patch_px)
+    if len(exposures) != 1 or float(exposures[0]) != 1.0:
+        rows = bracket_rows(rows, exposures)
+    write_rows(out / CAPTURE_FILE, rows)
+    extra = {"pixel_mm": float(pixel_mm)} if pixel_mm else {}
+    write_stands(out / STAND_FILE, stands, **extra)
+    return rows

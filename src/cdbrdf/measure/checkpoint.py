@@ -1,0 +1,204 @@
+"""The measurement's checkpoint: results of finished photographs, kept between runs.
+
+A measurement with an output file keeps a folder ``<output>.ckpt``
+(:func:`checkpoint_path`) of one ``.npz`` file per batch of photographs,
+each written atomically, under a key that identifies the capture and the
+options. A later run with the same key reuses every photograph whose size
+and modification time are unchanged, so an interrupted run resumes and
+gives a bit-identical table. The folder carries cdbrdf's owner mark: a
+folder of that name that cdbrdf did not make is never touched.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import re
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..fsutil import OWNER_MARK, atomic_path, is_owned, mark_owned, remove_owned, sweep_stale
+from .preflight import first_line
+
+__all__ = ["Checkpoint", "checkpoint_path", "CHECKPOINT_VERSION"]
+
+_LOG = logging.getLogger(__name__)
+
+#: Version of the checkpoint layout (part of its key).
+CHECKPOINT_VERSION = 1
+
+
+def checkpoint_path(output: str | PathLike[str]) -> Path:
+    """The checkpoint folder used for an output file: ``<output>.ckpt``."""
+    return Path(str(output) + ".ckpt")
+
+
+_CKPT_KIND = "checkpoint"
+_KEY_FILE = "key.json"
+_BATCH_RE = re.compile(r"^batch-\d{8}\.npz$")
+#: names in a checkpoint written by cdbrdf before folders carried the owner mark
+_LEGACY_RE = re.compile(r"^(key\.json|batch-\d{8}\.npz|\.batch-[A-Za-z0-9_]+\.npz)$")
+#: temporaries of :func:`cdbrdf.fsutil.atomic_path` inside a checkpoint: ``.<dest>.<pid>.<host>.<rand>.tmp``
+_TEMP_DEST_RE = re.compile(r"^\.(key\.json|batch-\d{8}\.npz)\.\d+\.[0-9a-f]{8}\.[0-9a-f]{8}\.tmp$")
+
+
+def _checkpoint_layout(folder: Path) -> bool:
+    """True when ``folder`` holds nothing but what cdbrdf's checkpoints hold."""
+    try:
+        names = [p.name for p in folder.iterdir()]
+    except OSError:
+        return False
+    return all(n == OWNER_MARK or _LEGACY_RE.match(n) or _TEMP_DEST_RE.match(n) for n in names)
+
+
+def _read_key(folder: Path) -> object:
+    try:
+        return json.loads((folder / _KEY_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+class Checkpoint:
+    """Results of finished images, one ``.npz`` file per batch (each written atomically).
+
+    The folder carries cdbrdf's owner mark (:func:`cdbrdf.fsutil.mark_owned`);
+    a folder of that name that cdbrdf did not make is never touched. A folder
+    of the layout written by earlier versions (``key.json`` and
+    ``batch-*.npz`` only) is adopted. An unreadable batch is ignored (its
+    photographs are read again) with a warning.
+    """
+
+    def __init__(self, folder: Path | None, key: str, *, legacy_keys: tuple[str, ...] = (),
+                 patch: int = 7) -> None:
+        self.folder = folder
+        self.key = key
+        self.patch = patch
+        self.done: dict[int, tuple[tuple[int, int], int, NDArray | None, NDArray | None, str]] = {}
+        if folder is None:
+            return
+        self._sweep_leftovers()
+        accepted = [{"key": k, "version": CHECKPOINT_VERSION} for k in (key, *legacy_keys)]
+        if folder.exists() or folder.is_symlink():
+            if not is_owned(folder, _CKPT_KIND):
+                legacy = folder.is_dir() and not folder.is_symlink() and not (folder / OWNER_MARK).exists() \
+                    and _checkpoint_layout(folder)
+                if not legacy:
+                    raise FileExistsError(
+                        f"{folder}: exists and is not a checkpoint made by cdbrdf measure; "
+                        "move it away or choose another output name"
+                    )
+                for p in folder.glob(".batch-*.npz"):  # temporaries of earlier versions
+                    p.unlink(missing_ok=True)
+                mark_owned(folder, _CKPT_KIND)
+            if _read_key(folder) not in accepted:
+                _LOG.warning("%s: checkpoint of a different run; starting afresh", folder)
+                remove_owned(folder, _CKPT_KIND)
+        if folder.is_dir():
+            for f in sorted(folder.iterdir()):
+                if _BATCH_RE.match(f.name):
+                    self._load(f)
+            if _read_key(folder) != accepted[0]:
+                self._write_key()
+        else:
+            folder.mkdir()
+            mark_owned(folder, _CKPT_KIND)
+            self._write_key()
+
+    def _sweep_leftovers(self) -> None:
+        """Remove what killed runs left: temporaries inside, half-removed checkpoints beside.
+
+        :func:`cdbrdf.fsutil.remove_owned` renames the folder to a temporary
+        name before deleting it; a run killed then leaves that folder, maybe
+        without its marker. One that holds only checkpoint files gets the
+        marker back so that :func:`cdbrdf.fsutil.sweep_stale` (which checks
+        that its process is gone) removes it.
+        """
+        assert self.folder is not None
+        folder = self.folder
+        prefix = f".{folder.name}."
+        try:
+            siblings = [p for p in folder.parent.iterdir() if p.name.startswith(prefix) and p.name.endswith(".old")]
+        except OSError:
+            siblings = []
+        for p in siblings:
+            try:
+                if p.is_dir() and not p.is_symlink() and not (p / OWNER_MARK).exists() and _checkpoint_layout(p):
+                    mark_owned(p, _CKPT_KIND)
+            except OSError:  # pragma: no cover - removed meanwhile
+                pass
+        sweep_stale(folder)
+        if is_owned(folder, _CKPT_KIND):
+            dests = set()
+            for p in folder.iterdir():
+                m = _TEMP_DEST_RE.match(p.name)
+                if m:
+                    dests.add(m[1])
+            for d in sorted(dests):
+                sweep_stale(folder / d)
+
+    def _write_key(self) -> None:
+        assert self.folder is not None
+        with atomic_path(self.folder / _KEY_FILE) as tmp:
+            tmp.write_text(json.dumps({"key": self.key, "version": CHECKPOINT_VERSION}), encoding="utf-8")
+
+    def _load(self, f: Path) -> None:
+        """Add one batch; an unreadable or inconsistent batch is ignored (and deleted)."""
+        n = self.patch
+        got = {}
+        try:
+            with open(f, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+                rows, stats, status, msgs = z["rows"], z["stats"], z["status"], z["messages"]
+                k = rows.shape[0] if rows.ndim == 1 else -1
+                if k < 1 or stats.shape != (k, 2) or status.shape != (k,) or msgs.shape != (k,) \
+                        or rows.dtype.kind != "i" or stats.dtype.kind != "i" or status.dtype.kind != "i":
+                    raise ValueError("arrays of inconsistent shapes or types")
+                for j, r in enumerate(rows.tolist()):
+                    st = int(status[j])
+                    if st not in (0, 1, 2):
+                        raise ValueError(f"status {st} of row {r}")
+                    v = s = None
+                    if st == 0:
+                        v, s = z[f"v{r}"], z[f"s{r}"]
+                        if v.ndim != 3 or v.shape[:2] != (n, n) or v.shape[2] < 1 or v.dtype != np.float64 \
+                                or s.shape != (n, n) or s.dtype != np.bool_:
+                            raise ValueError(f"patch of row {r} has shape {v.shape} {v.dtype}")
+                    got[r] = ((int(stats[j, 0]), int(stats[j, 1])), st, v, s, str(msgs[j]))
+        except Exception as exc:  # noqa: BLE001 - any damage: read the photographs again
+            _LOG.warning("%s: unreadable checkpoint batch ignored, its photographs are read again (%s: %s)",
+                         f, type(exc).__name__, first_line(exc))
+            f.unlink(missing_ok=True)
+            return
+        self.done.update(got)
+
+    def add(self, results: dict[int, tuple[tuple[int, int], int, NDArray | None, NDArray | None, str]]) -> None:
+        """Record results and, with a folder, save them as one batch.
+
+        ``results``: per row index, ``((size, mtime_ns), status, values,
+        saturated, message)``.
+        """
+        self.done.update(results)
+        if self.folder is None or not results:
+            return
+        rows = sorted(results)
+        arrays: dict[str, Any] = {
+            "rows": np.array(rows, dtype=np.int64),
+            "stats": np.array([results[r][0] for r in rows], dtype=np.int64).reshape(-1, 2),
+            "status": np.array([results[r][1] for r in rows], dtype=np.int8),
+            "messages": np.array([results[r][4] for r in rows], dtype=str),
+        }
+        for r in rows:
+            if results[r][1] == 0:
+                arrays[f"v{r}"] = results[r][2]
+                arrays[f"s{r}"] = results[r][3]
+        with atomic_path(self.folder / f"batch-{rows[0]:08d}.npz") as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **arrays)
+
+    def remove(self) -> None:
+        """Delete the checkpoint folder (once the output is written)."""
+        if self.folder is not None:
+            remove_owned(self.folder, _CKPT_KIND)

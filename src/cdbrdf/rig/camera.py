@@ -1,0 +1,130 @@
+"""The rig's camera and light, and what an ideal measurement of one photograph gives.
+
+The camera is orthographic and looks at the stand's centre (the origin) from
+the row's view direction from :data:`CAMERA_DISTANCE_MM` away; it is shifted
+so that the centre falls on the middle of pixel ``(size // 2, size // 2)``.
+Its image "up" is +z, or +y for a camera on the normal (:func:`camera_up`).
+The light is directional, from the row's light direction.
+
+:func:`expected_patch_value` integrates the table over the local directions
+the N x N patch of that camera sees on the stand's face: the ideal
+(noise-free, shadow-free) measurement the end-to-end tests compare with.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..frames import angles_from_direction, direction_from_angles
+from ..measure.stands import Stand
+from ..table import CDBRDF
+from .stands import surface_hits
+
+__all__ = ["CAMERA_DISTANCE_MM", "camera_up", "sensor_to_world", "light_to_world", "expected_patch_value"]
+
+#: Distance of the (orthographic) camera from the stand's centre, mm.
+CAMERA_DISTANCE_MM = 60.0
+
+
+def camera_up(v: NDArray) -> NDArray[np.float64]:
+    """The image's up vector for a camera in direction ``v``: +z, or +y when ``v`` is the normal."""
+    return np.array([0.0, 0.0, 1.0]) if math.hypot(v[0], v[1]) > 1e-6 else np.array([0.0, 1.0, 0.0])
+
+
+def _up_for(d: NDArray) -> list[float]:
+    """An up vector for the light's frame that is not parallel to ``d``."""
+    return [0.0, 1.0, 0.0] if abs(d[1]) < 0.9 else [1.0, 0.0, 0.0]
+
+
+def sensor_to_world(mi, v: NDArray, size: int, field_mm: float):  # noqa: ANN001, ANN201
+    """The orthographic sensor's transform for a camera in direction ``v``, ``field_mm`` wide.
+
+    ``mi`` is the :mod:`mitsuba` module (its variant set). The centre of
+    pixel ``(size // 2, size // 2)`` lies on the optical axis, which passes
+    through the stand's centre.
+    """
+    T = mi.ScalarTransform4f
+    px = field_mm / size
+    shift = (size // 2 + 0.5 - 0.5 * size) * px  # centre of pixel size//2 on the optical axis
+    up = camera_up(v).tolist()
+    return (
+        T().look_at(origin=list(v * CAMERA_DISTANCE_MM), target=[0.0, 0.0, 0.0], up=up)
+        @ T().translate([shift, shift, 0.0])
+        @ T().scale([0.5 * field_mm, 0.5 * field_mm, 1.0])
+    )
+
+
+def light_to_world(mi, l: NDArray):  # noqa: ANN001, ANN201, E741
+    """The directional light's transform for light arriving from direction ``l``."""
+    T = mi.ScalarTransform4f
+    return T().look_at(origin=[0.0, 0.0, 0.0], target=list(-l), up=_up_for(l))
+
+
+def expected_patch_value(
+    table: CDBRDF,
+    stand: Stand,
+    theta_v: float,
+    phi_v: float,
+    theta_l: float,
+    phi_l: float,
+    *,
+    size: int = 64,
+    field_mm: float = 2.0,
+    n: int = 7,
+    sub: int = 4,
+) -> NDArray[np.float64]:
+    """What an ideal (noise-free) measurement of one rig photograph gives.
+
+    The N x N patch of the rig's camera covers a small area of the stand's
+    face, over which the normal turns on a curved stand; the measurement
+    therefore averages the table over nearby local directions. This
+    integrates ``f(v_local, l_local, kappa) * cos(theta_l_local)`` over the
+    patch (``sub x sub`` points per pixel, shadows ignored) and divides by
+    ``cos(theta_l)`` at the centre, as :func:`cdbrdf.measure.measure` does.
+    With a tiny field it tends to the table's own value at the grid node.
+
+    Parameters
+    ----------
+    table
+        The material the rig renders.
+    stand
+        The stand the photograph shows.
+    theta_v, phi_v, theta_l, phi_l
+        The row's view and light directions, degrees.
+    size, field_mm
+        The rig's image size (pixels) and field width at the stand (mm).
+    n
+        Patch size N, pixels.
+    sub
+        Integration points per pixel along each side.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(channels,)``.
+    """
+    v = direction_from_angles(theta_v, phi_v)
+    light = direction_from_angles(theta_l, phi_l)
+    up = camera_up(v)
+    fwd = -v
+    left = np.cross(up, fwd)
+    left /= np.linalg.norm(left)
+    cam_up = np.cross(fwd, left)
+    px = field_mm / size
+    k = n * sub
+    off = (np.arange(k) + 0.5) / sub - 0.5 * n  # pixel units, centred on the patch
+    a, b = np.meshgrid(off * px, off * px, indexing="ij")
+    origins = a.reshape(-1, 1) * left + b.reshape(-1, 1) * cam_up
+    _p, nrm, tx = surface_hits(stand, origins, v)
+    ty = np.cross(nrm, tx)
+    loc_v = np.stack([tx @ v, ty @ v, nrm @ v], axis=-1)
+    loc_l = np.stack([tx @ light, ty @ light, nrm @ light], axis=-1)
+    tv, pv = angles_from_direction(loc_v)
+    tl, pl = angles_from_direction(loc_l)
+    ok = (tv < 90.0) & (tl < 90.0)
+    f = table.evaluate(np.minimum(tv, 90.0), pv, np.minimum(tl, 90.0), pl, stand.kappa)
+    rad = np.where(ok[:, None], f * np.maximum(loc_l[:, 2], 0.0)[:, None], 0.0)
+    return rad.mean(axis=0) / math.cos(math.radians(theta_l))

@@ -1,0 +1,86 @@
+"""The rig's Mitsuba 3 scenes: a stand with the fabric on it, or the white reference plate.
+
+One scene per stand is loaded once; the camera and light are then moved
+through :func:`mitsuba.traverse` between renders (``sensor.to_world``,
+``light.to_world``; :mod:`cdbrdf.rig.camera`), so the traced kernels are
+reused. The ``direct`` integrator traces shadow rays, so on a concave stand
+the walls and the trough shadow the centre at grazing light, and at grazing
+views the camera sees the trough or a wall instead of the centre: the
+paper's artefact appears by itself. The functions take the :mod:`mitsuba`
+and :mod:`cdbrdf.render` modules as arguments (imported, with the variant
+set, by the caller), so importing this module loads neither.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..measure.stands import Stand
+from ..table import CDBRDF
+from .camera import sensor_to_world
+from .stands import stand_meshes
+
+__all__ = ["STAND_REFLECTANCE", "stand_scene", "white_scene"]
+
+#: Diffuse reflectance of the white stand body.
+STAND_REFLECTANCE = 0.8
+
+
+def _mi_mesh(mi, name: str, m: dict[str, NDArray], bsdf: Any):  # noqa: ANN001, ANN202
+    """A Mitsuba mesh from a mesh of :func:`~cdbrdf.rig.stands.stand_meshes`, with ``bsdf``."""
+    mesh = mi.Mesh(name, vertex_count=m["positions"].shape[0], face_count=m["faces"].shape[0],
+                   has_vertex_normals=True, has_vertex_texcoords=True)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = m["positions"].astype(np.float32).ravel()
+    params["vertex_normals"] = m["normals"].astype(np.float32).ravel()
+    params["vertex_texcoords"] = m["uv"].astype(np.float32).ravel()
+    params["faces"] = m["faces"].ravel()
+    params.update()
+    mesh.set_bsdf(bsdf)
+    return mesh
+
+
+def _scene(mi, cr, parts: dict[str, Any], *, size: int, field_mm: float, spp: int):  # noqa: ANN001, ANN202
+    """The rig's scene with ``parts`` (shapes by name): the ``direct`` integrator, the camera, the light."""
+    d = {
+        "type": "scene",
+        "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
+        "sensor": {
+            "type": "orthographic",
+            "to_world": sensor_to_world(mi, np.array([0.0, 0.0, 1.0]), size, field_mm),
+            "near_clip": 1.0,
+            "far_clip": 1000.0,
+            "film": {"type": "hdrfilm", "width": size, "height": size, "rfilter": {"type": "box"},
+                     "pixel_format": "rgb"},
+            "sampler": {"type": "stratified", "sample_count": spp},
+        },
+        "light": {"type": "directional", "direction": [0.0, 0.0, -1.0],
+                  "irradiance": {"type": "rgb", "value": 1.0}},
+    }
+    d.update(parts)
+    return cr.load_dict(d)
+
+
+def stand_scene(mi, cr, table: CDBRDF, stand: Stand, **kw: Any):  # noqa: ANN001, ANN201
+    """The scene of a stand: the fabric (the ``cdbrdf`` BSDF at its curvature), the white body.
+
+    ``mi`` is :mod:`mitsuba`, ``cr`` :mod:`cdbrdf.render` (variant set);
+    ``kw``: ``size``, ``field_mm``, ``spp``.
+    """
+    fabric = cr.make_bsdf(table, mode="cdbrdf", curvature=float(stand.kappa))
+    white = mi.load_dict({"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {
+        "type": "rgb", "value": STAND_REFLECTANCE}}})
+    parts = {}
+    for name, m in stand_meshes(stand).items():
+        parts[name] = _mi_mesh(mi, name, m, fabric if name == "fabric" else white)
+    return _scene(mi, cr, parts, **kw)
+
+
+def white_scene(mi, cr, albedo: float, **kw: Any):  # noqa: ANN001, ANN201
+    """The scene of the white reference: a Lambertian plate of ``albedo`` (arguments as :func:`stand_scene`)."""
+    plate = {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale([30.0, 30.0, 1.0]),
+             "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": float(albedo)}}}
+    return _scene(mi, cr, {"plate": plate}, **kw)

@@ -1,0 +1,105 @@
+"""The rig's sensor: photon and read noise, quantisation, and the photographs written.
+
+The linear pixel value ``x = gain * exposure * L`` is turned into electrons
+``x * full_well``, gets photon (Poisson) and read (Gaussian) noise
+(:class:`NoiseModel`), is clipped to [0, 1], sRGB-encoded and quantised
+(:func:`encode`): 16-bit PNG by default; 8-bit PNG, 16-bit TIFF, or linear
+float OpenEXR without clipping (:data:`IMAGE_KINDS`). The files are written
+with the readers' own writers (:mod:`cdbrdf.measure.images`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..measure.images import linear_to_srgb, write_exr, write_png, write_tiff
+
+__all__ = ["IMAGE_KINDS", "NoiseModel", "encode", "extension", "write_photograph"]
+
+#: Image kinds the rig writes: kind -> description.
+IMAGE_KINDS: dict[str, str] = {
+    "png16": "16-bit sRGB PNG",
+    "png8": "8-bit sRGB PNG",
+    "tif16": "16-bit sRGB TIFF (uncompressed)",
+    "exr": "linear float32 OpenEXR",
+}
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """Sensor noise: photon (Poisson) noise of ``full_well`` electrons at full scale, plus read noise.
+
+    Parameters
+    ----------
+    full_well
+        Electrons at the largest code (linear value 1.0); ``0`` disables noise.
+    read_e
+        Standard deviation of the read noise, electrons.
+    """
+
+    full_well: float = 20000.0
+    read_e: float = 3.0
+
+    @classmethod
+    def parse(cls, text: str) -> "NoiseModel":
+        """``"none"`` or ``"FULL_WELL[,READ]"`` (electrons), e.g. ``"20000,3"``."""
+        t = text.strip().lower()
+        if t in ("none", "off", "0"):
+            return cls(0.0, 0.0)
+        parts = t.split(",")
+        try:
+            vals = [float(p) for p in parts]
+        except ValueError:
+            raise ValueError(f"noise: expected 'none' or 'FULL_WELL[,READ]', got {text!r}") from None
+        if len(vals) > 2 or vals[0] <= 0 or (len(vals) == 2 and vals[1] < 0):
+            raise ValueError(f"noise: expected 'none' or 'FULL_WELL[,READ]' (positive), got {text!r}")
+        return cls(vals[0], vals[1] if len(vals) == 2 else cls.read_e)
+
+    @property
+    def enabled(self) -> bool:
+        """False when the images are noise-free."""
+        return self.full_well > 0
+
+    def apply(self, x: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.float64]:
+        """Noisy linear values (not clipped)."""
+        if not self.enabled:
+            return x
+        e = np.maximum(x, 0.0) * self.full_well
+        noisy = rng.poisson(e).astype(np.float64) + rng.normal(0.0, self.read_e, size=x.shape)
+        return noisy / self.full_well
+
+
+def encode(x: NDArray[np.float64], kind: str) -> tuple[NDArray, int]:
+    """Codes of linear values for an image kind (:data:`IMAGE_KINDS`) and the number of saturated pixels.
+
+    Integer kinds clip to [0, 1], sRGB-encode and quantise; a pixel with any
+    channel at the largest code counts as saturated. ``exr`` keeps the linear
+    values (float32, unclipped).
+    """
+    if kind == "exr":
+        return x.astype(np.float32), 0
+    top = 65535 if kind in ("png16", "tif16") else 255
+    c = np.clip(x, 0.0, 1.0)
+    codes = np.round(linear_to_srgb(c) * top)
+    sat = int(np.count_nonzero(np.any(codes >= top, axis=-1)))
+    return codes.astype(np.uint16 if top == 65535 else np.uint8), sat
+
+
+def write_photograph(path: Path, codes: NDArray, kind: str) -> None:
+    """Write the codes of :func:`encode` as an image of ``kind`` (its folder created)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if kind in ("png16", "png8"):
+        write_png(path, codes, level=1)
+    elif kind == "tif16":
+        write_tiff(path, codes)
+    else:
+        write_exr(path, codes)
+
+
+def extension(kind: str) -> str:
+    """The file extension (no dot) of an image kind."""
+    return {"png16": "png", "png8": "png", "tif16": "tif", "exr": "exr"}[kind]

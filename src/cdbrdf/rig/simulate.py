@@ -1,0 +1,290 @@
+"""Simulated captures: :func:`simulate_capture` renders a capture folder of a known material.
+
+For every row of a capture plan (``docs/capture.md``) the rig renders one
+photograph with the row's camera and light (:mod:`cdbrdf.rig.scenes`,
+:mod:`cdbrdf.rig.camera`), adds sensor noise and writes it
+(:mod:`cdbrdf.rig.sensor`); white-reference rows render a flat Lambertian
+plate of albedo ``white_albedo``; dark rows render nothing (noise only).
+The capture table and ``stands.json`` are written with
+:mod:`cdbrdf.measure.capture` and :mod:`cdbrdf.measure.stands`, so the
+folder reads back with :func:`cdbrdf.measure.measure`.
+"""
+
+from __future__ import annotations
+
+import shutil
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..frames import direction_from_angles
+from ..measure.capture import CAPTURE_FILE, STAND_FILE, read_rows, row_kind, write_plan, write_rows
+from ..measure.images import FORMATS
+from ..measure.stands import KAPPA_TOL_PER_MM, Stand, default_stand, read_stands, stand_for, write_stands
+from ..table import CDBRDF, Grid
+from .camera import light_to_world, sensor_to_world
+from .scenes import stand_scene, white_scene
+from .sensor import IMAGE_KINDS, NoiseModel, encode, extension, write_photograph
+
+__all__ = ["SimulationReport", "simulate_capture", "load_material"]
+
+
+@dataclass
+class SimulationReport:
+    """What :func:`simulate_capture` wrote."""
+
+    folder: Path
+    n_images: int = 0
+    n_white: int = 0
+    n_dark: int = 0
+    n_saturated_pixels: int = 0
+    seconds_rendering: float = 0.0
+    files: list[str] = field(default_factory=list)
+
+    def summary(self) -> str:
+        """One line."""
+        return (
+            f"{self.folder}: {self.n_images} photographs ({self.n_white} white references, "
+            f"{self.n_dark} dark frames), {self.n_saturated_pixels} saturated pixels, "
+            f"{self.seconds_rendering:.1f} s rendering"
+        )
+
+
+def load_material(material: CDBRDF | str | PathLike[str]) -> CDBRDF:
+    """A table from a :class:`CDBRDF`, a CDBRDF file or a preset name (:mod:`cdbrdf.materials`)."""
+    if isinstance(material, CDBRDF):
+        return material
+    p = Path(material)
+    if p.suffix.lower() in (".h5", ".hdf5", ".nc") or p.exists():
+        from ..table import load
+
+        return load(p)
+    try:
+        from .. import materials
+    except ImportError as exc:  # pragma: no cover - the presets module is part of the package
+        raise ValueError(f"material {material!r}: not a file, and presets are unavailable ({exc})") from None
+    return materials.load(str(material))
+
+
+def simulate_capture(
+    material: CDBRDF | str | PathLike[str],
+    folder: str | PathLike[str],
+    *,
+    plan: str | PathLike[str] | None = None,
+    grid: Grid | None = None,
+    stands: Sequence[Stand] | None = None,
+    size: int = 64,
+    field_mm: float = 2.0,
+    spp: int = 4,
+    noise: NoiseModel = NoiseModel(),
+    gain: float = 2.0,
+    exposures: Sequence[float] = (1.0,),
+    image_kind: str = "png16",
+    white_albedo: float = 0.99,
+    white: bool = True,
+    patch_px: int = 7,
+    seed: int = 0,
+    progress: Callable[[int, int], None] | None = None,
+) -> SimulationReport:
+    """Render a capture folder of a material with the simulated rig.
+
+    Parameters
+    ----------
+    material
+        A :class:`CDBRDF`, a CDBRDF file, or a preset name.
+    folder
+        Output capture folder. It is built as a partial folder beside it and
+        swapped in whole once complete (:func:`cdbrdf.report.output_folder`):
+        an earlier capture written by cdbrdf is replaced, a non-empty folder
+        cdbrdf did not make is refused, and an error or interrupt leaves no
+        half-written folder.
+    plan
+        A ``capture.csv`` to render (its ``stands.json``, if beside it, gives
+        the stand geometry). Default: a plan for ``grid`` (default the
+        material's own grid) and ``stands`` (default: one per kappa of the
+        grid, default geometry), written like ``cdbrdf plan``.
+    size
+        Image width and height in pixels.
+    field_mm
+        Width of the camera's field at the stand, mm; ``field_mm / size``
+        (the pixel size) is written to ``stands.json`` as ``pixel_mm``, so
+        that the measurement discards photographs in which any pixel of the
+        patch sees a wall or lies in its shadow.
+    spp
+        Stratified samples per pixel (integrate each pixel's footprint; box filter).
+    noise
+        Sensor noise; ``NoiseModel(0, 0)`` for none.
+    gain
+        Linear pixel value per unit radiance at exposure 1.
+    exposures
+        Without ``plan``: the exposures of each sample and white photograph
+        (several make brackets, each rendered once and given its own noise).
+    image_kind
+        One of :data:`~cdbrdf.rig.sensor.IMAGE_KINDS`.
+    white_albedo
+        Albedo of the white reference plate (written to ``stands.json``).
+    white
+        Without ``plan``: add white-reference rows.
+    patch_px
+        Without ``plan``: the patch size the plan's ``hidden`` marks assume.
+    seed
+        Noise seed (each photograph draws from ``(seed, row)``).
+    progress
+        ``progress(done, total)`` after each photograph.
+    """
+    if image_kind not in IMAGE_KINDS:
+        raise ValueError(f"image_kind: {image_kind!r} is not one of {', '.join(IMAGE_KINDS)}")
+    if size < 8:
+        raise ValueError(f"size: must be at least 8 pixels, got {size}")
+    if not (field_mm > 0 and gain > 0 and spp >= 1):
+        raise ValueError("field_mm, gain and spp must be positive")
+    from ..report import check_output_folder, output_folder
+
+    final = check_output_folder(folder)  # refuse a foreign folder before any work
+    table = load_material(material)
+    with output_folder(final) as partial:
+        rep = _fill_capture(
+            partial, table, plan=plan, grid=grid, stands=stands, size=size, field_mm=field_mm,
+            spp=spp, noise=noise, gain=gain, exposures=exposures, image_kind=image_kind,
+            white_albedo=white_albedo, white=white, patch_px=patch_px, seed=seed,
+            progress=progress,
+        )
+    rep.folder = final
+    return rep
+
+
+def _fill_capture(
+    out: Path,
+    table: CDBRDF,
+    *,
+    plan: str | PathLike[str] | None,
+    grid: Grid | None,
+    stands: Sequence[Stand] | None,
+    size: int,
+    field_mm: float,
+    spp: int,
+    noise: NoiseModel,
+    gain: float,
+    exposures: Sequence[float],
+    image_kind: str,
+    white_albedo: float,
+    white: bool,
+    patch_px: int,
+    seed: int,
+    progress: Callable[[int, int], None] | None,
+) -> SimulationReport:
+    """Write the capture into the (empty, partial) folder ``out``; see :func:`simulate_capture`."""
+    ext = extension(image_kind)
+    if plan is not None:
+        rows, stand_list = _copy_plan(Path(plan), out, ext)
+    else:
+        g = grid if grid is not None else table.grid
+        stand_list = list(stands) if stands is not None else [default_stand(k) for k in g.kappa]
+        rows = write_plan(out, g, stand_list, extension=ext, white=white,
+                          pixel_mm=field_mm / size, patch_px=patch_px, exposures=exposures)
+    write_stands(out / STAND_FILE, stand_list, white_albedo=float(white_albedo),
+                 material=str(table.attrs.get("material", "unknown")), simulated=True,
+                 pixel_mm=field_mm / size)
+
+    import cdbrdf.render as cr
+
+    cr.set_variant()
+    import mitsuba as mi
+
+    kw = {"size": size, "field_mm": field_mm, "spp": spp}
+    rep = SimulationReport(out)
+    by_scene: dict[Any, list[int]] = {}
+    for i, r in enumerate(rows):
+        kind = row_kind(r)
+        key = "dark" if kind == "dark" else ("white" if kind == "white" else float(r["kappa"]))
+        by_scene.setdefault(key, []).append(i)
+    total = len(rows)
+    done = 0
+    t0 = time.perf_counter()
+    for key, idx in by_scene.items():
+        if key == "dark":
+            scene = None
+        elif key == "white":
+            scene = white_scene(mi, cr, white_albedo, **kw)
+        else:
+            scene = stand_scene(mi, cr, table, stand_for(stand_list, key), **kw)
+        params = mi.traverse(scene) if scene is not None else None
+        for i in idx:
+            r = rows[i]
+            exposure = float(r.get("exposure") or 1.0)
+            if scene is None or params is None:
+                lin = np.zeros((size, size, 3))
+                rep.n_dark += 1
+            else:
+                v = direction_from_angles(float(r["theta_v"]), float(r["phi_v"]))
+                light = direction_from_angles(float(r["theta_l"]), float(r["phi_l"]))
+                params["sensor.to_world"] = sensor_to_world(mi, v, size, field_mm)
+                params["light.to_world"] = light_to_world(mi, light)
+                params.update()
+                img = np.asarray(mi.render(scene, seed=(seed * 1000003 + i) % 2**32),  # type: ignore[arg-type]
+                                 dtype=np.float64)
+                lin = img[..., :3] * gain * exposure
+                if key == "white":
+                    rep.n_white += 1
+            rng = np.random.default_rng([int(seed), i])
+            lin = noise.apply(lin, rng)
+            codes, nsat = encode(lin, image_kind)
+            rep.n_saturated_pixels += nsat
+            write_photograph(out / r["file"], codes, image_kind)
+            rep.files.append(r["file"])
+            rep.n_images += 1
+            done += 1
+            if progress is not None:
+                progress(done, total)
+    rep.seconds_rendering = time.perf_counter() - t0
+    return rep
+
+
+def _copy_plan(plan_path: Path, out: Path, ext: str) -> tuple[list[dict[str, str]], list[Stand]]:
+    """Put a given plan into ``out`` as the capture table; its rows and the stands to render.
+
+    The stands come from the plan's ``stands.json`` (when beside it); a
+    sample curvature it does not describe gets the default stand.
+    """
+    if not plan_path.is_file():
+        raise FileNotFoundError(f"{plan_path}: no such capture plan")
+    columns, rows = read_rows(plan_path)
+    src_stands = plan_path.parent / STAND_FILE
+    stand_map = read_stands(src_stands) if src_stands.is_file() else {}
+    if _match_extension(plan_path, rows, ext):
+        # file names renamed to the image kind's extension: write the plan as rendered
+        write_rows(out / CAPTURE_FILE, rows, columns)
+    elif plan_path.resolve() != (out / CAPTURE_FILE).resolve():
+        shutil.copyfile(plan_path, out / CAPTURE_FILE)
+    kappas = sorted({float(r["kappa"]) for r in rows if row_kind(r) == "sample"})
+    for k in kappas:
+        if not any(abs(k - s) <= KAPPA_TOL_PER_MM for s in stand_map):
+            stand_map[k] = default_stand(k)
+    return rows, [stand_map[s] for s in sorted(stand_map)]
+
+
+def _match_extension(plan: Path, rows: list[dict[str, str]], ext: str) -> bool:
+    """Give every row's file the extension of the image kind (``a.png`` -> ``a.tif``); True if any changed.
+
+    A plan names its photographs ``.png`` (``cdbrdf plan``'s default): rendered
+    as TIFF or EXR they must not be written under a name whose extension
+    selects another format. Refuses renames that would make two rows share a file.
+    """
+    want = FORMATS["." + ext]
+    changed = False
+    for r in rows:
+        name = r["file"]
+        if FORMATS.get(Path(name).suffix.lower()) != want:
+            r["file"] = str(Path(name).with_suffix("." + ext).as_posix())
+            changed = True
+    if changed:
+        names = [r["file"] for r in rows]
+        if len(set(names)) != len(names):
+            dup = next(n for n in names if names.count(n) > 1)
+            raise ValueError(f"{plan}: giving the files the .{ext} extension makes two rows share {dup}")
+    return changed

@@ -1,0 +1,240 @@
+"""The capture folder's format (cdbrdf.measure.capture): rows, grid, stands.json settings, plans, brackets."""
+
+from __future__ import annotations
+
+import csv
+
+import pytest
+
+from cdbrdf import Grid
+from cdbrdf.cli import main
+from cdbrdf.measure import CaptureError, measure
+from cdbrdf.measure.capture import (
+    PLAN_COLUMNS,
+    bracket_rows,
+    plan_rows,
+    read_capture,
+    read_rows,
+    row_kind,
+    write_plan,
+)
+from cdbrdf.measure.stands import Stand, read_stands
+
+from .measure_helpers import (
+    SMALL,
+    make_capture,
+    pixel,
+    write_csv,
+)
+
+
+@pytest.mark.parametrize("edit,msg", [
+    (lambda r: r.pop("theta_v"), "missing column"),
+    (lambda r: r.update(kind="flat"), "kind 'flat' is not one of sample, white, dark"),
+    (lambda r: r.update(theta_l="abc"), "line 2: column 'theta_l': 'abc' is not a number"),
+    (lambda r: r.update(theta_v=95), "outside"),
+    (lambda r: r.update(file="x.jpg"), "unsupported extension"),
+    (lambda r: r.update(exposure=-1), "exposure must be positive"),
+    (lambda r: r.update(exposure=1e-320), r"exposure 9.99989e-321 is outside \[1e-9, 1e9\]"),
+])
+def test_capture_table_errors(tmp_path, edit, msg):
+    r = dict(file="a.png", kappa=0, theta_v=0, phi_v=0, theta_l=0, phi_l=0)
+    edit(r)
+    write_csv(tmp_path / "capture.csv", [r])
+    with pytest.raises(CaptureError, match=msg):
+        measure(tmp_path)
+
+
+def test_uneven_azimuths_are_refused(tmp_path):
+    rows = [dict(file=f"{p}.png", kappa=0, theta_v=30, phi_v=p, theta_l=0, phi_l=0) for p in (0, 90, 200)]
+    write_csv(tmp_path / "capture.csv", rows)
+    with pytest.raises(CaptureError, match="do not form a table grid"):
+        read_capture(tmp_path)
+
+
+# --------------------------------------------------------------------------- capture table hardening
+def _stray(rows, **edit):
+    r = dict(rows[0], **edit)
+    rows.insert(5, r)
+    return rows
+
+
+@pytest.mark.parametrize("edit,axis", [
+    (dict(theta_v=31), "theta_v = 31"),
+    (dict(kappa=0.25), "kappa = 0.25"),
+    (dict(theta_l=41), "theta_l = 41"),
+    (dict(phi_v=45), "phi_v = 45"),  # would also make the azimuths uneven
+])
+def test_stray_row_that_grows_the_grid_is_refused(tmp_path, edit, axis):
+    rows = make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    write_csv(tmp_path / "capture.csv", _stray(rows, **edit))
+    with pytest.raises(CaptureError, match=rf"capture.csv: line 7: {axis} is used by 1 sample condition"):
+        read_capture(tmp_path)
+
+
+def test_explicit_grid_in_stand_file(tmp_path):
+    rows = make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    write_csv(tmp_path / "capture.csv", _stray(rows, theta_v=31))
+    axes = {n: list(getattr(SMALL, n)) for n in ("kappa", "theta_l", "phi_l", "theta_v", "phi_v")}
+    axes["theta_v"] = [0, 30, 31, 60]
+    (tmp_path / "stands.json").write_text(__import__("json").dumps({"grid": axes}))
+    cap = read_capture(tmp_path)  # listed: accepted
+    assert list(cap.grid.theta_v) == [0, 30, 31, 60]
+    axes["theta_v"] = [0, 30, 60, 75]  # 31 not listed; 75 listed but not photographed
+    (tmp_path / "stands.json").write_text(__import__("json").dumps({"grid": axes}))
+    with pytest.raises(CaptureError, match="line 7: theta_v = 31 is not on the grid of stands.json"):
+        read_capture(tmp_path)
+    write_csv(tmp_path / "capture.csv", rows[:5] + rows[6:])
+    table, rep = measure(tmp_path)
+    assert list(table.grid.theta_v) == [0, 30, 60, 75] and rep.n_not_photographed == table.measured.size // 4
+    (tmp_path / "stands.json").write_text('{"grid": {"kappa": [0]}}')
+    with pytest.raises(CaptureError, match="grid: expected an object with the lists"):
+        read_capture(tmp_path)
+
+
+@pytest.mark.parametrize("doc,msg", [
+    ({"stands": [{"kappa": 0.0}, {"kappa": 0.2}], "pixel_mm": 1e308}, r"pixel_mm: expected a number in \[0, 10\]"),
+    ({"stands": [{"kappa": 0.0}, {"kappa": 0.2}], "pixel_mm": -0.01}, "pixel_mm"),
+    ({"stands": [{"kappa": 0.0}, {"kappa": 0.2}], "pixel_mm": True}, "pixel_mm"),
+    ({"stands": [{"kappa": 0.0}, {"kappa": 0.2, "face_width_mm": 0}]}, "stand 1: .*must be positive"),
+    ({"stands": [{"kappa": 0.0}, {"kappa": -0.2}]}, "no stand for kappa 0.2"),
+    ({"white_albedo": 0}, r"white_albedo: expected a number in \(0, 1.5\]"),
+    ({"white_albedo": "high"}, "white_albedo"),
+    ({"encoding": "gamma"}, "encoding: 'gamma' is not one of"),
+    ({"material": {"a": 1}}, "material: expected a printable name"),
+])
+def test_stand_file_values_are_checked(tmp_path, doc, msg):
+    make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    (tmp_path / "stands.json").write_text(__import__("json").dumps(doc))
+    with pytest.raises(CaptureError, match=msg) as exc:
+        measure(tmp_path)
+    assert "stands.json" in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_stand_file_deeply_nested_or_huge(tmp_path, monkeypatch):
+    from cdbrdf.errors import LimitError
+
+    make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    (tmp_path / "stands.json").write_text('{"stands": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    with pytest.raises(CaptureError, match="stands.json: not valid JSON .nested too deeply."):
+        read_capture(tmp_path)
+    monkeypatch.setenv("CDBRDF_MAX_JSON_BYTES", "1000")
+    with pytest.raises(LimitError, match="stands.json.*CDBRDF_MAX_JSON_BYTES"):
+        read_capture(tmp_path)
+
+
+def test_capture_rows_limit(tmp_path, monkeypatch):
+    from cdbrdf.errors import LimitError
+
+    make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    read_capture(tmp_path)
+    monkeypatch.setenv("CDBRDF_MAX_CAPTURE_ROWS", "50")
+    with pytest.raises(LimitError, match=r"capture.csv: a table of: 96 rows exceed the limit of 50"):
+        read_capture(tmp_path)
+
+
+@pytest.mark.parametrize("mangle,msg", [
+    (lambda b: b.replace(b"s/0_0_0_0_1", b"s/0_0\x00_0_0_1"), "line 3: NUL byte"),
+    (lambda b: b.replace(b"s/0_0_0_0_2", b"s/\xe90_0_0_0_2"), r"line 4: not UTF-8 text \(byte 0xe9\)"),
+    (lambda b: b.decode().encode("utf-16"), "UTF-16 text"),
+    (lambda b: b.replace(b"s/0_0_0_0_1.exr", b'"s/0_0_0_0_1.exr' + b"x" * 200_000), "line 3: not valid CSV"),
+    (lambda b: b.replace(b"s/0_0_0_0_1.exr", b"s/0_0_0_0_1\x07.exr"), "line 3: file .* contains control"),
+    (lambda b: b.replace(b"s/0_0_0_0_1.exr,0.0,", b"s/0_0_0_0_1.exr,1e400,"), "line 3: column 'kappa'.* not finite"),
+    (lambda b: b.replace(b"s/0_0_0_0_1.exr,0.0,", b"s/0_0_0_0_1.exr,0.0,,,"), "line 3: more fields"),
+])
+def test_capture_table_bytes(tmp_path, mangle, msg):
+    make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    p = tmp_path / "capture.csv"
+    p.write_bytes(mangle(p.read_bytes()))
+    with pytest.raises(CaptureError, match=msg) as exc:
+        read_capture(tmp_path)
+    assert str(p) in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_capture_table_utf8_bom_and_blank_lines(tmp_path):
+    make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    p = tmp_path / "capture.csv"
+    ref = read_capture(tmp_path)
+    lines = p.read_bytes().split(b"\n")
+    p.write_bytes(b"\xef\xbb\xbf" + b"\n".join(lines[:3] + [b""] + lines[3:]))
+    cap = read_capture(tmp_path)
+    assert cap.grid == ref.grid and [r.file for r in cap.rows] == [r.file for r in ref.rows]
+    assert cap.rows[2].line == ref.rows[2].line + 1  # the physical line, blank line counted
+
+
+# --------------------------------------------------------------------------- plans
+def test_write_plan_and_read_stands(tmp_path):
+    g = Grid.regular(theta_step_deg=30, phi_step_deg=90, theta_max_deg=60, kappa=[-0.22, 0.22])
+    rows = write_plan(tmp_path, g, [Stand(-0.22), Stand(0.22)])
+    with open(tmp_path / "capture.csv") as fh:
+        got = list(csv.DictReader(fh))
+    assert len(got) == len(rows) == 2 * 12 * 12 + 12
+    assert {r["kind"] for r in got} == {"sample", "white"}
+    assert len({r["file"] for r in got}) == len(got)
+    hidden = [r for r in got if r["hidden"]]
+    assert hidden and all(float(r["kappa"]) == -0.22 for r in hidden)
+    stands = read_stands(tmp_path / "stands.json")
+    assert set(stands) == {-0.22, 0.22}
+
+
+def test_plan_rows_extension():
+    g = Grid.regular(theta_step_deg=30, phi_step_deg=180, theta_max_deg=30, kappa=[0.0])
+    assert plan_rows(g, [Stand(0.0)], extension="exr")[0]["file"].endswith(".exr")
+    with pytest.raises(ValueError, match="not one of"):
+        plan_rows(g, [Stand(0.0)], extension="jpg")
+
+
+def test_cli_plan(tmp_path, capsys):
+    out = tmp_path / "p"
+    assert main(["plan", "-o", str(out), "--theta-step", "30", "--phi-step", "90"]) == 0
+    text = capsys.readouterr().out
+    assert "kappa -0.22 1/mm" in text and (out / "plan.png").stat().st_size > 0
+    assert main(["plan", "-o", str(out)]) == 2  # exists
+    assert "already exists" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- brackets and re-written plans
+def test_bracket_rows():
+    rows = [dict(file="k0/a.png", kind="sample", exposure="1"), dict(file="white/w.tif", kind="white", exposure="1"),
+            dict(file="d.exr", kind="dark", exposure="2")]
+    got = bracket_rows(rows, [1.0, 0.25])
+    assert [(r["file"], r["exposure"]) for r in got] == [
+        ("k0/a_e0.png", "1"), ("k0/a_e1.png", "0.25"), ("white/w_e0.tif", "1"), ("white/w_e1.tif", "0.25"),
+        ("d.exr", "2")]
+    assert rows[0]["file"] == "k0/a.png"  # the input is not changed
+
+
+def test_write_plan_with_exposures_writes_brackets(tmp_path):
+    g = Grid.regular(theta_step_deg=30, phi_step_deg=180, theta_max_deg=30, kappa=[0.0])
+    rows = write_plan(tmp_path, g, [Stand(0.0)], exposures=(1.0, 0.25))
+    assert rows == bracket_rows(plan_rows(g, [Stand(0.0)]), [1.0, 0.25])
+    with open(tmp_path / "capture.csv", newline="") as fh:
+        assert next(csv.reader(fh)) == list(PLAN_COLUMNS)
+    cap = read_capture(tmp_path)
+    groups = cap.brackets("sample")
+    assert len(groups) == g.theta_l.size * g.phi_l.size * g.theta_v.size * g.phi_v.size
+    assert all([cap.rows[i].exposure for i in idx] == [1.0, 0.25] for idx in groups.values())
+    assert len(cap.brackets("white")) == g.theta_l.size * g.phi_l.size
+    assert write_plan(tmp_path, g, [Stand(0.0)], exposures=(1.0,)) == plan_rows(g, [Stand(0.0)])
+
+
+def test_read_rows_keeps_the_text(tmp_path):
+    g = Grid.regular(theta_step_deg=30, phi_step_deg=180, theta_max_deg=30, kappa=[0.0])
+    rows = write_plan(tmp_path, g, [Stand(0.0)])
+    columns, got = read_rows(tmp_path / "capture.csv")
+    assert columns == list(PLAN_COLUMNS) and got == rows
+    p = tmp_path / "capture.csv"
+    p.write_text("file,kappa,theta_v,phi_v,theta_l\na.png,0,0,0,0\n")
+    with pytest.raises(CaptureError, match="missing column.* phi_l"):
+        read_rows(p)
+    p.write_text("file,kappa,theta_v,phi_v,theta_l,phi_l\na.png,0,0,0,0,0,9\n")
+    with pytest.raises(CaptureError, match="line 2: more fields than columns"):
+        read_rows(p)
+    p.write_bytes(b"file,kappa,theta_v,phi_v,theta_l,phi_l\na.png,0,0\x00,0,0,0\n")
+    with pytest.raises(CaptureError, match="line 2: NUL byte"):
+        read_rows(p)
+
+
+def test_row_kind():
+    assert row_kind({}) == row_kind({"kind": ""}) == row_kind({"kind": " "}) == "sample"
+    assert row_kind({"kind": " White "}) == "white" and row_kind({"kind": None}) == "sample"
