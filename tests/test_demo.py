@@ -198,7 +198,7 @@ def test_work_folder_is_inside_the_partial_output(tmp_path, monkeypatch):
 
 def test_cli_demo_into_the_current_folder_fails_at_once(tmp_path, monkeypatch, capsys):
     from cdbrdf.cli import main
-    from cdbrdf.report import output_folder
+    from cdbrdf.fsutil import output_folder
 
     with output_folder(tmp_path / "earlier") as tmp:
         (tmp / "report.html").write_text("old\n")

@@ -19,7 +19,7 @@ For each material (denim and shot fabric by default):
 7. write ``report.html`` beside the figures.
 
 The output folder is built beside the destination and swapped in whole at
-the end (:func:`cdbrdf.report.output_folder`), so results of different runs
+the end (:func:`cdbrdf.fsutil.output_folder`), so results of different runs
 are never mixed and a failed run leaves the previous one intact. The
 intermediate files (capture plans, and the photographs unless kept) are
 written to a work folder inside that partial folder, so a killed run leaves
@@ -467,7 +467,7 @@ def run_demo(
     """
     from . import materials as mats
     from .render import set_variant
-    from .report import check_output_folder, output_folder
+    from .fsutil import check_output_folder, output_folder
 
     cfg = config or CONFIGS["quick" if quick else "full"]
     unknown = [m for m in materials if m not in mats.names()]

@@ -11,6 +11,11 @@ Three rules every writer in cdbrdf follows:
 3. Temporary names embed the writer's process id
    (``.NAME.<pid>.<random>.<kind>``); :func:`sweep_stale` removes those whose
    process is gone (a run killed with SIGKILL), so nothing piles up.
+
+Output folders of whole runs (``cdbrdf demo``, ``cdbrdf simulate-capture``)
+are built as a partial folder beside the destination and swapped in whole
+(:func:`output_folder`); :func:`check_output_folder` refuses a bad destination
+before any work.
 """
 
 from __future__ import annotations
@@ -36,12 +41,18 @@ __all__ = [
     "remove_owned",
     "sweep_stale",
     "same_file",
+    "check_output_folder",
+    "output_folder",
 ]
 
 _LOG = logging.getLogger(__name__)
 
 #: Name of the marker file in every folder cdbrdf creates.
 OWNER_MARK = ".cdbrdf-owned"
+
+#: Kind (and legacy marker file) of the output folders of :func:`output_folder`.
+_OUTPUT_KIND = "output"
+_OUTPUT_MARKER = ".cdbrdf-output"
 
 _TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<host>[0-9a-f]{8})\.[0-9a-f]{8}\.(?P<kind>[a-z]+)(?:\.[A-Za-z0-9]+)?$")
 
@@ -196,3 +207,77 @@ def same_file(a: str | PathLike[str], b: str | PathLike[str]) -> bool:
         return os.path.samefile(a, b)
     except OSError:
         return Path(a).resolve() == Path(b).resolve()
+
+
+def check_output_folder(path: str | PathLike[str]) -> Path:
+    """Refuse, before any work, an output folder that :func:`output_folder` would refuse.
+
+    Cheap (no file is written), so that a command fails at once instead of
+    after its computation. Returns the folder as a :class:`~pathlib.Path`.
+
+    Raises
+    ------
+    FileExistsError
+        When ``path`` is a file or a link, a non-empty folder cdbrdf did not
+        make, or the current folder (or one that holds it).
+    """
+    dest = Path(path)
+    if dest.exists() or dest.is_symlink():
+        if dest.is_symlink() or not dest.is_dir():
+            raise FileExistsError(f"{dest}: exists and is not a folder")
+        if any(dest.iterdir()) and not _owned(dest):
+            raise FileExistsError(
+                f"{dest}: folder exists, is not empty and was not written by cdbrdf; "
+                "choose another output folder"
+            )
+        cwd = Path.cwd().resolve()
+        if cwd == dest.resolve() or dest.resolve() in cwd.parents:
+            raise FileExistsError(
+                f"{dest}: is the current folder (or holds it) and would be replaced whole; "
+                "run from another folder or choose another output folder"
+            )
+    return dest
+
+
+@contextmanager
+def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
+    """Build an output folder beside ``path`` and swap it in only on success.
+
+    Old results are never mixed with new ones: the new folder replaces a
+    previous cdbrdf output folder whole. A folder that exists, is not empty
+    and was not made by cdbrdf is refused (nothing of the user's is deleted),
+    as is the current folder (:func:`check_output_folder`).
+    On failure (or interrupt) the partial folder is removed and the old one
+    left as it was; partial folders of killed runs (``.NAME.<pid>...partial``,
+    with everything inside them) are removed by the next run.
+
+    Yields
+    ------
+    pathlib.Path
+        The partial folder to fill (marked as cdbrdf's own).
+    """
+    dest = check_output_folder(path)
+    parent = dest.parent if str(dest.parent) else Path(".")
+    parent.mkdir(parents=True, exist_ok=True)
+    sweep_stale(dest)
+    tmp = temp_sibling(dest, "partial")
+    tmp.mkdir(mode=0o777)
+    try:
+        mark_owned(tmp, _OUTPUT_KIND)
+        (tmp / _OUTPUT_MARKER).write_text("written by cdbrdf; the whole folder is replaced on the next run\n")
+        yield tmp
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    if dest.exists():
+        old = temp_sibling(dest, "old")
+        dest.rename(old)
+        tmp.rename(dest)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        tmp.rename(dest)
+
+
+def _owned(folder: Path) -> bool:
+    # folders of cdbrdf <= 0.1 carry only the old marker
+    return is_owned(folder, _OUTPUT_KIND) or (folder / _OUTPUT_MARKER).is_file()

@@ -10,20 +10,13 @@ from __future__ import annotations
 import datetime as _dt
 import html
 import json
-import shutil
-from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from typing import Any
 
-from .fsutil import is_owned, mark_owned, sweep_stale, temp_sibling
-
-__all__ = ["Figure", "Section", "Report", "output_folder", "check_output_folder", "provenance_text"]
-
-_MARKER = ".cdbrdf-output"
-_KIND = "output"
+__all__ = ["Figure", "Section", "Report", "provenance_text"]
 
 _CSS = """
 body { font: 15px/1.5 system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0 auto;
@@ -149,80 +142,6 @@ class Report:
         path = folder / name
         path.write_text(self.to_html(), encoding="utf-8")
         return path
-
-
-def check_output_folder(path: str | PathLike[str]) -> Path:
-    """Refuse, before any work, an output folder that :func:`output_folder` would refuse.
-
-    Cheap (no file is written), so that a command fails at once instead of
-    after its computation. Returns the folder as a :class:`~pathlib.Path`.
-
-    Raises
-    ------
-    FileExistsError
-        When ``path`` is a file or a link, a non-empty folder cdbrdf did not
-        make, or the current folder (or one that holds it).
-    """
-    dest = Path(path)
-    if dest.exists() or dest.is_symlink():
-        if dest.is_symlink() or not dest.is_dir():
-            raise FileExistsError(f"{dest}: exists and is not a folder")
-        if any(dest.iterdir()) and not _owned(dest):
-            raise FileExistsError(
-                f"{dest}: folder exists, is not empty and was not written by cdbrdf; "
-                "choose another output folder"
-            )
-        cwd = Path.cwd().resolve()
-        if cwd == dest.resolve() or dest.resolve() in cwd.parents:
-            raise FileExistsError(
-                f"{dest}: is the current folder (or holds it) and would be replaced whole; "
-                "run from another folder or choose another output folder"
-            )
-    return dest
-
-
-@contextmanager
-def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
-    """Build an output folder beside ``path`` and swap it in only on success.
-
-    Old results are never mixed with new ones: the new folder replaces a
-    previous cdbrdf output folder whole. A folder that exists, is not empty
-    and was not made by cdbrdf is refused (nothing of the user's is deleted),
-    as is the current folder (:func:`check_output_folder`).
-    On failure (or interrupt) the partial folder is removed and the old one
-    left as it was; partial folders of killed runs (``.NAME.<pid>...partial``,
-    with everything inside them) are removed by the next run.
-
-    Yields
-    ------
-    pathlib.Path
-        The partial folder to fill (marked as cdbrdf's own).
-    """
-    dest = check_output_folder(path)
-    parent = dest.parent if str(dest.parent) else Path(".")
-    parent.mkdir(parents=True, exist_ok=True)
-    sweep_stale(dest)
-    tmp = temp_sibling(dest, "partial")
-    tmp.mkdir(mode=0o777)
-    try:
-        mark_owned(tmp, _KIND)
-        (tmp / _MARKER).write_text("written by cdbrdf; the whole folder is replaced on the next run\n")
-        yield tmp
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    if dest.exists():
-        old = temp_sibling(dest, "old")
-        dest.rename(old)
-        tmp.rename(dest)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        tmp.rename(dest)
-
-
-def _owned(folder: Path) -> bool:
-    # folders of cdbrdf <= 0.1 carry only the old marker
-    return is_owned(folder, _KIND) or (folder / _MARKER).is_file()
 
 
 def provenance_text(attrs: Mapping[str, Any]) -> str:

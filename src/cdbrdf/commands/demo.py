@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from ..demo import CONFIGS, run_demo
-    from ..report import check_output_folder
+    from ..fsutil import check_output_folder
 
     check_output_folder(args.output)  # refuse at once, before the estimate and the run
     cfg = CONFIGS["quick" if args.quick else "full"]

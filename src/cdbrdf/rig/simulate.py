@@ -99,7 +99,7 @@ def simulate_capture(
         A :class:`CDBRDF`, a CDBRDF file, or a preset name.
     folder
         Output capture folder. It is built as a partial folder beside it and
-        swapped in whole once complete (:func:`cdbrdf.report.output_folder`):
+        swapped in whole once complete (:func:`cdbrdf.fsutil.output_folder`):
         an earlier capture written by cdbrdf is replaced, a non-empty folder
         cdbrdf did not make is refused, and an error or interrupt leaves no
         half-written folder.
@@ -143,7 +143,7 @@ def simulate_capture(
         raise ValueError(f"size: must be at least 8 pixels, got {size}")
     if not (field_mm > 0 and gain > 0 and spp >= 1):
         raise ValueError("field_mm, gain and spp must be positive")
-    from ..report import check_output_folder, output_folder
+    from ..fsutil import check_output_folder, output_folder
 
     final = check_output_folder(folder)  # refuse a foreign folder before any work
     table = load_material(material)
