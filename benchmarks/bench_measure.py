@@ -10,7 +10,7 @@ paper's size), as PNG and as uncompressed TIFF, then reports:
   decodes each PNG whole, checked, through libpng: the cost of reading is
   the library's.)
 - TIFF (uncompressed): reading only the 7 x 7 patch
-  (:func:`~cdbrdf.measure.images.read_window`, memory-mapped with
+  (:func:`~cdbrdf.images.read_window`, memory-mapped with
   :func:`tifffile.memmap`) versus decoding the whole file with
   :func:`tifffile.imread`, one thread. Reported, no target: the former
   ">= 10 x" target was met by a hand-written TIFF directory parser (a few
@@ -40,7 +40,8 @@ PNG_TARGET = 1.15
 
 
 def _generate(folder: Path, n: int, ext: str) -> None:
-    from cdbrdf.measure.images import linear_to_srgb, write_png, write_tiff
+    from cdbrdf.colour import linear_to_srgb
+    from cdbrdf.images import write_png, write_tiff
 
     rng = np.random.default_rng(0)
     y, x = np.mgrid[0:SIZE, 0:SIZE] / SIZE
@@ -116,7 +117,7 @@ def main(argv: list[str] | None = None) -> int:
             size_mb = sum(f.stat().st_size for f in files) / len(files) / 2**20
             import tifffile
 
-            from cdbrdf.measure.images import read_image, read_window
+            from cdbrdf.images import read_image, read_window
             from cdbrdf.measure.patch import patch_window
 
             read_image(files[0])  # import the readers outside the timings

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from cdbrdf import Grid
-from cdbrdf.measure.images import linear_to_srgb, write_exr, write_png, write_tiff
+from cdbrdf.colour import linear_to_srgb
+from cdbrdf.images import write_exr, write_png, write_tiff
 
 
 def encode(lin: np.ndarray, kind: str) -> np.ndarray:

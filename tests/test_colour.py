@@ -93,14 +93,6 @@ def test_luminance_nan_and_inf():
         assert np.isnan(luminance([np.inf, -np.inf, 0.0]))
 
 
-def test_other_modules_use_these_rules():
-    from cdbrdf.measure import images
-    from cdbrdf.synth import metrics
-
-    assert images.srgb_to_linear is srgb_to_linear and images.linear_to_srgb is linear_to_srgb
-    assert metrics.luminance is luminance and metrics.REC709_Y is LUMINANCE_WEIGHTS
-
-
 # -- exposure --------------------------------------------------------------------------
 def test_auto_exposure():
     assert colour.EXPOSURE_PERCENTILE == 99.5

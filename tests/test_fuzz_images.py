@@ -1,4 +1,4 @@
-"""Fuzzing the photograph readers (:mod:`cdbrdf.measure.images`) with :mod:`fuzzing`.
+"""Fuzzing the photograph readers (:mod:`cdbrdf.images`) with :mod:`fuzzing`.
 
 Mutated PNG (8/16 bit; grey, grey+alpha, RGB, RGBA; one image over several
 IDAT chunks), TIFF (uncompressed strips, deflate strips and tiles, float32)
@@ -32,7 +32,7 @@ import pytest
 
 from tests.fuzzing import fuzz
 from cdbrdf.errors import CDBRDFError
-from cdbrdf.measure.images import read_image, read_window, write_exr, write_png, write_tiff
+from cdbrdf.images import read_image, read_window, write_exr, write_png, write_tiff
 
 __all__ = ["target_png", "target_png_crafted", "target_tiff", "target_exr"]
 

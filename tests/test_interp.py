@@ -395,7 +395,7 @@ def test_read_only_install_without_writable_home_compiles_in_memory(tmp_path):
         "import cdbrdf.cli\n"
         "try:\n    cdbrdf.cli.main(['--version'])\nexcept SystemExit as e:\n    assert e.code == 0, e.code\n"
         "assert 'numba' not in sys.modules, 'cdbrdf --version imported numba'\n"
-        "import cdbrdf, cdbrdf.synth, cdbrdf.measure.images, cdbrdf._kernels as k\n"
+        "import cdbrdf, cdbrdf.synth, cdbrdf.images, cdbrdf._kernels as k\n"
         "assert cdbrdf.__file__.startswith(sys.argv[1]), cdbrdf.__file__\n"
         "assert k.lookup_generic._cache.__class__.__name__ == 'NullCache'\n"
         "g = cdbrdf.Grid(kappa=[0.0], theta_l=[0.0, 40.0], phi_l=[0.0, 180.0], theta_v=[0.0, 40.0], phi_v=[0.0, 180.0])\n"

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cdbrdf.measure.images import ImageInfo, linear_to_srgb, write_png, write_tiff
+from cdbrdf.colour import linear_to_srgb
+from cdbrdf.images import ImageInfo, write_png, write_tiff
 from cdbrdf.measure.patch import (
     decode_codes,
     merge_exposures,

@@ -57,7 +57,7 @@ def test_centre_columns(tmp_path):
 
 
 def test_grey_images_one_channel(tmp_path):
-    from cdbrdf.measure.images import write_png
+    from cdbrdf.images import write_png
 
     write_png(tmp_path / "g.png", np.full((9, 9), 40000, np.uint16))
     write_csv(tmp_path / "capture.csv", [dict(file="g.png", kappa=0, theta_v=0, phi_v=0, theta_l=0, phi_l=0)])

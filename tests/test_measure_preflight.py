@@ -8,7 +8,7 @@ import pytest
 from cdbrdf.cli import main
 from cdbrdf.measure import CaptureError, measure
 from cdbrdf.measure.checkpoint import checkpoint_path
-from cdbrdf.measure.images import ImageError
+from cdbrdf.images import ImageError
 from cdbrdf.measure.preflight import UnusablePhotographs
 
 from .measure_helpers import (
@@ -88,7 +88,7 @@ def _spoil(folder, rows):
     """Seven kinds of unusable photographs; returns {file: expected problem}."""
     import os
 
-    from cdbrdf.measure.images import write_png
+    from cdbrdf.images import write_png
 
     f = lambda i: folder / rows[i]["file"]  # noqa: E731
     f(1).unlink()

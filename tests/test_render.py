@@ -404,7 +404,7 @@ def test_encode_png_is_srgb_with_exposure():
 
 def test_write_render_png_and_exr(tmp_path):
     from cdbrdf.colour import tonemap_srgb8
-    from cdbrdf.measure.images import read_image
+    from cdbrdf.images import read_image
     from cdbrdf.render.output import write_render
 
     img = np.linspace(0.0, 2.0, 4 * 6 * 3).reshape(4, 6, 3).astype(np.float32)

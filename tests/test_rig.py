@@ -224,7 +224,7 @@ def test_plan_png_names_rendered_as_tiff_get_tif_names(tmp_path):
     """A plan's .png names rendered as TIFF/EXR: files and capture.csv carry the format's extension."""
     import csv
 
-    from cdbrdf.measure.images import read_image
+    from cdbrdf.images import read_image
 
     mat = material()
     g = Grid(kappa=[0.0], theta_l=[0.0], phi_l=[0.0], theta_v=[0.0, 45.0], phi_v=[0.0, 180.0])

@@ -218,7 +218,7 @@ def _contact_sheet(capture_dir: Path, grid: Grid, path: Path, *, material: str) 
     """Photographs of every stand at one light, normal and grazing views."""
     from matplotlib.figure import Figure
 
-    from .measure.images import read_image
+    from .images import read_image
     from .plot import kappa_label
 
     tl = grid.theta_l[min(1, grid.theta_l.size - 1)]

@@ -5,7 +5,7 @@ Modules, one per stage:
 - :mod:`~cdbrdf.measure.capture`: the capture folder's format: reading
   ``capture.csv`` (:func:`read_capture`), writing plans, brackets;
 - :mod:`~cdbrdf.measure.stands`: stand geometry, occlusion, ``stands.json``'s stands;
-- :mod:`~cdbrdf.measure.images`: PNG/TIFF/OpenEXR readers (whole or a window);
+- (the photographs are read by :mod:`cdbrdf.images`, whole or a window);
 - :mod:`~cdbrdf.measure.patch`: the N x N patch, saturation, brackets, dark frames;
 - :mod:`~cdbrdf.measure.preflight`: checks of photographs and outputs before any work;
 - :mod:`~cdbrdf.measure.checkpoint`: results kept between runs (resume);

@@ -38,7 +38,7 @@ from numpy.typing import NDArray
 from .. import limits
 from ..errors import CaptureError, TableError
 from ..table import Grid
-from .images import FORMATS
+from ..images import FORMATS
 from .stands import KAPPA_TOL_PER_MM, Stand, hidden_mask, load_json_object, parse_stands, write_stands
 
 __all__ = [

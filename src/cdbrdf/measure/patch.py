@@ -36,7 +36,8 @@ from os import PathLike
 import numpy as np
 from numpy.typing import NDArray
 
-from .images import ImageInfo, read_window, srgb_to_linear
+from ..colour import srgb_to_linear
+from ..images import ImageInfo, read_window
 
 __all__ = [
     "patch_window",
@@ -118,7 +119,7 @@ def read_patch(
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """Read and decode the ``n x n`` patch of one photograph.
 
-    Reads only what the format allows (see :func:`cdbrdf.measure.images.read_window`).
+    Reads only what the format allows (see :func:`cdbrdf.images.read_window`).
 
     Returns
     -------

@@ -41,7 +41,7 @@ from ..table import CDBRDF
 from .calibrate import MeasureReport, assemble
 from .capture import CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
-from .images import ImageError
+from ..images import ImageError
 from .patch import read_patch
 from .preflight import bad_list_path, describe, preflight, problem, refuse_bad, refuse_overlap, remove_bad_list
 

@@ -8,7 +8,7 @@
 - ``.exr``: the linear radiance as float32 (no exposure applied).
 
 Both are written atomically by the image writers of
-:mod:`cdbrdf.measure.images`.
+:mod:`cdbrdf.images`.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def write_render(path: str | PathLike[str], image: ArrayLike, *, exposure_ev: fl
     ValueError
         For another suffix (nothing is written) or an unusable image shape.
     """
-    from ..measure.images import write_exr, write_png
+    from ..images import write_exr, write_png
 
     out = Path(path)
     fmt = IMAGE_FORMATS.get(out.suffix.lower())

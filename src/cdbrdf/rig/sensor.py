@@ -5,7 +5,7 @@ The linear pixel value ``x = gain * exposure * L`` is turned into electrons
 (:class:`NoiseModel`), is clipped to [0, 1], sRGB-encoded and quantised
 (:func:`encode`): 16-bit PNG by default; 8-bit PNG, 16-bit TIFF, or linear
 float OpenEXR without clipping (:data:`IMAGE_KINDS`). The files are written
-with the readers' own writers (:mod:`cdbrdf.measure.images`).
+with the readers' own writers (:mod:`cdbrdf.images`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..measure.images import linear_to_srgb, write_exr, write_png, write_tiff
+from ..colour import linear_to_srgb
+from ..images import write_exr, write_png, write_tiff
 
 __all__ = ["IMAGE_KINDS", "NoiseModel", "encode", "extension", "write_photograph"]
 

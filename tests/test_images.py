@@ -1,4 +1,4 @@
-"""Readers of cdbrdf.measure.images: bit depth kept, windows, corrupt files."""
+"""Readers and writers of cdbrdf.images: bit depth kept, windows, corrupt files."""
 
 from __future__ import annotations
 
@@ -9,13 +9,11 @@ import numpy as np
 import pytest
 
 from cdbrdf.errors import LimitError
-from cdbrdf.measure.images import (
+from cdbrdf.images import (
     ImageError,
     image_format,
-    linear_to_srgb,
     read_image,
     read_window,
-    srgb_to_linear,
     write_exr,
     write_png,
     write_tiff,
@@ -122,13 +120,6 @@ def test_exr_window(tmp_path):
     np.testing.assert_array_equal(full, f)
 
 
-def test_srgb_round_trip_and_known_values():
-    x = np.linspace(0, 1, 1001)
-    np.testing.assert_allclose(srgb_to_linear(linear_to_srgb(x)), x, atol=1e-12)
-    assert srgb_to_linear(0.5) == pytest.approx(0.21404114, rel=1e-6)
-    assert srgb_to_linear(0.04045) == pytest.approx(0.04045 / 12.92)
-
-
 def test_missing_file(tmp_path):
     for ext in ("png", "tif", "exr"):
         with pytest.raises(FileNotFoundError, match=f"nope.{ext}"):
@@ -198,7 +189,7 @@ def test_tiff_strips_and_byte_order(tmp_path, rgb16, byteorder, rowsperstrip, mo
     """Uncompressed contiguous TIFF: the window is memory-mapped, either byte order, 8 and 16 bit."""
     import tifffile
 
-    from cdbrdf.measure import images
+    from cdbrdf import images
 
     for img in (rgb16, (rgb16 >> 8).astype(np.uint8)):
         p = tmp_path / "s.tif"
@@ -280,7 +271,7 @@ def test_png_impossible_sizes_refused(tmp_path, size):
 
 def test_png_bomb_refused_before_decoding(tmp_path, monkeypatch):
     """12000 x 12000 in a few hundred bytes: refused by the limit, libpng never called."""
-    from cdbrdf.measure import images
+    from cdbrdf import images
 
     p = tmp_path / "bomb.png"
     p.write_bytes(_png_with_size(12000, 12000))

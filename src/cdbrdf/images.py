@@ -1,4 +1,7 @@
-"""Reading photographs: PNG, TIFF (8/16 bit, float) and OpenEXR, whole or a window.
+"""Image files: PNG, TIFF (8/16 bit, float) and OpenEXR, read whole or as a window, and written.
+
+The one owner of image files in cdbrdf: the measurement reads photographs
+with it, the simulated rig writes them, the renderer writes its pictures.
 
 Two entry points:
 
@@ -52,10 +55,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .. import limits
-from ..colour import linear_to_srgb, srgb_to_linear  # re-exported: the sRGB curves live in cdbrdf.colour
-from ..errors import CDBRDFError, ImageError
-from ..fsutil import atomic_path
+from . import limits
+from .errors import CDBRDFError, ImageError
+from .fsutil import atomic_path
 
 __all__ = [
     "ImageError",
@@ -67,8 +69,6 @@ __all__ = [
     "write_png",
     "write_tiff",
     "write_exr",
-    "srgb_to_linear",
-    "linear_to_srgb",
 ]
 
 #: File extensions (lower case) and the format they select.
