@@ -15,9 +15,8 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from tqdm import tqdm
-
 from cdbrdf import materials
+from cdbrdf.commands._progress import ProgressBars
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -29,18 +28,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     unknown = [n for n in args.names if n not in materials.names()]
     if unknown:
         parser.error(f"unknown material {unknown[0]!r}; valid names: {', '.join(materials.names())}")
-    bars: dict[str, tqdm] = {}
-
-    def progress(name: str, done: int, total: int) -> None:
-        bar = bars.get(name)
-        if bar is None:
-            bar = bars[name] = tqdm(total=total, desc=name, unit="kappa")
-        bar.update(done - bar.n)
-        if done == total:
-            bar.close()
-
-    for path in materials.regenerate(args.names or None, out_dir=args.out, progress=progress):
-        print(path)
+    with ProgressBars(unit="kappa", leave=True) as bars:
+        for path in materials.regenerate(args.names or None, out_dir=args.out, progress=bars.update):
+            print(path)
     return 0
 
 

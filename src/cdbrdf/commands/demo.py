@@ -34,10 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from ..demo import CONFIGS, run_demo
     from ..fsutil import check_output_folder
+    from ._progress import ProgressBars
 
     check_output_folder(args.output)  # refuse at once, before the estimate and the run
     cfg = CONFIGS["quick" if args.quick else "full"]
@@ -52,24 +51,8 @@ def run(args: argparse.Namespace) -> int:
             f"{max(1, round(est / 60))} min on a 2-core machine",
             file=sys.stderr,
         )
-    bars: dict[str, tqdm] = {}
-
-    def progress(stage: str, done: int, total: int) -> None:
-        if args.quiet:
-            return
-        bar = bars.get(stage)
-        if bar is None:
-            for other in bars.values():
-                other.close()
-            bar = bars[stage] = tqdm(total=total, desc=stage, unit="", file=sys.stderr, leave=True,
-                                     dynamic_ncols=True)
-        bar.update(done - bar.n)
-
-    try:
-        result = run_demo(args.output, quick=args.quick, materials=materials, progress=progress)
-    finally:
-        for bar in bars.values():
-            bar.close()
+    with ProgressBars(quiet=args.quiet, leave=True, mininterval=0.1) as bars:
+        result = run_demo(args.output, quick=args.quick, materials=materials, progress=bars.update)
     if not args.quiet:
         for m in result.materials:
             print(f"{m.name}: median error of measured samples "

@@ -43,34 +43,22 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..measure.pipeline import measure
+    from ._progress import ProgressBars
 
     out = Path(args.output)
-    bar = None
-    if not args.quiet:
-        from tqdm import tqdm
-
-        bar = tqdm(total=0, unit="img", desc="measure", leave=False, mininterval=0.5)
-
-    def progress(done: int, total: int) -> None:
-        if bar is not None:
-            bar.total = total
-            bar.update(done - bar.n)  # tqdm redraws at most every mininterval
-
     try:
-        table, report = measure(
-            args.capture, out, patch=args.patch, linear=args.linear, skip_bad=args.skip_bad,
-            scheduler=args.scheduler, white_albedo=args.white_albedo, material=args.material,
-            num_workers=args.workers, progress=progress, overwrite=args.force,
-        )
+        with ProgressBars(quiet=args.quiet, unit="img") as bars:
+            table, report = measure(
+                args.capture, out, patch=args.patch, linear=args.linear, skip_bad=args.skip_bad,
+                scheduler=args.scheduler, white_albedo=args.white_albedo, material=args.material,
+                num_workers=args.workers, progress=bars.callback("measure"), overwrite=args.force,
+            )
     except KeyboardInterrupt:
         import sys
 
         print(f"cdbrdf measure: progress kept in {out}.ckpt; run the same command again to resume",
               file=sys.stderr)
         raise
-    finally:
-        if bar is not None:
-            bar.close()
     if not args.quiet:
         print(report.summary())
         print(f"wrote {out}")

@@ -95,13 +95,12 @@ def _check_sheet(sheet) -> None:  # noqa: ANN001 - a SineSheet
 
 
 def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from .. import render as cr
     from ..plot import FIGURE_FORMATS, plot_render_comparison, save_figure
     from ..render.output import IMAGE_FORMATS, write_render
-    from ..table import load
     from ..render.scenes import SineSheet, mesh_scene, prepare_mesh, render_scene, sine_scene
+    from ..table import load
+    from ._progress import ProgressBars
 
     out = Path(args.output)
     ext = out.suffix.lower()
@@ -136,18 +135,10 @@ def run(args: argparse.Namespace) -> int:
 
     modes = ["brdf", "cdbrdf"] if args.compare else ["brdf" if args.brdf else "cdbrdf"]
     images = {}
-    with tqdm(total=args.spp * len(modes), unit="spp", disable=args.quiet, file=sys.stderr,
-              desc="rendering") as bar:
+    with ProgressBars(quiet=args.quiet, unit="spp", leave=True) as bars:
         for mode in modes:
-            scene = build(mode)
-            bar.set_postfix_str(mode)
-            last = [0]
-
-            def progress(done, total, last=last):
-                bar.update(done - last[0])
-                last[0] = done
-
-            images[mode] = render_scene(scene, spp=args.spp, seed=args.seed, progress=progress)
+            images[mode] = render_scene(build(mode), spp=args.spp, seed=args.seed,
+                                        progress=bars.callback(f"rendering {mode}"))
     if args.compare:
         name = table.attrs.get("material") or Path(args.file).stem
         fig = plot_render_comparison(images["brdf"], images["cdbrdf"], exposure_ev=args.exposure,

@@ -73,28 +73,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..rig import simulate_capture
+    from ._progress import ProgressBars
 
-    bar = None
-    if not args.quiet:
-        from tqdm import tqdm
-
-        bar = tqdm(total=0, unit="img", desc="render", leave=False, mininterval=0.5)
-
-    def progress(done: int, total: int) -> None:
-        if bar is not None:
-            bar.total = total
-            bar.update(done - bar.n)  # tqdm redraws at most every mininterval
-
-    try:
+    with ProgressBars(quiet=args.quiet, unit="img") as bars:
         rep = simulate_capture(
             args.material, args.output, plan=args.plan, size=args.size, field_mm=args.field,
             spp=args.spp, noise=args.noise, gain=args.gain,
             exposures=args.exposures, image_kind=args.image, white_albedo=args.white_albedo,
-            seed=args.seed, progress=progress,
+            seed=args.seed, progress=bars.callback("render"),
         )
-    finally:
-        if bar is not None:
-            bar.close()
     if not args.quiet:
         print(rep.summary())
     return 0

@@ -22,7 +22,7 @@ def _grid(text: str) -> str:
 
 def _parse_grid_spec(spec: str) -> tuple[float, float] | None:
     """None for ``paper``, else the two steps of ``regular:T,P`` (degrees)."""
-    from ._args import float_list, output_file
+    from ._args import float_list
 
     s = spec.strip()
     if s == "paper":
@@ -104,7 +104,7 @@ def parse_grid(spec: str, kappa: str | Sequence[float] | None = None):  # noqa: 
     """
     from ..limits import check
     from ..table import PAPER_KAPPA, Grid
-    from ._args import float_list, output_file
+    from ._args import float_list
 
     try:
         if kappa is None:
@@ -130,24 +130,16 @@ def parse_grid(spec: str, kappa: str | Sequence[float] | None = None):  # noqa: 
 
 
 def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from ..synth import presets
+    from ._progress import ProgressBars
 
     overrides = parse_sets(args.sets)
     model = presets.model(args.preset, **overrides)
     grid = parse_grid(args.grid, args.kappa)
     quiet = getattr(args, "quiet", False)
-    bar = tqdm(total=grid.kappa.size, desc=f"synth {args.preset}", unit="kappa", disable=quiet)
     t0 = time.perf_counter()
-
-    def progress(done: int, total: int) -> None:
-        bar.update(done - bar.n)
-
-    try:
-        table = model.tabulate(grid, progress=progress)
-    finally:
-        bar.close()
+    with ProgressBars(quiet=quiet, unit="kappa") as bars:
+        table = model.tabulate(grid, progress=bars.callback(f"synth {args.preset}"))
     table.save(args.output)
     if not quiet:
         print(f"wrote {args.output}: {args.preset}, shape {table.shape}, "
