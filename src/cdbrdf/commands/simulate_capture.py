@@ -3,25 +3,22 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..rig import NoiseModel
 
 __all__ = ["register", "run"]
 
 
-def _noise(text: str):  # noqa: ANN202 - an argparse type returning a NoiseModel
-    """``none`` or ``FULL_WELL[,READ]`` electrons, both finite (full well > 0, read >= 0)."""
+def _noise(text: str) -> NoiseModel:
+    """``none`` or ``FULL_WELL[,READ]`` electrons (:meth:`cdbrdf.rig.NoiseModel.parse`)."""
     from ..rig import NoiseModel
-    from ._args import float_list
 
-    t = text.strip().lower()
-    if t in ("none", "off", "0"):
-        return NoiseModel(0.0, 0.0)
     try:
-        vals = float_list(0, 1e12, min_len=1, max_len=2, example="20000,3")(t)
-    except argparse.ArgumentTypeError as exc:
-        raise argparse.ArgumentTypeError(f"expected 'none' or FULL_WELL[,READ] electrons: {exc}") from None
-    if vals[0] <= 0:
-        raise argparse.ArgumentTypeError(f"expected a positive full well, got {text!r}")
-    return NoiseModel(vals[0], vals[1] if len(vals) == 2 else NoiseModel.read_e)
+        return NoiseModel.parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("noise: ")) from None
 
 
 def _material(text: str) -> str:
@@ -39,6 +36,7 @@ def _material(text: str) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ..rig.sensor import IMAGE_KINDS
     from ._args import existing_file, finite_float, float_list, int_range, seed, square_size
 
     p = sub.add_parser(
@@ -63,8 +61,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gain", type=finite_float(0, 1e12, lo_open=True), default=2.0, help="pixel value per unit radiance (2)")
     p.add_argument("--exposures", type=float_list(0, 1e6, lo_open=True, max_len=16), default=[1.0],
                    help="exposure brackets of each sample photograph, e.g. 1,0.25 (default 1)")
-    p.add_argument("--image", choices=("exr", "png16", "png8", "tif16"), default="png16",
-                   help="image kind (png16)")
+    p.add_argument("--image", choices=tuple(IMAGE_KINDS), default="png16",
+                   help="image kind: " + "; ".join(f"{k} {v}" for k, v in IMAGE_KINDS.items()) + " (png16)")
     p.add_argument("--white-albedo", type=finite_float(0, 1, lo_open=True), default=0.99,
                    help="white reference albedo, in (0, 1] (0.99)")
     p.add_argument("--seed", type=seed(), default=0, help="noise seed, 0 to 2**32-1 (0)")

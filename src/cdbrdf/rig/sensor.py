@@ -10,6 +10,7 @@ with the readers' own writers (:mod:`cdbrdf.images`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,6 +21,9 @@ from ..colour import linear_to_srgb
 from ..images import write_exr, write_png, write_tiff
 
 __all__ = ["IMAGE_KINDS", "NoiseModel", "encode", "extension", "write_photograph"]
+
+#: Largest full well or read noise :meth:`NoiseModel.parse` accepts, electrons.
+_MAX_ELECTRONS = 1e12
 
 #: Image kinds the rig writes: kind -> description.
 IMAGE_KINDS: dict[str, str] = {
@@ -51,13 +55,20 @@ class NoiseModel:
         t = text.strip().lower()
         if t in ("none", "off", "0"):
             return cls(0.0, 0.0)
-        parts = t.split(",")
         try:
-            vals = [float(p) for p in parts]
+            vals = [float(p) for p in t.split(",")]
         except ValueError:
-            raise ValueError(f"noise: expected 'none' or 'FULL_WELL[,READ]', got {text!r}") from None
-        if len(vals) > 2 or vals[0] <= 0 or (len(vals) == 2 and vals[1] < 0):
-            raise ValueError(f"noise: expected 'none' or 'FULL_WELL[,READ]' (positive), got {text!r}")
+            vals = []
+        ok = (
+            1 <= len(vals) <= 2
+            and all(math.isfinite(v) and 0.0 <= v <= _MAX_ELECTRONS for v in vals)
+            and vals[0] > 0
+        )
+        if not ok:
+            raise ValueError(
+                f"noise: expected 'none' or FULL_WELL[,READ] electrons (full well in (0, {_MAX_ELECTRONS:g}], "
+                f"read noise in [0, {_MAX_ELECTRONS:g}]), got {text!r}"
+            )
         return cls(vals[0], vals[1] if len(vals) == 2 else cls.read_e)
 
     @property
