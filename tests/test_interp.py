@@ -233,10 +233,23 @@ def test_float32_table_is_exact_at_nodes():
     np.testing.assert_array_equal(t.evaluate(45.0, 90.0, 30.0, 300.0), t.values[0, 10, 2, 3, 3])
 
 
-def test_prepare_is_cached(paper_table):
-    assert prepare(paper_table) is prepare(paper_table)
-    lg = prepare(paper_table)
+def test_prepared_grid_is_cached_by_the_table(paper_table):
+    assert paper_table.lookup_grid() is paper_table.lookup_grid()
+    lg = prepare(paper_table)  # builds a new one, equal to the cached grid
+    assert lg is not paper_table.lookup_grid()
+    np.testing.assert_array_equal(lg.values, paper_table.lookup_grid().values)
     assert lg.theta_l[0] == 0 and lg.phi_l_step == 30.0
+    assert lg.phi_l_inv_step == 1 / 30.0 and lg.rgb_kernel and lg.stride == 4
+    assert lg.shape == (5, 12, 6, 12, 6, 3) and lg.flat.size == 5 * 12 * 6 * 12 * 6 * 4
+
+
+def test_prepared_grid_is_immutable(paper_table):
+    lg = paper_table.lookup_grid()
+    with pytest.raises(AttributeError):
+        lg.values = None  # type: ignore[misc]
+    for name in ("values", "flat", "kappa", "kappa_inv_d", "theta_l", "theta_l_inv_d", "theta_v", "theta_v_inv_d"):
+        assert not getattr(lg, name).flags.writeable, name
+    assert "LookupGrid(shape=(5, 12, 6, 12, 6, 3)" in repr(lg)
 
 
 # -- robustness of the index math (huge, tiny and non-finite queries) ----------------------

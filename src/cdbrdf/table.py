@@ -38,13 +38,16 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from os import PathLike
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import limits
 from .errors import TableError
+
+if TYPE_CHECKING:
+    from .interp import LookupGrid
 
 __all__ = [
     "Grid",
@@ -357,7 +360,7 @@ class CDBRDF:
         self._measured = self._check_mask(measured, grid.shape)
         self._fill_source = self._check_fill(fill_source, self._measured)
         self._attrs = self._check_attrs(attrs)
-        self._lookup = None
+        self._lookup: LookupGrid | None = None  # filled by lookup_grid()
 
     # -- validation -------------------------------------------------------------
     @staticmethod
@@ -550,6 +553,19 @@ class CDBRDF:
         from .interp import evaluate
 
         return evaluate(self, theta_v, phi_v, theta_l, phi_l, kappa)
+
+    def lookup_grid(self) -> "LookupGrid":
+        """The table prepared for lookup (:class:`cdbrdf.interp.LookupGrid`).
+
+        Built by :func:`cdbrdf.interp.prepare` on first use and kept by the
+        table (the table never changes), so every lookup of this table, the
+        renderer's included, shares one prepared grid.
+        """
+        if self._lookup is None:
+            from .interp import prepare
+
+            self._lookup = prepare(self)
+        return self._lookup
 
     def brdf(self, kappa: float = 0.0) -> "CDBRDF":
         """The plain BRDF: the table at one curvature as a one-kappa table.
