@@ -341,7 +341,7 @@ def test_drjit_lookup_index_stays_in_the_table():
     import mitsuba as mi
 
     import cdbrdf.render as cr
-    from cdbrdf.render._bsdf import lookup_jit, pack_table
+    from cdbrdf.render._lookup_jit import lookup_jit, pack_table
 
     cr.set_variant("llvm_ad_rgb")
     specials = np.array([np.nan, np.inf, -np.inf, 3.4028235e38, -3.4028235e38, 1e30, -1e30, 1e20, 2.0**24 + 3.0,
