@@ -49,12 +49,12 @@ from numpy.typing import ArrayLike, DTypeLike, NDArray
 from .errors import QueryError
 
 __all__ = [
-    "LookupGrid",
     "KERNELS",
     "MAX_ELEVATION_DEG",
     "PERIOD_DEG",
     "RGB_MAX_KAPPA",
     "SNAP_TOLERANCE",
+    "LookupGrid",
     "evaluate",
     "evaluate_reference",
     "prepare",
@@ -421,12 +421,12 @@ def evaluate(
             f"{RGB_MAX_KAPPA} curvatures; this table has shape {lg.shape}"
         )
     run = _kernels.lookup_rgb if (kernel == "rgb" or (kernel == "auto" and lg.rgb_kernel)) else _kernels.lookup_generic
-    tol = snap_tolerance(np.float64)
+    tol = SNAP_TOLERANCE["float64"]  # the kernels compute in float64
     nc = lg.n_channels
     n = int(np.prod(shape, dtype=np.int64))
     out = np.empty((n, nc), dtype=np.float64)
 
-    direct: list[NDArray[np.float64] | None] = []
+    direct: list[NDArray[np.floating] | None] = []
     for q in qs:
         if q.size == 1:
             direct.append(q.reshape(1).astype(np.float64))
