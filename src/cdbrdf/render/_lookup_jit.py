@@ -131,7 +131,7 @@ def pack_table(mi: Any, grid: LookupGrid) -> tuple[Any, float, float]:
     word = q[..., 0] | (q[..., 1] << np.uint64(PACK_BITS)) | (q[..., 2] << np.uint64(2 * PACK_BITS))
     import drjit as dr
 
-    UInt64 = dr.uint64_array_t(mi.Float)
+    UInt64: Any = dr.uint64_array_t(mi.Float)
     return UInt64(word.reshape(-1)), lo, step
 
 
