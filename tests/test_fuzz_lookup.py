@@ -40,9 +40,9 @@ _SPECIALS = np.array([np.nan, np.inf, -np.inf, 0.0, -0.0, 5e-324, -5e-324, 1e-30
 
 @functools.lru_cache(maxsize=None)
 def _tables():
-    from .test_interp import _kernel_tables
+    from .lookup_cases import kernel_tables
 
-    ts = list(_kernel_tables().values())
+    ts = list(kernel_tables().values())
     return [(t, float(t.values.min()), float(t.values.max())) for t in ts]
 
 

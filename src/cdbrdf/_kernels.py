@@ -3,10 +3,16 @@
 Numba was chosen over a C/C++ extension because it needs no compiler on the
 user's machine (wheels for every platform NumPy supports), compiles lazily on
 first use (nothing happens at import), caches the machine code on disk, and
-parallelises with ``prange`` over all cores. The kernels are a plain 5-D
-multilinear interpolation on a grid already prepared by
-:func:`cdbrdf.interp.prepare` (pole rule applied, pole node present), so the
-same arithmetic can be reproduced in Dr.Jit for the renderer.
+parallelises with ``prange`` over all cores.
+
+The kernels implement the rule stated in :mod:`cdbrdf.interp` (clamped
+curvature and elevations, periodic azimuth with an exact ``fmod`` wrap, the
+pole rule, weights snapped to 0 or 1 within the tolerance ``tol``) on a
+:class:`cdbrdf.interp.LookupGrid`, which they take as one argument (a named
+tuple: numba reads its fields by name). The snap tolerance is an argument
+too, not a global of this module, so that numba's on-disk cache (keyed on
+this file) can never keep a stale copy of interp's constant. This module
+imports nothing of the package but :mod:`cdbrdf._jit`.
 
 :func:`lookup_rgb` (RGB tables with evenly spaced elevations, the common
 case) is about 4x faster than a scalar kernel (6.5 ms instead of 30 ms for
@@ -29,16 +35,21 @@ from ._jit import njit
 
 __all__: list[str] = []
 
-_SNAP = 1e-9
+
+@njit(inline="always", cache=True, error_model="numpy")
+def _snap(w, tol):
+    """The snapping rule: a weight within ``tol`` of 0 or 1 becomes exactly 0 or 1."""
+    w = 0.0 if w < tol else w
+    return 1.0 if w > 1.0 - tol else w
 
 
 @njit(inline="always", cache=True, error_model="numpy")
-def _locate(axis, inv_d, n, inv_step, x):
+def _locate(axis, inv_d, n, inv_step, x, tol):
     """Lower index and weight of ``x`` on a sorted axis, clamped at both ends.
 
     ``inv_d[i] = 1 / (axis[i + 1] - axis[i])``. ``inv_step > 0`` declares the
     axis evenly spaced (index by multiplication); otherwise short axes are
-    scanned and long ones bisected. The weight is exactly 0 at every node.
+    scanned and long ones bisected. The weight is snapped (:func:`_snap`).
     """
     if n == 1 or x <= axis[0]:
         return 0, 0.0
@@ -64,17 +75,18 @@ def _locate(axis, inv_d, n, inv_step, x):
             else:
                 hi = mid
         i = lo
-    return i, (x - axis[i]) * inv_d[i]
+    return i, _snap((x - axis[i]) * inv_d[i], tol)
 
 
 @njit(inline="always", cache=True, error_model="numpy")
 def _wrap_azimuth(x):
     """``x`` (degrees) reduced exactly into (-360, 360) when it lies outside.
 
-    ``np.fmod`` is exact for every finite float64, so a huge azimuth (1e30,
-    1e308) keeps its true place on the circle and the index math after it
-    works on small numbers only. Azimuths already inside are returned
-    unchanged (bit for bit); infinities and NaN become NaN.
+    As :func:`cdbrdf.interp.wrap_azimuth`: ``np.fmod`` is exact for every
+    finite float64, so a huge azimuth (1e30, 1e308) keeps its true place on
+    the circle and the index math after it works on small numbers only.
+    Azimuths already inside are returned unchanged (bit for bit); infinities
+    and NaN become NaN.
     """
     if -360.0 < x < 360.0:
         return x
@@ -82,23 +94,23 @@ def _wrap_azimuth(x):
 
 
 @njit(inline="always", cache=True, error_model="numpy")
-def _locate_periodic(phi0, inv_step, n, x):
+def _locate_periodic(phi0, inv_step, n, x, tol):
     """Lower index and weight of azimuth ``x`` on an evenly spaced circle.
 
     ``x`` is first reduced with :func:`_wrap_azimuth`, so ``(x - phi0) /
     step`` stays below ``2 n`` in magnitude and its floor wraps exactly. The
     index is clamped into ``[0, n)`` as a last line of defence (NaN gives 0).
-    Weights within 1e-9 of a node snap to it, so nodes are reproduced exactly
-    despite the rounding of ``(x - phi0) / step``.
+    A weight within ``tol`` of 0 snaps to this node, within ``tol`` of 1 to
+    the next one (index + 1, weight 0): the snapping rule of :func:`_snap`.
     """
     if n == 1:
         return 0, 0.0
     u = (_wrap_azimuth(x) - phi0) * inv_step
     f = np.floor(u)
     w = u - f
-    if w < _SNAP:
+    if w < tol:
         w = 0.0
-    elif w > 1.0 - _SNAP:
+    elif w > 1.0 - tol:
         w = 0.0
         f += 1.0
     if f < 0.0 or f >= n:
@@ -130,28 +142,6 @@ def _invalid(tv, pv, tl, pl, k):
     if bl:
         return 3
     return 0
-
-
-@njit(inline="always", cache=True, error_model="numpy")
-def _cell(g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
-          n_k, n_pl, n_tl, n_pv, n_tv, tv, pv, tl, pl, k):
-    ik, wk = _locate(g_kap, d_kap, n_k, 0.0, k)
-    itl, wtl = _locate(g_thl, d_thl, n_tl, inv_tl, tl)
-    itv, wtv = _locate(g_thv, d_thv, n_tv, inv_tv, tv)
-    ipl, wpl = _locate_periodic(pl0, pl_inv, n_pl, pl)
-    ipv, wpv = _locate_periodic(pv0, pv_inv, n_pv, pv)
-    # Pole: grid node 0 of each elevation axis is theta = 0, whose ring holds
-    # one value, so the azimuth weight must not matter there.
-    if itl == 0 and wtl == 0.0:
-        wpl = 0.0
-    if itv == 0 and wtv == 0.0:
-        wpv = 0.0
-    ik1 = ik + 1 if n_k > 1 else ik
-    itl1 = itl + 1 if n_tl > 1 else itl
-    itv1 = itv + 1 if n_tv > 1 else itv
-    ipl1 = ipl + 1 if ipl + 1 < n_pl else 0
-    ipv1 = ipv + 1 if ipv + 1 < n_pv else 0
-    return ik, ik1, wk, ipl, ipl1, wpl, itl, itl1, wtl, ipv, ipv1, wpv, itv, itv1, wtv
 
 
 @intrinsic
@@ -247,13 +237,10 @@ _FASTMATH = {"contract"}  # fused multiply-add only: NaN/inf semantics are kept
 
 #: Queries per block of :func:`lookup_rgb` (its scratch is 22 values per query).
 _BLOCK = 64
-#: Most curvature samples :func:`lookup_rgb` handles: its scan of the interior
-#: nodes (indices 1 to 6 of the padded axis) is unrolled.
-RGB_MAX_KAPPA = 8
 
 
 @njit(inline="always", cache=True, error_model="numpy")
-def _periodic_select(x, phi0, inv_step, n, inv_n):
+def _periodic_select(x, phi0, inv_step, n, inv_n, tol):
     """:func:`_locate_periodic` with selects instead of branches, plus the next index.
 
     ``x`` must already be reduced by :func:`_wrap_azimuth` (done when the
@@ -265,9 +252,9 @@ def _periodic_select(x, phi0, inv_step, n, inv_n):
     u = (x - phi0) * inv_step
     f = np.floor(u)
     w = u - f
-    up = w > 1.0 - _SNAP
+    up = w > 1.0 - tol
     f = f + 1.0 if up else f
-    w = 0.0 if (up or w < _SNAP or n == 1) else w
+    w = 0.0 if (up or w < tol or n == 1) else w
     r = f - n * np.floor(f * inv_n)
     r = r - n if r >= n else r
     r = r + n if r < 0.0 else r
@@ -277,38 +264,30 @@ def _periodic_select(x, phi0, inv_step, n, inv_n):
 
 
 @njit(inline="always", cache=True, error_model="numpy")
-def _elevation_select(x, inv_step, n):
+def _elevation_select(x, inv_step, n, tol):
     """Lower index and weight on an evenly spaced axis ``0, step, ..., (n - 1) step``.
 
     Clamped at both ends like :func:`_locate`, with selects instead of
-    branches; the weight is the fractional part of ``x / step``, snapped to
-    the node within 1e-9 so that nodes are reproduced exactly despite its
-    rounding (``n >= 2``).
+    branches; the weight is the fractional part of ``x / step``, snapped
+    (:func:`_snap`) so that nodes are reproduced exactly despite its rounding
+    (``n >= 2``).
     """
     u = min(max(x * inv_step, 0.0), n - 1.0)
     i = min(int(u), n - 2)
-    w = u - i
-    w = 0.0 if w < _SNAP else w
-    w = 1.0 if w > 1.0 - _SNAP else w
-    return i, w
+    return i, _snap(u - i, tol)
 
 
 @njit(parallel=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
-def lookup_rgb(
-    flat, n_k, n_pl, n_tl, n_pv, n_tv, k_lo, k_hi, k_node, k_scan, k_inv, inv_tl, inv_tv,
-    pl0, pl_inv, pv0, pv_inv,
-    q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset,
-):
+def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
     """:func:`lookup_generic` for RGB tables with evenly spaced elevations.
 
-    Same results (up to rounding) for tables with 3 channels (padded to
-    ``stride = 4`` in ``flat``), evenly spaced elevation axes of at least 3
-    samples (``inv_tl``, ``inv_tv``: 1 / spacing) and at most
-    :data:`RGB_MAX_KAPPA` curvatures: interpolate ``n`` queries into
-    ``out[offset:offset + n]``, return the counts of bad view and light
-    elevations. ``k_lo``, ``k_hi`` are the curvature axis ends; ``k_node``,
-    ``k_inv`` the axis and ``1 / spacing`` padded to :data:`RGB_MAX_KAPPA`;
-    ``k_scan`` the interior nodes at the same places, +inf elsewhere.
+    Same arguments and results (up to rounding) where ``g.rgb_kernel`` holds:
+    3 channels (padded to ``stride = 4`` in ``g.flat``), evenly spaced
+    elevation axes of at least 3 samples and at most
+    ``cdbrdf.interp.RGB_MAX_KAPPA`` (8) curvatures, given in the slots
+    ``g.kappa_node``, ``g.kappa_scan``, ``g.kappa_slot_inv_d`` that are
+    unpacked below into scalars (the scan over the interior nodes is
+    unrolled).
 
     Queries go in blocks of :data:`_BLOCK` (scratch of a few KiB per block,
     none of query size): a first loop, written with selects only so that
@@ -316,6 +295,17 @@ def lookup_rgb(
     a table offset and 12 weights; a second loop sums the 32 corners of each
     valid query with :func:`_blend_rgb` and classifies the invalid ones.
     """
+    flat = g.flat
+    n_k, n_pl, n_tl, n_pv, n_tv, _ = g.values.shape
+    inv_tl = g.theta_l_inv_step
+    inv_tv = g.theta_v_inv_step
+    pl0 = g.phi_l0
+    pl_inv = g.phi_l_inv_step
+    pv0 = g.phi_v0
+    pv_inv = g.phi_v_inv_step
+    k_lo, kn1, kn2, kn3, kn4, kn5, kn6, k_hi = g.kappa_node
+    _, ks1, ks2, ks3, ks4, ks5, ks6, _ = g.kappa_scan
+    ki0, ki1, ki2, ki3, ki4, ki5, ki6, _ = g.kappa_slot_inv_d
     s_tv = 1 if q_tv.shape[0] > 1 else 0
     s_pv = 1 if q_pv.shape[0] > 1 else 0
     s_tl = 1 if q_tl.shape[0] > 1 else 0
@@ -327,10 +317,6 @@ def lookup_rgb(
     d_k = n_pl * n_tl * s_tlight if n_k > 1 else 0
     inv_npl = 1.0 / n_pl
     inv_npv = 1.0 / n_pv
-    kn1, kn2, kn3, kn4, kn5, kn6 = k_node[1], k_node[2], k_node[3], k_node[4], k_node[5], k_node[6]
-    ks1, ks2, ks3, ks4, ks5, ks6 = k_scan[1], k_scan[2], k_scan[3], k_scan[4], k_scan[5], k_scan[6]
-    ki0, ki1, ki2, ki3 = k_inv[0], k_inv[1], k_inv[2], k_inv[3]
-    ki4, ki5, ki6 = k_inv[4], k_inv[5], k_inv[6]
     n_blocks = (n + _BLOCK - 1) // _BLOCK
     bad_v = 0
     bad_l = 0
@@ -371,12 +357,12 @@ def lookup_rgb(
             kinv = ki6 if b6 else (ki5 if b5 else (ki4 if b4 else (
                 ki3 if b3 else (ki2 if b2 else (ki1 if b1 else ki0)))))
             wk = (kc - klo) * kinv
-            wk = 1.0 if kc >= k_hi else wk
-            itl, wtl = _elevation_select(tl, inv_tl, n_tl)
-            itv, wtv = _elevation_select(tv, inv_tv, n_tv)
-            ipl, ipl1, wpl = _periodic_select(pl, pl0, pl_inv, n_pl, inv_npl)
-            ipv, ipv1, wpv = _periodic_select(pv, pv0, pv_inv, n_pv, inv_npv)
-            # pole rule, as in _cell
+            wk = 1.0 if kc >= k_hi else _snap(wk, tol)
+            itl, wtl = _elevation_select(tl, inv_tl, n_tl, tol)
+            itv, wtv = _elevation_select(tv, inv_tv, n_tv, tol)
+            ipl, ipl1, wpl = _periodic_select(pl, pl0, pl_inv, n_pl, inv_npl, tol)
+            ipv, ipv1, wpv = _periodic_select(pv, pv0, pv_inv, n_pv, inv_npv, tol)
+            # pole rule, as in lookup_generic
             wpl = 0.0 if (itl == 0 and wtl == 0.0) else wpl
             wpv = 0.0 if (itv == 0 and wtv == 0.0) else wpv
             ibuf[0, j] = ((ik * n_pl + ipl) * n_tl + itl) * s_tlight
@@ -421,31 +407,35 @@ def lookup_rgb(
                      b + d_k, b + d_k + d_tl, b + d_k + d_pl, b + d_k + d_pl + d_tl)
             wl = (fbuf[0, j], fbuf[1, j], fbuf[2, j], fbuf[3, j], fbuf[4, j], fbuf[5, j], fbuf[6, j], fbuf[7, j])
             wv = (fbuf[8, j], fbuf[9, j], fbuf[10, j], fbuf[11, j])
-            r, g, bl = _blend_rgb(flat, bases, wl, ibuf[2, j], ibuf[3, j], wv)
+            r, gg, bl = _blend_rgb(flat, bases, wl, ibuf[2, j], ibuf[3, j], wv)
             out[row, 0] = r
-            out[row, 1] = g
+            out[row, 1] = gg
             out[row, 2] = bl
     return bad_v, bad_l
 
 
 @njit(parallel=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
-def lookup_generic(
-    flat, n_k, n_pl, n_tl, n_pv, n_tv, n_c, stride,
-    g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
-    q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset,
-):
-    """Interpolate ``n`` queries into ``out[offset:offset + n]``.
+def lookup_generic(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
+    """Interpolate ``n`` queries on the prepared grid ``g`` into ``out[offset:offset + n]``.
 
-    ``flat`` is the prepared table (:func:`cdbrdf.interp.prepare`) raveled in
-    C order with ``stride`` values per sample (RGB tables are padded to 4 so
-    that a sample is one aligned 16-byte load). Query arrays have length ``n``
-    or 1 (broadcast). Rows with a non-finite component, or an elevation
-    outside [0, 90], are NaN; the counts of bad view and light elevations are
-    returned.
+    ``g`` is a :class:`cdbrdf.interp.LookupGrid` (its ``flat`` holds
+    ``stride`` values per sample), ``tol`` the weight snap tolerance
+    (``cdbrdf.interp.SNAP_TOLERANCE["float64"]``). Query arrays have length
+    ``n`` or 1 (broadcast). Rows with a non-finite component, or an
+    elevation outside [0, 90], are NaN; the counts of bad view and light
+    elevations are returned.
 
     The 32 corners are summed as 8 light/curvature corners of 4-corner view
     bilinear sums; every node is reproduced exactly (weights 0 and 1 only).
     """
+    # the grid's fields as locals: the parallel loop's body takes arrays and scalars only
+    flat = g.flat
+    stride = g.stride
+    n_k, n_pl, n_tl, n_pv, n_tv, n_c = g.values.shape
+    kap, kap_d = g.kappa, g.kappa_inv_d
+    thl, thl_d, inv_tl = g.theta_l, g.theta_l_inv_d, g.theta_l_inv_step
+    thv, thv_d, inv_tv = g.theta_v, g.theta_v_inv_d, g.theta_v_inv_step
+    pl0, pl_inv, pv0, pv_inv = g.phi_l0, g.phi_l_inv_step, g.phi_v0, g.phi_v_inv_step
     s_tv = 1 if q_tv.shape[0] > 1 else 0
     s_pv = 1 if q_pv.shape[0] > 1 else 0
     s_tl = 1 if q_tl.shape[0] > 1 else 0
@@ -467,10 +457,22 @@ def lookup_generic(
             for c in range(n_c):
                 out[row, c] = np.nan
             continue
-        ik, ik1, wk, ipl, ipl1, wpl, itl, itl1, wtl, ipv, ipv1, wpv, itv, itv1, wtv = _cell(
-            g_kap, d_kap, g_thl, d_thl, g_thv, d_thv, inv_tl, inv_tv, pl0, pl_inv, pv0, pv_inv,
-            n_k, n_pl, n_tl, n_pv, n_tv, tv, pv, tl, pl, k,
-        )
+        ik, wk = _locate(kap, kap_d, n_k, 0.0, k, tol)
+        itl, wtl = _locate(thl, thl_d, n_tl, inv_tl, tl, tol)
+        itv, wtv = _locate(thv, thv_d, n_tv, inv_tv, tv, tol)
+        ipl, wpl = _locate_periodic(pl0, pl_inv, n_pl, pl, tol)
+        ipv, wpv = _locate_periodic(pv0, pv_inv, n_pv, pv, tol)
+        # Pole: grid node 0 of each elevation axis is theta = 0, whose ring holds
+        # one value, so the azimuth weight must not matter there.
+        if itl == 0 and wtl == 0.0:
+            wpl = 0.0
+        if itv == 0 and wtv == 0.0:
+            wpv = 0.0
+        ik1 = ik + 1 if n_k > 1 else ik
+        itl1 = itl + 1 if n_tl > 1 else itl
+        itv1 = itv + 1 if n_tv > 1 else itv
+        ipl1 = ipl + 1 if ipl + 1 < n_pl else 0
+        ipv1 = ipv + 1 if ipv + 1 < n_pv else 0
         v00 = np.uint64(ipv * s_view + itv * stride)
         v01 = np.uint64(ipv * s_view + itv1 * stride)
         v10 = np.uint64(ipv1 * s_view + itv * stride)

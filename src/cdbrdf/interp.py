@@ -1,18 +1,35 @@
-"""5-D multilinear lookup of a :class:`~cdbrdf.table.CDBRDF`.
+"""5-D multilinear lookup of a :class:`~cdbrdf.table.CDBRDF`: the rule and its owner.
 
-The rule, fixed by the project's conventions and used identically by the
-renderer (:mod:`cdbrdf.render`):
+This module states the lookup rule once; every implementation (the numba
+kernels in :mod:`cdbrdf._kernels`, the Dr.Jit lookup of the renderer in
+:mod:`cdbrdf.render._lookup_jit`, and :func:`evaluate_reference`, the slow
+readable statement) consumes the same :class:`LookupGrid` built by
+:func:`prepare` and the constants below.
+
+The rule, fixed by the project's conventions:
 
 - **curvature**: linear between samples of any spacing, clamped to the ends;
-- **elevation**: linear between samples, clamped beyond the last one;
-- **azimuth**: linear and periodic on the evenly spaced circle;
+- **elevation**: linear between samples, clamped beyond the last one (and to
+  the pole node at 0);
+- **azimuth**: linear and periodic on the evenly spaced circle; an azimuth
+  outside (-360, 360) is first reduced exactly with ``fmod(phi, 360)``
+  (:func:`wrap_azimuth`), so a huge finite azimuth keeps its true place;
+- **snapping**: a weight within :data:`SNAP_TOLERANCE` of 0 or of 1 is set to
+  exactly 0 or 1, on every axis and on both sides, so that every sample is
+  reproduced exactly despite the rounding of the index arithmetic. The
+  tolerance belongs to the precision of that arithmetic: ``1e-9`` in float64
+  (the numba kernels and the reference, whatever the table's dtype), ``1e-6``
+  in float32 (the renderer), where one rounding of ``x / step`` is already
+  about 1e-7;
 - **pole rule**: at theta = 0 every azimuth is the same direction. The lookup
   grid's first elevation node is theta = 0 and holds, for every azimuth, the
   *mean of the stored ring at theta = 0* (or, when the table's first elevation
   is above 0, a virtual pole node holding the mean of that first ring). Between
-  the pole and the next elevation the value is blended linearly. The result is
-  continuous, independent of the azimuth at theta = 0, and exactly equal to
-  the table at every sample with both elevations above 0.
+  the pole and the next elevation the value is blended linearly; at the pole
+  itself (elevation node 0, weight 0 after snapping) the azimuth weight is 0.
+  The result is continuous, independent of the azimuth at theta = 0 (bit for
+  bit), and exactly equal to the table at every sample with both elevations
+  above 0.
 
 Non-finite query components give a NaN output row; an elevation outside
 [0, 90] degrees raises :class:`~cdbrdf.errors.QueryError` naming the argument
@@ -21,53 +38,204 @@ Non-finite query components give a NaN output row; an elevation outside
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike, DTypeLike, NDArray
 
 from .errors import QueryError
 
-__all__ = ["LookupGrid", "prepare", "evaluate", "evaluate_reference"]
+__all__ = [
+    "KERNELS",
+    "MAX_ELEVATION_DEG",
+    "PERIOD_DEG",
+    "RGB_MAX_KAPPA",
+    "SNAP_TOLERANCE",
+    "LookupGrid",
+    "evaluate",
+    "evaluate_reference",
+    "prepare",
+    "snap_tolerance",
+    "wrap_azimuth",
+]
+
+#: Weights this close to 0 or 1 are set to exactly 0 or 1, per precision of
+#: the index arithmetic (see the module docstring).
+SNAP_TOLERANCE: Mapping[str, float] = MappingProxyType({"float64": 1e-9, "float32": 1e-6})
+
+#: Period of both azimuth axes, degrees.
+PERIOD_DEG = 360.0
+
+#: Largest valid elevation, degrees (directions below the surface have no reflectance).
+MAX_ELEVATION_DEG = 90.0
+
+#: Most curvature samples of the RGB kernel (:func:`cdbrdf._kernels.lookup_rgb`):
+#: the length of :attr:`LookupGrid.kappa_node` and its siblings, which that
+#: kernel unpacks into scalars (so a different length fails to compile there).
+RGB_MAX_KAPPA = 8
+
+#: Kernels :func:`evaluate` can use: ``"auto"`` takes ``"rgb"`` where the grid
+#: allows it (:attr:`LookupGrid.rgb_kernel`) and ``"generic"`` elsewhere.
+KERNELS: tuple[str, ...] = ("auto", "rgb", "generic")
+
+#: Valid values of ``on_invalid``.
+_ON_INVALID: tuple[str, ...] = ("raise", "nan")
 
 #: Queries handled per kernel call when inputs need broadcasting copies.
 _CHUNK = 1 << 16
 
 
-@dataclass(frozen=True)
-class LookupGrid:
-    """A table prepared for lookup: pole rule applied, pole node present.
+def snap_tolerance(precision: DTypeLike) -> float:
+    """The weight snap tolerance of index arithmetic in ``precision``.
+
+    Parameters
+    ----------
+    precision
+        ``"float64"`` or ``"float32"`` (or the NumPy dtype).
+
+    Returns
+    -------
+    float
+        :data:`SNAP_TOLERANCE` of that precision.
+
+    Raises
+    ------
+    QueryError
+        For any other precision.
+    """
+    try:
+        name = np.dtype(precision).name
+    except TypeError:
+        name = str(precision)
+    if name not in SNAP_TOLERANCE:
+        raise QueryError(f"precision: {precision!r} is not one of {', '.join(SNAP_TOLERANCE)}")
+    return SNAP_TOLERANCE[name]
+
+
+def wrap_azimuth(phi_deg: float) -> float:
+    """``phi_deg`` reduced exactly into (-360, 360) when it lies outside.
+
+    ``fmod`` is exact for every finite float, so a huge azimuth (1e30, 1e308)
+    keeps its true place on the circle. Azimuths already inside are returned
+    unchanged; infinities and NaN give NaN.
+    """
+    x = float(phi_deg)
+    if -PERIOD_DEG < x < PERIOD_DEG:
+        return x
+    return math.fmod(x, PERIOD_DEG) if math.isfinite(x) else math.nan
+
+
+class LookupGrid(NamedTuple):
+    """A table prepared for lookup: pole rule applied, every kernel's fields named.
+
+    Built once per table by :func:`prepare` (and cached by the table,
+    :meth:`cdbrdf.table.CDBRDF.lookup_grid`); immutable, arrays read-only. A
+    named tuple so that the numba kernels take it as one argument.
 
     Attributes
     ----------
     values
         ``(n_kappa, n_phi_l, n_theta_l, n_phi_v, n_theta_v, channel)``,
-        C-contiguous, float32 or float64 (the table's dtype); the theta axes
-        below start at 0 and node 0 holds the ring mean.
-    kappa, theta_l, theta_v
-        Sorted axes (mm^-1, degrees); ``theta_*[0] == 0``.
-    phi_l0, phi_l_step, phi_v0, phi_v_step
-        First azimuth and spacing (degrees); the spacing is 360 / n_phi.
+        C-contiguous, the table's dtype (float32 or float64); node 0 of both
+        elevation axes is theta = 0 and holds the ring mean.
+    flat
+        ``values`` raveled in C order with ``stride`` values per sample: RGB
+        tables are padded to 4 (the padding is 0) so that a sample is one
+        aligned 16-byte (float32) or 32-byte (float64) block.
+    stride
+        Values per sample in ``flat`` (4 for RGB, else the channel count).
+    kappa, kappa_inv_d
+        Curvature axis (mm^-1) and ``1 / (kappa[i + 1] - kappa[i])`` (mm);
+        a single-sample axis has ``kappa_inv_d == [0]``.
+    theta_l, theta_l_inv_d, theta_l_inv_step
+        Light elevation axis (degrees, ``theta_l[0] == 0``), its inverse
+        spacings (1/degree) and ``1 / step`` when it is evenly spaced with at
+        least 3 nodes, else 0.0 (:attr:`theta_l_even`).
+    theta_v, theta_v_inv_d, theta_v_inv_step
+        The same for the view elevation.
+    phi_l0, phi_l_step, phi_l_inv_step
+        First light azimuth, spacing (degrees; 360 / n_phi_l) and its inverse.
+    phi_v0, phi_v_step, phi_v_inv_step
+        The same for the view azimuth.
+    rgb_kernel
+        True when the RGB kernel applies: 3 channels, both elevation axes
+        evenly spaced, at most :data:`RGB_MAX_KAPPA` curvatures.
+    kappa_node, kappa_scan, kappa_slot_inv_d
+        The curvature axis in :data:`RGB_MAX_KAPPA` slots for the RGB kernel
+        (meaningful when ``rgb_kernel``): the nodes padded with the last one;
+        the interior nodes ``1 .. n - 2`` at their places, +inf elsewhere (a
+        scan counts those at or below the query); the inverse spacings padded
+        with 0.
     """
 
     values: NDArray[np.floating]
+    flat: NDArray[np.floating]
+    stride: int
     kappa: NDArray[np.float64]
+    kappa_inv_d: NDArray[np.float64]
     theta_l: NDArray[np.float64]
+    theta_l_inv_d: NDArray[np.float64]
+    theta_l_inv_step: float
     theta_v: NDArray[np.float64]
+    theta_v_inv_d: NDArray[np.float64]
+    theta_v_inv_step: float
     phi_l0: float
     phi_l_step: float
+    phi_l_inv_step: float
     phi_v0: float
     phi_v_step: float
+    phi_v_inv_step: float
+    rgb_kernel: bool
+    kappa_node: tuple[float, ...]
+    kappa_scan: tuple[float, ...]
+    kappa_slot_inv_d: tuple[float, ...]
+
+    def __repr__(self) -> str:
+        return (f"LookupGrid(shape={self.shape}, dtype={self.values.dtype}, stride={self.stride}, "
+                f"rgb_kernel={self.rgb_kernel})")
 
     @property
     def shape(self) -> tuple[int, ...]:
-        return self.values.shape
+        """Shape of :attr:`values` (the pole node included)."""
+        return tuple(self.values.shape)
+
+    @property
+    def n_channels(self) -> int:
+        """Number of channels."""
+        return int(self.values.shape[-1])
+
+    @property
+    def theta_l_even(self) -> bool:
+        """Whether the light elevation axis is evenly spaced (index by multiplication)."""
+        return self.theta_l_inv_step > 0.0
+
+    @property
+    def theta_v_even(self) -> bool:
+        """Whether the view elevation axis is evenly spaced."""
+        return self.theta_v_inv_step > 0.0
 
 
-def _pole(values: NDArray[np.floating], theta: NDArray[np.float64], t_axis: int, p_axis: int):
-    """Apply the pole rule along one (theta, phi) axis pair."""
+class _Table(Protocol):
+    """What :func:`prepare` and :func:`evaluate` need of a table."""
+
+    @property
+    def values(self) -> NDArray[np.floating]: ...
+
+    @property
+    def grid(self) -> Any: ...
+
+    def lookup_grid(self) -> LookupGrid: ...
+
+
+def _pole(
+    values: NDArray[np.floating], theta: NDArray[np.float64], t_axis: int, p_axis: int
+) -> tuple[NDArray[np.floating], NDArray[np.float64]]:
+    """Apply the pole rule along one (theta, phi) axis pair: node 0 at theta = 0 holds the ring mean."""
     ring_mean = values.mean(axis=p_axis, keepdims=True, dtype=np.float64)
-    idx = [slice(None)] * values.ndim
+    idx: list[slice] = [slice(None)] * values.ndim
     idx[t_axis] = slice(0, 1)
     ring_mean = np.take(ring_mean, [0], axis=t_axis).astype(values.dtype)
     pole = np.broadcast_to(ring_mean, values[tuple(idx)].shape)
@@ -78,105 +246,97 @@ def _pole(values: NDArray[np.floating], theta: NDArray[np.float64], t_axis: int,
     return np.concatenate([pole, values], axis=t_axis), np.concatenate([[0.0], theta])
 
 
-def prepare(table) -> LookupGrid:
-    """Build (or fetch the cached) :class:`LookupGrid` of a table."""
-    cached = getattr(table, "_lookup", None)
-    if cached is not None:
-        return cached
-    g = table.grid
-    v, thl = _pole(np.asarray(table.values), g.theta_l, 2, 1)
-    v, thv = _pole(v, g.theta_v, 4, 3)
-    v = np.ascontiguousarray(v)
-    v.setflags(write=False)
-    lg = LookupGrid(
-        values=v,
-        kappa=np.ascontiguousarray(g.kappa),
-        theta_l=np.ascontiguousarray(thl, dtype=np.float64),
-        theta_v=np.ascontiguousarray(thv, dtype=np.float64),
-        phi_l0=float(g.phi_l[0]),
-        phi_l_step=360.0 / g.phi_l.size,
-        phi_v0=float(g.phi_v[0]),
-        phi_v_step=360.0 / g.phi_v.size,
-    )
-    try:
-        table._lookup = lg
-    except AttributeError:
-        pass
-    return lg
+def _frozen(a: ArrayLike, dtype: DTypeLike = np.float64, *, copy: bool = True) -> NDArray[Any]:
+    """``a`` as a C-contiguous read-only array: a copy, or (``copy=False``) ``a`` itself when it is one."""
+    out = np.array(a, dtype=dtype, order="C", copy=True if copy else None)
+    out.setflags(write=False)
+    return out
 
 
 def _inv_spacing(axis: NDArray[np.float64]) -> NDArray[np.float64]:
     """``1 / (axis[i + 1] - axis[i])`` (one zero for a single-sample axis)."""
     if axis.size < 2:
-        return np.zeros(1)
-    return np.ascontiguousarray(1.0 / np.diff(axis))
-
-
-def _kernel_consts(lg: LookupGrid) -> tuple:
-    """The kernel's table and axis arguments, built once per table.
-
-    RGB tables are padded to 4 values per sample so that a sample is one
-    aligned 16-byte (float32) or 32-byte (float64) block.
-    """
-    cached = lg.__dict__.get("_kernel_consts")
-    if cached is not None:
-        return cached
-    nk, npl, ntl, npv, ntv, nc = lg.values.shape
-    if nc == 3:
-        padded = np.zeros(lg.values.shape[:-1] + (4,), dtype=lg.values.dtype)
-        padded[..., :3] = lg.values
-        flat, stride = padded.reshape(-1), 4
-    else:
-        flat, stride = np.ascontiguousarray(lg.values).reshape(-1), nc
-    consts = (
-        flat, nk, npl, ntl, npv, ntv, nc, stride,
-        lg.kappa, _inv_spacing(lg.kappa),
-        lg.theta_l, _inv_spacing(lg.theta_l),
-        lg.theta_v, _inv_spacing(lg.theta_v),
-        _inv_step(lg.theta_l), _inv_step(lg.theta_v),
-        lg.phi_l0, 1.0 / lg.phi_l_step, lg.phi_v0, 1.0 / lg.phi_v_step,
-    )
-    object.__setattr__(lg, "_kernel_consts", consts)
-    return consts
-
-
-def _rgb_consts(lg: LookupGrid) -> tuple | None:
-    """Arguments of :func:`cdbrdf._kernels.lookup_rgb`, or None when it does not apply.
-
-    It needs an RGB table, evenly spaced elevation axes and at most
-    ``RGB_MAX_KAPPA`` curvatures; other tables use ``lookup_generic``.
-    """
-    from ._kernels import RGB_MAX_KAPPA
-
-    if "_rgb_consts" in lg.__dict__:
-        return lg.__dict__["_rgb_consts"]
-    consts = None
-    base = _kernel_consts(lg)
-    flat, nk, npl, ntl, npv, ntv, nc = base[:7]
-    inv_tl, inv_tv = base[14], base[15]
-    if nc == 3 and inv_tl > 0.0 and inv_tv > 0.0 and nk <= RGB_MAX_KAPPA:
-        k_node = np.full(RGB_MAX_KAPPA, lg.kappa[-1])
-        k_node[:nk] = lg.kappa
-        k_scan = np.full(RGB_MAX_KAPPA, np.inf)
-        k_scan[1:nk - 1] = lg.kappa[1:nk - 1]
-        k_inv = np.zeros(RGB_MAX_KAPPA)
-        k_inv[:max(nk - 1, 1)] = _inv_spacing(lg.kappa)
-        consts = (
-            flat, nk, npl, ntl, npv, ntv, float(lg.kappa[0]), float(lg.kappa[-1]), k_node, k_scan, k_inv,
-            inv_tl, inv_tv, lg.phi_l0, 1.0 / lg.phi_l_step, lg.phi_v0, 1.0 / lg.phi_v_step,
-        )
-    object.__setattr__(lg, "_rgb_consts", consts)
-    return consts
+        return _frozen(np.zeros(1))
+    return _frozen(1.0 / np.diff(axis))
 
 
 def _inv_step(axis: NDArray[np.float64]) -> float:
-    """1 / spacing of an evenly spaced axis, or 0.0 when the spacing varies."""
+    """1 / spacing of an evenly spaced axis of at least 3 nodes, or 0.0 when the spacing varies."""
     if axis.size < 3:
         return 0.0
     d = np.diff(axis)
     if np.allclose(d, d[0], rtol=1e-12, atol=0.0):
         return float(1.0 / d[0])
     return 0.0
+
+
+def _kappa_slots(kappa: NDArray[np.float64]) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
+    """The curvature axis in :data:`RGB_MAX_KAPPA` slots (see :class:`LookupGrid`)."""
+    n = min(kappa.size, RGB_MAX_KAPPA)
+    node = np.full(RGB_MAX_KAPPA, kappa[n - 1])
+    node[:n] = kappa[:n]
+    scan = np.full(RGB_MAX_KAPPA, np.inf)
+    scan[1:n - 1] = kappa[1:n - 1]
+    inv = np.zeros(RGB_MAX_KAPPA)
+    inv[:max(n - 1, 1)] = _inv_spacing(kappa[:n])
+    return tuple(map(float, node)), tuple(map(float, scan)), tuple(map(float, inv))
+
+
+def prepare(table: _Table) -> LookupGrid:
+    """Build the :class:`LookupGrid` of a table (apply the pole rule, lay out every kernel's fields).
+
+    Builds a new grid on every call; :meth:`cdbrdf.table.CDBRDF.lookup_grid`
+    calls it once per table and keeps the result, and the lookups use that.
+
+    Parameters
+    ----------
+    table
+        A :class:`~cdbrdf.table.CDBRDF`.
+
+    Returns
+    -------
+    LookupGrid
+        The prepared grid (read-only arrays).
+    """
+    g = table.grid
+    v, thl = _pole(np.asarray(table.values), np.asarray(g.theta_l, dtype=np.float64), 2, 1)
+    v, thv = _pole(v, np.asarray(g.theta_v, dtype=np.float64), 4, 3)
+    values = _frozen(v, v.dtype, copy=False)  # _pole made a new array
+    nc = values.shape[-1]
+    if nc == 3:
+        padded = np.zeros(values.shape[:-1] + (4,), dtype=values.dtype)
+        padded[..., :3] = values
+        flat, stride = _frozen(padded.reshape(-1), values.dtype, copy=False), 4
+    else:
+        flat, stride = values.reshape(-1), nc  # a read-only view
+    kappa = _frozen(g.kappa)
+    theta_l, theta_v = _frozen(thl), _frozen(thv)
+    inv_tl, inv_tv = _inv_step(theta_l), _inv_step(theta_v)
+    n_pl, n_pv = int(np.size(g.phi_l)), int(np.size(g.phi_v))
+    k_node, k_scan, k_inv = _kappa_slots(kappa)
+    return LookupGrid(
+        values=values,
+        flat=flat,
+        stride=stride,
+        kappa=kappa,
+        kappa_inv_d=_inv_spacing(kappa),
+        theta_l=theta_l,
+        theta_l_inv_d=_inv_spacing(theta_l),
+        theta_l_inv_step=inv_tl,
+        theta_v=theta_v,
+        theta_v_inv_d=_inv_spacing(theta_v),
+        theta_v_inv_step=inv_tv,
+        phi_l0=float(g.phi_l[0]),
+        phi_l_step=PERIOD_DEG / n_pl,
+        phi_l_inv_step=n_pl / PERIOD_DEG,
+        phi_v0=float(g.phi_v[0]),
+        phi_v_step=PERIOD_DEG / n_pv,
+        phi_v_inv_step=n_pv / PERIOD_DEG,
+        rgb_kernel=bool(nc == 3 and inv_tl > 0.0 and inv_tv > 0.0 and kappa.size <= RGB_MAX_KAPPA),
+        kappa_node=k_node,
+        kappa_scan=k_scan,
+        kappa_slot_inv_d=k_inv,
+    )
 
 
 def _as_query(name: str, x: ArrayLike) -> NDArray[np.floating]:
@@ -194,7 +354,7 @@ def _as_query(name: str, x: ArrayLike) -> NDArray[np.floating]:
 
 
 def evaluate(
-    table,
+    table: _Table,
     theta_v: ArrayLike,
     phi_v: ArrayLike,
     theta_l: ArrayLike,
@@ -202,6 +362,7 @@ def evaluate(
     kappa: ArrayLike = 0.0,
     *,
     on_invalid: str = "raise",
+    kernel: str = "auto",
 ) -> NDArray[np.float64]:
     """Interpolate ``table`` at continuous directions (degrees) and curvature (mm^-1).
 
@@ -220,16 +381,29 @@ def evaluate(
     on_invalid
         ``"raise"`` (default): an elevation outside [0, 90] raises
         :class:`QueryError`; ``"nan"``: such rows are NaN.
+    kernel
+        One of :data:`KERNELS` (for tests and benchmarks; the results agree
+        to rounding): ``"auto"`` (default), ``"rgb"`` (only where
+        :attr:`LookupGrid.rgb_kernel`), ``"generic"``.
 
     Returns
     -------
     numpy.ndarray
         Interpolated values; rows with a non-finite input are NaN.
+
+    Raises
+    ------
+    QueryError
+        For an elevation outside [0, 90] (with ``on_invalid="raise"``),
+        arguments that are not numbers or do not broadcast, and an unknown
+        ``on_invalid`` or ``kernel``.
     """
     from . import _kernels
 
-    if on_invalid not in ("raise", "nan"):
-        raise ValueError(f"on_invalid: {on_invalid!r} is not one of raise, nan")
+    if on_invalid not in _ON_INVALID:
+        raise QueryError(f"on_invalid: {on_invalid!r} is not one of {', '.join(_ON_INVALID)}")
+    if kernel not in KERNELS:
+        raise QueryError(f"kernel: {kernel!r} is not one of {', '.join(KERNELS)}")
     names = ("theta_v", "phi_v", "theta_l", "phi_l", "kappa")
     qs = [_as_query(n, x) for n, x in zip(names, (theta_v, phi_v, theta_l, phi_l, kappa))]
     try:
@@ -240,18 +414,19 @@ def evaluate(
             + ", ".join(str(q.shape) for q in qs)
             + " do not broadcast together"
         ) from None
-    lg = prepare(table)
-    nc = lg.values.shape[-1]
+    lg = table.lookup_grid()
+    if kernel == "rgb" and not lg.rgb_kernel:
+        raise QueryError(
+            "kernel: 'rgb' needs 3 channels, evenly spaced elevations and at most "
+            f"{RGB_MAX_KAPPA} curvatures; this table has shape {lg.shape}"
+        )
+    run = _kernels.lookup_rgb if (kernel == "rgb" or (kernel == "auto" and lg.rgb_kernel)) else _kernels.lookup_generic
+    tol = SNAP_TOLERANCE["float64"]  # the kernels compute in float64
+    nc = lg.n_channels
     n = int(np.prod(shape, dtype=np.int64))
     out = np.empty((n, nc), dtype=np.float64)
-    consts = _rgb_consts(lg)
-    if consts is not None:
-        kernel = _kernels.lookup_rgb
-    else:
-        consts = _kernel_consts(lg)
-        kernel = _kernels.lookup_generic
 
-    direct = []
+    direct: list[NDArray[np.floating] | None] = []
     for q in qs:
         if q.size == 1:
             direct.append(q.reshape(1).astype(np.float64))
@@ -263,13 +438,14 @@ def evaluate(
     if n == 0:
         pass
     elif all(d is not None for d in direct):
-        bad_v, bad_l = kernel(*consts, *direct, n, out, 0)
+        bad_v, bad_l = run(lg, tol, *direct, n, out, 0)
     else:
         views = [np.broadcast_to(q, shape) if d is None else None for q, d in zip(qs, direct)]
         for s in range(0, n, _CHUNK):
             e = min(n, s + _CHUNK)
-            args = [d if d is not None else v.flat[s:e].astype(np.float64, copy=False) for d, v in zip(direct, views)]
-            a, b = kernel(*consts, *args, e - s, out, s)
+            args = [d if d is not None else v.flat[s:e].astype(np.float64, copy=False)  # type: ignore[union-attr]
+                    for d, v in zip(direct, views)]
+            a, b = run(lg, tol, *args, e - s, out, s)
             bad_v += a
             bad_l += b
     if on_invalid == "raise" and (bad_v or bad_l):
@@ -281,41 +457,91 @@ def evaluate(
     return out.reshape(shape + (nc,))
 
 
+# -- the rule, written out slowly ----------------------------------------------------------
+def _snap(w: float, tol: float) -> float:
+    """The snapping rule: a weight within ``tol`` of 0 or 1 becomes exactly 0 or 1."""
+    if w < tol:
+        return 0.0
+    if w > 1.0 - tol:
+        return 1.0
+    return w
+
+
+def _linear(axis: NDArray[np.float64], x: float, tol: float) -> list[tuple[int, float]]:
+    """The two nodes of ``x`` on a sorted axis and their weights (clamped at both ends)."""
+    n = axis.size
+    if n == 1:
+        return [(0, 1.0)]
+    x = min(max(x, float(axis[0])), float(axis[-1]))
+    i = min(int(np.searchsorted(axis, x, side="right")) - 1, n - 2)
+    w = _snap((x - axis[i]) / (axis[i + 1] - axis[i]), tol)
+    return [(i, 1.0 - w), (i + 1, w)]
+
+
+def _periodic(phi0: float, step: float, n: int, x: float, tol: float) -> list[tuple[int, float]]:
+    """The two nodes of azimuth ``x`` on an evenly spaced circle and their weights."""
+    if n == 1:
+        return [(0, 1.0)]
+    u = (wrap_azimuth(x) - phi0) / step
+    f = math.floor(u)
+    w = _snap(u - f, tol)
+    return [(f % n, 1.0 - w), ((f + 1) % n, w)]
+
+
+def _at_pole(nodes: list[tuple[int, float]]) -> bool:
+    """Whether elevation ``nodes`` sit exactly on node 0 (theta = 0)."""
+    return nodes[0] == (0, 1.0)
+
+
 def evaluate_reference(
-    table, theta_v: float, phi_v: float, theta_l: float, phi_l: float, kappa: float = 0.0
+    table: _Table, theta_v: float, phi_v: float, theta_l: float, phi_l: float, kappa: float = 0.0
 ) -> NDArray[np.float64]:
-    """Slow, readable pure-Python lookup of one query (for tests and docs).
+    """Slow, readable pure-Python lookup of one query: the rule of this module, step by step.
 
-    Follows the same rules as :func:`evaluate` written out step by step.
+    Uses the table's :class:`LookupGrid` and the float64
+    :data:`SNAP_TOLERANCE`, like :func:`evaluate` (which agrees to rounding).
+
+    Parameters
+    ----------
+    table
+        A :class:`~cdbrdf.table.CDBRDF`.
+    theta_v, phi_v, theta_l, phi_l
+        Elevations and azimuths, degrees.
+    kappa
+        Curvature, mm^-1.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_channels,)`` float64; NaN when a component is not finite or an
+        elevation lies outside [0, 90] (as ``evaluate(..., on_invalid="nan")``).
     """
-    lg = prepare(table)
-    q = dict(theta_v=theta_v, phi_v=phi_v, theta_l=theta_l, phi_l=phi_l, kappa=kappa)
-    if not all(np.isfinite(float(x)) for x in q.values()):
-        return np.full(table.n_channels, np.nan)
-
-    def lin(axis, x):
-        if axis.size == 1 or x <= axis[0]:
-            return [(0, 1.0)]
-        if x >= axis[-1]:
-            return [(axis.size - 1, 1.0)]
-        i = int(np.searchsorted(axis, x, side="right") - 1)
-        w = (x - axis[i]) / (axis[i + 1] - axis[i])
-        return [(i, 1 - w), (i + 1, w)]
-
-    def per(phi0, step, n, x):
-        if n == 1:
-            return [(0, 1.0)]
-        u = (x - phi0) / step
-        f = np.floor(u)
-        w = u - f
-        return [(int(f) % n, 1 - w), ((int(f) + 1) % n, w)]
-
-    res = np.zeros(table.n_channels)
-    nk, npl, ntl, npv, ntv, _ = lg.values.shape
-    for ik, wk in lin(lg.kappa, kappa):
-        for ipl, wpl in per(lg.phi_l0, lg.phi_l_step, npl, phi_l):
-            for itl, wtl in lin(lg.theta_l, theta_l):
-                for ipv, wpv in per(lg.phi_v0, lg.phi_v_step, npv, phi_v):
-                    for itv, wtv in lin(lg.theta_v, theta_v):
-                        res += wk * wpl * wtl * wpv * wtv * lg.values[ik, ipl, itl, ipv, itv]
+    lg = table.lookup_grid()
+    tol = snap_tolerance(np.float64)
+    q = [float(x) for x in (theta_v, phi_v, theta_l, phi_l, kappa)]
+    tv, pv, tl, pl, k = q
+    if not all(math.isfinite(x) for x in q) or not (
+        0.0 <= tv <= MAX_ELEVATION_DEG and 0.0 <= tl <= MAX_ELEVATION_DEG
+    ):
+        return np.full(lg.n_channels, np.nan)
+    _, n_pl, _, n_pv, _, _ = lg.shape
+    k_nodes = _linear(lg.kappa, k, tol)
+    tl_nodes = _linear(lg.theta_l, tl, tol)
+    tv_nodes = _linear(lg.theta_v, tv, tol)
+    pl_nodes = _periodic(lg.phi_l0, lg.phi_l_step, n_pl, pl, tol)
+    pv_nodes = _periodic(lg.phi_v0, lg.phi_v_step, n_pv, pv, tol)
+    # pole rule: at theta = 0 the ring holds one value; the azimuth must not matter
+    if _at_pole(tl_nodes):
+        pl_nodes = [(pl_nodes[0][0], 1.0)]
+    if _at_pole(tv_nodes):
+        pv_nodes = [(pv_nodes[0][0], 1.0)]
+    res = np.zeros(lg.n_channels)
+    values = lg.values
+    for ik, wk in k_nodes:
+        for ipl, wpl in pl_nodes:
+            for itl, wtl in tl_nodes:
+                for ipv, wpv in pv_nodes:
+                    for itv, wtv in tv_nodes:
+                        v = values[ik, ipl, itl, ipv, itv].astype(np.float64)  # float32 tables: sum in float64
+                        res += wk * wpl * wtl * wpv * wtv * v
     return res

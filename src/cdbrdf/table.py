@@ -39,7 +39,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -62,6 +62,9 @@ from .schema import (
     variable_attrs,
     with_channel_names,
 )
+
+if TYPE_CHECKING:
+    from .interp import LookupGrid
 
 __all__ = [
     "Grid",
@@ -369,7 +372,7 @@ class CDBRDF:
         self._measured = self._check_mask(measured, grid.shape)
         self._fill_source = self._check_fill(fill_source, self._measured)
         self._attrs = self._check_attrs(attrs)
-        self._lookup = None
+        self._lookup: LookupGrid | None = None  # filled by lookup_grid()
 
     # -- validation -------------------------------------------------------------
     @staticmethod
@@ -557,6 +560,19 @@ class CDBRDF:
         from .interp import evaluate
 
         return evaluate(self, theta_v, phi_v, theta_l, phi_l, kappa)
+
+    def lookup_grid(self) -> "LookupGrid":
+        """The table prepared for lookup (:class:`cdbrdf.interp.LookupGrid`).
+
+        Built by :func:`cdbrdf.interp.prepare` on first use and kept by the
+        table (the table never changes), so every lookup of this table, the
+        renderer's included, shares one prepared grid.
+        """
+        if self._lookup is None:
+            from .interp import prepare
+
+            self._lookup = prepare(self)
+        return self._lookup
 
     def brdf(self, kappa: float = 0.0) -> "CDBRDF":
         """The plain BRDF: the table at one curvature as a one-kappa table.

@@ -1,10 +1,11 @@
 """The ``cdbrdf`` BSDF plug-in for Mitsuba 3 (see :mod:`cdbrdf.render`).
 
 The Python class is traced by Dr.Jit once per render in the ``llvm_ad_rgb``
-variant: the 5-D lookup below becomes straight-line vector code (compares,
-selects and 32 gathers of an RGB triple from the flattened table), never a
-Python call per ray. In ``scalar_rgb`` (debugging only) each call evaluates
-one query with :func:`cdbrdf.interp.evaluate`.
+variant: the 5-D lookup (:func:`cdbrdf.render._lookup_jit.lookup_jit`)
+becomes straight-line vector code (compares, selects and 32 gathers of an RGB
+triple from the flattened table), never a Python call per ray. In
+``scalar_rgb`` (debugging only) each call evaluates one query with
+:func:`cdbrdf.interp.evaluate`.
 """
 
 from __future__ import annotations
@@ -15,9 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from ..interp import LookupGrid, prepare
+from ..interp import LookupGrid
+from ._lookup_jit import lookup_jit, pack_table
 
-__all__ = ["MODES", "PLUGIN_NAME", "bsdf_class", "lookup_jit", "pack_table", "load_table"]
+__all__ = ["MODES", "PLUGIN_NAME", "bsdf_class", "load_table"]
 
 #: Name under which the plug-in is registered with Mitsuba.
 PLUGIN_NAME = "cdbrdf"
@@ -51,132 +53,7 @@ def _mode_grid(table, mode: str) -> LookupGrid:
         raise ValueError(f"cdbrdf BSDF: mode {mode!r} is not one of {', '.join(MODES)}")
     if mode == "brdf":
         table = table.brdf()
-    return prepare(table)
-
-
-# -- the Dr.Jit lookup (shared by the plug-in and the tests) ----------------------
-def _locate(dr, Float, UInt, axis: np.ndarray, x):
-    """Lower index and weight on a sorted axis, clamped at both ends (as ``_kernels._locate``)."""
-    n = axis.size
-    if n == 1:
-        return UInt(0), Float(0.0)
-    lo = UInt(0)
-    a0 = Float(float(axis[0]))
-    a1 = Float(float(axis[1]))
-    for j in range(1, n - 1):
-        m = x >= float(axis[j])
-        lo = dr.select(m, UInt(j), lo)
-        a0 = dr.select(m, Float(float(axis[j])), a0)
-        a1 = dr.select(m, Float(float(axis[j + 1])), a1)
-    w = dr.clip((x - a0) / (a1 - a0), 0.0, 1.0)
-    return lo, w
-
-
-def _locate_periodic(dr, Float, UInt, phi0: float, step: float, n: int, x):
-    """Lower index and weight of an azimuth on an evenly spaced circle.
-
-    The index is in ``[0, n)`` for every input, NaN and infinities included:
-    a lane whose wrapped position is not a number in range (a non-finite or
-    huge azimuth whose floor does not wrap exactly in float32) gets index 0
-    and weight 0, so no gather can leave the table.
-    """
-    if n == 1:
-        return UInt(0), Float(0.0)
-    u = (x - phi0) * (1.0 / step)
-    f = dr.floor(u)
-    w = u - f
-    snap = w > 1.0 - 1e-6
-    w = dr.select(snap, 0.0, w)
-    f = dr.select(snap, f + 1.0, f)
-    i = f - n * dr.floor(f / n)
-    ok = (i >= 0.0) & (i <= n - 1.0) & (w >= 0.0) & (w < 1.0)  # False for NaN
-    i = dr.select(ok, i, 0.0)
-    w = dr.select(ok, w, 0.0)
-    return UInt(dr.clip(i, 0.0, n - 1.0)), w
-
-
-#: Bits per channel of the packed RGB table (3 x 21 bits in one 64-bit word).
-_PACK_BITS = 21
-_PACK_MAX = (1 << _PACK_BITS) - 1
-
-
-def pack_table(mi, grid: LookupGrid):
-    """Upload a prepared table: ``(buffer, offset, step)``.
-
-    RGB tables are packed as three 21-bit fixed-point channels per 64-bit word
-    (``value = offset + step * q``; ``step`` = range / (2^21 - 1), i.e. about
-    5e-7 of the table's range), so one gather fetches a whole sample: the
-    lookup is gather-bound and this makes it about 1.5x faster than three
-    float gathers. One-channel tables stay float32 (``offset = 0, step = 1``).
-    """
-    v = np.asarray(grid.values, dtype=np.float64)
-    if v.shape[-1] == 1:
-        return mi.Float(v.astype(np.float32).reshape(-1)), 0.0, 1.0
-    lo, hi = float(v.min()), float(v.max())
-    step = (hi - lo) / _PACK_MAX if hi > lo else 1.0
-    q = np.rint((v - lo) / step).astype(np.uint64)
-    word = q[..., 0] | (q[..., 1] << np.uint64(_PACK_BITS)) | (q[..., 2] << np.uint64(2 * _PACK_BITS))
-    import drjit as dr
-
-    UInt64 = dr.uint64_array_t(mi.Float)
-    return UInt64(word.reshape(-1)), lo, step
-
-
-def lookup_jit(mi, grid: LookupGrid, packed, theta_v, phi_v, theta_l, phi_l, kappa, active=True):
-    """Interpolate a prepared table in Dr.Jit (degrees, mm^-1) -> ``mi.Color3f``.
-
-    Same arithmetic as :func:`cdbrdf._kernels.lookup` (multilinear, phi
-    periodic, theta and kappa clamped, pole rule) in the variant's precision.
-    ``packed`` is :func:`pack_table`'s result. Elevations are clamped into
-    [0, 90]; callers mask invalid directions.
-    """
-    import drjit as dr
-
-    buf, offset, step = packed
-
-    Float, UInt = mi.Float, mi.UInt32
-    nk, npl, ntl, npv, ntv, nc = grid.values.shape
-    ik, wk = _locate(dr, Float, UInt, grid.kappa, kappa)
-    itl, wtl = _locate(dr, Float, UInt, grid.theta_l, theta_l)
-    itv, wtv = _locate(dr, Float, UInt, grid.theta_v, theta_v)
-    ipl, wpl = _locate_periodic(dr, Float, UInt, grid.phi_l0, grid.phi_l_step, npl, phi_l)
-    ipv, wpv = _locate_periodic(dr, Float, UInt, grid.phi_v0, grid.phi_v_step, npv, phi_v)
-    # Pole: node 0 of an elevation axis is theta = 0 (one value for every azimuth).
-    wpl = dr.select((itl == 0) & (wtl == 0.0), 0.0, wpl)
-    wpv = dr.select((itv == 0) & (wtv == 0.0), 0.0, wpv)
-    ipl1 = dr.select(ipl + 1 < npl, ipl + 1, 0)
-    ipv1 = dr.select(ipv + 1 < npv, ipv + 1, 0)
-    k_nodes = [(ik, 1.0 - wk), (ik + 1, wk)] if nk > 1 else [(ik, Float(1.0))]
-    pl_nodes = [(ipl, 1.0 - wpl), (ipl1, wpl)] if npl > 1 else [(ipl, Float(1.0))]
-    tl_nodes = [(itl, 1.0 - wtl), (itl + 1, wtl)] if ntl > 1 else [(itl, Float(1.0))]
-    pv_nodes = [(ipv, 1.0 - wpv), (ipv1, wpv)] if npv > 1 else [(ipv, Float(1.0))]
-    tv_nodes = [(itv, 1.0 - wtv), (itv + 1, wtv)] if ntv > 1 else [(itv, Float(1.0))]
-    Int32 = dr.int32_array_t(Float)
-    rgb = nc == 3
-    acc = [Float(0.0) for _ in range(3 if rgb else 1)]
-    for ka, wa in k_nodes:
-        for pb, wb in pl_nodes:
-            wab = wa * wb
-            base_b = (ka * npl + pb) * ntl
-            for td, wd in tl_nodes:
-                wabd = wab * wd
-                base_d = (base_b + td) * npv
-                for pe, we in pv_nodes:
-                    wabde = wabd * we
-                    base_e = (base_d + pe) * ntv
-                    for tf, wf in tv_nodes:
-                        w = wabde * wf
-                        idx = base_e + tf
-                        if rgb:
-                            word = dr.gather(type(buf), buf, idx, active)
-                            acc[0] += w * Float(Int32(word & _PACK_MAX))
-                            acc[1] += w * Float(Int32((word >> _PACK_BITS) & _PACK_MAX))
-                            acc[2] += w * Float(Int32(word >> (2 * _PACK_BITS)))
-                        else:
-                            acc[0] += w * dr.gather(Float, buf, idx, active)
-    if rgb:
-        return mi.Color3f(acc[0], acc[1], acc[2]) * step + offset
-    return mi.Color3f(acc[0])
+    return table.lookup_grid()
 
 
 # -- the plug-in class (one per Mitsuba variant) ------------------------------------
