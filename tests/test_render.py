@@ -567,3 +567,16 @@ def test_ci_has_libllvm19():
     if not os.environ.get("CI"):
         pytest.skip("only enforced in CI (CI=true)")
     assert _INFO.ok, _llvm.llvm_message(_INFO)
+
+
+@pytest.mark.parametrize("channels", [1, 3])
+@pytest.mark.parametrize("peak", [1e31, 1e300, -1e308])
+def test_values_beyond_float32_range_are_refused(variant, channels, peak):
+    # Before: a table holding 1e300 rendered 78 % inf pixels, +-1e308 80 % NaN (and warnings).
+    g = cdbrdf.Grid.paper()
+    v = np.full(g.shape + (channels,), 0.2)
+    v[0, 0, 1, 0, 1, 0] = peak  # off the poles (their ring means are what the renderer holds)
+    with pytest.raises(cdbrdf.TableError, match=r"float32.*1e\+30"):
+        variant.make_bsdf(cdbrdf.CDBRDF(v, **g.axes()))
+    v[0, 0, 1, 0, 1, 0] = 1e29  # within range: accepted
+    variant.make_bsdf(cdbrdf.CDBRDF(v, **g.axes()))

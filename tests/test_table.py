@@ -182,6 +182,12 @@ def test_brdf_clamps_outside_the_curvature_range(small_grid):
     np.testing.assert_array_equal(single.brdf(0.3).values, single.values)
 
 
+@pytest.mark.parametrize("bad", ["a", None, [0.1], True, np.nan, np.inf])
+def test_brdf_refuses_what_is_not_a_finite_number(small_grid, bad):
+    with pytest.raises(cdbrdf.TableError, match="kappa"):
+        make_table(small_grid).brdf(bad)
+
+
 def test_xarray_round_trip(small_grid):
     xr = pytest.importorskip("xarray")
     measured = np.ones(small_grid.shape, bool)

@@ -583,6 +583,8 @@ class CDBRDF:
         as in the lookup); between samples the slice is interpolated linearly
         in kappa and a sample counts as measured only if both neighbours were.
         """
+        if isinstance(kappa, (bool, np.bool_)) or not isinstance(kappa, (int, float, np.integer, np.floating)):
+            raise TableError(f"kappa: expected a number (1/mm), got {type(kappa).__name__} {kappa!r}")
         k = float(kappa)
         if not np.isfinite(k):
             raise TableError(f"kappa: must be finite, got {kappa!r}")

@@ -33,9 +33,14 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import TableError
 from ..interp import LookupGrid, snap_tolerance
 
-__all__ = ["PACK_BITS", "lookup_jit", "pack_table"]
+__all__ = ["PACK_BITS", "MAX_ABS_VALUE", "lookup_jit", "pack_table"]
+
+#: Largest table value (in magnitude) the renderer accepts: its arithmetic is
+#: float32 (largest 3.4e38), with headroom for the weighted sums and ``scale``.
+MAX_ABS_VALUE = 1e30
 
 #: Bits per channel of the packed RGB table (3 x 21 bits in one 64-bit word).
 PACK_BITS = 21
@@ -123,9 +128,14 @@ def pack_table(mi: Any, grid: LookupGrid) -> tuple[Any, float, float]:
         The Dr.Jit buffer, the offset and the step of the fixed-point code.
     """
     v = np.asarray(grid.values, dtype=np.float64)
+    lo, hi = float(v.min()), float(v.max())
+    if max(abs(lo), abs(hi)) > MAX_ABS_VALUE:
+        raise TableError(
+            f"table values span {lo:g}..{hi:g}: the renderer computes in float32 and needs values "
+            f"within +-{MAX_ABS_VALUE:g} (rescale the table, e.g. with the plug-in's 'scale')"
+        )
     if v.shape[-1] == 1:
         return mi.Float(v.astype(np.float32).reshape(-1)), 0.0, 1.0
-    lo, hi = float(v.min()), float(v.max())
     step = (hi - lo) / _PACK_MAX if hi > lo else 1.0
     q = np.rint((v - lo) / step).astype(np.uint64)
     word = q[..., 0] | (q[..., 1] << np.uint64(PACK_BITS)) | (q[..., 2] << np.uint64(2 * PACK_BITS))
