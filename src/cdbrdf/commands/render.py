@@ -1,4 +1,14 @@
-"""``cdbrdf render FILE (--scene sine | --mesh MESH) -o OUT.png|OUT.exr``: render with Mitsuba 3.
+"""``cdbrdf render FILE (--scene sine | --mesh MESH) -o OUT`` or ``cdbrdf render SCENE.xml -o OUT``.
+
+Render with Mitsuba 3.
+
+A Mitsuba XML scene (``SCENE.xml``, using ``<bsdf type="cdbrdf">``) is
+loaded by :func:`cdbrdf.render.load_file` (the plug-in registered, files
+found next to the scene, curvature units and the scene checks) with the
+``mitsuba`` command's options: ``-D name=value`` for the scene's parameters,
+``--spp`` (the sensor's count unless given), the variant, ``--seed``; the
+scene defines camera, film, lights and integrator. ``--units`` is the
+scene's unit there (mm per scene unit).
 
 PNG output is tone-mapped by a fixed exposure and sRGB-encoded:
 ``png = srgb(clip(radiance * 2**exposure, 0, 1))`` with ``--exposure`` in EV
@@ -26,9 +36,15 @@ MAX_SPP = 65536
 
 _SEED_MAX = 2**32 - 1 - MAX_SPP
 
+#: Options of the built-in scenes that a scene file defines itself (refused with SCENE.xml when changed).
+_SCENE_FILE_IGNORES = ("light", "irradiance", "no_light", "envmap", "amplitude", "wavelength", "sheet_size",
+                       "max_depth", "view", "size", "brdf", "compare")
+
+
 def register(sub: argparse._SubParsersAction) -> None:
+    from ..render import VARIANTS
     from ..render.scenes import UNITS_MM
-    from ._args import existing_file, finite_float, float_list, int_range, output_file, seed, size_wxh
+    from ._args import existing_file, finite_float, float_list, int_range, key_value, output_file, seed, size_wxh
 
     p = sub.add_parser(
         "render",
@@ -37,8 +53,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "or on a mesh with UVs (curvature computed if the file has none). PNG is sRGB-encoded "
         "after the exposure (radiance x 2^EV, clipped); EXR is linear.",
     )
-    p.add_argument("file", help="a CDBRDF file (.h5)")
-    what = p.add_mutually_exclusive_group(required=True)
+    p.add_argument("file", help="a CDBRDF file (.h5), or a Mitsuba scene (.xml) using <bsdf type=\"cdbrdf\">")
+    what = p.add_mutually_exclusive_group()
     what.add_argument("--scene", choices=["sine"], help="built-in scene: the paper's sine sheet")
     what.add_argument("--mesh", metavar="MESH", type=existing_file(".ply", ".obj"), help="a .ply/.obj mesh with UVs (lengths in --units)")
     mode = p.add_mutually_exclusive_group()
@@ -48,8 +64,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, metavar="OUT",
                    type=output_file(),
                    help="output .png or .exr (--compare: .png, .pdf or .svg)")
-    p.add_argument("--spp", type=int_range(1, MAX_SPP), default=64,
-                   help=f"samples per pixel, 1 to {MAX_SPP} (default: 64)")
+    p.add_argument("--spp", type=int_range(1, MAX_SPP), default=None,
+                   help=f"samples per pixel, 1 to {MAX_SPP} (default: 64; a scene file: its sensor's)")
+    p.add_argument("-D", dest="define", action="append", default=[], type=key_value(), metavar="NAME=VALUE",
+                   help="a scene file's parameter $NAME (as Mitsuba's -D; repeatable)")
     p.add_argument("--size", type=size_wxh(), default="512x384", metavar="WxH",
                    help="image size (default: 512x384; at most CDBRDF_MAX_RENDER_PIXELS pixels)")
     p.add_argument("--light", type=float_list(-360, 360, min_len=2, max_len=2, example="45,0", unit="deg"),
@@ -77,9 +95,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="camera elevation and azimuth, degrees (default: 40,-90)")
     p.add_argument("--seed", type=seed(_SEED_MAX), default=0,
                    help=f"random seed, 0 to {_SEED_MAX} (default: 0)")
-    p.add_argument("--variant", choices=["llvm_ad_rgb", "scalar_rgb"], default="llvm_ad_rgb",
-                   help="Mitsuba variant (scalar_rgb: one Python call per ray, debugging only)")
-    p.set_defaults(func=run)
+    p.add_argument("--variant", choices=VARIANTS, default="llvm_ad_rgb",
+                   help="Mitsuba variant (default: llvm_ad_rgb; spectral and mono variants too; "
+                   "scalar_*: one Python call per ray, debugging only)")
+    defaults = {}
+    for action in p._actions:  # the parsed defaults, to tell options a scene file does not use
+        if action.dest in _SCENE_FILE_IGNORES:
+            d = action.default
+            defaults[action.dest] = action.type(d) if isinstance(d, str) and callable(action.type) else d
+    p.set_defaults(func=run, defaults_=defaults)
 
 
 def _check_sheet(sheet) -> None:  # noqa: ANN001 - a SineSheet
@@ -102,6 +126,13 @@ def run(args: argparse.Namespace) -> int:
     from ..table import load
     from ._progress import ProgressBars
 
+    if Path(args.file).suffix.lower() == ".xml":
+        return _run_scene_file(args)
+    if args.scene is None and args.mesh is None:
+        raise ValueError("give --scene sine or --mesh MESH for a CDBRDF file (or render a scene file SCENE.xml)")
+    if args.define:
+        raise ValueError("-D: only for a scene file (SCENE.xml)")
+    args.spp = 64 if args.spp is None else args.spp
     out = Path(args.output)
     ext = out.suffix.lower()
     if args.compare:
@@ -148,4 +179,41 @@ def run(args: argparse.Namespace) -> int:
         write_render(out, images[modes[0]], exposure_ev=args.exposure)
     if not args.quiet:
         print(f"{out}: written ({width}x{height}, {args.spp} spp)", file=sys.stderr)
+    return 0
+
+
+def _run_scene_file(args: argparse.Namespace) -> int:
+    """``cdbrdf render SCENE.xml``: load with :func:`cdbrdf.render.load_file`, check, render, write."""
+    from .. import render as cr
+    from ..errors import SceneError
+    from ..render.output import IMAGE_FORMATS, write_render
+    from ..render.scenes import UNITS_MM, render_scene
+    from ._progress import ProgressBars
+
+    if args.scene is not None or args.mesh is not None:
+        raise ValueError(f"{args.file}: a scene file brings its own shapes; --scene and --mesh are not used")
+    defaults = getattr(args, "defaults_", {})
+    changed = [k for k in _SCENE_FILE_IGNORES if k in defaults and getattr(args, k) != defaults[k]]
+    if changed:
+        raise ValueError(f"--{changed[0].replace('_', '-')}: not used with a scene file (the scene defines "
+                         "camera, film, lights and integrator; use -D for its parameters)")
+    out = Path(args.output)
+    if out.suffix.lower() not in IMAGE_FORMATS:
+        raise ValueError(f"{out}: unknown image type {out.suffix.lower()!r}; use {' or '.join(IMAGE_FORMATS)}")
+    units = args.units if isinstance(args.units, (int, float)) else UNITS_MM[args.units]
+    cr.set_variant(args.variant)
+    import mitsuba as mi
+
+    scene = cr.load_file(args.file, variables=dict(args.define), unit_mm=float(units))
+    if not isinstance(scene, mi.Scene):
+        raise SceneError(f"{args.file}: holds a {type(scene).__name__}, not a scene")
+    if not scene.sensors():
+        raise SceneError(f"{args.file}: the scene has no sensor to render from")
+    with ProgressBars(quiet=args.quiet, unit="spp", leave=True) as bars:
+        image = render_scene(scene, spp=args.spp, seed=args.seed, progress=bars.callback("rendering"))
+    write_render(out, image, exposure_ev=args.exposure)
+    if not args.quiet:
+        h, w = image.shape[:2]
+        print(f"{out}: written ({w}x{h}, {args.spp or scene.sensors()[0].sampler().sample_count()} spp, "
+              f"{args.variant})", file=sys.stderr)
     return 0
