@@ -1,0 +1,142 @@
+"""The plug-in in Mitsuba's spectral and mono variants (and the variant checks).
+
+Spectral variants upsample every table sample with Mitsuba's sRGB model and
+blend the spectra (as Mitsuba's bitmap textures do); mono variants use the
+luminance. A constant table renders as ``diffuse`` in both.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cdbrdf.colour import LUMINANCE_WEIGHTS
+
+from .render_helpers import constant_table, dr, glossy_table, mi, needs_llvm, vec
+
+pytestmark = needs_llvm
+
+LAMBDAS = (420.0, 510.0, 580.0, 660.0)
+
+
+@pytest.fixture
+def cr():
+    import cdbrdf.render as cr
+
+    yield cr
+    cr.set_variant("llvm_ad_rgb")
+
+
+def _si(cr_mod, wi, wavelengths=LAMBDAS):
+    si = dr.zeros(mi.SurfaceInteraction3f, wi.shape[0])
+    si.wi = vec(wi)
+    if "spectral" in mi.variant():
+        si.wavelengths = mi.Spectrum(*wavelengths)
+    return si
+
+
+def _dirs(rng, n):
+    v = rng.normal(size=(n, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    v[:, 2] = np.abs(v[:, 2]) + 0.05
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def test_srgb_coefficients_are_mitsubas(cr):
+    from cdbrdf.render._spectral import srgb_coefficients
+
+    cr.set_variant("scalar_spectral")
+    rng = np.random.default_rng(0)
+    c = rng.random((1500, 3)).astype(np.float32)
+    c[:200] **= 4  # dark colours
+    c[200:250] = c[200:250, :1]  # greys
+    c[250:260] = [[0, 0, 0], [1, 1, 1], [2, 2, 2], [1, 0, 0], [0, 0, 1], [1, 1, 0.999], [0.5] * 3, [1e-8, 0, 0],
+                  [1.5, 0.2, -0.1], [0.3, 0.3, 0.30001]]
+    ref = np.array([np.array(mi.srgb_model_fetch(mi.ScalarColor3f(*map(float, x)))) for x in c])
+    np.testing.assert_array_equal(srgb_coefficients(c), ref.astype(np.float32))
+
+
+def test_available_and_refused_variants(cr):
+    have = cr.available_variants()
+    assert {"llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", "scalar_rgb", "scalar_spectral"} <= set(have)
+    with pytest.raises(ValueError, match="llvm_ad_spectral_polarized' is not one of"):
+        cr.set_variant("llvm_ad_spectral_polarized")
+    mi.set_variant("llvm_ad_spectral_polarized")
+    with pytest.raises(ValueError, match="polarised variants are not supported"):
+        cr.register()
+
+
+@pytest.mark.parametrize("name", ["llvm_ad_spectral", "llvm_ad_mono"])
+def test_constant_table_equals_diffuse(cr, name):
+    from cdbrdf.render.scenes import render_scene, sine_scene
+
+    cr.set_variant(name)
+    albedo = np.array([0.2, 0.5, 0.8])
+    table = constant_table(albedo / np.pi)
+    kw = dict(size=(24, 16), spp=8, max_depth=3)
+    ours = render_scene(sine_scene(table, bsdf={"type": "cdbrdf", "table": table, "sampling": "cosine"}, **kw),
+                        seed=3)
+    diffuse = {"type": "diffuse", "reflectance": {"type": "rgb", "value": albedo.tolist()}}
+    ref = render_scene(sine_scene(table, bsdf=diffuse, **kw), seed=3)
+    assert ours.mean() > 0.05
+    np.testing.assert_allclose(ours, ref, rtol=2e-4, atol=2e-5)
+
+
+def test_spectral_sample_is_mitsubas_upsampling_of_pi_f(cr):
+    """At a table sample: the spectrum is Mitsuba's model of pi f, over pi (rescaled above 1)."""
+    cr.set_variant("llvm_ad_spectral")
+    for rgb in ([0.05, 0.1, 0.2], [0.9, 0.3, 0.1]):  # a reflectance-like colour and a bright glossy one
+        table = constant_table(np.asarray(rgb))
+        b = cr.make_bsdf(table, curvature=0.0, sampling="cosine")
+        wi = np.array([[0.0, 0.0, 1.0]])
+        f = np.array(b.eval(mi.BSDFContext(), _si(cr, wi), vec(wi))).ravel()
+        rho = np.pi * np.asarray(rgb)
+        s = max(1.0, rho.max())
+        cr.set_variant("scalar_spectral")
+        coeff = mi.srgb_model_fetch(mi.ScalarColor3f(*(rho / s)))
+        want = [s / np.pi * float(mi.srgb_model_eval(coeff, mi.Spectrum(lam, lam, lam, lam))[0]) for lam in LAMBDAS]
+        cr.set_variant("llvm_ad_spectral")
+        np.testing.assert_allclose(f, want, rtol=2e-5)
+
+
+def test_spectral_vectorised_equals_scalar(cr):
+    """Between samples both blend the samples' spectra (the scalar path through the reference lookup)."""
+    table = glossy_table(theta_step=15.0, phi_step=30.0, ks=0.3)
+    rng = np.random.default_rng(1)
+    n = 12
+    wi, wo = _dirs(rng, n), _dirs(rng, n)
+    cr.set_variant("llvm_ad_spectral")
+    b = cr.make_bsdf(table, curvature=0.07)
+    vec_f = np.array(b.eval(mi.BSDFContext(), _si(cr, wi), vec(wo))).T
+    cr.set_variant("scalar_spectral")
+    b = cr.make_bsdf(table, curvature=0.07)
+    for i in range(n):
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(*map(float, wi[i]))
+        si.wavelengths = mi.Spectrum(*LAMBDAS)
+        f = np.array(b.eval(mi.BSDFContext(), si, mi.Vector3f(*map(float, wo[i]))))
+        np.testing.assert_allclose(f, vec_f[i], rtol=2e-4, atol=1e-7)
+
+
+def test_mono_is_luminance(cr):
+    table = glossy_table(theta_step=15.0, phi_step=30.0, ks=0.3)
+    rng = np.random.default_rng(2)
+    n = 2000
+    wi, wo = _dirs(rng, n), _dirs(rng, n)
+    cr.set_variant("llvm_ad_rgb")
+    rgb = np.array(cr.make_bsdf(table, curvature=-0.1).eval(mi.BSDFContext(), _si(cr, wi), vec(wo))).T
+    cr.set_variant("llvm_ad_mono")
+    for storage in ("packed", "float"):
+        b = cr.make_bsdf(table, curvature=-0.1, storage=storage)
+        mono = np.array(b.eval(mi.BSDFContext(), _si(cr, wi), vec(wo))).ravel()
+        np.testing.assert_allclose(mono, rgb @ LUMINANCE_WEIGHTS, rtol=2e-5, atol=1e-7)
+
+
+@pytest.mark.parametrize("name", ["llvm_ad_spectral", "llvm_ad_mono"])
+def test_table_sampling_in_every_variant(cr, name):
+    from cdbrdf.render.scenes import render_scene, sine_scene
+
+    cr.set_variant(name)
+    t = glossy_table(theta_step=15.0, phi_step=30.0, ks=0.3)
+    img = render_scene(sine_scene(t, size=(12, 8), spp=4), seed=0)
+    assert np.isfinite(img).all() and img.max() > 0
