@@ -118,10 +118,10 @@ def test_resolution_is_capped():
 
     big = SimpleNamespace(values=np.empty((9, 72, 45, 72, 45, 1), dtype=np.float32))
     nx, ny = _sampling.default_resolution(big)
-    assert 9 * 45 * 72 * nx * ny <= _sampling.MAX_CELLS and nx >= 16 and ny >= 16
-    assert _sampling.default_resolution(constant_table([0.1] * 3).lookup_grid()) == (48, 40)
+    assert 9 * 45 * 72 * nx * ny <= _sampling.MAX_CELLS and nx >= 8 and ny >= 8
+    assert _sampling.default_resolution(constant_table([0.1] * 3).lookup_grid()) == (24, 20)
     one = SimpleNamespace(values=np.empty((1, 1, 7, 1, 7, 3)))
-    assert _sampling.default_resolution(one) == (1, 48)
+    assert _sampling.default_resolution(one) == (1, 24)
 
 
 # -- the Dr.Jit copy and the plug-in ------------------------------------------------------------------
@@ -209,7 +209,7 @@ def test_weight_is_eval_over_pdf_on_a_strong_lobe(variant, glossy):
 @needs_llvm
 def test_pdf_integrates_to_one_in_the_plugin(variant, glossy):
     b = variant.make_bsdf(glossy, curvature=-0.05)
-    d, dw = hemisphere_quadrature(200)
+    d, dw = hemisphere_quadrature(500)  # the density jumps at cell edges: a fine midpoint rule
     for wi in ([0.0, 0.0, 1.0], [0.5, -0.5, np.sqrt(0.5)], [0.2, 0.1, -0.97]):
         wi = np.asarray(wi) / np.linalg.norm(wi)
         dd = d * (1 if wi[2] > 0 else np.array([1.0, -1.0, -1.0]))
