@@ -94,7 +94,7 @@ def main(argv=None) -> int:
     else:
         print(f"({args.rgl} not found: Mitsuba's measured is skipped)")
 
-    for name, sc in scenes.items():
+    for sc in scenes.values():
         timed(mi, dr, sc, args.spp, 0)
     cpu: dict[str, list[float]] = {name: [] for name in scenes}
     wall: dict[str, list[float]] = {name: [] for name in scenes}
