@@ -138,7 +138,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--size", default="160x120", help="image size WxH (default 160x120)")
     ap.add_argument("--spp", type=int, default=16, help="samples per pixel of the measured renders (default 16)")
-    ap.add_argument("--seeds", type=int, default=4, help="renders averaged per MSE (default 4)")
+    ap.add_argument("--seeds", type=int, default=8, help="renders averaged per MSE (default 8)")
     ap.add_argument("--ref-spp", type=int, default=2048, help="samples per pixel of the references (default 2048)")
     ap.add_argument("--time-spp", type=int, default=128, help="samples per pixel of the timed render (default 128)")
     ap.add_argument("--rgl", type=Path, default=RGL_DIR, help=f"folder of the RGL .bsdf files (default {RGL_DIR})")

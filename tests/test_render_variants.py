@@ -140,3 +140,30 @@ def test_table_sampling_in_every_variant(cr, name):
     t = glossy_table(theta_step=15.0, phi_step=30.0, ks=0.3)
     img = render_scene(sine_scene(t, size=(12, 8), spp=4), seed=0)
     assert np.isfinite(img).all() and img.max() > 0
+
+
+def test_scalar_variant_samples_with_the_same_rule(cr):
+    """scalar_rgb (debugging): table sampling through the NumPy rule, consistent and equal to llvm_ad_rgb's."""
+    table = glossy_table(theta_step=15.0, phi_step=30.0, ks=0.3)
+    rng = np.random.default_rng(3)
+    n = 16
+    wi = _dirs(rng, n)
+    wi[n // 2:] *= [1.0, 1.0, -1.0]  # the back side too
+    s1, s2 = rng.random(n).astype(np.float32), rng.random((n, 2)).astype(np.float32)
+    cr.set_variant("llvm_ad_rgb")
+    b = cr.make_bsdf(table, curvature=0.05)
+    bs, w = b.sample(mi.BSDFContext(), _si(cr, wi), mi.Float(s1), mi.Point2f(s2[:, 0], s2[:, 1]))
+    ref_wo, ref_w = np.array(bs.wo).T, np.array(w).T
+    cr.set_variant("scalar_rgb")
+    b = cr.make_bsdf(table, curvature=0.05)
+    ctx = mi.BSDFContext()
+    for i in range(n):
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(*map(float, wi[i]))
+        bs, w = b.sample(ctx, si, float(s1[i]), mi.Point2f(float(s2[i, 0]), float(s2[i, 1])))
+        wo = np.array(bs.wo)
+        assert float(b.pdf(ctx, si, bs.wo)) == pytest.approx(float(bs.pdf), rel=1e-6)
+        f = np.array(b.eval(ctx, si, bs.wo))
+        np.testing.assert_allclose(np.array(w), f / float(bs.pdf), rtol=1e-5)
+        np.testing.assert_allclose(wo, ref_wo[i], atol=2e-4)
+        np.testing.assert_allclose(np.array(w), ref_w[i], rtol=2e-3)
