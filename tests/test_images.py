@@ -7,6 +7,7 @@ import zlib
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from cdbrdf.errors import LimitError
 from cdbrdf.images import (
@@ -36,18 +37,6 @@ def test_png16_keeps_16_bits(tmp_path, rgb16):
     assert np.any(a % 257 != 0)
 
 
-def test_png16_from_pillow_reader_would_lose_bits(tmp_path, rgb16):
-    """Pillow opens 16-bit RGB PNG as 8-bit RGB: the reason for reading with libpng (imagecodecs)."""
-    PIL = pytest.importorskip("PIL.Image")
-    p = tmp_path / "a.png"
-    write_png(p, rgb16)
-    with PIL.open(p) as im:
-        pil = np.asarray(im)
-    assert pil.dtype == np.uint8  # the loss our reader avoids
-    a, _ = read_image(p)
-    np.testing.assert_array_equal(a >> 8, pil)
-
-
 @pytest.mark.parametrize("channels", [1, 2, 3, 4])
 @pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
 def test_png_round_trip_channels(tmp_path, channels, dtype):
@@ -63,7 +52,6 @@ def test_png_round_trip_channels(tmp_path, channels, dtype):
 
 def test_png_all_filter_types(tmp_path):
     """A PNG written by Pillow with optimisation uses Sub/Up/Average/Paeth filters."""
-    Image = pytest.importorskip("PIL.Image")
     rng = np.random.default_rng(3)
     img = (np.add.outer(np.arange(40), np.arange(30))[..., None] * [1, 2, 3] % 256).astype(np.uint8)
     img = (img + rng.integers(0, 3, img.shape)).astype(np.uint8)
@@ -189,7 +177,6 @@ def test_tiff_strips_and_byte_order(tmp_path, rgb16, byteorder, rowsperstrip, mo
     """Uncompressed contiguous TIFF: the window is memory-mapped, either byte order, 8 and 16 bit."""
     import tifffile
 
-    from cdbrdf import images
 
     for img in (rgb16, (rgb16 >> 8).astype(np.uint8)):
         p = tmp_path / "s.tif"
@@ -211,7 +198,6 @@ def test_tiff_planar_separate(tmp_path, rgb16):
 
 
 def test_palette_png_falls_back(tmp_path):
-    Image = pytest.importorskip("PIL.Image")
     img = (np.arange(12 * 10).reshape(12, 10) % 7).astype(np.uint8)
     im = Image.fromarray(img, mode="L").convert("P")
     p = tmp_path / "p.png"
@@ -395,7 +381,6 @@ def test_every_failure_is_image_error(tmp_path, rgb16):
 
 def test_unsupported_png_kinds(tmp_path):
     """Palette, low bit depth and interlaced PNG decode through libpng; 16-bit grey too."""
-    Image = pytest.importorskip("PIL.Image")
     img = (np.arange(12 * 10).reshape(12, 10) % 7 * 30).astype(np.uint8)
     p = tmp_path / "i.png"
     Image.fromarray(img).save(p, interlace=1)

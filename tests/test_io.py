@@ -60,7 +60,7 @@ def test_round_trip_keeps_mask_sources_std_attrs(tmp_path, rich_table):
 
 
 def test_xarray_sees_named_dims_and_units(tmp_path, rich_table):
-    xr = pytest.importorskip("xarray")
+    import xarray as xr
     p = tmp_path / "x.h5"
     rich_table.save(p)
     with xr.open_dataset(p, engine="h5netcdf") as ds:
@@ -255,7 +255,7 @@ def test_legacy_file_is_read_in_a_child_and_equal(tmp_path, rich_table, monkeypa
 
 
 def test_xarray_reads_written_files(tmp_path, rich_table):
-    xr = pytest.importorskip("xarray")
+    import xarray as xr
     p = tmp_path / "t.h5"
     rich_table.save(p)
     with xr.open_dataset(p, engine="h5netcdf") as ds:

@@ -24,7 +24,7 @@ from .measure_helpers import (
 
 
 def test_local_cluster_same_table(tmp_path):
-    distributed = pytest.importorskip("distributed")
+    import distributed
     make_capture(tmp_path, GRID, pixel, kind="png16", white=WHITE)
     ref, _ = measure(tmp_path)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,

@@ -7,6 +7,8 @@ so a wrong libLLVM cannot abort pytest).
 
 from __future__ import annotations
 
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 import pytest
 
@@ -14,9 +16,6 @@ import cdbrdf
 from cdbrdf.frames import angles_from_direction
 from cdbrdf.render import _llvm
 from cdbrdf.render._llvm import LLVMError, LLVMInfo, check_llvm, find_llvm
-
-mi = pytest.importorskip("mitsuba")
-dr = pytest.importorskip("drjit")
 
 _INFO = find_llvm()
 needs_llvm = pytest.mark.skipif(not _INFO.ok, reason=_llvm.llvm_message(_INFO))

@@ -23,12 +23,10 @@ import numpy as np
 import pytest
 
 import cdbrdf
-from cdbrdf import CDBRDF, Grid
+from cdbrdf import CDBRDF, Grid, render
 from cdbrdf.cli import main
 from cdbrdf.measure import Stand, hidden_mask, measure
 
-pytest.importorskip("mitsuba")
-render = pytest.importorskip("cdbrdf.render")
 try:
     render.check_llvm()
 except Exception as exc:  # noqa: BLE001 - no usable LLVM: the rig cannot run here
@@ -252,7 +250,7 @@ def test_noise_model_parse():
 
 def test_preset_denim_end_to_end(tmp_path):
     """The issue's 'done when' on a reduced grid: the denim preset, simulated and measured back."""
-    materials = pytest.importorskip("cdbrdf.materials")
+    from cdbrdf import materials
     mat = materials.load("denim")
     simulate_capture(mat, tmp_path / "cap", grid=CAPTURE_GRID, size=32, field_mm=2.0,
                      noise=NOISE, gain=GAIN, white_albedo=ALBEDO)

@@ -89,16 +89,6 @@ def test_parameter_validation():
     assert ClothParams.parse_value("rays", "377") == 377
 
 
-def test_presets_are_what_the_issue_asks():
-    d, s = presets.params("denim"), presets.params("shot")
-    assert d.weave == "twill_3_1" and s.weave == "plain"
-    # Indigo warp (blue dominant, dark), white-ish weft.
-    assert d.warp_rgb[2] > 3 * d.warp_rgb[0] and max(d.warp_rgb) < 0.2
-    assert min(d.weft_rgb) > 0.4
-    # Shot: two strongly different colours.
-    assert np.linalg.norm(np.subtract(s.warp_rgb, s.weft_rgb)) > 0.5
-
-
 # -- geometry ------------------------------------------------------------------------
 def test_face_stretch():
     assert face_stretch(0.2, 1.0) == pytest.approx(1.1)
