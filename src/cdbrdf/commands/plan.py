@@ -31,7 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="largest elevation, degrees, below 90 (75)")
     p.add_argument("--phi-step", type=finite_float(0, 360, lo_open=True, unit="deg"), default=30.0,
                    help="azimuth step, degrees, dividing 360 (30)")
-    p.add_argument("--face-width", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None, help="fabric face width (arc), mm (6)")
+    p.add_argument("--face-width", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
+                   help="fabric face width (arc), mm (6)")
     p.add_argument("--wall-height", type=finite_float(0, 1000, unit="mm"), default=None,
                    help="concave stands: wall height above the face's edges, mm (1)")
     p.add_argument("--pixel-mm", type=finite_float(0, 1000, unit="mm"), default=0.0,

@@ -23,8 +23,8 @@ from typing import Any
 import numpy as np
 
 from ..frames import direction_from_angles
-from ..measure.capture import CAPTURE_FILE, STAND_FILE, read_rows, row_kind, write_plan, write_rows
 from ..images import FORMATS
+from ..measure.capture import CAPTURE_FILE, STAND_FILE, read_rows, row_kind, write_plan, write_rows
 from ..measure.stands import KAPPA_TOL_PER_MM, Stand, default_stand, read_stands, stand_for, write_stands
 from ..table import CDBRDF, Grid
 from .camera import light_to_world, sensor_to_world
