@@ -199,7 +199,7 @@ def test_curvature_cost_is_bounded_at_any_neighbourhood(tmp_path):
     """The fit thins a fine mesh to the neighbourhood: a huge neighbourhood finishes as fast as a small one."""
     n = 30
     x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n), indexing="ij")
-    lines = [f"v {a:g} {b:g} {0.1 * np.sin(3 * a):g}" for a, b in zip(x.ravel(), y.ravel())]
+    lines = [f"v {a:g} {b:g} {0.1 * np.sin(3 * a):g}" for a, b in zip(x.ravel(), y.ravel(), strict=True)]
     for i in range(n - 1):
         for j in range(n - 1):
             a = i * n + j + 1
