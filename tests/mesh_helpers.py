@@ -67,16 +67,17 @@ def jittered_uv(nu: int, nv: int, seed: int, jitter: float = 0.4) -> np.ndarray:
 
 
 def cylinder_patch(radius: float, *, convex: bool = True, n: int = 140, seed: int = 0, angle: float = np.pi,
-                   length: float | None = None):
+                   length: float | None = None, n_along: int | None = None):
     """Part of a cylinder (axis y, apex on +z) from jittered Delaunay points.
 
     ``angle`` is the arc around the axis, ``length`` the extent along it
-    (default ``angle * radius``). Faces wind counter-clockwise seen from
+    (default ``angle * radius``), ``n`` and ``n_along`` (default ``n``) the
+    vertices around and along. Faces wind counter-clockwise seen from
     outside (convex) or from the axis (concave). Returns vertices, faces,
     uv (u around, v along the axis), interior mask.
     """
     length = angle * radius if length is None else length
-    uv = jittered_uv(n, n, seed)
+    uv = jittered_uv(n, n if n_along is None else n_along, seed)
     f = Delaunay(uv).simplices.astype(np.int64)
     a = (uv[:, 0] - 0.5) * angle
     v = np.c_[radius * np.sin(a), (uv[:, 1] - 0.5) * length, radius * np.cos(a)]

@@ -155,7 +155,7 @@ def test_a_wrong_unit_is_found_and_the_likely_one_named():
 # -- scan noise, outliers -------------------------------------------------------------
 def noisy_cylinder(sigma=0.05, seed=4):
     # edges of about 0.3 mm, a scanner's resolution
-    v, f, uv, interior = cylinder_patch(R_CYL, n=50, angle=np.pi / 2, length=14.0)
+    v, f, uv, interior = cylinder_patch(R_CYL, n=48, angle=np.pi, length=30.0, n_along=100)
     rng = np.random.default_rng(seed)
     return v + rng.normal(scale=sigma, size=v.shape), f, uv, interior
 

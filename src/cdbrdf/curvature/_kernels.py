@@ -19,6 +19,9 @@ from .._jit import njit
 #: Iterations of the fit: a height quadric, then the normal-section model twice.
 FIT_ITERATIONS = 3
 
+#: Vertices per task of the parallel loops (scratch arrays are allocated once per task).
+BLOCK = 256
+
 #: Tukey biweight constant (95 % efficiency under Gaussian noise), in robust standard deviations.
 TUKEY_C = 4.685
 
@@ -116,8 +119,201 @@ def _solve6(m, b, out):
     return True
 
 
+@njit(inline="always")
+def _median(a, n):
+    """The (upper) median of ``a[:n]``, by quickselect; ``a`` is reordered."""
+    k = n // 2
+    lo = 0
+    hi = n - 1
+    while lo < hi:
+        pivot = a[(lo + hi) // 2]
+        i = lo
+        j = hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                t = a[i]
+                a[i] = a[j]
+                a[j] = t
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            break
+    return a[k]
+
+
+@njit(cache=True, error_model="numpy")
+def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, radius, k_min, cos_max,  # noqa: C901
+             k1, k2, d1, d2, nrm, status, sel, x, y, h, g, wg, w, res, tmp, m, b, coef, row):
+    """The fit of :func:`fit_vertices` at query ``i``, in the caller's scratch arrays."""
+    kk = nbr.shape[1]
+    ns = s_pos.shape[0]
+    n0 = q_nrm[i, 0]
+    n1 = q_nrm[i, 1]
+    n2 = q_nrm[i, 2]
+    ln = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    k1[i] = 0.0
+    k2[i] = 0.0
+    for c in range(3):
+        d1[i, c] = 0.0
+        d2[i, c] = 0.0
+        nrm[i, c] = 0.0
+    if not ln > 0.0:
+        status[i] = 2
+        return
+    n0, n1, n2 = n0 / ln, n1 / ln, n2 / ln
+    nrm[i, 0], nrm[i, 1], nrm[i, 2] = n0, n1, n2
+    # candidates: normal within the cone, within the radius (or the k_min nearest);
+    # where too few normals agree (a mesh coarser than its folds), any normal
+    cnt = 0
+    r_use = radius
+    for cone in (cos_max, -2.0):
+        cnt = 0
+        r_use = radius
+        for j in range(kk):
+            s = nbr[i, j]
+            if s >= ns:
+                break
+            if s_comp[s] != q_comp[i]:
+                continue
+            if s_nrm[s, 0] * n0 + s_nrm[s, 1] * n1 + s_nrm[s, 2] * n2 < cone:
+                continue
+            if nbr_d[i, j] <= radius:
+                sel[cnt] = s
+                cnt += 1
+            elif cnt < k_min:
+                sel[cnt] = s
+                cnt += 1
+                r_use = nbr_d[i, j]
+            else:
+                break
+        if cnt >= 6:
+            break
+    if cnt < 6:
+        status[i] = 1
+        return
+    sigma = 0.5 * r_use
+    inv_s = 1.0 / sigma
+    ox = q_pos[i, 0]
+    oy = q_pos[i, 1]
+    oz = q_pos[i, 2]
+    t10, t11, t12, t20, t21, t22 = _frame(n0, n1, n2)
+    coef[:] = 0.0
+    ok = True
+    for it in range(FIT_ITERATIONS):
+        for j in range(cnt):
+            s = sel[j]
+            dx = (s_pos[s, 0] - ox) * inv_s
+            dy = (s_pos[s, 1] - oy) * inv_s
+            dz = (s_pos[s, 2] - oz) * inv_s
+            x[j] = dx * t10 + dy * t11 + dz * t12
+            y[j] = dx * t20 + dy * t21 + dz * t22
+            h[j] = dx * n0 + dy * n1 + dz * n2
+            rho2 = x[j] * x[j] + y[j] * y[j]
+            dd = rho2 + h[j] * h[j]
+            g[j] = dd / rho2 if (it > 0 and rho2 > 1e-12) else 1.0
+            if it == 0:
+                wg[j] = s_w[s] * math.exp(-0.5 * dd)
+                w[j] = wg[j]
+        if it > 0:
+            # Tukey's biweight of the previous fit's residuals
+            for j in range(cnt):
+                tmp[j] = abs(res[j])
+            med = _median(tmp, cnt)
+            scale = 1.4826 * med
+            if scale > 1e-9:
+                cut = TUKEY_C * scale
+                for j in range(cnt):
+                    u = abs(res[j]) / cut
+                    w[j] = wg[j] * (1.0 - u * u) ** 2 if u < 1.0 else 0.0
+            else:
+                for j in range(cnt):
+                    w[j] = wg[j]
+        m[:, :] = 0.0
+        b[:] = 0.0
+        wsum = 0.0
+        for j in range(cnt):
+            if w[j] <= 0.0:
+                continue
+            wsum += w[j]
+            row[0] = 1.0
+            row[1] = x[j]
+            row[2] = y[j]
+            row[3] = 0.5 * x[j] * x[j] * g[j]
+            row[4] = x[j] * y[j] * g[j]
+            row[5] = 0.5 * y[j] * y[j] * g[j]
+            for p in range(6):
+                wp = w[j] * row[p]
+                b[p] += wp * h[j]
+                for q in range(p, 6):
+                    m[p, q] += wp * row[q]
+        for p in range(6):
+            for q in range(p):
+                m[p, q] = m[q, p]
+        tr = 0.0
+        for p in range(6):
+            tr += m[p, p]
+        for p in range(6):
+            m[p, p] += 1e-10 * tr + 1e-300
+        if not (wsum > 0.0) or not _solve6(m, b, coef):
+            ok = False
+            break
+        for j in range(cnt):
+            res[j] = h[j] - (coef[0] + coef[1] * x[j] + coef[2] * y[j] + 0.5 * coef[3] * x[j] * x[j] * g[j]
+                             + coef[4] * x[j] * y[j] * g[j] + 0.5 * coef[5] * y[j] * y[j] * g[j])
+        if it < FIT_ITERATIONS - 1:
+            # move the origin onto the fitted surface, tilt the normal by the gradient
+            ox += coef[0] * sigma * n0
+            oy += coef[0] * sigma * n1
+            oz += coef[0] * sigma * n2
+            a0 = n0 - coef[1] * t10 - coef[2] * t20
+            a1 = n1 - coef[1] * t11 - coef[2] * t21
+            a2 = n2 - coef[1] * t12 - coef[2] * t22
+            la = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+            n0, n1, n2 = a0 / la, a1 / la, a2 / la
+            # keep t1 as close as possible to the previous one
+            dt = t10 * n0 + t11 * n1 + t12 * n2
+            u0, u1, u2 = t10 - dt * n0, t11 - dt * n1, t12 - dt * n2
+            lu = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+            if lu < 1e-6:
+                t10, t11, t12, t20, t21, t22 = _frame(n0, n1, n2)
+            else:
+                t10, t11, t12 = u0 / lu, u1 / lu, u2 / lu
+                t20, t21, t22 = n1 * t12 - n2 * t11, n2 * t10 - n0 * t12, n0 * t11 - n1 * t10
+    if not ok:
+        status[i] = 1
+        return
+    # curvature tensor in the last frame: kappa > 0 where the surface bends away from the normal
+    ka = -coef[3] * inv_s
+    kb = -coef[4] * inv_s
+    kc = -coef[5] * inv_s
+    mean = 0.5 * (ka + kc)
+    half = math.sqrt(0.25 * (ka - kc) * (ka - kc) + kb * kb)
+    k1[i] = mean + half
+    k2[i] = mean - half
+    # eigenvector of k1: angle th with tan(2 th) = 2 kb / (ka - kc)
+    th = 0.5 * math.atan2(2.0 * kb, ka - kc)
+    ct = math.cos(th)
+    st = math.sin(th)
+    d1[i, 0] = ct * t10 + st * t20
+    d1[i, 1] = ct * t11 + st * t21
+    d1[i, 2] = ct * t12 + st * t22
+    d2[i, 0] = -st * t10 + ct * t20
+    d2[i, 1] = -st * t11 + ct * t21
+    d2[i, 2] = -st * t12 + ct * t22
+    nrm[i, 0], nrm[i, 1], nrm[i, 2] = n0, n1, n2
+    status[i] = 0
+
+
 @njit(cache=True, parallel=True, error_model="numpy")
-def fit_vertices(  # noqa: C901 - one loop
+def fit_vertices(
     q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, radius, k_min, cos_max,
     k1, k2, d1, d2, nrm, status,
 ):
@@ -148,174 +344,24 @@ def fit_vertices(  # noqa: C901 - one loop
     """
     nq = q_pos.shape[0]
     kk = nbr.shape[1]
-    ns = s_pos.shape[0]
-    for i in prange(nq):
-        n0 = q_nrm[i, 0]
-        n1 = q_nrm[i, 1]
-        n2 = q_nrm[i, 2]
-        ln = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
-        k1[i] = 0.0
-        k2[i] = 0.0
-        for c in range(3):
-            d1[i, c] = 0.0
-            d2[i, c] = 0.0
-            nrm[i, c] = 0.0
-        if not ln > 0.0:
-            status[i] = 2
-            continue
-        n0, n1, n2 = n0 / ln, n1 / ln, n2 / ln
-        nrm[i, 0], nrm[i, 1], nrm[i, 2] = n0, n1, n2
-        # candidates: normal within the cone, within the radius (or the k_min nearest);
-        # where too few normals agree (a mesh coarser than its folds), any normal
+    n_blocks = (nq + BLOCK - 1) // BLOCK
+    for blk in prange(n_blocks):
         sel = np.empty(kk, np.int64)
-        cnt = 0
-        r_use = radius
-        for cone in (cos_max, -2.0):
-            cnt = 0
-            r_use = radius
-            for j in range(kk):
-                s = nbr[i, j]
-                if s >= ns:
-                    break
-                if s_comp[s] != q_comp[i]:
-                    continue
-                if s_nrm[s, 0] * n0 + s_nrm[s, 1] * n1 + s_nrm[s, 2] * n2 < cone:
-                    continue
-                if nbr_d[i, j] <= radius:
-                    sel[cnt] = s
-                    cnt += 1
-                elif cnt < k_min:
-                    sel[cnt] = s
-                    cnt += 1
-                    r_use = nbr_d[i, j]
-                else:
-                    break
-            if cnt >= 6:
-                break
-        if cnt < 6:
-            status[i] = 1
-            continue
-        sigma = 0.5 * r_use
-        inv_s = 1.0 / sigma
-        ox = q_pos[i, 0]
-        oy = q_pos[i, 1]
-        oz = q_pos[i, 2]
-        t10, t11, t12, t20, t21, t22 = _frame(n0, n1, n2)
-        x = np.empty(cnt)
-        y = np.empty(cnt)
-        h = np.empty(cnt)
-        g = np.empty(cnt)
-        wg = np.empty(cnt)
-        w = np.empty(cnt)
-        res = np.empty(cnt)
+        x = np.empty(kk)
+        y = np.empty(kk)
+        h = np.empty(kk)
+        g = np.empty(kk)
+        wg = np.empty(kk)
+        w = np.empty(kk)
+        res = np.empty(kk)
+        tmp = np.empty(kk)
         m = np.empty((6, 6))
         b = np.empty(6)
         coef = np.zeros(6)
         row = np.empty(6)
-        ok = True
-        for it in range(FIT_ITERATIONS):
-            for j in range(cnt):
-                s = sel[j]
-                dx = (s_pos[s, 0] - ox) * inv_s
-                dy = (s_pos[s, 1] - oy) * inv_s
-                dz = (s_pos[s, 2] - oz) * inv_s
-                x[j] = dx * t10 + dy * t11 + dz * t12
-                y[j] = dx * t20 + dy * t21 + dz * t22
-                h[j] = dx * n0 + dy * n1 + dz * n2
-                rho2 = x[j] * x[j] + y[j] * y[j]
-                dd = rho2 + h[j] * h[j]
-                g[j] = dd / rho2 if (it > 0 and rho2 > 1e-12) else 1.0
-                if it == 0:
-                    wg[j] = s_w[s] * math.exp(-0.5 * dd)
-                    w[j] = wg[j]
-            if it > 0:
-                # Tukey's biweight of the previous fit's residuals
-                for j in range(cnt):
-                    res[j] = abs(res[j])
-                med = np.median(res)
-                scale = 1.4826 * med
-                if scale > 1e-9:
-                    cut = TUKEY_C * scale
-                    for j in range(cnt):
-                        u = res[j] / cut
-                        w[j] = wg[j] * (1.0 - u * u) ** 2 if u < 1.0 else 0.0
-                else:
-                    for j in range(cnt):
-                        w[j] = wg[j]
-            m[:, :] = 0.0
-            b[:] = 0.0
-            wsum = 0.0
-            for j in range(cnt):
-                if w[j] <= 0.0:
-                    continue
-                wsum += w[j]
-                row[0] = 1.0
-                row[1] = x[j]
-                row[2] = y[j]
-                row[3] = 0.5 * x[j] * x[j] * g[j]
-                row[4] = x[j] * y[j] * g[j]
-                row[5] = 0.5 * y[j] * y[j] * g[j]
-                for p in range(6):
-                    wp = w[j] * row[p]
-                    b[p] += wp * h[j]
-                    for q in range(p, 6):
-                        m[p, q] += wp * row[q]
-            for p in range(6):
-                for q in range(p):
-                    m[p, q] = m[q, p]
-            tr = 0.0
-            for p in range(6):
-                tr += m[p, p]
-            for p in range(6):
-                m[p, p] += 1e-10 * tr + 1e-300
-            if not (wsum > 0.0) or not _solve6(m, b, coef):
-                ok = False
-                break
-            for j in range(cnt):
-                res[j] = h[j] - (coef[0] + coef[1] * x[j] + coef[2] * y[j] + 0.5 * coef[3] * x[j] * x[j] * g[j]
-                                 + coef[4] * x[j] * y[j] * g[j] + 0.5 * coef[5] * y[j] * y[j] * g[j])
-            if it < FIT_ITERATIONS - 1:
-                # move the origin onto the fitted surface, tilt the normal by the gradient
-                ox += coef[0] * sigma * n0
-                oy += coef[0] * sigma * n1
-                oz += coef[0] * sigma * n2
-                a0 = n0 - coef[1] * t10 - coef[2] * t20
-                a1 = n1 - coef[1] * t11 - coef[2] * t21
-                a2 = n2 - coef[1] * t12 - coef[2] * t22
-                la = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-                n0, n1, n2 = a0 / la, a1 / la, a2 / la
-                # keep t1 as close as possible to the previous one
-                dt = t10 * n0 + t11 * n1 + t12 * n2
-                u0, u1, u2 = t10 - dt * n0, t11 - dt * n1, t12 - dt * n2
-                lu = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-                if lu < 1e-6:
-                    t10, t11, t12, t20, t21, t22 = _frame(n0, n1, n2)
-                else:
-                    t10, t11, t12 = u0 / lu, u1 / lu, u2 / lu
-                    t20, t21, t22 = n1 * t12 - n2 * t11, n2 * t10 - n0 * t12, n0 * t11 - n1 * t10
-        if not ok:
-            status[i] = 1
-            continue
-        # curvature tensor in the last frame: kappa > 0 where the surface bends away from the normal
-        ka = -coef[3] * inv_s
-        kb = -coef[4] * inv_s
-        kc = -coef[5] * inv_s
-        mean = 0.5 * (ka + kc)
-        half = math.sqrt(0.25 * (ka - kc) * (ka - kc) + kb * kb)
-        k1[i] = mean + half
-        k2[i] = mean - half
-        # eigenvector of k1: angle th with tan(2 th) = 2 kb / (ka - kc)
-        th = 0.5 * math.atan2(2.0 * kb, ka - kc)
-        ct = math.cos(th)
-        st = math.sin(th)
-        d1[i, 0] = ct * t10 + st * t20
-        d1[i, 1] = ct * t11 + st * t21
-        d1[i, 2] = ct * t12 + st * t22
-        d2[i, 0] = -st * t10 + ct * t20
-        d2[i, 1] = -st * t11 + ct * t21
-        d2[i, 2] = -st * t12 + ct * t22
-        nrm[i, 0], nrm[i, 1], nrm[i, 2] = n0, n1, n2
-        status[i] = 0
+        for i in range(blk * BLOCK, min(nq, (blk + 1) * BLOCK)):
+            _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, radius, k_min, cos_max,
+                     k1, k2, d1, d2, nrm, status, sel, x, y, h, g, wg, w, res, tmp, m, b, coef, row)
 
 
 @njit(cache=True, parallel=True, error_model="numpy")

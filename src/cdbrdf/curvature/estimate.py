@@ -162,20 +162,27 @@ def _samples(
 
 
 def _neighbours(tree: Any, q: NDArray[np.float64], k: int, radius: float,
-                n_samples: int) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+                n_samples: int, coarse: bool = False) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The ``k`` nearest samples within ``radius`` (a bounded search is fast), topped up where too few.
 
     Rows with fewer than :data:`MIN_NEIGHBOURS` within the radius (a mesh
-    coarser than the neighbourhood) get their ``k`` nearest at any distance.
+    coarser than the neighbourhood) get their ``2 * MIN_NEIGHBOURS`` nearest at any distance.
     Missing neighbours have index ``n_samples`` and distance inf, sorted last.
+    With ``coarse`` (the ball holds fewer than that on average) all rows
+    take the latter at once.
     """
+    if coarse:
+        kk = min(k, 2 * MIN_NEIGHBOURS)
+        dist, idx = tree.query(q, k=kk, workers=-1)
+        return (np.ascontiguousarray(dist.reshape(q.shape[0], kk)),
+                np.ascontiguousarray(idx.reshape(q.shape[0], kk), dtype=np.int64))
     dist, idx = tree.query(q, k=k, distance_upper_bound=radius * (1.0 + 1e-9), workers=-1)
     dist, idx = np.atleast_2d(dist), np.atleast_2d(idx)
     if k == 1:
         dist, idx = dist.reshape(-1, 1), idx.reshape(-1, 1)
     few = np.flatnonzero(np.count_nonzero(idx < n_samples, axis=1) < MIN_NEIGHBOURS)
     if few.size:
-        kk = k
+        kk = min(k, 2 * MIN_NEIGHBOURS)
         d2, i2 = tree.query(q[few], k=kk, workers=-1)
         d2, i2 = d2.reshape(few.size, kk), i2.reshape(few.size, kk)
         dist[few] = np.inf
@@ -235,6 +242,8 @@ def fit_curvatures(
     nq = q_pos.shape[0]
     total = nq + (n if thinned else 0)
     k = int(min(MAX_NEIGHBOURS, sp.shape[0]))
+    # vertices in the ball on a mesh of mean edge e: pi r^2 / (0.866 e^2)
+    coarse = not thinned and math.pi * radius**2 < 1.5 * MIN_NEIGHBOURS * 0.866 * edge_length**2
     tree = cKDTree(sp, balanced_tree=False, compact_nodes=False)
     k1, k2 = np.zeros(nq), np.zeros(nq)
     d1, d2 = np.zeros((nq, 3)), np.zeros((nq, 3))
@@ -245,7 +254,7 @@ def fit_curvatures(
         progress(0, total)
     for start in range(0, nq, CHUNK):
         stop = min(nq, start + CHUNK)
-        dist, idx = _neighbours(tree, q_pos[start:stop], k, radius, sp.shape[0])
+        dist, idx = _neighbours(tree, q_pos[start:stop], k, radius, sp.shape[0], coarse)
         fit_vertices(q_pos[start:stop], q_nrm[start:stop], q_comp[start:stop], sp, sn, sw, sc, idx, dist,
                      float(radius), MIN_NEIGHBOURS, cos_max,
                      k1[start:stop], k2[start:stop], d1[start:stop], d2[start:stop],

@@ -173,12 +173,17 @@ def seam_jumps(
     if adjacent.size == 0:
         return 0, 0
     f1, f2 = adjacent[:, 0], adjacent[:, 1]
-    match = faces[f1][:, :, None] == faces[f2][:, None, :]  # (k, 3, 3)
-    u1 = uv[out_faces[f1]]  # (k, 3, 2)
-    u2 = uv[out_faces[f2]]
-    diff = np.abs(u1[:, :, None, :] - u2[:, None, :, :]).max(axis=-1)  # (k, 3, 3)
+    # faces sharing two output vertices share their UVs there: only the others can be seams
+    shared = (out_faces[f1][:, :, None] == out_faces[f2][:, None, :]).sum(axis=(1, 2))
+    cand = np.flatnonzero(shared < 2)
+    c1, c2 = f1[cand], f2[cand]
+    match = faces[c1][:, :, None] == faces[c2][:, None, :]  # (k, 3, 3)
+    u1 = uv[out_faces[c1]]  # (k, 3, 2)
+    u2 = uv[out_faces[c2]]
+    diff = np.abs(u1[:, :, None, :] - u2[:, None, :, :]).max(axis=-1) if cand.size else np.zeros((0, 3, 3))
     scale = max(float(np.ptp(uv)) if uv.size else 1.0, 1e-300)
-    seam = np.any(match & (diff > 1e-6 * scale), axis=(1, 2))
+    seam = np.zeros(f1.size, bool)
+    seam[cand] = np.any(match & (diff > 1e-6 * scale), axis=(1, 2))
     both = seam & ok[f1] & ok[f2]
     g1, g2 = f1[both], f2[both]
 

@@ -34,7 +34,7 @@ CURVATURE_MODES: tuple[str, ...] = ("max", "directional")
 
 #: Largest neighbourhood, as a share of the mesh's size (bounding-box diagonal): a larger one is
 #: reduced to it, with a note (a wrong unit?); beyond it a quadric cannot follow the surface.
-MAX_NEIGHBOURHOOD_SHARE = 0.2
+MAX_NEIGHBOURHOOD_SHARE = 0.5
 
 
 @dataclass(frozen=True)
