@@ -28,8 +28,6 @@ import os
 import sys
 import time
 
-import numpy as np
-
 TARGET_S_PER_100K = 3.0
 TARGET_LARGE_S = 60.0
 
