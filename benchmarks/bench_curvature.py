@@ -2,10 +2,14 @@
 
 Run: ``.venv/bin/python benchmarks/bench_curvature.py [--vertices 100000] [--large-faces 1000000] [--repeat 3]``
 
-The mesh is the generated garment (:func:`cdbrdf.render.meshes.skirt_mesh`:
+The meshes: the generated garment (:func:`cdbrdf.render.meshes.skirt_mesh`:
 two sewn panels with opposite winding, folds, a double-sided sash), in mm,
-at two resolutions: about ``--vertices`` vertices, and about
-``--large-faces`` faces. For each, timed in the same run:
+at two resolutions, about ``--vertices`` vertices (edges of about 3 mm,
+coarser than the neighbourhood, as a garment from a CAD tool) and about
+``--large-faces`` faces; and a scan: a jittered half-cylinder of radius
+1/0.22 mm with about ``--vertices`` vertices (0.1 mm edges, 0.02 mm noise,
+much finer than the neighbourhood: the thinned path). For each, timed in
+the same run:
 
 - :func:`cdbrdf.curvature.surface_curvature` (everything ``cdbrdf
   curvature`` does between reading and writing: repair, fit, frame) at the
@@ -40,6 +44,24 @@ def _skirt(n_vertices: int):
     return skirt_mesh(Skirt(around=int(1.6 * down), down=down))
 
 
+def _scan(n_vertices: int):
+    import numpy as np
+    from scipy.spatial import Delaunay
+
+    from cdbrdf.render.meshio import Mesh
+
+    n = int(round(math.sqrt(n_vertices)))
+    rng = np.random.default_rng(0)
+    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n), indexing="ij")
+    uv = np.c_[u.ravel(), v.ravel()] + rng.uniform(-0.3 / n, 0.3 / n, (n * n, 2))
+    f = Delaunay(uv).simplices.astype(np.int64)
+    r = 1 / 0.22
+    a = (uv[:, 0] - 0.5) * math.pi
+    p = np.c_[r * np.sin(a), (uv[:, 1] - 0.5) * math.pi * r, r * np.cos(a)]
+    p += rng.normal(scale=0.02, size=p.shape)
+    return Mesh(p, f, None, uv)
+
+
 def _best(fn, repeat: int) -> float:
     fn()
     best = math.inf
@@ -64,6 +86,7 @@ def main(argv=None) -> int:
     ok = True
     print(f"cores: {os.cpu_count()}, numba threads: {os.environ.get('NUMBA_NUM_THREADS', 'all')}")
     for label, mesh, repeat in (("mesh", _skirt(args.vertices), args.repeat),
+                                ("scan", _scan(args.vertices), args.repeat),
                                 ("large", _skirt(args.large_faces // 2), 1)):
         v, f, uv = mesh.vertices, mesh.faces, mesh.uv
         n = v.shape[0]
@@ -76,7 +99,7 @@ def main(argv=None) -> int:
             t = _best(lambda nb=nb, v=v, f=f, uv=uv: surface_curvature(v, f, uv=uv, neighbourhood_mm=nb), repeat)
             per = t / n * 1e5
             flag = ""
-            if label == "mesh" and nb == 5.0 and per > TARGET_S_PER_100K:
+            if label in ("mesh", "scan") and nb == 5.0 and per > TARGET_S_PER_100K:
                 flag, ok = f"  MISSED (target {TARGET_S_PER_100K:g} s per 100k)", False
             if label == "large" and t > TARGET_LARGE_S:
                 flag, ok = f"  MISSED (target {TARGET_LARGE_S:g} s)", False

@@ -453,3 +453,18 @@ def test_fandisk_cad_part_without_uvs():
     assert np.percentile(np.abs(s.kappa), 25) < 1e-6 and np.percentile(np.abs(s.kappa), 95) > 0.01
     corners_per_vertex = np.bincount(s.source) if s.source.size else np.zeros(0)
     assert corners_per_vertex.max() > 1
+
+
+def test_a_measured_table_records_its_patch_for_the_neighbourhood(tmp_path):
+    from cdbrdf.images import write_png
+    from cdbrdf.measure import measure
+
+    from .measure_helpers import write_csv
+
+    write_png(tmp_path / "g.png", np.full((15, 15), 40000, np.uint16))
+    write_csv(tmp_path / "capture.csv", [dict(file="g.png", kappa=0, theta_v=0, phi_v=0, theta_l=0, phi_l=0)])
+    (tmp_path / "stands.json").write_text('{"pixel_mm": 0.4}')
+    table, _ = measure(tmp_path, linear=True)
+    assert table.attrs["provenance"]["patch_mm"] == pytest.approx(7 * 0.4)
+    nb, why = neighbourhood_from_table(table.attrs)
+    assert nb == pytest.approx(2.8) and "measured patch" in why

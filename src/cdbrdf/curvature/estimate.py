@@ -25,11 +25,11 @@ given in mm and converted to the mesh's unit, whatever the tessellation:
    of a height quadric, then of the normal-section model, which is exact for
    spheres at any radius (:func:`cdbrdf.curvature._kernels.fit_vertices`).
 
-Measured (``tests/test_curvature.py``): a cylinder of radius 1/0.22 mm at a
-5 mm neighbourhood is within 0.5 % (median), the same with 0.05 mm Gaussian
-noise on the vertices within 2 %; the plain quadric of libigl's
-``principal_curvature`` gives ``1/r`` of each triangle's noise instead.
-Cost: about 1 s per 100k vertices on 2 cores (``benchmarks/bench_curvature.py``).
+Measured (``tests/test_curvature.py``, ``docs/rendering.md``): a cylinder
+of radius 1/0.22 mm at the default 5 mm neighbourhood is within 0.86 %
+(median), the same with 0.05 mm Gaussian noise on 0.3 mm edges within 1.4 %;
+libigl's ``principal_curvature`` (two edge lengths) is off by 65 % there.
+Cost: ``benchmarks/bench_curvature.py``.
 """
 
 from __future__ import annotations
