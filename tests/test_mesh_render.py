@@ -187,7 +187,7 @@ def test_curvature_command_records_the_unit_and_render_uses_it(variant, tmp_path
     assert main(["curvature", str(src), "-o", str(out), "--units", "cm"]) == 0
     err = capsys.readouterr().err
     assert f"{src}: repaired: re-oriented 1 of 1 component" in err
-    assert "units: cm (given)" in err and "neighbourhood: 5 mm (the default (5 mm))" in err
+    assert "units: cm (given)" in err and "neighbourhood: 5 mm (the default)" in err
     r = read_ply(out)
     assert r.metadata["units"] == "cm" and r.metadata["curvature_units"] == "1/mm"
     inner = np.all((r.uv > 0.15) & (r.uv < 0.85), axis=1)
@@ -202,7 +202,7 @@ def test_curvature_command_records_the_unit_and_render_uses_it(variant, tmp_path
     assert "repaired" not in err and "exposure" in err
     assert main([*common, "--mesh", str(out), "--units", "mm", "-o", str(tmp_path / "b.png")]) == 0
     err = capsys.readouterr().err
-    assert "units: mm (given)" in err and "recomputed" in err
+    assert "units: mm (given)" in err and "curvature: computed again" in err
     assert main([*common, "--mesh", str(out), "--compare", "--curvature", "directional",
                  "-o", str(tmp_path / "c.png")]) == 0
     assert (tmp_path / "c.png").stat().st_size > 1000

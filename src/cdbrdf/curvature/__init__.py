@@ -111,8 +111,8 @@ def neighbourhood_from_table(attrs: Mapping[str, Any] | None) -> tuple[float, st
             except (TypeError, ValueError):
                 continue
             if np.isfinite(x) and lo <= x <= hi:
-                return x, f"{what} ({x:g} mm, from the table's provenance)"
-    return DEFAULT_NEIGHBOURHOOD_MM, f"the default ({DEFAULT_NEIGHBOURHOOD_MM:g} mm)"
+                return x, f"{what}, from the table's provenance"
+    return DEFAULT_NEIGHBOURHOOD_MM, "the default"
 
 
 def principal_curvatures(

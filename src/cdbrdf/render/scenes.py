@@ -302,7 +302,7 @@ def prepare_mesh(
     elif table is not None:
         nb, nb_note = neighbourhood_from_table(getattr(table, "attrs", None))
     else:
-        nb, nb_note = DEFAULT_NEIGHBOURHOOD_MM, f"the default ({DEFAULT_NEIGHBOURHOOD_MM:g} mm)"
+        nb, nb_note = DEFAULT_NEIGHBOURHOOD_MM, "the default"
     reuse = (not recompute and "curvature" in mesh.attributes and "curvature_dir" in mesh.attributes
              and meta.get("curvature_units") == "1/mm" and recorded_units is not None
              and mesh.uv is not None
@@ -312,11 +312,12 @@ def prepare_mesh(
     if reuse:
         repairs: list[str] = []
         notes.append("curvature: as recorded in the file")
-        nb = float(meta.get("neighbourhood_mm", nb)) if _is_number(meta.get("neighbourhood_mm")) else nb
+        if _is_number(meta.get("neighbourhood_mm")):
+            nb, nb_note = float(meta["neighbourhood_mm"]), "recorded in the file"
         out = mesh
     else:
         if "curvature" in mesh.attributes and not recompute:
-            notes.append("curvature: recomputed (the file's has no recorded unit or other settings)")
+            notes.append("curvature: computed again (the file's has no recorded unit, or other settings)")
         s = surface_curvature(mesh.vertices, mesh.faces, uv=mesh.uv, normals=mesh.normals, tangents=mesh.tangents,
                               units=u, neighbourhood_mm=nb, frame=frame or "auto", name=name, progress=progress)
         repairs = list(s.repairs)
@@ -636,7 +637,11 @@ def mesh_scene(
         raise ValueError(f"lighting: {lighting!r} is not one of {', '.join(LIGHTINGS)}")
     if up not in UP_AXES:
         raise ValueError(f"up: {up!r} is not one of {', '.join(UP_AXES)}")
-    if not isinstance(mesh, Mesh) or "curvature" not in mesh.attributes:
+    from ..curvature import MESH_ATTRIBUTES
+
+    if curvature_mode not in MESH_ATTRIBUTES:
+        raise ValueError(f"curvature mode: {curvature_mode!r} is not one of {', '.join(MESH_ATTRIBUTES)}")
+    if not isinstance(mesh, Mesh) or MESH_ATTRIBUTES[curvature_mode] not in mesh.attributes:
         mesh = prepare_mesh(mesh, units=units, table=table if not isinstance(table, (str, PathLike)) else None)
     if mesh.uv is None:
         raise MeshError("mesh: no UV coordinates, so no anisotropy frame (dP/du) for the CDBRDF")
