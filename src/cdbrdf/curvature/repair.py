@@ -535,11 +535,13 @@ def repair(  # noqa: C901 - one pass, step by step
         _LOG.info("%s: %s", name, r)
     return RepairedMesh(va, fa.astype(np.int64), na, areas, out_source.astype(np.int64),
                         out_vertex.astype(np.int64), out_side, out_faces.astype(np.int64), out_normals,
-                        pairs, _components_of(fa, n_cls), ident, tuple(repairs))
+                        pairs, _vertex_components(fa, comp, n_cls), ident, tuple(repairs))
 
 
-def _components_of(fa: NDArray[np.int64], n: int) -> NDArray[np.int64]:
-    """The connected component of every vertex of a face list (through shared vertices), numbered 0..."""
-    _, lab = _components(n, np.r_[fa[:, 0], fa[:, 1]], np.r_[fa[:, 1], fa[:, 2]])
-    _, inv = np.unique(lab, return_inverse=True)
+def _vertex_components(fa: NDArray[np.int64], face_comp: NDArray[np.int64], n: int) -> NDArray[np.int64]:
+    """The component of every analysis vertex: that of its faces (a vertex's faces, joined through
+    consistently oriented edges, are all of one orientation component), numbered 0, 1, ..."""
+    out = np.zeros(n, np.int64)
+    out[fa.reshape(-1)] = np.repeat(face_comp, 3)
+    _, inv = np.unique(out, return_inverse=True)
     return inv.reshape(-1).astype(np.int64)
