@@ -7,7 +7,8 @@ types of :mod:`cdbrdf.commands._args`. Bad arguments and user errors
 (:class:`ValueError`, :class:`OSError`, :class:`cdbrdf.CDBRDFError`) print one
 line ``cdbrdf COMMAND: error: MESSAGE`` to stderr and exit with status 2; so do
 :class:`MemoryError` and :class:`RecursionError` (naming the limits that bound
-the work). ``--debug`` shows the traceback instead.
+the work). The limit variables (:mod:`cdbrdf.limits`) are checked before the
+command runs. ``--debug`` shows the traceback instead.
 """
 
 from __future__ import annotations
@@ -144,6 +145,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_USER_ERROR
     try:
+        from .limits import check_environment
+
+        check_environment()  # a bad CDBRDF_MAX_* variable: one line before any work
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
         print("cdbrdf: interrupted", file=sys.stderr)
