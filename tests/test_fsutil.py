@@ -159,3 +159,88 @@ def test_check_output_folder_refuses_up_front(tmp_path, monkeypatch):
     with pytest.raises(FileExistsError, match="current folder"):
         check_output_folder(".")
     assert check_output_folder(tmp_path / "new") == tmp_path / "new"
+
+
+# -- destinations that are not regular files; bounded reads of inputs -----------
+def _specials(tmp_path):
+    """A FIFO, a link to the character device /dev/null and a socket: none may be replaced."""
+    import os
+    import socket
+
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    dev = tmp_path / "devnull"
+    dev.symlink_to(os.devnull)
+    sock = tmp_path / "sock"
+    s = socket.socket(socket.AF_UNIX)
+    try:
+        s.bind(str(sock))
+    except OSError:  # pragma: no cover - a path too long for a socket
+        sock = None
+    s.close()
+    out = {"FIFO": fifo, "character device": dev}
+    if sock is not None:
+        out["socket"] = sock
+    return out
+
+
+def test_atomic_path_never_replaces_a_device_fifo_or_socket(tmp_path):
+    import stat
+
+    for kind, p in _specials(tmp_path).items():
+        before = p.lstat()
+        with pytest.raises(FileExistsError, match=rf"{p.name}: exists and is not a regular file \(.*{kind}"):
+            with fsutil.atomic_path(p) as tmp:
+                tmp.write_bytes(b"x")
+        after = p.lstat()
+        assert stat.S_IFMT(after.st_mode) == stat.S_IFMT(before.st_mode) and after.st_ino == before.st_ino
+    assert not [n for n in tmp_path.iterdir() if n.name.startswith(".")]  # no temporary left
+
+
+def test_atomic_path_refuses_a_device_made_while_writing(tmp_path):
+    import os
+
+    dest = tmp_path / "out.bin"
+    with pytest.raises(FileExistsError, match="not a regular file"):
+        with fsutil.atomic_path(dest) as tmp:
+            tmp.write_bytes(b"x")
+            os.mkfifo(dest)
+    assert [n.name for n in tmp_path.iterdir()] == ["out.bin"]
+
+
+@pytest.mark.parametrize("name", ["", " ", "sub/", ".", "..", "sub/.."])
+def test_check_output_file_refuses_folders_and_empty_names(tmp_path, monkeypatch, name):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    with pytest.raises(IsADirectoryError):
+        fsutil.check_output_file(name)
+    with pytest.raises(IsADirectoryError):
+        with fsutil.atomic_path(name):
+            pass
+    assert sorted(n.name for n in tmp_path.iterdir()) == ["sub"]
+
+
+def test_check_output_file_accepts_new_and_regular_files(tmp_path):
+    assert fsutil.check_output_file(tmp_path / "new.h5") == tmp_path / "new.h5"
+    (tmp_path / "old.h5").write_bytes(b"x")
+    fsutil.check_output_file(tmp_path / "old.h5")
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        fsutil.check_output_file(tmp_path / "nope" / "x.h5")
+
+
+def test_read_regular_refuses_fifos_and_devices_without_blocking(tmp_path):
+    specials = _specials(tmp_path)
+    zero = tmp_path / "zero"
+    zero.symlink_to("/dev/zero")
+    for p in [*specials.values(), zero, tmp_path]:
+        with pytest.raises(OSError, match="not a regular file"):
+            fsutil.read_regular(p, max_bytes=10)  # a FIFO would block, /dev/zero never end
+    with pytest.raises(FileNotFoundError):
+        fsutil.read_regular(tmp_path / "missing", max_bytes=10)
+
+
+def test_read_regular_reads_at_most_one_byte_over_the_bound(tmp_path):
+    f = tmp_path / "f.json"
+    f.write_bytes(b"0123456789" * 100)
+    assert fsutil.read_regular(f, max_bytes=5000) == f.read_bytes()
+    assert fsutil.read_regular(f, max_bytes=10) == b"01234567890"

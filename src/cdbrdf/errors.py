@@ -17,6 +17,7 @@ __all__ = [
     "MeshError",
     "CaptureError",
     "LimitError",
+    "OptionError",
 ]
 
 
@@ -53,4 +54,11 @@ class LimitError(CDBRDFError, ValueError):
 
     The message names the limit, the amount asked for and the environment
     variable that raises it.
+    """
+
+
+class OptionError(CDBRDFError, ValueError):
+    """An option (a keyword argument of the library) has an invalid value.
+
+    The message names the option, the value given and the valid values.
     """

@@ -27,6 +27,7 @@ import re
 import secrets
 import shutil
 import socket
+import stat
 from collections.abc import Iterator
 from contextlib import contextmanager
 from os import PathLike
@@ -35,6 +36,8 @@ from pathlib import Path
 __all__ = [
     "OWNER_MARK",
     "atomic_path",
+    "check_output_file",
+    "read_regular",
     "temp_sibling",
     "mark_owned",
     "is_owned",
@@ -130,6 +133,83 @@ def sweep_stale(dest: str | PathLike[str]) -> list[Path]:
     return removed
 
 
+def _kind_of(mode: int) -> str:
+    """What a file that is not a regular file is, for messages."""
+    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                       (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a plain file"  # pragma: no cover - no other kinds on POSIX
+
+
+def check_output_file(path: str | PathLike[str]) -> Path:
+    """Refuse, before any work, a file destination that :func:`atomic_path` must not replace.
+
+    Cheap (nothing is written), so that a command fails at once instead of
+    after its computation. Returns the destination as a :class:`~pathlib.Path`.
+
+    Raises
+    ------
+    IsADirectoryError
+        When ``path`` is empty or names a folder (links followed).
+    FileNotFoundError
+        When the folder that would hold it does not exist.
+    FileExistsError
+        When it exists and is not a regular file (a character device such as
+        ``/dev/null``, a FIFO, a socket): replacing it by a regular file
+        would destroy it.
+    """
+    if not str(path).strip():
+        raise IsADirectoryError(f"{str(path)!r}: an empty output name; give a file name")
+    dest = Path(path)
+    if str(path).endswith(("/", os.sep)) or dest.name in ("", ".", ".."):
+        raise IsADirectoryError(f"{path}: names a folder; give a file name")
+    folder = dest.parent if str(dest.parent) else Path(".")
+    if not folder.is_dir():
+        raise FileNotFoundError(f"{dest}: the folder {folder} does not exist")
+    try:
+        mode = dest.stat().st_mode  # links followed: what would be written through
+    except OSError:
+        return dest  # missing (or a dangling link): created
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(f"{dest}: is a folder; give a file name")
+    if not stat.S_ISREG(mode):
+        raise FileExistsError(
+            f"{dest}: exists and is not a regular file ({_kind_of(mode)}); "
+            "it is never replaced, choose another output name"
+        )
+    return dest
+
+
+def read_regular(path: str | PathLike[str], *, max_bytes: int) -> bytes:
+    """The bytes of a regular file, reading at most ``max_bytes + 1`` of them.
+
+    A FIFO, a device (``/dev/zero``), a socket or a folder is refused before
+    it is opened (so reading never blocks or runs without end), checked again
+    on the open file; a result longer than ``max_bytes`` means the file is
+    larger than that (the caller refuses it).
+
+    Raises
+    ------
+    FileNotFoundError
+        When ``path`` does not exist.
+    OSError
+        When it is not a regular file (the message says what it is) or
+        cannot be read.
+    """
+    p = Path(path)
+    mode = p.stat().st_mode
+    if not stat.S_ISREG(mode):
+        raise OSError(f"{p}: not a regular file ({_kind_of(mode)})")
+    fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
+    with os.fdopen(fd, "rb") as fh:
+        mode = os.fstat(fh.fileno()).st_mode
+        if not stat.S_ISREG(mode):  # replaced since the check
+            raise OSError(f"{p}: not a regular file ({_kind_of(mode)})")
+        return fh.read(max(int(max_bytes), 0) + 1)
+
+
 @contextmanager
 def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp") -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
@@ -138,13 +218,10 @@ def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp") -> Iterator[
     Temporaries of killed runs for the same destination are swept first.
     ``suffix`` is kept for writers that pick the format from the name
     (``.png``, ``.exr``): the temporary is ``.NAME.<pid>...tmp<suffix>``.
+    A destination that is a folder or exists and is not a regular file (a
+    device, a FIFO, a socket) is refused (:func:`check_output_file`).
     """
-    dest = Path(path)
-    folder = dest.parent if str(dest.parent) else Path(".")
-    if not folder.is_dir():
-        raise FileNotFoundError(f"{dest}: the folder {folder} does not exist")
-    if dest.is_dir():
-        raise IsADirectoryError(f"{dest}: is a folder; give a file name")
+    dest = check_output_file(path)
     sweep_stale(dest)
     tmp_path = temp_sibling(dest, "tmp")
     if suffix and suffix != ".tmp":
@@ -155,6 +232,7 @@ def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp") -> Iterator[
         yield tmp_path
         with open(tmp_path, "rb+") as fh:
             os.fsync(fh.fileno())
+        check_output_file(dest)  # not made a device or FIFO meanwhile
         os.replace(tmp_path, dest)
     except BaseException:
         tmp_path.unlink(missing_ok=True)

@@ -78,6 +78,9 @@ class Checkpoint:
         self.key = key
         self.patch = patch
         self.done: dict[int, tuple[tuple[int, int], int, NDArray | None, NDArray | None, str]] = {}
+        #: the folder was created by this object (not resumed), and batches it saved since
+        self.created = False
+        self.saved = 0
         if folder is None:
             return
         self._sweep_leftovers()
@@ -105,6 +108,7 @@ class Checkpoint:
                 self._write_key()
         else:
             folder.mkdir()
+            self.created = True
             mark_owned(folder, _CKPT_KIND)
             self._write_key()
 
@@ -197,6 +201,12 @@ class Checkpoint:
         with atomic_path(self.folder / f"batch-{rows[0]:08d}.npz") as tmp:
             with open(tmp, "wb") as fh:
                 np.savez(fh, **arrays)
+        self.saved += 1
+
+    def discard_if_empty(self) -> None:
+        """Delete the folder if this run created it and saved nothing in it (a run that failed at once)."""
+        if self.folder is not None and self.created and not self.saved:
+            remove_owned(self.folder, _CKPT_KIND)
 
     def remove(self) -> None:
         """Delete the checkpoint folder (once the output is written)."""
