@@ -8,7 +8,6 @@ import pytest
 import cdbrdf
 from cdbrdf.cli import main
 from cdbrdf.measure import MeasurementInterrupted, measure
-from cdbrdf.measure.capture import read_capture
 from cdbrdf.measure.checkpoint import checkpoint_path
 
 from .measure_helpers import (

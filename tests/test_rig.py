@@ -352,3 +352,70 @@ def test_simulate_capture_large_seed(tmp_path):
     """Seeds up to 2**32 - 1 are accepted (Mitsuba's seed is derived modulo 2**32)."""
     _tiny(tmp_path / "cap", seed=2**32 - 1)
     assert (tmp_path / "cap" / "capture.csv").is_file()
+
+
+# --------------------------------------------------------------------------- plans checked before rendering
+def _plan_with(tmp_path, edits):
+    """A plan of 36 photographs + 6 white references; ``edits``: {line number: new line}."""
+    from cdbrdf.measure.capture import write_plan
+
+    write_plan(tmp_path / "plan", Grid(kappa=[0.0], theta_l=[0.0, 40.0], phi_l=[0.0, 120.0, 240.0],
+                                       theta_v=[0.0, 40.0], phi_v=[0.0, 120.0, 240.0]), [Stand(0.0)])
+    p = tmp_path / "plan" / "capture.csv"
+    lines = p.read_text().splitlines()
+    for n, text in edits.items():
+        lines[n - 1] = text
+    p.write_text("\n".join(lines) + "\n")
+    return p
+
+
+BAD_PLANS = [
+    ({3: "../victim.png,0,40,0,0,0,1,sample,"}, "line 3: file '../victim.png' has a '..' component"),
+    ({4: "{victim2},0,0,120,0,0,1,sample,"}, "line 4: file '.*victim2.png' is an absolute path"),
+    ({3: "k0/l0_0_v0_0.png,0,40,0,0,0,1,sample,"}, "line 3: file 'k0/l0_0_v0_0.png' is also the file of line 2"),
+    ({3: "k0/a.png,0,95,0,0,0,1,sample,"}, r"line 3: theta_v = 95 is outside \[0, 90\)"),
+    ({3: "k0/a.png,0,nan,0,0,0,1,sample,"}, "line 3: column 'theta_v': 'nan' is not finite"),
+    ({3: "k0/a.png,0,40,0,-5,0,1,sample,"}, "line 3: theta_l = -5 is outside"),
+    ({3: "k0/a.png,0,40,0,0,0,0,sample,"}, "line 3: exposure must be positive"),
+    ({3: "k0/a.png,0,40,0,0,0,1e308,sample,"}, "line 3: exposure 1e.308 is outside"),
+    ({3: "k0/a.png,0,40,0,0,0,1,bogus,"}, "line 3: kind 'bogus' is not one of"),
+    ({3: "k0/a.png,0,41,0,0,0,1,sample,"}, "line 3: theta_v = 41 is used by 1 sample condition"),
+]
+
+
+@pytest.mark.parametrize("edits, msg", BAD_PLANS, ids=[m.split(": ", 1)[1][:30] for _, m in BAD_PLANS])
+def test_bad_plan_is_refused_before_anything_is_rendered(tmp_path, monkeypatch, capsys, edits, msg):
+    import cdbrdf.rig.simulate as simulate
+
+    victim, victim2 = tmp_path / "victim.png", tmp_path / "victim2.png"
+    victim.write_text("precious user data")
+    victim2.write_text("precious")
+    plan = _plan_with(tmp_path, {n: t.format(victim2=victim2) for n, t in edits.items()})
+    rendered = []
+    monkeypatch.setattr(simulate, "write_photograph", lambda path, *a: rendered.append(path))
+    with pytest.raises(cdbrdf.errors.CaptureError, match=rf"plan/capture.csv: {msg}"):
+        _tiny(tmp_path / "out", plan=plan)
+    os_cwd = tmp_path / "run"
+    os_cwd.mkdir()
+    monkeypatch.chdir(os_cwd)
+    assert main(["-q", "simulate-capture", "denim", "-o", "out", "--plan", str(plan), "--size", "8",
+                 "--spp", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "plan/capture.csv: line" in err
+    assert rendered == [] and not (tmp_path / "out").exists() and list(os_cwd.iterdir()) == []
+    assert victim.read_text() == "precious user data" and victim2.read_text() == "precious"
+
+
+def test_plan_grid_of_stands_json_is_kept_for_the_measurement(tmp_path):
+    """A plan whose stands.json lists the grid: the capture keeps it, so measure builds that grid."""
+    import json
+
+    plan = _plan_with(tmp_path, {})
+    doc = json.loads((plan.parent / "stands.json").read_text())
+    doc["grid"] = {"kappa": [0], "theta_l": [0, 40], "phi_l": [0, 120, 240], "theta_v": [0, 40, 60],
+                   "phi_v": [0, 120, 240]}
+    (plan.parent / "stands.json").write_text(json.dumps(doc))
+    _tiny(tmp_path / "cap", plan=plan)
+    assert json.loads((tmp_path / "cap" / "stands.json").read_text())["grid"] == doc["grid"]
+    table, _ = measure(tmp_path / "cap")
+    assert list(table.theta_v) == [0, 40, 60] and not table.measured[..., 2].any()
