@@ -342,3 +342,68 @@ def test_write_rows_refuses_names_a_capture_cannot_have(tmp_path):
         with pytest.raises(CaptureError, match=msg):
             write_rows(tmp_path / "capture.csv", [good, bad])
         assert not (tmp_path / "capture.csv").exists()
+
+
+# --------------------------------------------------------------------------- inputs that are not regular files; keys
+@pytest.mark.parametrize("name", ["capture.csv", "stands.json"])
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero"])
+def test_capture_inputs_that_are_not_regular_files_are_refused(tmp_path, capsys, name, kind):
+    import os
+
+    from .test_measure_stands import unblocking
+
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9, settings={"white_albedo": 0.9})
+    p = tmp_path / "cap" / name
+    p.unlink()
+    if kind == "fifo":
+        os.mkfifo(p)
+    else:
+        p.symlink_to(kind)
+    what = "FIFO" if kind == "fifo" else "character device"
+    with unblocking(p):
+        with pytest.raises(CaptureError, match=rf"{name}: not a regular file \(a {what}\)"):
+            read_capture(tmp_path / "cap")
+        assert main(["-q", "measure", str(tmp_path / "cap"), "-o", str(tmp_path / "m.h5")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{name}: not a regular file" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
+
+
+def test_capture_csv_size_limit(tmp_path, monkeypatch):
+    from cdbrdf.errors import LimitError
+
+    make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    size = (tmp_path / "capture.csv").stat().st_size
+    monkeypatch.setenv("CDBRDF_MAX_CSV_BYTES", str(size - 1))
+    with pytest.raises(LimitError, match=rf"capture.csv: CSV file: {size:,} bytes exceed the limit .*CDBRDF_MAX_CSV_BYTES"):
+        read_capture(tmp_path)
+    monkeypatch.setenv("CDBRDF_MAX_CSV_BYTES", str(size))
+    read_capture(tmp_path)
+
+
+def test_unknown_stands_json_key_is_refused(tmp_path, capsys):
+    """A typo (white_albdeo) was ignored, giving values 1/albedo off with exit status 0."""
+    from cdbrdf.measure.capture import STAND_FILE_KEYS
+
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9, settings={"white_albdeo": 0.5})
+    with pytest.raises(CaptureError, match=r"stands.json: unknown key 'white_albdeo'; valid keys are stands, grid, "
+                                           r"white_albedo, pixel_mm, encoding, material, simulated"):
+        read_capture(tmp_path / "cap")
+    assert main(["-q", "measure", str(tmp_path / "cap"), "-o", str(tmp_path / "m.h5")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "white_albdeo" in err
+    assert not (tmp_path / "m.h5").exists()
+    # every documented key is accepted
+    doc = {"grid": None, "white_albedo": 0.5, "pixel_mm": 0.0, "encoding": "linear", "material": "felt",
+           "simulated": True}
+    assert set(doc) | {"stands"} == set(STAND_FILE_KEYS)
+    doc.pop("grid")
+    make_capture(tmp_path / "ok", SMALL, pixel, kind="exr", size=9, settings=doc,
+                 stands=[{"kappa": 0.0}, {"kappa": 0.2}])
+    assert read_capture(tmp_path / "ok").settings["white_albedo"] == 0.5
+
+
+def test_simulated_setting_must_be_a_boolean(tmp_path):
+    make_capture(tmp_path, SMALL, pixel, kind="exr", size=9, settings={"simulated": "yes"})
+    with pytest.raises(CaptureError, match="simulated: expected true or false"):
+        read_capture(tmp_path)

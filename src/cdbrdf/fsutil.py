@@ -135,7 +135,7 @@ def sweep_stale(dest: str | PathLike[str]) -> list[Path]:
 
 def _kind_of(mode: int) -> str:
     """What a file that is not a regular file is, for messages."""
-    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"),
                        (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
                        (stat.S_ISSOCK, "a socket")):
         if test(mode):

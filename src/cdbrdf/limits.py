@@ -21,6 +21,7 @@ limit                      environment variable             default
 ``capture_rows``           ``CDBRDF_MAX_CAPTURE_ROWS``      10,000,000 rows
 ``mesh_faces``             ``CDBRDF_MAX_MESH_FACES``        50,000,000 faces
 ``json_bytes``             ``CDBRDF_MAX_JSON_BYTES``        16,777,216 bytes
+``csv_bytes``              ``CDBRDF_MAX_CSV_BYTES``         2,147,483,648 bytes
 =========================  ===============================  ==================
 """
 
@@ -92,6 +93,7 @@ LIMITS: dict[str, Limit] = {
         Limit("capture_rows", "CDBRDF_MAX_CAPTURE_ROWS", 10_000_000, "rows"),
         Limit("mesh_faces", "CDBRDF_MAX_MESH_FACES", 50_000_000, "faces"),
         Limit("json_bytes", "CDBRDF_MAX_JSON_BYTES", 16 * 1024 * 1024, "bytes"),
+        Limit("csv_bytes", "CDBRDF_MAX_CSV_BYTES", 2 * 1024**3, "bytes"),
     )
 }
 

@@ -41,7 +41,16 @@ from .. import limits
 from ..errors import CaptureError, TableError
 from ..table import Grid
 from ..images import FORMATS
-from .stands import KAPPA_TOL_PER_MM, Stand, hidden_mask, load_json_object, parse_stands, write_stands
+from .stands import (
+    KAPPA_TOL_PER_MM,
+    Stand,
+    hidden_mask,
+    load_json_object,
+    parse_stands,
+    read_input,
+    read_json_object,
+    write_stands,
+)
 
 __all__ = [
     "CAPTURE_FILE",
@@ -51,6 +60,7 @@ __all__ = [
     "KINDS",
     "HIDDEN_NAMES",
     "ENCODINGS",
+    "STAND_FILE_KEYS",
     "CaptureRow",
     "Capture",
     "read_capture",
@@ -79,6 +89,9 @@ KINDS: tuple[str, ...] = ("sample", "white", "dark")
 HIDDEN_NAMES: Mapping[int, str] = {0: "", 1: "view", 2: "light", 3: "view+light"}
 #: Values of the ``encoding`` column and setting.
 ENCODINGS: tuple[str, ...] = ("srgb", "linear")
+#: The top-level keys ``stands.json`` may have (``docs/capture.md``); any other is refused.
+STAND_FILE_KEYS: tuple[str, ...] = ("stands", "grid", "white_albedo", "pixel_mm", "encoding", "material",
+                                    "simulated")
 _KNOWN = REQUIRED_COLUMNS + ("exposure", "cx", "cy", "kind", "hidden", "encoding")
 _AXES = ("kappa", "theta_l", "phi_l", "theta_v", "phi_v")
 _ANGLE_DECIMALS = 6
@@ -206,11 +219,8 @@ def _decode_csv(csv_path: Path, data: bytes) -> str:
 
 
 def _load_table(csv_path: Path) -> tuple[bytes, str]:
-    """``capture.csv``'s bytes and text, within the ``capture_rows`` limit."""
-    try:
-        data = csv_path.read_bytes()
-    except OSError as exc:
-        raise CaptureError(f"{csv_path}: cannot be read ({exc.strerror or exc})") from None
+    """``capture.csv``'s bytes and text: a regular file within the ``csv_bytes`` and ``capture_rows`` limits."""
+    data = read_input(csv_path, "csv_bytes", what=f"{csv_path}: CSV file")
     text = _decode_csv(csv_path, data)
     _check_rows_limit(csv_path, text)
     return data, text
@@ -284,8 +294,20 @@ def _check_rows_limit(csv_path: Path, text: str) -> None:
 
 
 def _settings(doc: dict[str, Any], stand_path: Path) -> dict[str, Any]:
-    """Validate the settings of ``stands.json`` (every key but ``stands`` and ``grid``)."""
+    """Validate the settings of ``stands.json`` (every key but ``stands`` and ``grid``).
+
+    An unknown key is refused, listing the valid ones (:data:`STAND_FILE_KEYS`):
+    a typo such as ``white_albdeo`` would otherwise silently scale the table.
+    """
+    unknown = [k for k in doc if k not in STAND_FILE_KEYS]
+    if unknown:
+        raise CaptureError(
+            f"{stand_path}: unknown key{'s' * (len(unknown) > 1)} {', '.join(repr(k[:40]) for k in unknown[:5])}; "
+            f"valid keys are {', '.join(STAND_FILE_KEYS)}"
+        )
     out = {k: v for k, v in doc.items() if k not in ("stands", "grid")}
+    if "simulated" in out and not isinstance(out["simulated"], bool):
+        raise CaptureError(f"{stand_path}: simulated: expected true or false, got {out['simulated']!r:.40}")
     if "white_albedo" in out:
         a = out["white_albedo"]
         if isinstance(a, bool) or not isinstance(a, (int, float)) or not 0 < a <= 1.5:
@@ -382,7 +404,7 @@ def read_capture(folder: str | PathLike[str], *, csv_name: str = CAPTURE_FILE, p
     if not root.is_dir():
         raise FileNotFoundError(f"{root}: no such capture folder")
     csv_path = root / csv_name
-    if not csv_path.is_file():
+    if not csv_path.exists() and not csv_path.is_symlink():
         raise FileNotFoundError(f"{csv_path}: the capture folder has no {csv_name}")
     csv_bytes, text = _load_table(csv_path)
 
@@ -393,8 +415,7 @@ def read_capture(folder: str | PathLike[str], *, csv_name: str = CAPTURE_FILE, p
     stand_path = root / STAND_FILE
     given_grid = None
     if stand_path.exists() or stand_path.is_symlink():
-        doc = load_json_object(stand_path)
-        stand_bytes = stand_path.read_bytes()
+        doc, stand_bytes = read_json_object(stand_path)  # read once: what is checked is what is hashed
         settings = _settings(doc, stand_path)
         given_grid = _explicit_grid(doc, stand_path)
         if "stands" in doc:
