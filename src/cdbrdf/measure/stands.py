@@ -53,8 +53,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import limits
 from ..errors import CaptureError
-from ..fsutil import read_regular
 from ..frames import direction_from_angles
+from ..fsutil import read_regular
 from ..table import Grid
 
 __all__ = [
