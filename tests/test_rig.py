@@ -312,11 +312,29 @@ def test_simulate_capture_replaces_an_earlier_capture_whole(tmp_path):
     cap = tmp_path / "cap"
     rep = _tiny(cap)
     assert rep.folder == cap and (cap / "capture.csv").is_file()
-    (cap / "stale.png").write_bytes(b"from the first run")
+    first = {str(p.relative_to(cap)) for p in cap.rglob("*.png")}
     _tiny(cap, exposures=(1.0, 0.5))
-    names = {p.name for p in cap.rglob("*")}
-    assert "stale.png" not in names and any("_e1." in n for n in names)
+    names = {str(p.relative_to(cap)) for p in cap.rglob("*.png")}
+    assert not names & first and any("_e1." in n for n in names)  # nothing of the first run mixed in
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]  # no partial folder left
+
+
+def test_resimulating_refuses_a_capture_holding_files_the_rig_did_not_write(tmp_path, capsys):
+    """A table measured into a simulated capture, or the user's notes, were deleted without a word."""
+    cap = tmp_path / "cap"
+    _tiny(cap)
+    measure(cap, cap / "result.h5")
+    (cap / "notes.txt").write_text("my notes")
+    before = sorted(str(p.relative_to(cap)) for p in cap.rglob("*"))
+    with pytest.raises(FileExistsError, match=r"cap: holds 2 files that cdbrdf did not write there "
+                                              r"\(notes.txt, result.h5\)"):
+        _tiny(cap, seed=1)
+    assert main(["-q", "simulate-capture", "denim", "-o", str(cap), "--size", "8", "--spp", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "notes.txt, result.h5" in err and "move them away" in err
+    assert sorted(str(p.relative_to(cap)) for p in cap.rglob("*")) == before
+    assert (cap / "notes.txt").read_text() == "my notes" and cdbrdf.load(cap / "result.h5").measured.any()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
 
 
 @pytest.mark.parametrize("exc", [RuntimeError("boom"), KeyboardInterrupt()])

@@ -15,7 +15,8 @@ Three rules every writer in cdbrdf follows:
 Output folders of whole runs (``cdbrdf demo``, ``cdbrdf simulate-capture``)
 are built as a partial folder beside the destination and swapped in whole
 (:func:`output_folder`); :func:`check_output_folder` refuses a bad destination
-before any work.
+before any work, including an earlier output folder that holds files its run
+did not write (the owner mark keeps the run's manifest).
 """
 
 from __future__ import annotations
@@ -239,11 +240,49 @@ def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp") -> Iterator[
         raise
 
 
-def mark_owned(folder: str | PathLike[str], kind: str) -> None:
-    """Write the owner marker into ``folder`` (which cdbrdf has just created)."""
-    Path(folder, OWNER_MARK).write_text(
-        json.dumps({"written_by": "cdbrdf", "kind": kind}) + "\n", encoding="utf-8"
-    )
+def mark_owned(folder: str | PathLike[str], kind: str, *, files: list[str] | None = None) -> None:
+    """Write the owner marker into ``folder`` (which cdbrdf has just created).
+
+    ``files``: the manifest of what cdbrdf wrote there (:func:`output_folder`),
+    relative POSIX paths, folders ending in ``/``.
+    """
+    info: dict[str, object] = {"written_by": "cdbrdf", "kind": kind}
+    if files is not None:
+        info["files"] = files
+    Path(folder, OWNER_MARK).write_text(json.dumps(info) + "\n", encoding="utf-8")
+
+
+def _read_mark(folder: Path) -> dict | None:
+    try:
+        info = json.loads((folder / OWNER_MARK).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return info if isinstance(info, dict) else None
+
+
+def _entries(folder: Path) -> list[str]:
+    """Every entry under ``folder`` but the markers: relative POSIX paths, real folders ending in ``/``."""
+    out: list[str] = []
+    for root, dirs, files in os.walk(folder):  # links are not followed
+        rel = Path(root).relative_to(folder)
+        for d in dirs:
+            p = (rel / d).as_posix()
+            out.append(p if os.path.islink(os.path.join(root, d)) else p + "/")
+        for f in files:
+            p = (rel / f).as_posix()
+            if p not in (OWNER_MARK, _OUTPUT_MARKER):
+                out.append(p)
+    return sorted(out)
+
+
+def _unlisted(folder: Path) -> list[str]:
+    """Entries of an owned output folder that its manifest does not list ([] for folders without one)."""
+    info = _read_mark(folder)
+    listed = info.get("files") if info else None
+    if not isinstance(listed, list):
+        return []  # made before the manifest: replaced as it always was
+    known = set(listed)
+    return [e for e in _entries(folder) if e not in known]
 
 
 def is_owned(folder: str | PathLike[str], kind: str | None = None) -> bool:
@@ -254,11 +293,8 @@ def is_owned(folder: str | PathLike[str], kind: str | None = None) -> bool:
         return False
     if kind is None:
         return True
-    try:
-        info = json.loads(mark.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    return isinstance(info, dict) and info.get("kind") == kind
+    info = _read_mark(p)
+    return info is not None and info.get("kind") == kind
 
 
 def remove_owned(folder: str | PathLike[str], kind: str | None = None) -> None:
@@ -297,7 +333,9 @@ def check_output_folder(path: str | PathLike[str]) -> Path:
     ------
     FileExistsError
         When ``path`` is a file or a link, a non-empty folder cdbrdf did not
-        make, or the current folder (or one that holds it).
+        make, an output folder of cdbrdf that holds files its run did not
+        write (added since: a measured table, notes; listed in the message),
+        or the current folder (or one that holds it).
     """
     dest = Path(path)
     if dest.exists() or dest.is_symlink():
@@ -308,6 +346,7 @@ def check_output_folder(path: str | PathLike[str]) -> Path:
                 f"{dest}: folder exists, is not empty and was not written by cdbrdf; "
                 "choose another output folder"
             )
+        _refuse_added_files(dest)
         cwd = Path.cwd().resolve()
         if cwd == dest.resolve() or dest.resolve() in cwd.parents:
             raise FileExistsError(
@@ -344,6 +383,10 @@ def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
         mark_owned(tmp, _OUTPUT_KIND)
         (tmp / _OUTPUT_MARKER).write_text("written by cdbrdf; the whole folder is replaced on the next run\n")
         yield tmp
+        # the manifest: what this run wrote; anything added later stops the next run from replacing it
+        mark_owned(tmp, _OUTPUT_KIND, files=_entries(tmp))
+        if dest.exists() or dest.is_symlink():
+            check_output_folder(dest)  # files added to the old folder while this run worked
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -354,6 +397,18 @@ def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
         shutil.rmtree(old, ignore_errors=True)
     else:
         tmp.rename(dest)
+
+
+def _refuse_added_files(dest: Path) -> None:
+    """Refuse to replace an output folder that holds entries its manifest does not list."""
+    extra = _unlisted(dest) if is_owned(dest, _OUTPUT_KIND) else []
+    if extra:
+        shown = ", ".join(extra[:3]) + (f" and {len(extra) - 3} more" if len(extra) > 3 else "")
+        raise FileExistsError(
+            f"{dest}: holds {len(extra)} file{'s' * (len(extra) > 1)} that cdbrdf did not write there "
+            f"({shown}), which replacing the folder would delete; move them away or choose another "
+            "output folder"
+        )
 
 
 def _owned(folder: Path) -> bool:
