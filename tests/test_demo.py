@@ -227,3 +227,13 @@ def test_cli_demo_refuses_an_earlier_demo_folder_holding_added_files(tmp_path, c
     assert err.count("\n") == 1 and "(my-figure.png)" in err and "move them away" in err
     assert (tmp_path / "earlier" / "my-figure.png").read_bytes() == b"user's"
     assert (tmp_path / "earlier" / "report.html").read_text() == "old\n"
+
+
+@pytest.mark.parametrize("materials, match", [(["velvet"], r"materials: \['velvet'\] unknown; valid: denim, shot"),
+                                              ([], "materials: give at least one")])
+def test_run_demo_bad_materials_are_option_errors(tmp_path, materials, match):
+    from cdbrdf.errors import OptionError
+
+    with pytest.raises(OptionError, match=match):
+        run_demo(tmp_path / "out", materials=materials)
+    assert list(tmp_path.iterdir()) == []

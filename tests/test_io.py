@@ -108,6 +108,15 @@ def test_save_into_missing_folder(tmp_path, small_grid):
         make_table(small_grid).save(tmp_path / "nope" / "t.h5")
 
 
+@pytest.mark.parametrize("compression", ["bogus", "lzf", 4, True])
+def test_save_with_an_unknown_compression_lists_the_valid_ones(tmp_path, small_grid, compression):
+    from cdbrdf.errors import OptionError
+
+    with pytest.raises(OptionError, match=r"^compression: .* is not one of 'gzip', None$"):
+        make_table(small_grid).save(tmp_path / "t.h5", compression=compression)
+    assert not list(tmp_path.iterdir())
+
+
 def _write_then_edit(tmp_path, small_grid, edit):
     p = tmp_path / "t.h5"
     make_table(small_grid).save(p, compression=None)

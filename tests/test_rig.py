@@ -437,3 +437,18 @@ def test_plan_grid_of_stands_json_is_kept_for_the_measurement(tmp_path):
     assert json.loads((tmp_path / "cap" / "stands.json").read_text())["grid"] == doc["grid"]
     table, _ = measure(tmp_path / "cap")
     assert list(table.theta_v) == [0, 40, 60] and not table.measured[..., 2].any()
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"image_kind": "jpeg"}, "image_kind: 'jpeg' is not one of png16"),
+    ({"size": 4}, "size: expected a whole number >= 8"),
+    ({"size": 16.0}, "size: expected a whole number"),
+    ({"spp": 0}, "spp: expected a whole number >= 1"),
+    ({"field_mm": float("nan")}, "field_mm: expected a finite positive number"),
+    ({"gain": -1}, "gain: expected a finite positive number"),
+    ({"white_albedo": 0}, "white_albedo: expected a finite positive number"),
+])
+def test_simulate_capture_bad_option_is_an_option_error(tmp_path, kw, match):
+    with pytest.raises(cdbrdf.errors.OptionError, match=match):
+        simulate_capture(material(), tmp_path / "cap", **kw)
+    assert list(tmp_path.iterdir()) == []

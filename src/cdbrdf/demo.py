@@ -470,11 +470,13 @@ def run_demo(
     from .fsutil import check_output_folder, output_folder
 
     cfg = config or CONFIGS["quick" if quick else "full"]
+    from .errors import OptionError
+
     unknown = [m for m in materials if m not in mats.names()]
     if unknown:
-        raise ValueError(f"materials: {unknown} unknown; valid: {', '.join(mats.names())}")
+        raise OptionError(f"materials: {unknown} unknown; valid: {', '.join(mats.names())}")
     if not materials:
-        raise ValueError("materials: give at least one")
+        raise OptionError("materials: give at least one")
     check_output_folder(output)  # fail now, not after the whole run
     set_variant()  # checks libLLVM before anything long starts
     t0 = time.perf_counter()

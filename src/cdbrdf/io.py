@@ -51,7 +51,7 @@ from ._hdf5 import (
     one_line,
     superblock_version,
 )
-from .errors import FormatError, LimitError, TableError
+from .errors import FormatError, LimitError, OptionError, TableError
 from .fsutil import atomic_path
 from .schema import (
     ATTRS_JSON_ATTR,
@@ -158,7 +158,7 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
     from ._version import __version__
 
     if compression not in ("gzip", None):
-        raise ValueError(f"compression: {compression!r} is not one of 'gzip', None")
+        raise OptionError(f"compression: {compression!r:.40} is not one of 'gzip', None")
     attrs = parts.attrs
     attrs_json = _jsonable("*", attrs)
     for k, v in attrs.items():

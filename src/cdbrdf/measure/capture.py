@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import limits
-from ..errors import CaptureError, TableError
+from ..errors import CaptureError, OptionError, TableError
 from ..table import Grid
 from ..images import FORMATS
 from .stands import (
@@ -696,9 +696,9 @@ def plan_rows(
     ``white`` one white-reference row per light direction follows, with the
     camera along the normal (``white/l<theta_l>_<phi_l>.<ext>``, blank kappa).
     """
-    ext = extension.lstrip(".").lower()
+    ext = extension.lstrip(".").lower() if isinstance(extension, str) else ""
     if f".{ext}" not in (".png", ".tif", ".tiff", ".exr"):
-        raise ValueError(f"extension: {extension!r} is not one of png, tif, tiff, exr")
+        raise OptionError(f"extension: {extension!r:.40} is not one of png, tif, tiff, exr")
     hid = hidden_mask(grid, stands, pixel_mm=pixel_mm, patch_px=patch_px)
     rows: list[dict[str, Any]] = []
     for k, kappa in enumerate(grid.kappa):

@@ -12,6 +12,7 @@ folder reads back with :func:`cdbrdf.measure.measure`.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -22,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..frames import direction_from_angles
-from ..errors import CaptureError
+from ..errors import CaptureError, OptionError
 from ..measure.capture import CAPTURE_FILE, STAND_FILE, CaptureRow, Plan, file_key, read_plan, write_plan, write_rows
 from ..images import FORMATS
 from ..measure.stands import KAPPA_TOL_PER_MM, Stand, default_stand, stand_for, write_stands
@@ -141,12 +142,15 @@ def simulate_capture(
     progress
         ``progress(done, total)`` after each photograph.
     """
-    if image_kind not in IMAGE_KINDS:
-        raise ValueError(f"image_kind: {image_kind!r} is not one of {', '.join(IMAGE_KINDS)}")
-    if size < 8:
-        raise ValueError(f"size: must be at least 8 pixels, got {size}")
-    if not (field_mm > 0 and gain > 0 and spp >= 1):
-        raise ValueError("field_mm, gain and spp must be positive")
+    if not isinstance(image_kind, str) or image_kind not in IMAGE_KINDS:
+        raise OptionError(f"image_kind: {image_kind!r:.40} is not one of {', '.join(IMAGE_KINDS)}")
+    for name, v, lo in (("size", size, 8), ("spp", spp, 1)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
+            raise OptionError(f"{name}: expected a whole number >= {lo}, got {v!r:.40}")
+    for name, x in (("field_mm", field_mm), ("gain", gain), ("white_albedo", white_albedo)):
+        if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) \
+                or not (math.isfinite(x) and x > 0):
+            raise OptionError(f"{name}: expected a finite positive number, got {x!r:.40}")
     from ..fsutil import check_output_folder, output_folder
 
     final = check_output_folder(folder)  # refuse a foreign folder before any work
