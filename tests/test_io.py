@@ -263,6 +263,57 @@ def test_legacy_file_is_read_in_a_child_and_equal(tmp_path, rich_table, monkeypa
     assert cdbrdf.load(p) == rich_table
 
 
+def _legacy_file(tmp_path, table, monkeypatch):
+    monkeypatch.setattr(io, "_LIBVER", ("earliest", "v110"))  # superblock 0, B-tree v1: no metadata checksums
+    p = tmp_path / "old.h5"
+    table.save(p)
+    monkeypatch.undo()
+    assert io.superblock_version(p) == 0
+    return p
+
+
+@pytest.mark.parametrize("damage", ["address", "record", "size"])
+def test_damaged_chunk_index_of_a_legacy_file_is_a_format_error(tmp_path, rich_table, monkeypatch, damage):
+    """A zeroed B-tree record made HDF5 read whole chunks as the fill value (0): silently changed values."""
+    import struct
+
+    p = _legacy_file(tmp_path, rich_table, monkeypatch)
+    with h5py.File(p, "r") as f:
+        ci = f["reflectance"].id.get_chunk_info(1)
+    b = bytearray(p.read_bytes())
+    addr = struct.pack("<Q", ci.byte_offset)
+    i = b.find(addr)
+    while i >= 0 and b[i - 64 : i - 60] != struct.pack("<I", ci.size):  # the child address after its key
+        i = b.find(addr, i + 1)
+    assert i > 0
+    if damage == "address":
+        b[i : i + 8] = bytes(8)
+    elif damage == "record":
+        b[i - 64 : i + 8] = bytes(72)  # key (size, filter mask, offsets) and address
+    else:
+        b[i - 64 : i - 60] = bytes(4)
+    p.write_bytes(bytes(b))
+    with pytest.raises(FormatError, match=r"old\.h5: .*'reflectance'"):
+        cdbrdf.load(p)
+
+
+@pytest.mark.slow
+def test_no_zeroed_block_of_a_legacy_file_loads_with_other_values(tmp_path, rich_table, monkeypatch):
+    """Every 1 KiB block zeroed in turn: each load is refused or equal to the original, never different."""
+    p = _legacy_file(tmp_path, rich_table, monkeypatch)
+    data = p.read_bytes()
+    q = tmp_path / "z.h5"
+    for off in range(0, len(data), 1024):
+        b = bytearray(data)
+        b[off : off + 1024] = bytes(len(b[off : off + 1024]))
+        q.write_bytes(bytes(b))
+        try:
+            t = cdbrdf.load(q)
+        except cdbrdf.CDBRDFError:
+            continue
+        assert t == rich_table, f"zeroed bytes {off}..{off + 1023} loaded with other values"
+
+
 def test_xarray_reads_written_files(tmp_path, rich_table):
     xr = pytest.importorskip("xarray")
     p = tmp_path / "t.h5"
