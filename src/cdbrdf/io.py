@@ -287,7 +287,7 @@ def _check_storage(path: Path, ds: Any, name: str) -> None:
         if dsid.get_storage_size() < ds.size * ds.dtype.itemsize:
             raise fail(path, f"{name!r} has no (or too little) stored data: the file is damaged or incomplete")
         return
-    counts = [-(-n // c) for n, c in zip(ds.shape, ds.chunks)]
+    counts = [-(-n // c) for n, c in zip(ds.shape, ds.chunks, strict=True)]
     expected = math.prod(counts)
     n = dsid.get_num_chunks()
     if n != expected:
@@ -305,7 +305,7 @@ def _check_storage(path: Path, ds: Any, name: str) -> None:
         off = tuple(ci.chunk_offset)
         ok = (
             len(off) == len(ds.chunks) and off not in seen
-            and all(o % c == 0 and 0 <= o < s for o, c, s in zip(off, ds.chunks, ds.shape))
+            and all(o % c == 0 and 0 <= o < s for o, c, s in zip(off, ds.chunks, ds.shape, strict=False))
             and ci.byte_offset is not None and 0 < ci.byte_offset and 0 < ci.size
             and ci.byte_offset + ci.size <= size and not ci.filter_mask & mandatory
         )
