@@ -475,3 +475,21 @@ def test_booleans_and_big_integers_in_attrs_round_trip(tmp_path, small_grid):
     with h5py.File(p, "r") as f:
         assert f.attrs["calibrated"] in ("true", b"true")
         assert np.asarray(f.attrs["n"]).item() == -5
+
+
+def test_load_of_something_that_is_not_a_file_name_or_not_a_regular_file(tmp_path):
+    import os
+
+    from cdbrdf.errors import OptionError
+
+    for bad in (None, 3, ["t.h5"]):
+        with pytest.raises(OptionError, match="path: expected a file name"):
+            cdbrdf.load(bad)
+    fifo = tmp_path / "t.h5"
+    os.mkfifo(fifo)  # reading it would block forever
+    with pytest.raises(FormatError, match=r"t\.h5: is not a regular file"):
+        cdbrdf.load(fifo)
+    dev = tmp_path / "zero.h5"
+    dev.symlink_to("/dev/zero")
+    with pytest.raises(FormatError, match=r"zero\.h5: is not a regular file"):
+        cdbrdf.load(dev)

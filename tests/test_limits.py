@@ -44,3 +44,16 @@ def test_cli_refuses_a_bad_variable_before_any_work(tmp_path, monkeypatch, capsy
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith(f"cdbrdf plan: error: {var}='inf': expected a whole number")
     assert not out.exists()
+
+
+def test_cli_names_the_variable_not_the_option_that_uses_it(tmp_path, monkeypatch, capsys):
+    """render --size checks the render_pixels limit while parsing: the error is about the variable."""
+    monkeypatch.setenv("CDBRDF_MAX_RENDER_PIXELS", "1e400")
+    assert main(["render", "t.h5", "--scene", "sine", "-o", str(tmp_path / "a.png"), "--size", "8x8"]) == 2
+    err = capsys.readouterr().err
+    assert err == ("cdbrdf render: error: CDBRDF_MAX_RENDER_PIXELS='1e400': expected a whole number of pixels "
+                   "from 1 to 9,223,372,036,854,775,807 in decimal digits (e.g. 67108864), or unset it for the "
+                   "default\n")
+    with pytest.raises(SystemExit) as exc:  # help still works
+        main(["render", "--help"])
+    assert exc.value.code == 0

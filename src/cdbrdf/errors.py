@@ -58,7 +58,9 @@ class LimitError(CDBRDFError, ValueError):
 
 
 class OptionError(CDBRDFError, ValueError):
-    """An option (a keyword argument of the library) has an invalid value.
+    """An option or argument of a library function has an invalid value.
 
-    The message names the option, the value given and the valid values.
+    The message names the option, the value given and the valid values
+    (e.g. ``scheduler``, ``compression``, a material name, an image array of
+    the wrong shape or type).
     """

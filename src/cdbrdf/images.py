@@ -359,11 +359,11 @@ def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6) ->
     if a.ndim == 3 and a.shape[-1] == 1:
         a = a[..., 0]
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] not in (2, 3, 4)) or 0 in a.shape:
-        raise ValueError(f"image: expected (h, w[, 1-4]) pixels, got shape {a.shape}")
+        raise OptionError(f"image: expected (h, w[, 1-4]) pixels, got shape {a.shape}")
     if a.dtype not in (np.uint8, np.uint16):
-        raise ValueError(f"image: expected uint8 or uint16, got {a.dtype}")
+        raise OptionError(f"image: expected uint8 or uint16, got {a.dtype}")
     if not 0 <= int(level) <= 9:
-        raise ValueError(f"level: expected 0 to 9, got {level!r}")
+        raise OptionError(f"level: expected 0 to 9, got {level!r}")
     encoded = imagecodecs.png_encode(np.ascontiguousarray(a), level=int(level))
     with atomic_path(path, suffix=".png") as tmp:
         tmp.write_bytes(encoded)
@@ -507,7 +507,7 @@ def write_exr(path: str | PathLike[str], image: ArrayLike) -> None:
     if a.ndim == 2:
         a = a[..., None]
     if a.ndim != 3 or a.shape[-1] not in (1, 3):
-        raise ValueError(f"image: expected 1 or 3 channels, got shape {a.shape}")
+        raise OptionError(f"image: expected 1 or 3 channels, got shape {a.shape}")
     if a.shape[-1] == 3:
         channels = {"RGB": np.ascontiguousarray(a)}
     else:

@@ -32,6 +32,7 @@ import logging
 import math
 import pickle
 import re
+import stat
 import subprocess
 import sys
 from os import PathLike
@@ -586,11 +587,15 @@ def read(path: str | PathLike[str]) -> TableParts:
     LimitError
         When the file declares more samples than the ``table_samples`` limit.
     """
+    if not isinstance(path, (str, PathLike)):
+        raise OptionError(f"path: expected a file name (str or os.PathLike), got {type(path).__name__}")
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"{p}: no such file")
     if p.is_dir():
         raise fail(p, "is a folder, not a CDBRDF file")
+    if not stat.S_ISREG(p.stat().st_mode):  # a FIFO would block the read, a device never end it
+        raise fail(p, "is not a regular file (a FIFO, a device or a socket), not a CDBRDF file")
     try:
         version = superblock_version(p)
     except OSError as exc:
