@@ -407,3 +407,41 @@ def test_simulated_setting_must_be_a_boolean(tmp_path):
     make_capture(tmp_path, SMALL, pixel, kind="exr", size=9, settings={"simulated": "yes"})
     with pytest.raises(CaptureError, match="simulated: expected true or false"):
         read_capture(tmp_path)
+
+
+@pytest.mark.parametrize("name", ["capture.csv", "stands.json"])
+def test_plan_never_writes_into_a_fifo(tmp_path, capsys, name):
+    """The plan's files are written atomically: a FIFO in their place is refused (writing it blocked)."""
+    import os
+    import stat
+    import threading
+
+    out = tmp_path / "plan"
+    out.mkdir()
+    fifo = out / name
+    os.mkfifo(fifo)
+    stop = threading.Event()
+
+    def drain():  # feeds a writer that blocked on the FIFO (the old behaviour), so the test fails, never hangs
+        if stop.wait(5):
+            return
+        fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
+        while not stop.wait(0.1):
+            try:
+                os.read(fd, 1 << 16)
+            except BlockingIOError:
+                pass
+        os.close(fd)
+
+    t = threading.Thread(target=drain, daemon=True)
+    t.start()
+    try:
+        rc = main(["-q", "plan", "-o", str(out), "--kappa", "0", "--theta-step", "40", "--theta-max", "40",
+                   "--phi-step", "120", "--force"])
+    finally:
+        stop.set()
+        t.join()
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{name}: exists and is not a regular file (a FIFO)" in err
+    assert stat.S_ISFIFO(fifo.lstat().st_mode) and sorted(p.name for p in out.iterdir()) == [name]

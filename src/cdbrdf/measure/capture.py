@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 
 from .. import limits
 from ..errors import CaptureError, OptionError, TableError
+from ..fsutil import atomic_path, check_output_file
 from ..table import Grid
 from ..images import FORMATS
 from .stands import (
@@ -753,7 +754,8 @@ def write_rows(path: str | PathLike[str], rows: Sequence[Mapping[str, Any]],
     Each row's ``file`` must be a relative path inside the capture folder,
     and no two rows may name the same photograph (the rules of
     :func:`read_capture`): :class:`CaptureError` naming the line otherwise,
-    before anything is written.
+    before anything is written. The file is written atomically
+    (:func:`cdbrdf.fsutil.atomic_path`: never over a device or a FIFO).
     """
     names = []
     for line, r in enumerate(rows, start=2):
@@ -764,7 +766,7 @@ def write_rows(path: str | PathLike[str], rows: Sequence[Mapping[str, Any]],
         _check_file_name(where, fname)
         names.append((line, fname))
     _check_duplicates(Path(path), names)
-    with open(path, "w", newline="", encoding="utf-8") as fh:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(columns))
         w.writeheader()
         w.writerows(rows)
@@ -790,6 +792,8 @@ def write_plan(
     """
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
+    for name in (CAPTURE_FILE, STAND_FILE):
+        check_output_file(out / name)  # before either is written
     rows = plan_rows(grid, stands, extension=extension, white=white, pixel_mm=pixel_mm,
                      patch_px=patch_px)
     if len(exposures) != 1 or float(exposures[0]) != 1.0:

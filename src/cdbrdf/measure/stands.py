@@ -54,7 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import limits
 from ..errors import CaptureError
 from ..frames import direction_from_angles
-from ..fsutil import read_regular
+from ..fsutil import atomic_path, read_regular
 from ..table import Grid
 
 __all__ = [
@@ -389,6 +389,7 @@ def read_stands(path: str | PathLike[str]) -> dict[float, Stand]:
 
 
 def write_stands(path: str | PathLike[str], stands: Iterable[Stand], **extra: Any) -> None:
-    """Write ``stands.json``: ``{"stands": [...], ...extra}``."""
+    """Write ``stands.json``: ``{"stands": [...], ...extra}`` (atomically: :func:`cdbrdf.fsutil.atomic_path`)."""
     doc = {"stands": [s.to_dict() for s in stands], **extra}
-    Path(path).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
