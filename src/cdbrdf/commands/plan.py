@@ -71,12 +71,10 @@ def check_grid_rows(grid, *, white: bool = True, brackets: int = 1) -> None:  # 
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..measure.capture import CAPTURE_FILE, write_plan
+    from ..fsutil import check_output_file
+    from ..measure.capture import CAPTURE_FILE, STAND_FILE, write_plan
     from ..measure.stands import DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM, Stand, hidden_mask
     from ..table import PAPER_KAPPA, Grid
-
-    from ..fsutil import check_output_file
-    from ..measure.capture import STAND_FILE
 
     out = Path(args.output)
     if (out / CAPTURE_FILE).exists() and not args.force:
