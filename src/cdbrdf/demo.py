@@ -454,7 +454,8 @@ def run_demo(
     ----------
     output
         Output folder; replaced whole when it holds an earlier cdbrdf output,
-        refused when it holds anything else.
+        refused when it holds anything else (also files added to an earlier
+        output since it was written: :func:`cdbrdf.fsutil.output_folder`).
     quick
         Use :data:`CONFIGS` ``["quick"]`` (coarse grid, small images: a few
         minutes) instead of ``["full"]`` (the paper's grid).

@@ -101,9 +101,10 @@ def simulate_capture(
     folder
         Output capture folder. It is built as a partial folder beside it and
         swapped in whole once complete (:func:`cdbrdf.fsutil.output_folder`):
-        an earlier capture written by cdbrdf is replaced, a non-empty folder
-        cdbrdf did not make is refused, and an error or interrupt leaves no
-        half-written folder.
+        an earlier capture written by cdbrdf is replaced, unless files were
+        added to it since (a measured table, notes: refused, naming them); a
+        non-empty folder cdbrdf did not make is refused, and an error or
+        interrupt leaves no half-written folder.
     plan
         A ``capture.csv`` to render (its ``stands.json``, if beside it, gives
         the stand geometry). It is checked before anything is rendered with
