@@ -291,7 +291,8 @@ def test_killed_while_writing_the_output_leaves_nothing_behind(tmp_path):
     sabotage = (
         "real = os.fsync\n"
         "def fsync(fd):\n"
-        "    if os.readlink(f'/proc/self/fd/{fd}').endswith('.tmp') and '.out.h5.' in os.readlink(f'/proc/self/fd/{fd}'):\n"
+        "    name = os.path.basename(os.readlink(f'/proc/self/fd/{fd}'))\n"
+        "    if name.startswith('.out.h5.') and name.endswith('.tmp') and '.ckpt.' not in name:\n"
         "        die()\n"
         "    real(fd)\n"
         "os.fsync = fsync\n"
@@ -326,3 +327,19 @@ def test_killed_while_removing_the_checkpoint(tmp_path):
     out.unlink()
     table, rep = measure(tmp_path / "cap", out)
     assert out.exists() and _dotfiles(tmp_path) == []
+
+
+def test_killed_while_creating_the_checkpoint_does_not_block_the_rerun(tmp_path):
+    """The folder is made under a temporary name and renamed once marked: never an unmarked OUT.ckpt."""
+    import signal
+
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9)
+    out = tmp_path / "out.h5"
+    sabotage = (
+        "import cdbrdf.measure.checkpoint as ck\n"
+        "ck.mark_owned = lambda *a, **k: die()\n"  # killed between mkdir and the marker
+    )
+    assert _run_killed(tmp_path, sabotage, out) == -signal.SIGKILL
+    assert not checkpoint_path(out).exists() and [n for n in _dotfiles(tmp_path) if n.endswith(".partial")]
+    table, rep = measure(tmp_path / "cap", out)
+    assert out.exists() and not checkpoint_path(out).exists() and _dotfiles(tmp_path) == []

@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import re
+import shutil
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -21,7 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..fsutil import OWNER_MARK, atomic_path, is_owned, mark_owned, remove_owned, sweep_stale
+from ..fsutil import OWNER_MARK, atomic_path, is_owned, mark_owned, remove_owned, sweep_stale, temp_sibling
 from .preflight import first_line
 
 __all__ = ["Checkpoint", "checkpoint_path", "CHECKPOINT_VERSION"]
@@ -92,10 +94,20 @@ class Checkpoint:
             if _read_key(folder) != accepted[0]:
                 self._write_key()
         else:
-            folder.mkdir()
+            # made complete (marked, keyed) under a pid-tagged name, then renamed: a run killed
+            # half-way leaves a temporary that the next run sweeps, never an unmarked OUT.ckpt
+            tmp = temp_sibling(folder, "partial")
+            tmp.mkdir()
+            try:
+                mark_owned(tmp, _CKPT_KIND)
+                with atomic_path(tmp / _KEY_FILE) as key_tmp:
+                    key_tmp.write_text(json.dumps({"key": self.key, "version": CHECKPOINT_VERSION}),
+                                       encoding="utf-8")
+                os.rename(tmp, folder)
+            except BaseException:
+                shutil.rmtree(tmp, ignore_errors=True)
+                raise
             self.created = True
-            mark_owned(folder, _CKPT_KIND)
-            self._write_key()
 
     def _sweep_leftovers(self) -> None:
         """Remove what killed runs left: temporaries inside, half-removed checkpoints beside.
