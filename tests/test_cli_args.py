@@ -212,3 +212,35 @@ def test_curvature_cost_is_bounded_at_any_neighbourhood(tmp_path):
                      "--neighbourhood", nb]) == 0
         seconds.append(time.perf_counter() - t0)
     assert seconds[2] < 3 * seconds[1] + 1.0, seconds
+
+
+WRITERS = {"render": RENDER, "mosaic": MOSAIC, "curvature": CURV, "synth": SYNTH, "measure": MEASURE}
+
+
+@pytest.mark.parametrize("special", ["fifo", "devnull"])
+@pytest.mark.parametrize("command", sorted(WRITERS))
+def test_output_that_is_not_a_regular_file_is_refused(files, capsys, command, special):
+    """-o naming a FIFO or a device (/dev/null) is refused before any work, never replaced by a file."""
+    import os
+    import stat
+
+    d, o = files
+    argv = ["-q"] + [a.format(d=d, o=o) for a in WRITERS[command]]
+    i = argv.index("-o") + 1
+    target = o / (special + os.path.splitext(argv[i])[1])  # the suffix the command writes
+    argv[i] = str(target)
+    if special == "fifo":
+        os.mkfifo(target)
+    else:
+        target.symlink_to(os.devnull)
+    if command == "measure":
+        argv.append("--force")
+    assert _exit_code(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"cdbrdf {command}: error: ") and err.count("\n") == 1, err
+    assert "is not a regular file" in err
+    assert sorted(p.name for p in o.iterdir()) == [target.name]
+    if special == "fifo":
+        assert stat.S_ISFIFO(target.lstat().st_mode)
+    else:
+        assert target.is_symlink() and stat.S_ISCHR(os.stat(os.devnull).st_mode)

@@ -70,6 +70,35 @@ def test_png_window(tmp_path, rgb16):
     np.testing.assert_array_equal(a, rgb16[-2:, -2:])
 
 
+@pytest.mark.parametrize("window", [(0, 0, 1), (0, 0, 1, 1, 1), (float("nan"), 0, 1, 1), (0.5, 0, 1, 1),
+                                    (True, 0, 1, 1), ("0", 0, 1, 1), None, 5, (0, 0, 1e300, 1)])
+def test_malformed_window_is_an_option_error(tmp_path, rgb16, window):
+    from cdbrdf.errors import OptionError
+
+    p = tmp_path / "w.png"
+    write_png(p, rgb16)
+    with pytest.raises(OptionError, match=r"^window: expected four whole numbers \(x0, y0, nx, ny\)"):
+        read_window(p, window)
+    with pytest.raises(OptionError, match="^window: expected four whole numbers"):
+        read_window(p, lambda info: window)  # a function returning a bad window
+    a, _ = read_window(p, (np.int64(1), 2.0, 3, np.uint8(2)))  # any whole numbers
+    np.testing.assert_array_equal(a, rgb16[2:4, 1:4])
+
+
+def test_writers_refuse_bad_arrays_with_an_option_error(tmp_path):
+    from cdbrdf.errors import OptionError
+
+    for bad, match in ((np.zeros((4, 4, 3)), "image: expected uint8 or uint16, got float64"),
+                       (np.zeros(4, np.uint8), r"image: expected \(h, w\[, 1-4\]\) pixels, got shape \(4,\)")):
+        with pytest.raises(OptionError, match=match):
+            write_png(tmp_path / "a.png", bad)
+    with pytest.raises(OptionError, match="level: expected 0 to 9"):
+        write_png(tmp_path / "a.png", np.zeros((4, 4), np.uint8), level=11)
+    with pytest.raises(OptionError, match="image: expected 1 or 3 channels"):
+        write_exr(tmp_path / "a.exr", np.zeros((4, 4, 2)))
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("tile", [None, (16, 16)])
 @pytest.mark.parametrize("compression", [None, "zlib"])
 def test_tiff_window(tmp_path, rgb16, tile, compression):

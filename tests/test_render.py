@@ -583,3 +583,43 @@ def test_values_beyond_float32_range_are_refused(variant, channels, peak):
         variant.make_bsdf(cdbrdf.CDBRDF(v, **g.axes()))
     v[0, 0, 1, 0, 1, 0] = 1e29  # within range: accepted
     variant.make_bsdf(cdbrdf.CDBRDF(v, **g.axes()))
+
+
+@pytest.mark.parametrize("args, match", [
+    ((95.0,), r"light theta: elevation must lie in \[0, 90\) degrees, got 95"),
+    ((float("nan"),), "light theta: expected a finite number, got nan"),
+    ((-1.0,), "light theta: elevation must lie in"),
+    (("45",), "light theta: expected a finite number, got '45'"),
+    ((45.0, float("inf")), "light phi: expected a finite number"),
+    ((45.0, 0.0, 0.0), "irradiance: must be positive, got 0"),
+    ((45.0, 0.0, float("nan")), "irradiance: expected a finite number"),
+    ((45.0, None), "light phi: expected a finite number, got None"),
+])
+def test_directional_light_bad_values_are_option_errors(args, match):
+    from cdbrdf.errors import OptionError
+    from cdbrdf.render.scenes import directional_light
+
+    with pytest.raises(OptionError, match=match):
+        directional_light(*args)
+    d = directional_light(np.float32(30.0), 90, 2)
+    assert d["irradiance"]["value"] == 2.0 and d["direction"][2] == pytest.approx(-np.cos(np.radians(30)))
+
+
+@needs_llvm
+@pytest.mark.parametrize("extra, match", [
+    (["--light", "95,0"], r"light theta: elevation must lie in \[0, 90\)"),
+    (["--no-light"], "needs a light"),
+    (["--no-light", "--light", "95,0"], "needs a light"),
+])
+def test_render_bad_light_is_the_only_line(tmp_path, capsys, extra, match):
+    """No progress bar (or anything else) is drawn before the error (without -q)."""
+    from cdbrdf.cli import main
+
+    path = tmp_path / "t.h5"
+    analytic_table().save(path)
+    out = tmp_path / "a.png"
+    assert main(["render", str(path), "--scene", "sine", "-o", str(out), "--size", "16x12", "--spp", "1",
+                 *extra]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err.count("\n") == 1 and cap.err.startswith("cdbrdf render: error: ")
+    assert __import__("re").search(match, cap.err) and not out.exists()

@@ -318,6 +318,16 @@ def test_anisotropic(name, denim, shot):
 
 
 # -- command line --------------------------------------------------------------------
+@pytest.mark.parametrize("setting", ["thickness_mm=1e308", "thickness_mm=-1", "rays=0"])
+def test_cli_synth_bad_setting_is_the_only_line(tmp_path, capsys, setting):
+    """Refused before any work: no progress bar (or anything else) before the error, without -q."""
+    out = tmp_path / "s.h5"
+    assert cli_main(["synth", "denim", "-o", str(out), "--set", setting]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err.count("\n") == 1 and cap.err.startswith("cdbrdf synth: error: ")
+    assert setting.split("=")[0].split("_")[0] in cap.err and not out.exists()
+
+
 def test_cli_synth(tmp_path, capsys):
     out = tmp_path / "s.h5"
     rc = cli_main(["-q", "synth", "shot", "--grid", "regular:45,90", "--kappa", "0,0.22",

@@ -455,7 +455,8 @@ def run_demo(
     ----------
     output
         Output folder; replaced whole when it holds an earlier cdbrdf output,
-        refused when it holds anything else.
+        refused when it holds anything else (also files added to an earlier
+        output since it was written: :func:`cdbrdf.fsutil.output_folder`).
     quick
         Use :data:`CONFIGS` ``["quick"]`` (coarse grid, small images: a few
         minutes) instead of ``["full"]`` (the paper's grid).
@@ -471,11 +472,13 @@ def run_demo(
     from .fsutil import check_output_folder, output_folder
 
     cfg = config or CONFIGS["quick" if quick else "full"]
+    from .errors import OptionError
+
     unknown = [m for m in materials if m not in mats.names()]
     if unknown:
-        raise ValueError(f"materials: {unknown} unknown; valid: {', '.join(mats.names())}")
+        raise OptionError(f"materials: {unknown} unknown; valid: {', '.join(mats.names())}")
     if not materials:
-        raise ValueError("materials: give at least one")
+        raise OptionError("materials: give at least one")
     check_output_folder(output)  # fail now, not after the whole run
     set_variant()  # checks libLLVM before anything long starts
     t0 = time.perf_counter()

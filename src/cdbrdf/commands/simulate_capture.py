@@ -50,7 +50,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("material", type=_material, help="preset name (see cdbrdf.materials) or a CDBRDF file")
     p.add_argument("-o", "--output", required=True, metavar="DIR",
-                   help="capture folder to write (new, empty, or an earlier simulated capture, replaced whole)")
+                   help="capture folder to write (new, empty, or an earlier simulated capture, replaced "
+                   "whole unless files were added to it since)")
     p.add_argument("--plan", type=existing_file(".csv"), default=None,
                    help="capture.csv to render (default: the material's grid, the paper's stands, white references)")
     p.add_argument("--size", type=square_size(lo=8, hi=8192), default=64,

@@ -65,7 +65,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..curvature import sine_sheet_curvature, sine_sheet_height
-from ..errors import MeshError
+from ..errors import MeshError, OptionError
 from ..frames import direction_from_angles
 from .meshio import Mesh, read_mesh, write_ply
 
@@ -430,11 +430,27 @@ def frame_camera(
 
 
 def directional_light(theta_deg: float = 45.0, phi_deg: float = 0.0, irradiance: float = DEFAULT_IRRADIANCE) -> dict:
-    """Mitsuba ``directional`` emitter dict for the direction towards the light (z-up world)."""
+    """Mitsuba ``directional`` emitter dict for the direction towards the light (z-up world).
+
+    Raises
+    ------
+    OptionError
+        When ``theta_deg`` is not in [0, 90) degrees, ``phi_deg`` is not a
+        finite number or ``irradiance`` is not a finite positive number.
+    """
+    def number(name: str, v: Any) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not math.isfinite(v):
+            raise OptionError(f"{name}: expected a finite number, got {v!r:.40}")
+        return float(v)
+
+    theta_deg = number("light theta", theta_deg)
+    phi_deg = number("light phi", phi_deg)
+    irradiance = number("irradiance", irradiance)
     if not (0.0 <= theta_deg < 90.0):
-        raise ValueError(f"light theta: elevation must lie in [0, 90) degrees, got {theta_deg}")
-    if not (math.isfinite(irradiance) and irradiance > 0):
-        raise ValueError(f"irradiance: must be positive, got {irradiance}")
+        raise OptionError(f"light theta: elevation must lie in [0, 90) degrees, got {theta_deg:g}")
+    if not irradiance > 0:
+        raise OptionError(f"irradiance: must be positive, got {irradiance:g}")
     # The world frame (z up) is the local frame of a horizontal surface: theta from +z, phi from +x towards +y.
     to_light = direction_from_angles(theta_deg, phi_deg).tolist()
     return {"type": "directional", "direction": [-c for c in to_light],
