@@ -109,8 +109,8 @@ BAD: list[tuple[list[str], list[str], str]] = [
     (SIM, ["--image", "jpg"], "--image"),
     (SIM, ["--plan", "{d}/missing.csv"], "--plan"),
     (["simulate-capture", "velvet", "-o", "{o}/cap"], [], "velvet"),
-    (CURV, ["--radius", "100"], "--radius"),
-    (CURV, ["--radius", "1"], "--radius"),
+    (CURV, ["--neighbourhood", "1e5"], "--neighbourhood"),
+    (CURV, ["--neighbourhood", "0"], "--neighbourhood"),
     (CURV, ["--units", "furlong"], "--units"),
     (["curvature", "{d}/missing.ply", "-o", "{o}/c.ply"], [], "missing.ply"),
     (SYNTH, ["--grid", "regular:0,30"], "--grid"),
@@ -195,25 +195,52 @@ def test_size_limit_follows_the_environment(monkeypatch):
         _args.size_wxh()("11x10")
 
 
-def test_curvature_radius_cost_is_bounded(tmp_path, monkeypatch, capsys):
-    """A radius whose neighbourhoods would cost more than the mesh_faces limit is refused up front."""
-    from cdbrdf.curvature import neighbourhood_cost
-
+def test_curvature_cost_is_bounded_at_any_neighbourhood(tmp_path):
+    """The fit thins a fine mesh to the neighbourhood: a huge neighbourhood finishes as fast as a small one."""
     n = 30
     x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n), indexing="ij")
-    lines = [f"v {a:g} {b:g} {0.1 * np.sin(3 * a):g}" for a, b in zip(x.ravel(), y.ravel())]
+    lines = [f"v {a:g} {b:g} {0.1 * np.sin(3 * a):g}" for a, b in zip(x.ravel(), y.ravel(), strict=True)]
     for i in range(n - 1):
         for j in range(n - 1):
             a = i * n + j + 1
             lines += [f"f {a} {a + n} {a + n + 1}", f"f {a} {a + n + 1} {a + 1}"]
     (tmp_path / "g.obj").write_text("\n".join(lines) + "\n")
-    faces = 2 * (n - 1) ** 2
-    assert neighbourhood_cost(faces, 2) == faces and neighbourhood_cost(faces, 20) == 100 * faces
-    monkeypatch.setenv("CDBRDF_MAX_MESH_FACES", str(10 * faces))
-    t0 = time.perf_counter()
-    assert main(["-q", "curvature", str(tmp_path / "g.obj"), "-o", str(tmp_path / "c.ply"), "--radius", "20"]) == 2
-    assert time.perf_counter() - t0 < 5
+    seconds = []
+    for nb in ("5", "0.001", "1e4"):  # the first run also compiles
+        t0 = time.perf_counter()
+        assert main(["-q", "curvature", str(tmp_path / "g.obj"), "-o", str(tmp_path / "c.ply"),
+                     "--neighbourhood", nb]) == 0
+        seconds.append(time.perf_counter() - t0)
+    assert seconds[2] < 3 * seconds[1] + 1.0, seconds
+
+
+WRITERS = {"render": RENDER, "mosaic": MOSAIC, "curvature": CURV, "synth": SYNTH, "measure": MEASURE}
+
+
+@pytest.mark.parametrize("special", ["fifo", "devnull"])
+@pytest.mark.parametrize("command", sorted(WRITERS))
+def test_output_that_is_not_a_regular_file_is_refused(files, capsys, command, special):
+    """-o naming a FIFO or a device (/dev/null) is refused before any work, never replaced by a file."""
+    import os
+    import stat
+
+    d, o = files
+    argv = ["-q"] + [a.format(d=d, o=o) for a in WRITERS[command]]
+    i = argv.index("-o") + 1
+    target = o / (special + os.path.splitext(argv[i])[1])  # the suffix the command writes
+    argv[i] = str(target)
+    if special == "fifo":
+        os.mkfifo(target)
+    else:
+        target.symlink_to(os.devnull)
+    if command == "measure":
+        argv.append("--force")
+    assert _exit_code(argv) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "radius 20" in err and "CDBRDF_MAX_MESH_FACES" in err
-    assert not (tmp_path / "c.ply").exists()
-    assert main(["-q", "curvature", str(tmp_path / "g.obj"), "-o", str(tmp_path / "c.ply"), "--radius", "4"]) == 0
+    assert err.startswith(f"cdbrdf {command}: error: ") and err.count("\n") == 1, err
+    assert "is not a regular file" in err
+    assert sorted(p.name for p in o.iterdir()) == [target.name]
+    if special == "fifo":
+        assert stat.S_ISFIFO(target.lstat().st_mode)
+    else:
+        assert target.is_symlink() and stat.S_ISCHR(os.stat(os.devnull).st_mode)

@@ -7,13 +7,12 @@ import os
 import re
 import shutil
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import cdbrdf
-from cdbrdf.demo import CONFIGS, DemoConfig, compare_with_truth, run_demo
+from cdbrdf.demo import DemoConfig, compare_with_truth, run_demo
 from cdbrdf.table import Grid
 
 from .conftest import make_table
@@ -160,12 +159,6 @@ def test_compare_with_truth_sees_a_known_error(small_grid):
     assert stats["median_rel_error_measured"] < 1e-12
 
 
-def test_configs_state_their_cost():
-    assert CONFIGS["full"].grid == Grid.paper()
-    assert CONFIGS["full"].n_photos == 72 * 72 * 5 + 72
-    assert CONFIGS["quick"].expected_seconds(2) < CONFIGS["full"].expected_seconds(2)
-
-
 def test_work_folder_is_inside_the_partial_output(tmp_path, monkeypatch):
     """Intermediate files live in the pid-tagged partial folder (swept after a kill), not in the system temp."""
     import tempfile
@@ -210,3 +203,30 @@ def test_cli_demo_into_the_current_folder_fails_at_once(tmp_path, monkeypatch, c
     assert err.startswith("cdbrdf demo: error:") and "current folder" in err and err.count("\n") == 1
     assert (tmp_path / "earlier" / "report.html").read_text() == "old\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["earlier"]
+
+
+def test_cli_demo_refuses_an_earlier_demo_folder_holding_added_files(tmp_path, capsys):
+    """Re-running the demo into its earlier folder deleted files the user had added there."""
+    from cdbrdf.cli import main
+    from cdbrdf.fsutil import output_folder
+
+    with output_folder(tmp_path / "earlier") as tmp:
+        (tmp / "report.html").write_text("old\n")
+    (tmp_path / "earlier" / "my-figure.png").write_bytes(b"user's")
+    t0 = time.perf_counter()
+    assert main(["demo", "-o", str(tmp_path / "earlier"), "--quick"]) == 2
+    assert time.perf_counter() - t0 < 1.0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "(my-figure.png)" in err and "move them away" in err
+    assert (tmp_path / "earlier" / "my-figure.png").read_bytes() == b"user's"
+    assert (tmp_path / "earlier" / "report.html").read_text() == "old\n"
+
+
+@pytest.mark.parametrize("materials, match", [(["velvet"], r"materials: \['velvet'\] unknown; valid: denim, shot"),
+                                              ([], "materials: give at least one")])
+def test_run_demo_bad_materials_are_option_errors(tmp_path, materials, match):
+    from cdbrdf.errors import OptionError
+
+    with pytest.raises(OptionError, match=match):
+        run_demo(tmp_path / "out", materials=materials)
+    assert list(tmp_path.iterdir()) == []

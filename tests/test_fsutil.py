@@ -159,3 +159,160 @@ def test_check_output_folder_refuses_up_front(tmp_path, monkeypatch):
     with pytest.raises(FileExistsError, match="current folder"):
         check_output_folder(".")
     assert check_output_folder(tmp_path / "new") == tmp_path / "new"
+
+
+# -- destinations that are not regular files; bounded reads of inputs -----------
+def _specials(tmp_path):
+    """A FIFO, a link to the character device /dev/null and a socket: none may be replaced."""
+    import os
+    import socket
+
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    dev = tmp_path / "devnull"
+    dev.symlink_to(os.devnull)
+    sock = tmp_path / "sock"
+    s = socket.socket(socket.AF_UNIX)
+    try:
+        s.bind(str(sock))
+    except OSError:  # pragma: no cover - a path too long for a socket
+        sock = None
+    s.close()
+    out = {"FIFO": fifo, "character device": dev}
+    if sock is not None:
+        out["socket"] = sock
+    return out
+
+
+def test_atomic_path_never_replaces_a_device_fifo_or_socket(tmp_path):
+    import stat
+
+    for kind, p in _specials(tmp_path).items():
+        before = p.lstat()
+        with pytest.raises(FileExistsError, match=rf"{p.name}: exists and is not a regular file \(.*{kind}"):
+            with fsutil.atomic_path(p) as tmp:
+                tmp.write_bytes(b"x")
+        after = p.lstat()
+        assert stat.S_IFMT(after.st_mode) == stat.S_IFMT(before.st_mode) and after.st_ino == before.st_ino
+    assert not [n for n in tmp_path.iterdir() if n.name.startswith(".")]  # no temporary left
+
+
+def test_atomic_path_refuses_a_device_made_while_writing(tmp_path):
+    import os
+
+    dest = tmp_path / "out.bin"
+    with pytest.raises(FileExistsError, match="not a regular file"):
+        with fsutil.atomic_path(dest) as tmp:
+            tmp.write_bytes(b"x")
+            os.mkfifo(dest)
+    assert [n.name for n in tmp_path.iterdir()] == ["out.bin"]
+
+
+@pytest.mark.parametrize("name", ["", " ", "sub/", ".", "..", "sub/.."])
+def test_check_output_file_refuses_folders_and_empty_names(tmp_path, monkeypatch, name):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    with pytest.raises(IsADirectoryError):
+        fsutil.check_output_file(name)
+    with pytest.raises(IsADirectoryError):
+        with fsutil.atomic_path(name):
+            pass
+    assert sorted(n.name for n in tmp_path.iterdir()) == ["sub"]
+
+
+def test_check_output_file_accepts_new_and_regular_files(tmp_path):
+    assert fsutil.check_output_file(tmp_path / "new.h5") == tmp_path / "new.h5"
+    (tmp_path / "old.h5").write_bytes(b"x")
+    fsutil.check_output_file(tmp_path / "old.h5")
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        fsutil.check_output_file(tmp_path / "nope" / "x.h5")
+
+
+def test_read_regular_refuses_fifos_and_devices_without_blocking(tmp_path):
+    specials = _specials(tmp_path)
+    zero = tmp_path / "zero"
+    zero.symlink_to("/dev/zero")
+    for p in [*specials.values(), zero, tmp_path]:
+        with pytest.raises(OSError, match="not a regular file"):
+            fsutil.read_regular(p, max_bytes=10)  # a FIFO would block, /dev/zero never end
+    with pytest.raises(FileNotFoundError):
+        fsutil.read_regular(tmp_path / "missing", max_bytes=10)
+
+
+def test_read_regular_reads_at_most_one_byte_over_the_bound(tmp_path):
+    f = tmp_path / "f.json"
+    f.write_bytes(b"0123456789" * 100)
+    assert fsutil.read_regular(f, max_bytes=5000) == f.read_bytes()
+    assert fsutil.read_regular(f, max_bytes=10) == b"01234567890"
+
+
+# -- the manifest of an output folder: files added since are never deleted -------
+def test_output_folder_records_what_the_run_wrote(tmp_path):
+    import json
+
+    dest = tmp_path / "out"
+    with output_folder(dest) as d:
+        (d / "a.txt").write_text("1")
+        (d / "sub").mkdir()
+        (d / "sub" / "b.png").write_bytes(b"2")
+        (d / "link").symlink_to("a.txt")
+    info = json.loads((dest / fsutil.OWNER_MARK).read_text())
+    assert info["kind"] == "output" and info["files"] == ["a.txt", "link", "sub/", "sub/b.png"]
+    with output_folder(dest) as d:  # nothing added: replaced whole
+        (d / "c.txt").write_text("3")
+    assert sorted(p.name for p in dest.iterdir()) == [".cdbrdf-output", ".cdbrdf-owned", "c.txt"]
+
+
+@pytest.mark.parametrize("added, shown", [
+    (["notes.txt"], r"holds 1 file that cdbrdf did not write there \(notes.txt\)"),
+    (["sub/result.h5", "mine/"], r"holds 2 files .* \(mine/, sub/result.h5\)"),
+    (["a1", "a2", "a3", "a4", "a5"], r"holds 5 files .* \(a1, a2, a3 and 2 more\)"),
+])
+def test_output_folder_with_added_files_is_refused_up_front(tmp_path, added, shown):
+    from cdbrdf.fsutil import check_output_folder
+
+    dest = tmp_path / "out"
+    with output_folder(dest) as d:
+        (d / "sub").mkdir()
+        (d / "report.html").write_text("x")
+    for name in added:
+        if name.endswith("/"):
+            (dest / name).mkdir()
+        else:
+            (dest / name).write_text("user data")
+    before = sorted(str(p.relative_to(dest)) for p in dest.rglob("*"))
+    with pytest.raises(FileExistsError, match=rf"out: {shown}, which replacing the folder would delete; move"):
+        check_output_folder(dest)
+    ran = []
+    with pytest.raises(FileExistsError, match="did not write there"):
+        with output_folder(dest):
+            ran.append(1)
+    assert ran == [] and sorted(str(p.relative_to(dest)) for p in dest.rglob("*")) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_output_folder_refuses_files_added_while_it_ran(tmp_path):
+    dest = tmp_path / "out"
+    with output_folder(dest) as d:
+        (d / "old.txt").write_text("1")
+    with pytest.raises(FileExistsError, match=r"\(result.h5\)"):
+        with output_folder(dest) as d:
+            (d / "new.txt").write_text("2")
+            (dest / "result.h5").write_text("measured meanwhile")
+    assert sorted(p.name for p in dest.iterdir() if not p.name.startswith(".")) == ["old.txt", "result.h5"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_output_folder_without_manifest_is_replaced_as_before(tmp_path):
+    """Folders written before the manifest (owner mark without 'files', or only the old marker) keep the old rule."""
+    for mark in ("owner", "old"):
+        dest = tmp_path / mark
+        dest.mkdir()
+        if mark == "owner":
+            fsutil.mark_owned(dest, "output")
+        else:
+            (dest / ".cdbrdf-output").write_text("written by cdbrdf\n")
+        (dest / "extra.txt").write_text("x")
+        with output_folder(dest) as d:
+            (d / "new.txt").write_text("2")
+        assert sorted(p.name for p in dest.iterdir() if not p.name.startswith(".")) == ["new.txt"]

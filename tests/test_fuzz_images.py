@@ -30,9 +30,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.fuzzing import fuzz
 from cdbrdf.errors import CDBRDFError
 from cdbrdf.images import read_image, read_window, write_exr, write_png, write_tiff
+from tests.fuzzing import fuzz
 
 __all__ = ["target_png", "target_png_crafted", "target_tiff", "target_exr"]
 

@@ -7,6 +7,7 @@ import zlib
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from cdbrdf.errors import LimitError
 from cdbrdf.images import (
@@ -36,18 +37,6 @@ def test_png16_keeps_16_bits(tmp_path, rgb16):
     assert np.any(a % 257 != 0)
 
 
-def test_png16_from_pillow_reader_would_lose_bits(tmp_path, rgb16):
-    """Pillow opens 16-bit RGB PNG as 8-bit RGB: the reason for reading with libpng (imagecodecs)."""
-    PIL = pytest.importorskip("PIL.Image")
-    p = tmp_path / "a.png"
-    write_png(p, rgb16)
-    with PIL.open(p) as im:
-        pil = np.asarray(im)
-    assert pil.dtype == np.uint8  # the loss our reader avoids
-    a, _ = read_image(p)
-    np.testing.assert_array_equal(a >> 8, pil)
-
-
 @pytest.mark.parametrize("channels", [1, 2, 3, 4])
 @pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
 def test_png_round_trip_channels(tmp_path, channels, dtype):
@@ -63,7 +52,6 @@ def test_png_round_trip_channels(tmp_path, channels, dtype):
 
 def test_png_all_filter_types(tmp_path):
     """A PNG written by Pillow with optimisation uses Sub/Up/Average/Paeth filters."""
-    Image = pytest.importorskip("PIL.Image")
     rng = np.random.default_rng(3)
     img = (np.add.outer(np.arange(40), np.arange(30))[..., None] * [1, 2, 3] % 256).astype(np.uint8)
     img = (img + rng.integers(0, 3, img.shape)).astype(np.uint8)
@@ -80,6 +68,35 @@ def test_png_window(tmp_path, rgb16):
     np.testing.assert_array_equal(a, rgb16[6:9, 4:9])
     a, _ = read_window(p, lambda inf: (inf.width - 2, inf.height - 2, 2, 2))
     np.testing.assert_array_equal(a, rgb16[-2:, -2:])
+
+
+@pytest.mark.parametrize("window", [(0, 0, 1), (0, 0, 1, 1, 1), (float("nan"), 0, 1, 1), (0.5, 0, 1, 1),
+                                    (True, 0, 1, 1), ("0", 0, 1, 1), None, 5, (0, 0, 1e300, 1)])
+def test_malformed_window_is_an_option_error(tmp_path, rgb16, window):
+    from cdbrdf.errors import OptionError
+
+    p = tmp_path / "w.png"
+    write_png(p, rgb16)
+    with pytest.raises(OptionError, match=r"^window: expected four whole numbers \(x0, y0, nx, ny\)"):
+        read_window(p, window)
+    with pytest.raises(OptionError, match="^window: expected four whole numbers"):
+        read_window(p, lambda info: window)  # a function returning a bad window
+    a, _ = read_window(p, (np.int64(1), 2.0, 3, np.uint8(2)))  # any whole numbers
+    np.testing.assert_array_equal(a, rgb16[2:4, 1:4])
+
+
+def test_writers_refuse_bad_arrays_with_an_option_error(tmp_path):
+    from cdbrdf.errors import OptionError
+
+    for bad, match in ((np.zeros((4, 4, 3)), "image: expected uint8 or uint16, got float64"),
+                       (np.zeros(4, np.uint8), r"image: expected \(h, w\[, 1-4\]\) pixels, got shape \(4,\)")):
+        with pytest.raises(OptionError, match=match):
+            write_png(tmp_path / "a.png", bad)
+    with pytest.raises(OptionError, match="level: expected 0 to 9"):
+        write_png(tmp_path / "a.png", np.zeros((4, 4), np.uint8), level=11)
+    with pytest.raises(OptionError, match="image: expected 1 or 3 channels"):
+        write_exr(tmp_path / "a.exr", np.zeros((4, 4, 2)))
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("tile", [None, (16, 16)])
@@ -189,7 +206,6 @@ def test_tiff_strips_and_byte_order(tmp_path, rgb16, byteorder, rowsperstrip, mo
     """Uncompressed contiguous TIFF: the window is memory-mapped, either byte order, 8 and 16 bit."""
     import tifffile
 
-    from cdbrdf import images
 
     for img in (rgb16, (rgb16 >> 8).astype(np.uint8)):
         p = tmp_path / "s.tif"
@@ -211,7 +227,6 @@ def test_tiff_planar_separate(tmp_path, rgb16):
 
 
 def test_palette_png_falls_back(tmp_path):
-    Image = pytest.importorskip("PIL.Image")
     img = (np.arange(12 * 10).reshape(12, 10) % 7).astype(np.uint8)
     im = Image.fromarray(img, mode="L").convert("P")
     p = tmp_path / "p.png"
@@ -395,7 +410,6 @@ def test_every_failure_is_image_error(tmp_path, rgb16):
 
 def test_unsupported_png_kinds(tmp_path):
     """Palette, low bit depth and interlaced PNG decode through libpng; 16-bit grey too."""
-    Image = pytest.importorskip("PIL.Image")
     img = (np.arange(12 * 10).reshape(12, 10) % 7 * 30).astype(np.uint8)
     p = tmp_path / "i.png"
     Image.fromarray(img).save(p, interlace=1)

@@ -60,7 +60,7 @@ def test_round_trip_keeps_mask_sources_std_attrs(tmp_path, rich_table):
 
 
 def test_xarray_sees_named_dims_and_units(tmp_path, rich_table):
-    xr = pytest.importorskip("xarray")
+    import xarray as xr
     p = tmp_path / "x.h5"
     rich_table.save(p)
     with xr.open_dataset(p, engine="h5netcdf") as ds:
@@ -106,6 +106,15 @@ def test_attrs_that_cannot_be_stored(tmp_path, small_grid):
 def test_save_into_missing_folder(tmp_path, small_grid):
     with pytest.raises(FileNotFoundError, match="does not exist"):
         make_table(small_grid).save(tmp_path / "nope" / "t.h5")
+
+
+@pytest.mark.parametrize("compression", ["bogus", "lzf", 4, True])
+def test_save_with_an_unknown_compression_lists_the_valid_ones(tmp_path, small_grid, compression):
+    from cdbrdf.errors import OptionError
+
+    with pytest.raises(OptionError, match=r"^compression: .* is not one of 'gzip', None$"):
+        make_table(small_grid).save(tmp_path / "t.h5", compression=compression)
+    assert not list(tmp_path.iterdir())
 
 
 def _write_then_edit(tmp_path, small_grid, edit):
@@ -254,8 +263,59 @@ def test_legacy_file_is_read_in_a_child_and_equal(tmp_path, rich_table, monkeypa
     assert cdbrdf.load(p) == rich_table
 
 
+def _legacy_file(tmp_path, table, monkeypatch):
+    monkeypatch.setattr(io, "_LIBVER", ("earliest", "v110"))  # superblock 0, B-tree v1: no metadata checksums
+    p = tmp_path / "old.h5"
+    table.save(p)
+    monkeypatch.undo()
+    assert io.superblock_version(p) == 0
+    return p
+
+
+@pytest.mark.parametrize("damage", ["address", "record", "size"])
+def test_damaged_chunk_index_of_a_legacy_file_is_a_format_error(tmp_path, rich_table, monkeypatch, damage):
+    """A zeroed B-tree record made HDF5 read whole chunks as the fill value (0): silently changed values."""
+    import struct
+
+    p = _legacy_file(tmp_path, rich_table, monkeypatch)
+    with h5py.File(p, "r") as f:
+        ci = f["reflectance"].id.get_chunk_info(1)
+    b = bytearray(p.read_bytes())
+    addr = struct.pack("<Q", ci.byte_offset)
+    i = b.find(addr)
+    while i >= 0 and b[i - 64 : i - 60] != struct.pack("<I", ci.size):  # the child address after its key
+        i = b.find(addr, i + 1)
+    assert i > 0
+    if damage == "address":
+        b[i : i + 8] = bytes(8)
+    elif damage == "record":
+        b[i - 64 : i + 8] = bytes(72)  # key (size, filter mask, offsets) and address
+    else:
+        b[i - 64 : i - 60] = bytes(4)
+    p.write_bytes(bytes(b))
+    with pytest.raises(FormatError, match=r"old\.h5: .*'reflectance'"):
+        cdbrdf.load(p)
+
+
+@pytest.mark.slow
+def test_no_zeroed_block_of_a_legacy_file_loads_with_other_values(tmp_path, rich_table, monkeypatch):
+    """Every 1 KiB block zeroed in turn: each load is refused or equal to the original, never different."""
+    p = _legacy_file(tmp_path, rich_table, monkeypatch)
+    data = p.read_bytes()
+    q = tmp_path / "z.h5"
+    for off in range(0, len(data), 1024):
+        b = bytearray(data)
+        b[off : off + 1024] = bytes(len(b[off : off + 1024]))
+        q.write_bytes(bytes(b))
+        try:
+            t = cdbrdf.load(q)
+        except cdbrdf.CDBRDFError:
+            continue
+        assert t == rich_table, f"zeroed bytes {off}..{off + 1023} loaded with other values"
+
+
 def test_xarray_reads_written_files(tmp_path, rich_table):
-    xr = pytest.importorskip("xarray")
+    import xarray as xr
     p = tmp_path / "t.h5"
     rich_table.save(p)
     with xr.open_dataset(p, engine="h5netcdf") as ds:
@@ -415,3 +475,21 @@ def test_booleans_and_big_integers_in_attrs_round_trip(tmp_path, small_grid):
     with h5py.File(p, "r") as f:
         assert f.attrs["calibrated"] in ("true", b"true")
         assert np.asarray(f.attrs["n"]).item() == -5
+
+
+def test_load_of_something_that_is_not_a_file_name_or_not_a_regular_file(tmp_path):
+    import os
+
+    from cdbrdf.errors import OptionError
+
+    for bad in (None, 3, ["t.h5"]):
+        with pytest.raises(OptionError, match="path: expected a file name"):
+            cdbrdf.load(bad)
+    fifo = tmp_path / "t.h5"
+    os.mkfifo(fifo)  # reading it would block forever
+    with pytest.raises(FormatError, match=r"t\.h5: is not a regular file"):
+        cdbrdf.load(fifo)
+    dev = tmp_path / "zero.h5"
+    dev.symlink_to("/dev/zero")
+    with pytest.raises(FormatError, match=r"zero\.h5: is not a regular file"):
+        cdbrdf.load(dev)

@@ -17,9 +17,14 @@ def tables():
 
 
 def test_names_and_unknown():
+    from cdbrdf.errors import OptionError
+
     assert materials.names() == ["denim", "shot"]
-    with pytest.raises(ValueError, match="unknown material 'velvet'; valid names: denim, shot"):
-        materials.load("velvet")
+    for bad in ("velvet", None, 3, ["denim"]):
+        with pytest.raises(OptionError, match=r"material .*: unknown; valid names: denim, shot"):
+            materials.load(bad)
+        with pytest.raises(OptionError):
+            materials.path(bad)
 
 
 @pytest.mark.parametrize("name", ["denim", "shot"])

@@ -54,7 +54,7 @@ def test_uneven_azimuths_are_refused(tmp_path):
 
 # --------------------------------------------------------------------------- capture table hardening
 def _stray(rows, **edit):
-    r = dict(rows[0], **edit)
+    r = dict(rows[0], file="s/stray.exr", **edit)
     rows.insert(5, r)
     return rows
 
@@ -238,3 +238,210 @@ def test_read_rows_keeps_the_text(tmp_path):
 def test_row_kind():
     assert row_kind({}) == row_kind({"kind": ""}) == row_kind({"kind": " "}) == "sample"
     assert row_kind({"kind": " White "}) == "white" and row_kind({"kind": None}) == "sample"
+
+
+# --------------------------------------------------------------------------- file names, duplicates, plans
+@pytest.mark.parametrize("name, why", [
+    ("../victim.png", "has a '..' component"),
+    ("k0/../../victim.png", "has a '..' component"),
+    ("..\\victim.png", "has a '..' component"),
+    ("/tmp/victim.png", "is an absolute path"),
+    ("C:\\photos\\a.png", "is an absolute path"),
+    ("C:a.png", "is an absolute path"),
+    ("\\\\server\\share\\a.png", "is an absolute path"),
+    ("k0/a.png/", "names a folder, not a file"),
+    ("k0/.", "names a folder, not a file"),
+])
+def test_file_outside_the_capture_folder_is_refused(tmp_path, name, why):
+    rows = make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    rows[3]["file"] = name
+    write_csv(tmp_path / "capture.csv", rows)
+    with pytest.raises(CaptureError, match=rf"capture.csv: line 5: .*{why}"):
+        read_capture(tmp_path)
+
+
+def test_relative_names_inside_the_folder_are_kept(tmp_path):
+    rows = make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    (tmp_path / "s" / "0_0_0_0_1.exr").rename(tmp_path / "s" / "a b..exr")
+    rows[1]["file"] = "./s/a b..exr"  # '.' components and dots inside a name are fine
+    write_csv(tmp_path / "capture.csv", rows)
+    cap = read_capture(tmp_path)
+    assert cap.rows[1].file == "./s/a b..exr"
+    table, _ = measure(tmp_path)
+    assert table.measured.all()
+
+
+@pytest.mark.parametrize("second", ["s/0_0_0_0_0.exr", "s/./0_0_0_0_0.exr", "s//0_0_0_0_0.exr",
+                                    " s/0_0_0_0_0.exr"])
+def test_two_rows_naming_one_photograph_are_refused(tmp_path, second):
+    """Two conditions photographed by one file would silently get the same value."""
+    rows = make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    assert rows[0]["file"] == "s/0_0_0_0_0.exr"
+    rows[2]["file"] = second
+    write_csv(tmp_path / "capture.csv", rows)
+    with pytest.raises(CaptureError, match=r"capture.csv: line 4: file '.*0_0_0_0_0.exr' is also the file of line 2"):
+        read_capture(tmp_path)
+    with pytest.raises(CaptureError, match="is also the file of line 2"):
+        measure(tmp_path)
+
+
+def _plan(tmp_path, edit=None):
+    """A small plan written by write_plan, its third line replaced by ``edit``."""
+    write_plan(tmp_path / "plan", Grid(kappa=[0.0], theta_l=[0.0, 40.0], phi_l=[0.0, 120.0, 240.0],
+                                       theta_v=[0.0, 40.0], phi_v=[0.0, 120.0, 240.0]), [Stand(0.0)])
+    p = tmp_path / "plan" / "capture.csv"
+    if edit is not None:
+        lines = p.read_text().splitlines()
+        lines[2] = edit
+        p.write_text("\n".join(lines) + "\n")
+    return p
+
+
+PLAN_ROWS = [
+    ("k0/a.png,0,95,0,0,0,1,sample,", r"theta_v = 95 is outside \[0, 90\)"),
+    ("k0/a.png,0,nan,0,0,0,1,sample,", "column 'theta_v': 'nan' is not finite"),
+    ("k0/a.png,0,40,0,-5,0,1,sample,", r"theta_l = -5 is outside \[0, 90\)"),
+    ("k0/a.png,0,40,0,0,0,0,sample,", "exposure must be positive"),
+    ("k0/a.png,0,40,0,0,0,-1,sample,", "exposure must be positive"),
+    ("k0/a.png,0,40,0,0,0,1e308,sample,", r"exposure 1e\+308 is outside"),
+    ("k0/a.png,0,40,0,0,0,1,bogus,", "kind 'bogus' is not one of"),
+    ("k0/a.png,0,41,0,0,0,1,sample,", "theta_v = 41 is used by 1 sample condition"),
+    ("../victim.png,0,40,0,0,0,1,sample,", "has a '..' component"),
+    ("/tmp/victim.png,0,40,0,0,0,1,sample,", "is an absolute path"),
+    ("k0/l0_0_v0_0.png,0,40,0,0,0,1,sample,", "is also the file of line 2"),
+    ("k0/a.png,0,40,0,0,0,1,sample,,extra", "more fields than columns"),
+]
+
+
+@pytest.mark.parametrize("row, msg", PLAN_ROWS, ids=[r for r, _ in PLAN_ROWS])
+def test_read_plan_applies_the_capture_rules(tmp_path, row, msg):
+    from cdbrdf.measure.capture import read_plan
+
+    p = _plan(tmp_path, row)
+    with pytest.raises(CaptureError, match=rf"plan/capture.csv: line 3: .*{msg}"):
+        read_plan(p)
+
+
+def test_read_plan_of_a_good_plan(tmp_path):
+    from cdbrdf.measure.capture import read_plan
+
+    plan = read_plan(_plan(tmp_path))
+    assert plan.columns == list(PLAN_COLUMNS) and len(plan.rows) == len(plan.records) == 36 + 6
+    assert plan.grid.shape == (1, 3, 2, 3, 2) and list(plan.stands) == [0.0]
+    assert plan.records[0]["file"] == plan.rows[0].file == "k0/l0_0_v0_0.png"
+    assert [r.kind for r in plan.rows].count("white") == 6
+
+
+def test_write_rows_refuses_names_a_capture_cannot_have(tmp_path):
+    from cdbrdf.measure.capture import write_rows
+
+    good = dict(file="k0/a.png", kappa="0", theta_v="0", phi_v="0", theta_l="0", phi_l="0")
+    for bad, msg in ((dict(good, file="../a.png"), "line 3: .*'..' component"),
+                     (dict(good), "line 3: file 'k0/a.png' is also the file of line 2"),
+                     (dict(good, file=""), "line 3: column 'file' is empty")):
+        with pytest.raises(CaptureError, match=msg):
+            write_rows(tmp_path / "capture.csv", [good, bad])
+        assert not (tmp_path / "capture.csv").exists()
+
+
+# --------------------------------------------------------------------------- inputs that are not regular files; keys
+@pytest.mark.parametrize("name", ["capture.csv", "stands.json"])
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero"])
+def test_capture_inputs_that_are_not_regular_files_are_refused(tmp_path, capsys, name, kind):
+    import os
+
+    from .test_measure_stands import unblocking
+
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9, settings={"white_albedo": 0.9})
+    p = tmp_path / "cap" / name
+    p.unlink()
+    if kind == "fifo":
+        os.mkfifo(p)
+    else:
+        p.symlink_to(kind)
+    what = "FIFO" if kind == "fifo" else "character device"
+    with unblocking(p):
+        with pytest.raises(CaptureError, match=rf"{name}: not a regular file \(a {what}\)"):
+            read_capture(tmp_path / "cap")
+        assert main(["-q", "measure", str(tmp_path / "cap"), "-o", str(tmp_path / "m.h5")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{name}: not a regular file" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
+
+
+def test_capture_csv_size_limit(tmp_path, monkeypatch):
+    from cdbrdf.errors import LimitError
+
+    make_capture(tmp_path, SMALL, pixel, kind="exr", size=9)
+    size = (tmp_path / "capture.csv").stat().st_size
+    monkeypatch.setenv("CDBRDF_MAX_CSV_BYTES", str(size - 1))
+    with pytest.raises(LimitError, match=rf"capture.csv: CSV file: {size:,} bytes exceed the limit .*MAX_CSV_BYTES"):
+        read_capture(tmp_path)
+    monkeypatch.setenv("CDBRDF_MAX_CSV_BYTES", str(size))
+    read_capture(tmp_path)
+
+
+def test_unknown_stands_json_key_is_refused(tmp_path, capsys):
+    """A typo (white_albdeo) was ignored, giving values 1/albedo off with exit status 0."""
+    from cdbrdf.measure.capture import STAND_FILE_KEYS
+
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9, settings={"white_albdeo": 0.5})
+    with pytest.raises(CaptureError, match=r"stands.json: unknown key 'white_albdeo'; valid keys are stands, grid, "
+                                           r"white_albedo, pixel_mm, encoding, material, simulated"):
+        read_capture(tmp_path / "cap")
+    assert main(["-q", "measure", str(tmp_path / "cap"), "-o", str(tmp_path / "m.h5")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "white_albdeo" in err
+    assert not (tmp_path / "m.h5").exists()
+    # every documented key is accepted
+    doc = {"grid": None, "white_albedo": 0.5, "pixel_mm": 0.0, "encoding": "linear", "material": "felt",
+           "simulated": True}
+    assert set(doc) | {"stands"} == set(STAND_FILE_KEYS)
+    doc.pop("grid")
+    make_capture(tmp_path / "ok", SMALL, pixel, kind="exr", size=9, settings=doc,
+                 stands=[{"kappa": 0.0}, {"kappa": 0.2}])
+    assert read_capture(tmp_path / "ok").settings["white_albedo"] == 0.5
+
+
+def test_simulated_setting_must_be_a_boolean(tmp_path):
+    make_capture(tmp_path, SMALL, pixel, kind="exr", size=9, settings={"simulated": "yes"})
+    with pytest.raises(CaptureError, match="simulated: expected true or false"):
+        read_capture(tmp_path)
+
+
+@pytest.mark.parametrize("name", ["capture.csv", "stands.json"])
+def test_plan_never_writes_into_a_fifo(tmp_path, capsys, name):
+    """The plan's files are written atomically: a FIFO in their place is refused (writing it blocked)."""
+    import os
+    import stat
+    import threading
+
+    out = tmp_path / "plan"
+    out.mkdir()
+    fifo = out / name
+    os.mkfifo(fifo)
+    stop = threading.Event()
+
+    def drain():  # feeds a writer that blocked on the FIFO (the old behaviour), so the test fails, never hangs
+        if stop.wait(5):
+            return
+        fd = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
+        while not stop.wait(0.1):
+            try:
+                os.read(fd, 1 << 16)
+            except BlockingIOError:
+                pass
+        os.close(fd)
+
+    t = threading.Thread(target=drain, daemon=True)
+    t.start()
+    try:
+        rc = main(["-q", "plan", "-o", str(out), "--kappa", "0", "--theta-step", "40", "--theta-max", "40",
+                   "--phi-step", "120", "--force"])
+    finally:
+        stop.set()
+        t.join()
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{name}: exists and is not a regular file (a FIFO)" in err
+    assert stat.S_ISFIFO(fifo.lstat().st_mode) and sorted(p.name for p in out.iterdir()) == [name]

@@ -8,7 +8,6 @@ import pytest
 import cdbrdf
 from cdbrdf.cli import main
 from cdbrdf.measure import MeasurementInterrupted, measure
-from cdbrdf.measure.capture import read_capture
 from cdbrdf.measure.checkpoint import checkpoint_path
 
 from .measure_helpers import (
@@ -131,24 +130,43 @@ def test_checkpoint_is_marked_and_removed(tmp_path):
     assert not ck.exists() and not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
 
 
-def test_checkpoint_of_the_previous_version_is_adopted(tmp_path):
-    """Checkpoints written before folders carried the owner mark: key.json + batch-*.npz."""
-    import json
+@pytest.mark.parametrize("content", [{}, {"key.json": b'{"my": "settings"}'}, {"batch-00000000.npz": b"data"},
+                                     {"key.json": b"{}", "batch-00000000.npz": b"x", ".batch-abc.npz": b"y"}],
+                         ids=["empty", "key.json", "batch", "all"])
+def test_folder_without_owner_mark_is_refused_whatever_it_holds(tmp_path, capsys, content):
+    """A user's OUT.ckpt folder is never adopted as a checkpoint (nor deleted), even if its names look like one."""
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9)
+    out = tmp_path / "out.h5"
+    ck = checkpoint_path(out)
+    ck.mkdir()
+    for name, data in content.items():
+        (ck / name).write_bytes(data)
+    with pytest.raises(FileExistsError, match=r"out.h5.ckpt: exists and is not a checkpoint made by cdbrdf "
+                                              r"measure \(it has no \.cdbrdf-owned mark\)"):
+        measure(tmp_path / "cap", out)
+    assert main(["-q", "measure", str(tmp_path / "cap"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "out.h5.ckpt" in err and "move it away" in err
+    assert {p.name: p.read_bytes() for p in ck.iterdir()} == content
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap", "out.h5.ckpt"]
 
-    from cdbrdf.fsutil import OWNER_MARK
+
+def test_half_removed_checkpoint_of_a_killed_run_is_swept(tmp_path):
+    """remove_owned renames before deleting: a dead run's ``.out.h5.ckpt.<pid>...old`` goes, marker or not."""
+    import subprocess
+    import sys
+
+    from cdbrdf.fsutil import OWNER_MARK, temp_sibling
 
     out, ck = _interrupted(tmp_path, after=16)
-    ref, _ = measure(tmp_path / "cap")
-    cap = read_capture(tmp_path / "cap")
-    (ck / OWNER_MARK).unlink()
-    # the previous version's key also hashed skip_bad
-    doc = {"capture": cap.digest, "patch": 7, "linear": False, "skip_bad": False, "needed": len(cap.rows)}
-    key = __import__("hashlib").sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
-    (ck / "key.json").write_text(json.dumps({"key": key, "version": 1}))
-    (ck / ".batch-abc123.npz").write_bytes(b"half")  # a temporary of the previous version
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    old = temp_sibling(ck, "old")
+    old = old.with_name(old.name.replace(f".{__import__('os').getpid()}.", f".{int(dead.stdout)}.", 1))
+    ck.rename(old)
+    (old / OWNER_MARK).unlink()
     table, rep = measure(tmp_path / "cap", out)
-    assert rep.n_images_resumed == 16 and not ck.exists()
-    same_tables(table, ref)
+    assert rep.n_images_resumed == 0 and out.exists() and not old.exists() and not ck.exists()
 
 
 # --------------------------------------------------------------------------- damaged batches
@@ -273,7 +291,8 @@ def test_killed_while_writing_the_output_leaves_nothing_behind(tmp_path):
     sabotage = (
         "real = os.fsync\n"
         "def fsync(fd):\n"
-        "    if os.readlink(f'/proc/self/fd/{fd}').endswith('.tmp') and '.out.h5.' in os.readlink(f'/proc/self/fd/{fd}'):\n"
+        "    name = os.path.basename(os.readlink(f'/proc/self/fd/{fd}'))\n"
+        "    if name.startswith('.out.h5.') and name.endswith('.tmp') and '.ckpt.' not in name:\n"
         "        die()\n"
         "    real(fd)\n"
         "os.fsync = fsync\n"
@@ -310,12 +329,17 @@ def test_killed_while_removing_the_checkpoint(tmp_path):
     assert out.exists() and _dotfiles(tmp_path) == []
 
 
-def test_killed_while_removing_a_checkpoint_of_the_previous_version(tmp_path):
-    """The previous version deleted the folder in place: a half-deleted one is recognised and replaced."""
-    out, ck = _interrupted(tmp_path, after=16)
-    from cdbrdf.fsutil import OWNER_MARK
+def test_killed_while_creating_the_checkpoint_does_not_block_the_rerun(tmp_path):
+    """The folder is made under a temporary name and renamed once marked: never an unmarked OUT.ckpt."""
+    import signal
 
-    (ck / OWNER_MARK).unlink()
-    (ck / "key.json").unlink()
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9)
+    out = tmp_path / "out.h5"
+    sabotage = (
+        "import cdbrdf.measure.checkpoint as ck\n"
+        "ck.mark_owned = lambda *a, **k: die()\n"  # killed between mkdir and the marker
+    )
+    assert _run_killed(tmp_path, sabotage, out) == -signal.SIGKILL
+    assert not checkpoint_path(out).exists() and [n for n in _dotfiles(tmp_path) if n.endswith(".partial")]
     table, rep = measure(tmp_path / "cap", out)
-    assert rep.n_images_resumed == 0 and out.exists() and not ck.exists()
+    assert out.exists() and not checkpoint_path(out).exists() and _dotfiles(tmp_path) == []

@@ -24,7 +24,7 @@ from .measure_helpers import (
 
 
 def test_local_cluster_same_table(tmp_path):
-    distributed = pytest.importorskip("distributed")
+    import distributed
     make_capture(tmp_path, GRID, pixel, kind="png16", white=WHITE)
     ref, _ = measure(tmp_path)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
@@ -103,3 +103,121 @@ def test_cli_force_replaces_an_earlier_output(tmp_path, capsys):
     assert "already exists" in capsys.readouterr().err and out.read_bytes() == b"old"
     assert main(["-q", "measure", str(tmp_path / "cap"), "-o", str(out), "--force"]) == 0
     assert cdbrdf.load(out).measured.all()
+
+
+# --------------------------------------------------------------------------- refused before any work
+def _no_work(tmp_path, cap, call):
+    """``call(progress)`` must fail before any photograph is read and leave nothing beside the capture."""
+    seen = []
+    before = sorted(p.name for p in tmp_path.iterdir())
+    call(lambda done, total: seen.append(done))
+    assert seen == [] and sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+@pytest.mark.parametrize("name", ["sub", "", ".", "sub/"])
+def test_output_that_is_a_folder_is_refused_before_any_work(tmp_path, monkeypatch, capsys, name):
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9)
+    (tmp_path / "sub").mkdir()
+    monkeypatch.chdir(tmp_path)
+
+    def call(progress):
+        with pytest.raises(IsADirectoryError):
+            measure("cap", name, progress=progress)
+        assert main(["-q", "measure", "cap", "-o", name, "--force"]) == 2
+
+    _no_work(tmp_path, "cap", call)
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "give a file name" in err
+    assert list((tmp_path / "sub").iterdir()) == []  # no sub/..ckpt, no sub.ckpt
+
+
+def test_output_that_is_a_device_or_fifo_is_never_replaced(tmp_path, capsys):
+    import os
+    import stat
+
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9)
+    fifo, dev = tmp_path / "fifo", tmp_path / "null"
+    os.mkfifo(fifo)
+    dev.symlink_to(os.devnull)
+    for p in (fifo, dev):
+        def call(progress, p=p):
+            with pytest.raises(FileExistsError, match="not a regular file"):
+                measure(tmp_path / "cap", p, progress=progress)
+            assert main(["-q", "measure", str(tmp_path / "cap"), "-o", str(p), "--force"]) == 2
+
+        _no_work(tmp_path, "cap", call)
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "is not a regular file" in err
+    assert stat.S_ISFIFO(fifo.lstat().st_mode) and dev.is_symlink() and stat.S_ISCHR(os.stat(os.devnull).st_mode)
+
+
+BAD_OPTIONS = [
+    ({"scheduler": "bogus"}, "scheduler: 'bogus' is neither"),
+    ({"scheduler": 3}, "scheduler: 3 is neither"),
+    ({"scheduler": ""}, "scheduler"),
+    ({"patch": 0}, "patch: expected a positive whole number"),
+    ({"patch": "a"}, "patch"),
+    ({"patch": 7.5}, "patch"),
+    ({"patch": True}, "patch"),
+    ({"batch_size": 0}, "batch_size"),
+    ({"num_workers": 0}, "num_workers"),
+    ({"num_workers": "2"}, "num_workers"),
+    ({"white_albedo": -1}, r"white_albedo: expected a number in \(0, 1.5\]"),
+    ({"white_albedo": float("nan")}, "white_albedo"),
+    ({"white_albedo": "0.5"}, "white_albedo"),
+    ({"material": ""}, "material"),
+    ({"material": 5}, "material"),
+    ({"progress": 5}, "progress"),
+]
+
+
+@pytest.mark.parametrize("kw, match", BAD_OPTIONS, ids=[str(k) for k, _ in BAD_OPTIONS])
+def test_bad_option_is_an_option_error_before_anything_is_created(tmp_path, kw, match):
+    from cdbrdf.errors import OptionError
+
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(OptionError, match=match):
+        measure(tmp_path / "cap", tmp_path / "m.h5", **kw)
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_cli_bad_scheduler_leaves_no_checkpoint(tmp_path, capsys):
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9)
+    assert main(["-q", "measure", str(tmp_path / "cap"), "-o", str(tmp_path / "m.h5"), "--scheduler", "bogus"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "scheduler: 'bogus'" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
+
+
+def test_unreachable_scheduler_fails_before_the_checkpoint_is_created(tmp_path, monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9)
+
+    def unreachable(address, **kw):
+        assert not (tmp_path / "m.h5.ckpt").exists()  # not created before the connection
+        raise OSError(f"Timed out trying to connect to {address} after 10 s")
+
+    monkeypatch.setattr(distributed, "Client", unreachable)
+    with pytest.raises(OSError, match=r"scheduler tcp://127.0.0.1:9: cannot connect \(Timed out"):
+        measure(tmp_path / "cap", tmp_path / "m.h5", scheduler="tcp://127.0.0.1:9")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
+
+
+def test_failure_before_the_first_batch_removes_the_new_checkpoint(tmp_path, monkeypatch):
+    """A checkpoint this run created and saved nothing in is removed again; one with batches is kept."""
+    from cdbrdf.measure import pipeline
+
+    make_capture(tmp_path / "cap", GRID, pixel, kind="png16", white=WHITE)
+
+    def broken(*a, **k):
+        raise RuntimeError("worker lost")
+
+    monkeypatch.setattr(pipeline, "_compute", broken)
+    with pytest.raises(RuntimeError, match="worker lost"):
+        measure(tmp_path / "cap", tmp_path / "m.h5")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
+    monkeypatch.undo()
+    with pytest.raises(pipeline.MeasurementInterrupted):
+        measure(tmp_path / "cap", tmp_path / "m.h5", batch_size=8, _interrupt_after=8)
+    assert (tmp_path / "m.h5.ckpt").is_dir()

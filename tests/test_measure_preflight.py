@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from cdbrdf.cli import main
+from cdbrdf.images import ImageError
 from cdbrdf.measure import CaptureError, measure
 from cdbrdf.measure.checkpoint import checkpoint_path
-from cdbrdf.images import ImageError
 from cdbrdf.measure.preflight import UnusablePhotographs
 
 from .measure_helpers import (

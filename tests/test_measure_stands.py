@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 
@@ -138,3 +139,81 @@ def test_read_stands_encoding_and_size_limit(tmp_path, monkeypatch):
     monkeypatch.setenv("CDBRDF_MAX_JSON_BYTES", "4096")
     with pytest.raises(LimitError, match="CDBRDF_MAX_JSON_BYTES"):
         read_stands(p)
+
+
+@contextlib.contextmanager
+def unblocking(fifo, after_s=5.0):
+    """While inside: after ``after_s``, feed any reader that blocked on ``fifo``, so that it fails, never hangs."""
+    import os
+    import threading
+
+    stop = threading.Event()
+
+    def writer():
+        if stop.wait(after_s):
+            return
+        while not stop.is_set():
+            try:
+                fd = os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
+            except OSError:  # no reader now
+                stop.wait(0.2)
+                continue
+            try:
+                os.write(fd, b'{"stands": [{"kappa": 0.1}]}')
+            except OSError:
+                pass
+            os.close(fd)
+
+    t = threading.Thread(target=writer, daemon=True)
+    t.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        t.join()
+
+
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero", "folder"])
+def test_json_that_is_not_a_regular_file_is_refused_at_once(tmp_path, kind):
+    """A FIFO blocked the reader forever, /dev/zero read until memory ran out."""
+    import os
+    import time
+
+    from cdbrdf.errors import CaptureError
+    from cdbrdf.measure.stands import load_json_object
+
+    p = tmp_path / "stands.json"
+    if kind == "fifo":
+        os.mkfifo(p)
+    elif kind == "folder":
+        p.mkdir()
+    else:
+        p.symlink_to(kind)
+    t0 = time.monotonic()
+    with unblocking(p), pytest.raises(CaptureError, match=r"stands.json: not a regular file \(a (FIFO|character "
+                                                           r"device|folder)\)"):
+        load_json_object(p)
+    assert time.monotonic() - t0 < 2
+
+
+def test_json_is_read_with_a_bounded_read(tmp_path, monkeypatch):
+    """At most the limit + 1 bytes are read, whatever the file's size says (a file that grows)."""
+    from cdbrdf import fsutil
+    from cdbrdf.errors import LimitError
+    from cdbrdf.measure import stands
+
+    p = tmp_path / "stands.json"
+    p.write_text(json.dumps({"stands": [{"kappa": 0.1}], "pad": "x" * 5000}))
+    asked = []
+    real = fsutil.read_regular
+
+    def spy(path, *, max_bytes):
+        asked.append(max_bytes)
+        return real(path, max_bytes=max_bytes)
+
+    monkeypatch.setattr(stands, "read_regular", spy)
+    monkeypatch.setenv("CDBRDF_MAX_JSON_BYTES", "100")
+    with pytest.raises(LimitError, match=r"stands.json: JSON file: 5,\d+ bytes exceed the limit of 100 "
+                                         r"\(raise it with CDBRDF_MAX_JSON_BYTES\)"):
+        read_stands(p)
+    assert asked == [100]

@@ -7,6 +7,8 @@ so a wrong libLLVM cannot abort pytest).
 
 from __future__ import annotations
 
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 import pytest
 
@@ -14,9 +16,6 @@ import cdbrdf
 from cdbrdf.frames import angles_from_direction
 from cdbrdf.render import _llvm
 from cdbrdf.render._llvm import LLVMError, LLVMInfo, check_llvm, find_llvm
-
-mi = pytest.importorskip("mitsuba")
-dr = pytest.importorskip("drjit")
 
 _INFO = find_llvm()
 needs_llvm = pytest.mark.skipif(not _INFO.ok, reason=_llvm.llvm_message(_INFO))
@@ -317,7 +316,7 @@ def test_convex_and_concave_patches_pick_the_right_kappa(variant, tmp_path, conv
     radius = 1 / 0.13
     path = tmp_path / "cyl.ply"
     write_ply(path, cylinder_mesh(radius, convex))
-    scene = mesh_scene(kappa_table(), path, size=(33, 33), spp=4, max_depth=2,
+    scene = mesh_scene(kappa_table(), path, size=(33, 33), spp=4, max_depth=2, lighting="paper",
                        light=(0.0, 0.0, np.pi), elevation_deg=89.0, azimuth_deg=-90.0, fov_deg=10.0)
     img = render_scene(scene)
     centre = img[14:19, 14:19].mean(axis=(0, 1))
@@ -336,7 +335,7 @@ def test_mesh_without_uv_is_refused(variant, tmp_path):
     path = tmp_path / "nouv.ply"
     write_ply(path, m)
     with pytest.raises(ValueError, match="no UV coordinates"):
-        prepare_mesh(path)
+        prepare_mesh(path, frame="uv")
     with pytest.raises(ValueError, match="UV coordinates.*no anisotropy frame"):
         variant.load_dict({
             "type": "scene",
@@ -470,12 +469,12 @@ def test_mesh_scene_with_environment_map(variant, tmp_path):
     g = cdbrdf.Grid.paper()
     albedo = 0.6
     table = cdbrdf.CDBRDF(np.full(g.shape + (3,), albedo / np.pi), **g.axes())
-    img = render_scene(mesh_scene(table, path, light=None, envmap=env, size=(17, 17), spp=64,
+    img = render_scene(mesh_scene(table, path, lighting="paper", light=None, envmap=env, size=(17, 17), spp=64,
                                   max_depth=2, elevation_deg=89.0, fov_deg=10.0))
     # Lambertian under a uniform unit sky, direct light only, at the apex: radiance = albedo.
     assert img[7:10, 7:10].mean() == pytest.approx(albedo, rel=0.1)
     with pytest.raises(ValueError, match="needs a light"):
-        mesh_scene(table, path, light=None, envmap=None)
+        mesh_scene(table, path, lighting="paper", light=None, envmap=None)
 
 
 def test_render_command_reports_missing_llvm_before_rendering(tmp_path):
@@ -512,17 +511,21 @@ def test_render_command_with_uv_mapped_obj(variant, tmp_path):
     path = tmp_path / "k.h5"
     kappa_table().save(path)
     exr = tmp_path / "c.exr"
-    assert main(["-q", "render", str(path), "--mesh", str(obj), "--size", "33x33", "--spp", "4",
-                 "--light", "0,0", "--view", "89,-90", "--max-depth", "2", "-o", str(exr)]) == 0
+    assert main(["-q", "render", str(path), "--mesh", str(obj), "--size", "33x33", "--spp", "4", "--up", "z",
+                 "--lighting", "paper", "--light", "0,0", "--view", "89,-90", "--max-depth", "2",
+                 "-o", str(exr)]) == 0
     img = np.array(mi.Bitmap(str(exr)))[..., :3]
     # default irradiance pi, normal light at the apex: radiance = pi * (0.5 + 0.13)
     assert img[15:18, 15:18].mean() == pytest.approx(np.pi * 0.63, rel=0.05)
     nouv = tmp_path / "nouv.obj"
     nouv.write_text("\n".join([ln for ln in lines if ln.startswith("v ")]
                               + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in m.faces]) + "\n")
-    assert main(["-q", "render", str(path), "--mesh", str(nouv), "--size", "8x8", "--spp", "1",
+    # without UVs: refused with the UV frame, rendered with the principal-direction frame
+    assert main(["-q", "render", str(path), "--mesh", str(nouv), "--size", "8x8", "--spp", "1", "--frame", "uv",
                  "-o", str(tmp_path / "n.exr")]) == 2
     assert not (tmp_path / "n.exr").exists()
+    assert main(["-q", "render", str(path), "--mesh", str(nouv), "--size", "8x8", "--spp", "1",
+                 "-o", str(tmp_path / "n.exr")]) == 0
 
 
 def _other_libllvm():
@@ -598,3 +601,43 @@ def test_values_beyond_float32_range_are_refused(variant, channels, peak):
         variant.make_bsdf(cdbrdf.CDBRDF(v, **g.axes()))
     v[0, 0, 1, 0, 1, 0] = 1e29  # within range: accepted
     variant.make_bsdf(cdbrdf.CDBRDF(v, **g.axes()))
+
+
+@pytest.mark.parametrize("args, match", [
+    ((95.0,), r"light theta: elevation must lie in \[0, 90\) degrees, got 95"),
+    ((float("nan"),), "light theta: expected a finite number, got nan"),
+    ((-1.0,), "light theta: elevation must lie in"),
+    (("45",), "light theta: expected a finite number, got '45'"),
+    ((45.0, float("inf")), "light phi: expected a finite number"),
+    ((45.0, 0.0, 0.0), "irradiance: must be positive, got 0"),
+    ((45.0, 0.0, float("nan")), "irradiance: expected a finite number"),
+    ((45.0, None), "light phi: expected a finite number, got None"),
+])
+def test_directional_light_bad_values_are_option_errors(args, match):
+    from cdbrdf.errors import OptionError
+    from cdbrdf.render.scenes import directional_light
+
+    with pytest.raises(OptionError, match=match):
+        directional_light(*args)
+    d = directional_light(np.float32(30.0), 90, 2)
+    assert d["irradiance"]["value"] == 2.0 and d["direction"][2] == pytest.approx(-np.cos(np.radians(30)))
+
+
+@needs_llvm
+@pytest.mark.parametrize("extra, match", [
+    (["--light", "95,0"], r"light theta: elevation must lie in \[0, 90\)"),
+    (["--no-light"], "needs a light"),
+    (["--no-light", "--light", "95,0"], "needs a light"),
+])
+def test_render_bad_light_is_the_only_line(tmp_path, capsys, extra, match):
+    """No progress bar (or anything else) is drawn before the error (without -q)."""
+    from cdbrdf.cli import main
+
+    path = tmp_path / "t.h5"
+    analytic_table().save(path)
+    out = tmp_path / "a.png"
+    assert main(["render", str(path), "--scene", "sine", "-o", str(out), "--size", "16x12", "--spp", "1",
+                 *extra]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err.count("\n") == 1 and cap.err.startswith("cdbrdf render: error: ")
+    assert __import__("re").search(match, cap.err) and not out.exists()

@@ -61,9 +61,9 @@ def write_scene(folder, *, shape_extra="", bsdf_extra="", unit_comment=None, wra
     folder.mkdir(parents=True, exist_ok=True)
     kappa_table().save(folder / "kappa.h5")
     write_ply(folder / "cyl.ply", mesh or cylinder())
-    if unit_comment is not None:
+    if unit_comment is not None:  # the unit as cdbrdf curvature records it: comment cdbrdf units 2
         raw = (folder / "cyl.ply").read_bytes()
-        raw = raw.replace(b"comment written by cdbrdf", f"comment cdbrdf unit_mm={unit_comment}".encode(), 1)
+        raw = raw.replace(b"end_header", f"comment cdbrdf units {unit_comment:g}\nend_header".encode(), 1)
         (folder / "cyl.ply").write_bytes(raw)
     bsdf = f'<bsdf type="cdbrdf"><string name="filename" value="kappa.h5"/>{bsdf_extra}</bsdf>'
     if wrap:

@@ -23,12 +23,10 @@ import numpy as np
 import pytest
 
 import cdbrdf
-from cdbrdf import CDBRDF, Grid
+from cdbrdf import CDBRDF, Grid, render
 from cdbrdf.cli import main
 from cdbrdf.measure import Stand, hidden_mask, measure
 
-pytest.importorskip("mitsuba")
-render = pytest.importorskip("cdbrdf.render")
 try:
     render.check_llvm()
 except Exception as exc:  # noqa: BLE001 - no usable LLVM: the rig cannot run here
@@ -252,7 +250,7 @@ def test_noise_model_parse():
 
 def test_preset_denim_end_to_end(tmp_path):
     """The issue's 'done when' on a reduced grid: the denim preset, simulated and measured back."""
-    materials = pytest.importorskip("cdbrdf.materials")
+    from cdbrdf import materials
     mat = materials.load("denim")
     simulate_capture(mat, tmp_path / "cap", grid=CAPTURE_GRID, size=32, field_mm=2.0,
                      noise=NOISE, gain=GAIN, white_albedo=ALBEDO)
@@ -312,11 +310,29 @@ def test_simulate_capture_replaces_an_earlier_capture_whole(tmp_path):
     cap = tmp_path / "cap"
     rep = _tiny(cap)
     assert rep.folder == cap and (cap / "capture.csv").is_file()
-    (cap / "stale.png").write_bytes(b"from the first run")
+    first = {str(p.relative_to(cap)) for p in cap.rglob("*.png")}
     _tiny(cap, exposures=(1.0, 0.5))
-    names = {p.name for p in cap.rglob("*")}
-    assert "stale.png" not in names and any("_e1." in n for n in names)
+    names = {str(p.relative_to(cap)) for p in cap.rglob("*.png")}
+    assert not names & first and any("_e1." in n for n in names)  # nothing of the first run mixed in
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]  # no partial folder left
+
+
+def test_resimulating_refuses_a_capture_holding_files_the_rig_did_not_write(tmp_path, capsys):
+    """A table measured into a simulated capture, or the user's notes, were deleted without a word."""
+    cap = tmp_path / "cap"
+    _tiny(cap)
+    measure(cap, cap / "result.h5")
+    (cap / "notes.txt").write_text("my notes")
+    before = sorted(str(p.relative_to(cap)) for p in cap.rglob("*"))
+    with pytest.raises(FileExistsError, match=r"cap: holds 2 files that cdbrdf did not write there "
+                                              r"\(notes.txt, result.h5\)"):
+        _tiny(cap, seed=1)
+    assert main(["-q", "simulate-capture", "denim", "-o", str(cap), "--size", "8", "--spp", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "notes.txt, result.h5" in err and "move them away" in err
+    assert sorted(str(p.relative_to(cap)) for p in cap.rglob("*")) == before
+    assert (cap / "notes.txt").read_text() == "my notes" and cdbrdf.load(cap / "result.h5").measured.any()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
 
 
 @pytest.mark.parametrize("exc", [RuntimeError("boom"), KeyboardInterrupt()])
@@ -352,3 +368,85 @@ def test_simulate_capture_large_seed(tmp_path):
     """Seeds up to 2**32 - 1 are accepted (Mitsuba's seed is derived modulo 2**32)."""
     _tiny(tmp_path / "cap", seed=2**32 - 1)
     assert (tmp_path / "cap" / "capture.csv").is_file()
+
+
+# --------------------------------------------------------------------------- plans checked before rendering
+def _plan_with(tmp_path, edits):
+    """A plan of 36 photographs + 6 white references; ``edits``: {line number: new line}."""
+    from cdbrdf.measure.capture import write_plan
+
+    write_plan(tmp_path / "plan", Grid(kappa=[0.0], theta_l=[0.0, 40.0], phi_l=[0.0, 120.0, 240.0],
+                                       theta_v=[0.0, 40.0], phi_v=[0.0, 120.0, 240.0]), [Stand(0.0)])
+    p = tmp_path / "plan" / "capture.csv"
+    lines = p.read_text().splitlines()
+    for n, text in edits.items():
+        lines[n - 1] = text
+    p.write_text("\n".join(lines) + "\n")
+    return p
+
+
+BAD_PLANS = [
+    ({3: "../victim.png,0,40,0,0,0,1,sample,"}, "line 3: file '../victim.png' has a '..' component"),
+    ({4: "{victim2},0,0,120,0,0,1,sample,"}, "line 4: file '.*victim2.png' is an absolute path"),
+    ({3: "k0/l0_0_v0_0.png,0,40,0,0,0,1,sample,"}, "line 3: file 'k0/l0_0_v0_0.png' is also the file of line 2"),
+    ({3: "k0/a.png,0,95,0,0,0,1,sample,"}, r"line 3: theta_v = 95 is outside \[0, 90\)"),
+    ({3: "k0/a.png,0,nan,0,0,0,1,sample,"}, "line 3: column 'theta_v': 'nan' is not finite"),
+    ({3: "k0/a.png,0,40,0,-5,0,1,sample,"}, "line 3: theta_l = -5 is outside"),
+    ({3: "k0/a.png,0,40,0,0,0,0,sample,"}, "line 3: exposure must be positive"),
+    ({3: "k0/a.png,0,40,0,0,0,1e308,sample,"}, "line 3: exposure 1e.308 is outside"),
+    ({3: "k0/a.png,0,40,0,0,0,1,bogus,"}, "line 3: kind 'bogus' is not one of"),
+    ({3: "k0/a.png,0,41,0,0,0,1,sample,"}, "line 3: theta_v = 41 is used by 1 sample condition"),
+]
+
+
+@pytest.mark.parametrize("edits, msg", BAD_PLANS, ids=[m.split(": ", 1)[1][:30] for _, m in BAD_PLANS])
+def test_bad_plan_is_refused_before_anything_is_rendered(tmp_path, monkeypatch, capsys, edits, msg):
+    import cdbrdf.rig.simulate as simulate
+
+    victim, victim2 = tmp_path / "victim.png", tmp_path / "victim2.png"
+    victim.write_text("precious user data")
+    victim2.write_text("precious")
+    plan = _plan_with(tmp_path, {n: t.format(victim2=victim2) for n, t in edits.items()})
+    rendered = []
+    monkeypatch.setattr(simulate, "write_photograph", lambda path, *a: rendered.append(path))
+    with pytest.raises(cdbrdf.errors.CaptureError, match=rf"plan/capture.csv: {msg}"):
+        _tiny(tmp_path / "out", plan=plan)
+    os_cwd = tmp_path / "run"
+    os_cwd.mkdir()
+    monkeypatch.chdir(os_cwd)
+    assert main(["-q", "simulate-capture", "denim", "-o", "out", "--plan", str(plan), "--size", "8",
+                 "--spp", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "plan/capture.csv: line" in err
+    assert rendered == [] and not (tmp_path / "out").exists() and list(os_cwd.iterdir()) == []
+    assert victim.read_text() == "precious user data" and victim2.read_text() == "precious"
+
+
+def test_plan_grid_of_stands_json_is_kept_for_the_measurement(tmp_path):
+    """A plan whose stands.json lists the grid: the capture keeps it, so measure builds that grid."""
+    import json
+
+    plan = _plan_with(tmp_path, {})
+    doc = json.loads((plan.parent / "stands.json").read_text())
+    doc["grid"] = {"kappa": [0], "theta_l": [0, 40], "phi_l": [0, 120, 240], "theta_v": [0, 40, 60],
+                   "phi_v": [0, 120, 240]}
+    (plan.parent / "stands.json").write_text(json.dumps(doc))
+    _tiny(tmp_path / "cap", plan=plan)
+    assert json.loads((tmp_path / "cap" / "stands.json").read_text())["grid"] == doc["grid"]
+    table, _ = measure(tmp_path / "cap")
+    assert list(table.theta_v) == [0, 40, 60] and not table.measured[..., 2].any()
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"image_kind": "jpeg"}, "image_kind: 'jpeg' is not one of png16"),
+    ({"size": 4}, "size: expected a whole number >= 8"),
+    ({"size": 16.0}, "size: expected a whole number"),
+    ({"spp": 0}, "spp: expected a whole number >= 1"),
+    ({"field_mm": float("nan")}, "field_mm: expected a finite positive number"),
+    ({"gain": -1}, "gain: expected a finite positive number"),
+    ({"white_albedo": 0}, "white_albedo: expected a finite positive number"),
+])
+def test_simulate_capture_bad_option_is_an_option_error(tmp_path, kw, match):
+    with pytest.raises(cdbrdf.errors.OptionError, match=match):
+        simulate_capture(material(), tmp_path / "cap", **kw)
+    assert list(tmp_path.iterdir()) == []

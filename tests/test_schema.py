@@ -126,7 +126,7 @@ def test_parts_with_a_changed_quantity_are_refused(small_grid, tmp_path):
 
 
 def test_file_and_xarray_carry_the_same_variable_attributes(tmp_path, small_grid):
-    xr = pytest.importorskip("xarray")
+    import xarray as xr
     t = make_table(small_grid, channels=2, std=np.full(small_grid.shape + (2,), 0.1),
                    attrs={"quantity": "brdf", "channels": ["nir", "uv"]})
     p = tmp_path / "t.h5"

@@ -89,16 +89,6 @@ def test_parameter_validation():
     assert ClothParams.parse_value("rays", "377") == 377
 
 
-def test_presets_are_what_the_issue_asks():
-    d, s = presets.params("denim"), presets.params("shot")
-    assert d.weave == "twill_3_1" and s.weave == "plain"
-    # Indigo warp (blue dominant, dark), white-ish weft.
-    assert d.warp_rgb[2] > 3 * d.warp_rgb[0] and max(d.warp_rgb) < 0.2
-    assert min(d.weft_rgb) > 0.4
-    # Shot: two strongly different colours.
-    assert np.linalg.norm(np.subtract(s.warp_rgb, s.weft_rgb)) > 0.5
-
-
 # -- geometry ------------------------------------------------------------------------
 def test_face_stretch():
     assert face_stretch(0.2, 1.0) == pytest.approx(1.1)
@@ -328,6 +318,16 @@ def test_anisotropic(name, denim, shot):
 
 
 # -- command line --------------------------------------------------------------------
+@pytest.mark.parametrize("setting", ["thickness_mm=1e308", "thickness_mm=-1", "rays=0"])
+def test_cli_synth_bad_setting_is_the_only_line(tmp_path, capsys, setting):
+    """Refused before any work: no progress bar (or anything else) before the error, without -q."""
+    out = tmp_path / "s.h5"
+    assert cli_main(["synth", "denim", "-o", str(out), "--set", setting]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and cap.err.count("\n") == 1 and cap.err.startswith("cdbrdf synth: error: ")
+    assert setting.split("=")[0].split("_")[0] in cap.err and not out.exists()
+
+
 def test_cli_synth(tmp_path, capsys):
     out = tmp_path / "s.h5"
     rc = cli_main(["-q", "synth", "shot", "--grid", "regular:45,90", "--kappa", "0,0.22",

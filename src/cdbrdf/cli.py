@@ -7,7 +7,8 @@ types of :mod:`cdbrdf.commands._args`. Bad arguments and user errors
 (:class:`ValueError`, :class:`OSError`, :class:`cdbrdf.CDBRDFError`) print one
 line ``cdbrdf COMMAND: error: MESSAGE`` to stderr and exit with status 2; so do
 :class:`MemoryError` and :class:`RecursionError` (naming the limits that bound
-the work). ``--debug`` shows the traceback instead.
+the work). The limit variables (:mod:`cdbrdf.limits`) are checked before the
+options are parsed (one line naming a bad one, status 2). ``--debug`` shows the traceback instead.
 """
 
 from __future__ import annotations
@@ -134,6 +135,20 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         print(f"cdbrdf {__version__}")
         raise SystemExit(0)
+    if not {"-h", "--help"} & set(argv):
+        # a bad CDBRDF_MAX_* variable: one line naming it, before the options that use it are parsed
+        from .errors import LimitError
+        from .limits import check_environment
+
+        try:
+            check_environment()
+        except LimitError as exc:
+            if "--debug" in argv:
+                raise
+            command = next((a for a in argv if not a.startswith("-")), "")
+            where = f"cdbrdf {command}" if command in COMMANDS else "cdbrdf"
+            print(f"{where}: error: {_one_line(str(exc))}", file=sys.stderr)
+            return EXIT_USER_ERROR
     parser = build_parser()
     args = parser.parse_args(_join_negative_lists(argv))
     logging.basicConfig(

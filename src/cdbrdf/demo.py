@@ -330,7 +330,8 @@ def _material(
     res.figures["sine"] = f"{name}-sine.png"
 
     mesh = prepare_mesh(draped_cloth_mesh())
-    images, secs = _render_pair(measured, lambda mode: mesh_scene(measured, mesh, mode=mode, **common),
+    images, secs = _render_pair(measured, lambda mode: mesh_scene(measured, mesh, mode=mode, lighting="paper",
+                                                                  **common),
                                 config=config, progress=progress, label=f"{name}: draped cloth")
     res.seconds["render_drape"] = secs
     fig = plot_render_comparison(images["brdf"], images["cdbrdf"],
@@ -429,7 +430,7 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
                  f"{config.render_size[1]} pixels, {config.render_spp} spp.")
         s.figure(m.figures["drape"], "A draped cloth",
                  "A generated cloth over a dome with radial folds, its curvature computed from the mesh "
-                 "(libigl): the dome and the fold ridges are convex, the fold valleys concave.")
+                 "(cdbrdf.curvature): the dome and the fold ridges are convex, the fold valleys concave.")
         s.table("Overall error of the measured table against the ground truth",
                 ["quantity", "value"],
                 [["median relative error, measured samples", f"{100 * m.error['median_rel_error_measured']:.2f} %"],
@@ -454,7 +455,8 @@ def run_demo(
     ----------
     output
         Output folder; replaced whole when it holds an earlier cdbrdf output,
-        refused when it holds anything else.
+        refused when it holds anything else (also files added to an earlier
+        output since it was written: :func:`cdbrdf.fsutil.output_folder`).
     quick
         Use :data:`CONFIGS` ``["quick"]`` (coarse grid, small images: a few
         minutes) instead of ``["full"]`` (the paper's grid).
@@ -470,11 +472,13 @@ def run_demo(
     from .fsutil import check_output_folder, output_folder
 
     cfg = config or CONFIGS["quick" if quick else "full"]
+    from .errors import OptionError
+
     unknown = [m for m in materials if m not in mats.names()]
     if unknown:
-        raise ValueError(f"materials: {unknown} unknown; valid: {', '.join(mats.names())}")
+        raise OptionError(f"materials: {unknown} unknown; valid: {', '.join(mats.names())}")
     if not materials:
-        raise ValueError("materials: give at least one")
+        raise OptionError("materials: give at least one")
     check_output_folder(output)  # fail now, not after the whole run
     set_variant()  # checks libLLVM before anything long starts
     t0 = time.perf_counter()

@@ -18,6 +18,7 @@ __all__ = [
     "SceneError",
     "CaptureError",
     "LimitError",
+    "OptionError",
 ]
 
 
@@ -58,4 +59,13 @@ class LimitError(CDBRDFError, ValueError):
 
     The message names the limit, the amount asked for and the environment
     variable that raises it.
+    """
+
+
+class OptionError(CDBRDFError, ValueError):
+    """An option or argument of a library function has an invalid value.
+
+    The message names the option, the value given and the valid values
+    (e.g. ``scheduler``, ``compression``, a material name, an image array of
+    the wrong shape or type).
     """

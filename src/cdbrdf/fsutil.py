@@ -15,7 +15,8 @@ Three rules every writer in cdbrdf follows:
 Output folders of whole runs (``cdbrdf demo``, ``cdbrdf simulate-capture``)
 are built as a partial folder beside the destination and swapped in whole
 (:func:`output_folder`); :func:`check_output_folder` refuses a bad destination
-before any work.
+before any work, including an earlier output folder that holds files its run
+did not write (the owner mark keeps the run's manifest).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import re
 import secrets
 import shutil
 import socket
+import stat
 from collections.abc import Iterator
 from contextlib import contextmanager
 from os import PathLike
@@ -35,6 +37,8 @@ from pathlib import Path
 __all__ = [
     "OWNER_MARK",
     "atomic_path",
+    "check_output_file",
+    "read_regular",
     "temp_sibling",
     "mark_owned",
     "is_owned",
@@ -130,6 +134,83 @@ def sweep_stale(dest: str | PathLike[str]) -> list[Path]:
     return removed
 
 
+def _kind_of(mode: int) -> str:
+    """What a file that is not a regular file is, for messages."""
+    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                       (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return "not a plain file"  # pragma: no cover - no other kinds on POSIX
+
+
+def check_output_file(path: str | PathLike[str]) -> Path:
+    """Refuse, before any work, a file destination that :func:`atomic_path` must not replace.
+
+    Cheap (nothing is written), so that a command fails at once instead of
+    after its computation. Returns the destination as a :class:`~pathlib.Path`.
+
+    Raises
+    ------
+    IsADirectoryError
+        When ``path`` is empty or names a folder (links followed).
+    FileNotFoundError
+        When the folder that would hold it does not exist.
+    FileExistsError
+        When it exists and is not a regular file (a character device such as
+        ``/dev/null``, a FIFO, a socket): replacing it by a regular file
+        would destroy it.
+    """
+    if not str(path).strip():
+        raise IsADirectoryError(f"{str(path)!r}: an empty output name; give a file name")
+    dest = Path(path)
+    if str(path).endswith(("/", os.sep)) or dest.name in ("", ".", ".."):
+        raise IsADirectoryError(f"{path}: names a folder; give a file name")
+    folder = dest.parent if str(dest.parent) else Path(".")
+    if not folder.is_dir():
+        raise FileNotFoundError(f"{dest}: the folder {folder} does not exist")
+    try:
+        mode = dest.stat().st_mode  # links followed: what would be written through
+    except OSError:
+        return dest  # missing (or a dangling link): created
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(f"{dest}: is a folder; give a file name")
+    if not stat.S_ISREG(mode):
+        raise FileExistsError(
+            f"{dest}: exists and is not a regular file ({_kind_of(mode)}); "
+            "it is never replaced, choose another output name"
+        )
+    return dest
+
+
+def read_regular(path: str | PathLike[str], *, max_bytes: int) -> bytes:
+    """The bytes of a regular file, reading at most ``max_bytes + 1`` of them.
+
+    A FIFO, a device (``/dev/zero``), a socket or a folder is refused before
+    it is opened (so reading never blocks or runs without end), checked again
+    on the open file; a result longer than ``max_bytes`` means the file is
+    larger than that (the caller refuses it).
+
+    Raises
+    ------
+    FileNotFoundError
+        When ``path`` does not exist.
+    OSError
+        When it is not a regular file (the message says what it is) or
+        cannot be read.
+    """
+    p = Path(path)
+    mode = p.stat().st_mode
+    if not stat.S_ISREG(mode):
+        raise OSError(f"{p}: not a regular file ({_kind_of(mode)})")
+    fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
+    with os.fdopen(fd, "rb") as fh:
+        mode = os.fstat(fh.fileno()).st_mode
+        if not stat.S_ISREG(mode):  # replaced since the check
+            raise OSError(f"{p}: not a regular file ({_kind_of(mode)})")
+        return fh.read(max(int(max_bytes), 0) + 1)
+
+
 @contextmanager
 def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp") -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
@@ -138,13 +219,10 @@ def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp") -> Iterator[
     Temporaries of killed runs for the same destination are swept first.
     ``suffix`` is kept for writers that pick the format from the name
     (``.png``, ``.exr``): the temporary is ``.NAME.<pid>...tmp<suffix>``.
+    A destination that is a folder or exists and is not a regular file (a
+    device, a FIFO, a socket) is refused (:func:`check_output_file`).
     """
-    dest = Path(path)
-    folder = dest.parent if str(dest.parent) else Path(".")
-    if not folder.is_dir():
-        raise FileNotFoundError(f"{dest}: the folder {folder} does not exist")
-    if dest.is_dir():
-        raise IsADirectoryError(f"{dest}: is a folder; give a file name")
+    dest = check_output_file(path)
     sweep_stale(dest)
     tmp_path = temp_sibling(dest, "tmp")
     if suffix and suffix != ".tmp":
@@ -155,17 +233,56 @@ def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp") -> Iterator[
         yield tmp_path
         with open(tmp_path, "rb+") as fh:
             os.fsync(fh.fileno())
+        check_output_file(dest)  # not made a device or FIFO meanwhile
         os.replace(tmp_path, dest)
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise
 
 
-def mark_owned(folder: str | PathLike[str], kind: str) -> None:
-    """Write the owner marker into ``folder`` (which cdbrdf has just created)."""
-    Path(folder, OWNER_MARK).write_text(
-        json.dumps({"written_by": "cdbrdf", "kind": kind}) + "\n", encoding="utf-8"
-    )
+def mark_owned(folder: str | PathLike[str], kind: str, *, files: list[str] | None = None) -> None:
+    """Write the owner marker into ``folder`` (which cdbrdf has just created).
+
+    ``files``: the manifest of what cdbrdf wrote there (:func:`output_folder`),
+    relative POSIX paths, folders ending in ``/``.
+    """
+    info: dict[str, object] = {"written_by": "cdbrdf", "kind": kind}
+    if files is not None:
+        info["files"] = files
+    Path(folder, OWNER_MARK).write_text(json.dumps(info) + "\n", encoding="utf-8")
+
+
+def _read_mark(folder: Path) -> dict | None:
+    try:
+        info = json.loads((folder / OWNER_MARK).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return info if isinstance(info, dict) else None
+
+
+def _entries(folder: Path) -> list[str]:
+    """Every entry under ``folder`` but the markers: relative POSIX paths, real folders ending in ``/``."""
+    out: list[str] = []
+    for root, dirs, files in os.walk(folder):  # links are not followed
+        rel = Path(root).relative_to(folder)
+        for d in dirs:
+            p = (rel / d).as_posix()
+            out.append(p if os.path.islink(os.path.join(root, d)) else p + "/")
+        for f in files:
+            p = (rel / f).as_posix()
+            if p not in (OWNER_MARK, _OUTPUT_MARKER):
+                out.append(p)
+    return sorted(out)
+
+
+def _unlisted(folder: Path) -> list[str]:
+    """Entries of an owned output folder that its manifest does not list ([] for folders without one)."""
+    info = _read_mark(folder)
+    listed = info.get("files") if info else None
+    if not isinstance(listed, list):
+        return []  # made before the manifest: replaced as it always was
+    known = set(listed)
+    return [e for e in _entries(folder) if e not in known]
 
 
 def is_owned(folder: str | PathLike[str], kind: str | None = None) -> bool:
@@ -176,11 +293,8 @@ def is_owned(folder: str | PathLike[str], kind: str | None = None) -> bool:
         return False
     if kind is None:
         return True
-    try:
-        info = json.loads(mark.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    return isinstance(info, dict) and info.get("kind") == kind
+    info = _read_mark(p)
+    return info is not None and info.get("kind") == kind
 
 
 def remove_owned(folder: str | PathLike[str], kind: str | None = None) -> None:
@@ -219,7 +333,9 @@ def check_output_folder(path: str | PathLike[str]) -> Path:
     ------
     FileExistsError
         When ``path`` is a file or a link, a non-empty folder cdbrdf did not
-        make, or the current folder (or one that holds it).
+        make, an output folder of cdbrdf that holds files its run did not
+        write (added since: a measured table, notes; listed in the message),
+        or the current folder (or one that holds it).
     """
     dest = Path(path)
     if dest.exists() or dest.is_symlink():
@@ -230,6 +346,7 @@ def check_output_folder(path: str | PathLike[str]) -> Path:
                 f"{dest}: folder exists, is not empty and was not written by cdbrdf; "
                 "choose another output folder"
             )
+        _refuse_added_files(dest)
         cwd = Path.cwd().resolve()
         if cwd == dest.resolve() or dest.resolve() in cwd.parents:
             raise FileExistsError(
@@ -266,6 +383,10 @@ def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
         mark_owned(tmp, _OUTPUT_KIND)
         (tmp / _OUTPUT_MARKER).write_text("written by cdbrdf; the whole folder is replaced on the next run\n")
         yield tmp
+        # the manifest: what this run wrote; anything added later stops the next run from replacing it
+        mark_owned(tmp, _OUTPUT_KIND, files=_entries(tmp))
+        if dest.exists() or dest.is_symlink():
+            check_output_folder(dest)  # files added to the old folder while this run worked
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -276,6 +397,18 @@ def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
         shutil.rmtree(old, ignore_errors=True)
     else:
         tmp.rename(dest)
+
+
+def _refuse_added_files(dest: Path) -> None:
+    """Refuse to replace an output folder that holds entries its manifest does not list."""
+    extra = _unlisted(dest) if is_owned(dest, _OUTPUT_KIND) else []
+    if extra:
+        shown = ", ".join(extra[:3]) + (f" and {len(extra) - 3} more" if len(extra) > 3 else "")
+        raise FileExistsError(
+            f"{dest}: holds {len(extra)} file{'s' * (len(extra) > 1)} that cdbrdf did not write there "
+            f"({shown}), which replacing the folder would delete; move them away or choose another "
+            "output folder"
+        )
 
 
 def _owned(folder: Path) -> bool:

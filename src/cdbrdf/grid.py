@@ -171,7 +171,7 @@ class Grid:
         )
 
     @classmethod
-    def paper(cls, *, kappa: ArrayLike | None = None) -> "Grid":
+    def paper(cls, *, kappa: ArrayLike | None = None) -> Grid:
         """The paper's grid: theta 0..75 step 15, phi 0..330 step 30, 5 curvatures."""
         return cls(
             kappa=PAPER_KAPPA if kappa is None else kappa,
@@ -189,7 +189,7 @@ class Grid:
         phi_step_deg: float,
         theta_max_deg: float = 75.0,
         kappa: ArrayLike = PAPER_KAPPA,
-    ) -> "Grid":
+    ) -> Grid:
         """A grid with the same regular direction sampling for light and view."""
         for name, x in (("theta_step_deg", theta_step_deg), ("phi_step_deg", phi_step_deg),
                         ("theta_max_deg", theta_max_deg)):

@@ -40,6 +40,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import logging
+import math
 import os
 import stat
 import struct
@@ -56,7 +57,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import limits
-from .errors import CDBRDFError, ImageError
+from .errors import CDBRDFError, ImageError, OptionError
 from .fsutil import atomic_path
 
 __all__ = [
@@ -121,9 +122,27 @@ def image_format(path: str | PathLike[str]) -> str:
 
 
 # --------------------------------------------------------------------------- common
+def _window_values(window: Any) -> tuple[int, int, int, int]:
+    """``(x0, y0, nx, ny)`` as integers; :class:`OptionError` for anything else (NaN, 1.5, 3 values...)."""
+    try:
+        vals = tuple(window)
+    except TypeError:
+        vals = ()
+    ok = len(vals) == 4 and all(
+        not isinstance(v, bool) and isinstance(v, (int, float, np.integer, np.floating))
+        and math.isfinite(float(v)) and float(v).is_integer() and abs(float(v)) < 2**62 for v in vals)
+    if not ok:
+        raise OptionError(
+            f"window: expected four whole numbers (x0, y0, nx, ny) or a function returning them, "
+            f"got {window!r:.60}"
+        )
+    x0, y0, nx, ny = (int(v) for v in vals)
+    return x0, y0, nx, ny
+
+
 def _resolve(path: object, info: ImageInfo, window: Any) -> tuple[int, int, int, int]:
     """The window ``(x0, y0, nx, ny)`` (called with ``info`` if callable), checked to fit."""
-    x0, y0, nx, ny = (int(v) for v in (window(info) if callable(window) else window))
+    x0, y0, nx, ny = _window_values(window(info) if callable(window) else window)
     if nx < 1 or ny < 1 or x0 < 0 or y0 < 0 or x0 + nx > info.width or y0 + ny > info.height:
         raise ImageError(
             f"{path}: the window x {x0}..{x0 + nx - 1}, y {y0}..{y0 + ny - 1} does not lie "
@@ -340,11 +359,11 @@ def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6) ->
     if a.ndim == 3 and a.shape[-1] == 1:
         a = a[..., 0]
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[-1] not in (2, 3, 4)) or 0 in a.shape:
-        raise ValueError(f"image: expected (h, w[, 1-4]) pixels, got shape {a.shape}")
+        raise OptionError(f"image: expected (h, w[, 1-4]) pixels, got shape {a.shape}")
     if a.dtype not in (np.uint8, np.uint16):
-        raise ValueError(f"image: expected uint8 or uint16, got {a.dtype}")
+        raise OptionError(f"image: expected uint8 or uint16, got {a.dtype}")
     if not 0 <= int(level) <= 9:
-        raise ValueError(f"level: expected 0 to 9, got {level!r}")
+        raise OptionError(f"level: expected 0 to 9, got {level!r}")
     encoded = imagecodecs.png_encode(np.ascontiguousarray(a), level=int(level))
     with atomic_path(path, suffix=".png") as tmp:
         tmp.write_bytes(encoded)
@@ -488,7 +507,7 @@ def write_exr(path: str | PathLike[str], image: ArrayLike) -> None:
     if a.ndim == 2:
         a = a[..., None]
     if a.ndim != 3 or a.shape[-1] not in (1, 3):
-        raise ValueError(f"image: expected 1 or 3 channels, got shape {a.shape}")
+        raise OptionError(f"image: expected 1 or 3 channels, got shape {a.shape}")
     if a.shape[-1] == 3:
         channels = {"RGB": np.ascontiguousarray(a)}
     else:
@@ -588,5 +607,10 @@ def read_window(
     FileNotFoundError, ImageError
         As :func:`read_image`; :class:`ImageError` also when the window does
         not lie inside the image.
+    OptionError
+        When ``window`` is not four whole numbers (checked before the file
+        is opened) or the function returns something else.
     """
+    if not callable(window):
+        _window_values(window)
     return _read(Path(path), window)

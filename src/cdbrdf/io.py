@@ -32,6 +32,7 @@ import logging
 import math
 import pickle
 import re
+import stat
 import subprocess
 import sys
 from os import PathLike
@@ -51,7 +52,7 @@ from ._hdf5 import (
     one_line,
     superblock_version,
 )
-from .errors import FormatError, LimitError, TableError
+from .errors import FormatError, LimitError, OptionError, TableError
 from .fsutil import atomic_path
 from .schema import (
     ATTRS_JSON_ATTR,
@@ -158,7 +159,7 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
     from ._version import __version__
 
     if compression not in ("gzip", None):
-        raise ValueError(f"compression: {compression!r} is not one of 'gzip', None")
+        raise OptionError(f"compression: {compression!r:.40} is not one of 'gzip', None")
     attrs = parts.attrs
     attrs_json = _jsonable("*", attrs)
     for k, v in attrs.items():
@@ -269,7 +270,59 @@ def _dims_of(ds: Any) -> tuple[str, ...]:
     return tuple(names)
 
 
+def _check_storage(path: Path, ds: Any, name: str) -> None:
+    """Refuse a variable whose stored data do not cover it (nothing is read but the chunk index).
+
+    HDF5 reads a chunk (or a contiguous block) that is not allocated as its
+    fill value, silently: in a file without metadata checksums a damaged
+    chunk index (a zeroed B-tree record) makes whole chunks read as zeros.
+    Every chunk of a CDBRDF variable is written, so the index must list
+    each chunk of the grid once, at an address inside the file, with a
+    non-zero size, and with no mandatory filter (Fletcher-32, shuffle)
+    marked as skipped.
+    """
+    if ds.size == 0:
+        return
+    dsid = ds.id
+    if ds.chunks is None:
+        if dsid.get_storage_size() < ds.size * ds.dtype.itemsize:
+            raise fail(path, f"{name!r} has no (or too little) stored data: the file is damaged or incomplete")
+        return
+    counts = [-(-n // c) for n, c in zip(ds.shape, ds.chunks, strict=True)]
+    expected = math.prod(counts)
+    n = dsid.get_num_chunks()
+    if n != expected:
+        raise fail(path, f"{name!r}: {expected - n} of its {expected} chunks are missing: the file is damaged "
+                         "or incomplete")
+    plist = dsid.get_create_plist()
+    mandatory = 0
+    for i in range(plist.get_nfilters()):
+        if not plist.get_filter(i)[1] & 1:  # H5Z_FLAG_OPTIONAL unset: HDF5 never skips it when writing
+            mandatory |= 1 << i
+    size = path.stat().st_size
+    seen: set[tuple[int, ...]] = set()
+    for i in range(n):
+        ci = dsid.get_chunk_info(i)
+        off = tuple(ci.chunk_offset)
+        ok = (
+            len(off) == len(ds.chunks) and off not in seen
+            and all(o % c == 0 and 0 <= o < s for o, c, s in zip(off, ds.chunks, ds.shape, strict=False))
+            and ci.byte_offset is not None and 0 < ci.byte_offset and 0 < ci.size
+            and ci.byte_offset + ci.size <= size and not ci.filter_mask & mandatory
+        )
+        if not ok:
+            raise fail(path, f"{name!r}: the index of its chunks is damaged (chunk {i})")
+        seen.add(off)
+
+
 def _read_ds(path: Path, ds: Any, name: str) -> np.ndarray:
+    try:
+        _check_storage(path, ds, name)
+    except FormatError:
+        raise
+    except (OSError, RuntimeError, ValueError, TypeError, AttributeError, KeyError) as exc:
+        raise fail(path, f"{name!r}: the index of its data cannot be read ({one_line(exc)}): the file is "
+                         "damaged") from None
     try:
         return np.asarray(ds[()])
     except UnicodeDecodeError:
@@ -534,11 +587,15 @@ def read(path: str | PathLike[str]) -> TableParts:
     LimitError
         When the file declares more samples than the ``table_samples`` limit.
     """
+    if not isinstance(path, (str, PathLike)):
+        raise OptionError(f"path: expected a file name (str or os.PathLike), got {type(path).__name__}")
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"{p}: no such file")
     if p.is_dir():
         raise fail(p, "is a folder, not a CDBRDF file")
+    if not stat.S_ISREG(p.stat().st_mode):  # a FIFO would block the read, a device never end it
+        raise fail(p, "is not a regular file (a FIFO, a device or a socket), not a CDBRDF file")
     try:
         version = superblock_version(p)
     except OSError as exc:

@@ -8,7 +8,9 @@ environment variable that raises it.
 
 Each limit is read from its environment variable at the moment it is checked
 (no state is kept at import), so a user or a test raises it with e.g.
-``CDBRDF_MAX_IMAGE_PIXELS=400000000 cdbrdf measure ...``.
+``CDBRDF_MAX_IMAGE_PIXELS=400000000 cdbrdf measure ...``. A variable must
+hold a whole number in decimal digits (:meth:`Limit.value`); the command
+line checks every variable before any work (:func:`check_environment`).
 
 =========================  ===============================  ==================
 limit                      environment variable             default
@@ -19,17 +21,19 @@ limit                      environment variable             default
 ``capture_rows``           ``CDBRDF_MAX_CAPTURE_ROWS``      10,000,000 rows
 ``mesh_faces``             ``CDBRDF_MAX_MESH_FACES``        50,000,000 faces
 ``json_bytes``             ``CDBRDF_MAX_JSON_BYTES``        16,777,216 bytes
+``csv_bytes``              ``CDBRDF_MAX_CSV_BYTES``         2,147,483,648 bytes
 =========================  ===============================  ==================
 """
 
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass
 
 from .errors import LimitError
 
-__all__ = ["Limit", "LIMITS", "limit", "check"]
+__all__ = ["Limit", "LIMITS", "MAX_VALUE", "limit", "check", "check_environment"]
 
 
 @dataclass(frozen=True)
@@ -54,17 +58,29 @@ class Limit:
     unit: str
 
     def value(self) -> int:
-        """The limit in force now (the environment variable, else the default)."""
+        """The limit in force now (the environment variable, else the default).
+
+        The variable must hold a whole number of the limit's unit, written
+        in decimal digits (``1000000``; ``1_000_000`` is accepted too), from 1
+        to :data:`MAX_VALUE`. Anything else (``inf``, ``1e400``, ``-5``,
+        ``abc``, ``1.5``) is refused with a :class:`LimitError` naming the
+        variable, never read as some other limit.
+        """
         raw = os.environ.get(self.env)
         if raw is None or not raw.strip():
             return self.default
-        try:
-            v = int(float(raw))
-        except ValueError:
-            raise LimitError(f"{self.env}={raw!r}: not a number") from None
-        if v <= 0:
-            raise LimitError(f"{self.env}={raw!r}: must be a positive number of {self.unit}")
+        text = raw.strip()
+        if len(text) > 40 or not _DIGITS.fullmatch(text) or not 1 <= (v := int(text.replace("_", ""))) <= MAX_VALUE:
+            raise LimitError(
+                f"{self.env}={raw[:40]!r}: expected a whole number of {self.unit} from 1 to "
+                f"{MAX_VALUE:,} in decimal digits (e.g. {self.default}), or unset it for the default"
+            )
         return v
+
+
+#: Largest value a limit variable may hold (the largest int64: counts stay exact in NumPy).
+MAX_VALUE = 2**63 - 1
+_DIGITS = re.compile(r"[0-9]+(?:_[0-9]+)*")
 
 
 #: Every limit, by name.
@@ -77,6 +93,7 @@ LIMITS: dict[str, Limit] = {
         Limit("capture_rows", "CDBRDF_MAX_CAPTURE_ROWS", 10_000_000, "rows"),
         Limit("mesh_faces", "CDBRDF_MAX_MESH_FACES", 50_000_000, "faces"),
         Limit("json_bytes", "CDBRDF_MAX_JSON_BYTES", 16 * 1024 * 1024, "bytes"),
+        Limit("csv_bytes", "CDBRDF_MAX_CSV_BYTES", 2 * 1024**3, "bytes"),
     )
 }
 
@@ -114,3 +131,19 @@ def check(name: str, amount: int | float, *, what: str) -> None:
             f"{what}: {amount:,.0f} {lim.unit} exceed the limit of {cap:,} "
             f"(raise it with {lim.env})"
         )
+
+
+def check_environment() -> None:
+    """Refuse, before any work, a limit variable that is set to something :meth:`Limit.value` refuses.
+
+    The command line calls it first, so that a bad ``CDBRDF_MAX_*`` value is
+    one line naming the variable, not a failure of whichever file is read
+    first.
+
+    Raises
+    ------
+    LimitError
+        Naming the first bad variable and what it may hold.
+    """
+    for lim in LIMITS.values():
+        lim.value()

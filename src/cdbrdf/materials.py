@@ -24,6 +24,7 @@ import logging
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from .errors import OptionError
 from .table import CDBRDF, Grid
 
 __all__ = ["names", "load", "path", "build", "regenerate"]
@@ -40,8 +41,8 @@ def names() -> list[str]:
 
 
 def _check(name: str) -> str:
-    if name not in _NAMES:
-        raise ValueError(f"unknown material {name!r}; valid names: {', '.join(_NAMES)}")
+    if not isinstance(name, str) or name not in _NAMES:
+        raise OptionError(f"material {name!r:.40}: unknown; valid names: {', '.join(_NAMES)}")
     return name
 
 
@@ -55,7 +56,7 @@ def load(name: str) -> CDBRDF:
 
     Raises
     ------
-    ValueError
+    OptionError
         For an unknown name (the message lists the valid ones).
     FileNotFoundError
         When the package was installed without its data files.

@@ -129,7 +129,7 @@ class Report:
                 out.append(
                     f"<details><summary>{html.escape(summary)}</summary><pre>{html.escape(text)}</pre></details>"
                 )
-        stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+        stamp = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
         out.append(f'<p class="footer">Made by cdbrdf on {stamp}.</p></body></html>')
         return "\n".join(out)
 

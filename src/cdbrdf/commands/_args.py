@@ -301,7 +301,11 @@ def existing_file(*kinds: str) -> _Type:
 
 
 def output_file(*kinds: str) -> _Type:
-    """A file to write: suffix among ``kinds`` (if given), in an existing folder, not a folder."""
+    """A file to write: suffix among ``kinds`` (if given), in an existing folder, not a folder.
+
+    An existing destination must be a regular file (never a device such as
+    ``/dev/null``, a FIFO or a socket: :func:`cdbrdf.fsutil.check_output_file`).
+    """
     suffixes = _suffixes(kinds)
 
     def parse(text: str) -> str:
@@ -310,11 +314,12 @@ def output_file(*kinds: str) -> _Type:
             got = repr(p.suffix) if p.suffix else "no suffix"
             raise argparse.ArgumentTypeError(
                 f"{text}: cannot write {got}; use {', '.join(suffixes)}")
-        folder = p.parent if str(p.parent) else Path(".")
-        if not folder.is_dir():
-            raise argparse.ArgumentTypeError(f"{text}: the folder {folder} does not exist")
-        if p.is_dir():
-            raise argparse.ArgumentTypeError(f"{text}: is a folder, give a file name")
+        from ..fsutil import check_output_file
+
+        try:
+            check_output_file(text)  # a folder, a missing folder, a device or FIFO
+        except OSError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
         return text
 
     return _named(parse, "file")

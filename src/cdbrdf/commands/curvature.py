@@ -1,9 +1,13 @@
-"""``cdbrdf curvature IN.ply|IN.obj -o OUT.ply``: per-vertex curvature for rendering.
+"""``cdbrdf curvature IN -o OUT.ply``: repair a mesh and write its curvatures for rendering.
 
-Writes the mesh (positions, normals, UVs kept) with the signed principal
-curvature of larger magnitude in mm^-1 as the PLY vertex property
-``curvature_x``, which Mitsuba loads as the mesh attribute
-``vertex_curvature`` read by the ``cdbrdf`` BSDF.
+Reads any mesh cdbrdf reads (PLY, OBJ, glTF/GLB, STL, OFF), repairs it (weld,
+duplicate and degenerate faces, orientation, double-sided panels; each repair
+is reported), fits the curvature over a neighbourhood given in mm and writes
+the mesh as binary PLY with the signed principal curvature of larger
+magnitude (``curvature_x``, Mitsuba attribute ``vertex_curvature``) and the
+directional curvature along the material's x axis (``curvature_dir_x``,
+``vertex_curvature_dir``), both in mm^-1, with the unit, neighbourhood and
+frame recorded in the header (``cdbrdf render`` reuses them).
 """
 
 from __future__ import annotations
@@ -13,56 +17,94 @@ import sys
 
 import numpy as np
 
-__all__ = ["register", "run", "LARGE_MESH_FACES"]
+__all__ = ["register", "run", "LARGE_MESH_FACES", "mesh_options", "print_mesh_report"]
 
-#: Meshes from this many faces get a note before the (single, silent) libigl call.
-LARGE_MESH_FACES = 200_000
+#: Meshes from this many faces get a progress bar while the curvature is fitted.
+LARGE_MESH_FACES = 100_000
+
+
+def mesh_options(p: argparse.ArgumentParser) -> None:
+    """The options shared with ``cdbrdf render --mesh``: unit, neighbourhood, frame."""
+    from ..curvature import FRAMES, NEIGHBOURHOOD_RANGE_MM, UNITS_MM
+    from ._args import finite_float, keyword
+
+    lo, hi = NEIGHBOURHOOD_RANGE_MM
+    p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
+                   default=None, metavar="UNIT",
+                   help="length unit of the mesh: mm, cm, m, in or a number of mm per model unit "
+                   "(default: the unit the file records, glTF's metre, else mm)")
+    p.add_argument("--neighbourhood", type=finite_float(lo, hi, unit="mm"), default=None, metavar="MM",
+                   help="diameter of the surface patch the curvature is fitted over, mm (default: the "
+                   "table's measured patch if its provenance records it, else 5)")
+    p.add_argument("--frame", choices=FRAMES, default=None,
+                   help="the material's x axis: from the UVs, a tangent attribute, or the principal "
+                   "curvature directions (default auto: UVs if any, else tangents, else principal)")
+
+
+def print_mesh_report(label: str, mesh: object) -> None:
+    """The repairs and notes of a prepared mesh, one line each, on standard error."""
+    meta = getattr(mesh, "metadata", {})
+    repairs = meta.get("repairs") or []
+    if repairs:
+        print(f"{label}: repaired: {', '.join(repairs)}", file=sys.stderr)
+    line = "; ".join(str(meta[k]) for k in ("units_note", "neighbourhood_note") if meta.get(k))
+    if line:
+        print(f"{label}: {line}; frame: {meta.get('frame', '?')}", file=sys.stderr)
+    for note in meta.get("notes") or []:
+        print(f"{label}: note: {note}", file=sys.stderr)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..curvature import IGL_RADIUS, MAX_RADIUS
-    from ..render.scenes import UNITS_MM
-    from ._args import existing_file, int_range, output_file
+    from ..render.meshio import MESH_FORMATS
+    from ._args import existing_file, output_file
 
     p = sub.add_parser(
         "curvature",
-        help="compute per-vertex curvature of a mesh and write it as a PLY for rendering",
-        description="Compute the signed principal curvature of larger magnitude at every vertex "
-        "(> 0 convex relative to the counter-clockwise outward normal, in 1/mm) and write the "
-        "mesh as binary PLY with the property 'curvature_x' (Mitsuba attribute "
-        "'vertex_curvature'), keeping UVs and normals.",
+        help="repair a mesh, compute its curvature (1/mm) and write it as a PLY for rendering",
+        description="Repair a mesh (weld, duplicate and degenerate faces, orientation, double-sided "
+        "panels) and fit at every vertex the signed principal curvature of larger magnitude and the "
+        "normal curvature along the material's x axis (> 0 convex, in 1/mm, over a neighbourhood in "
+        "mm), then write binary PLY with 'curvature_x' and 'curvature_dir_x' (Mitsuba attributes "
+        "'vertex_curvature', 'vertex_curvature_dir'), keeping UVs and normals.",
     )
-    p.add_argument("mesh", metavar="IN", type=existing_file(".ply", ".obj"), help="input mesh (.ply or .obj)")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.ply", type=output_file(),
+    p.add_argument("mesh", metavar="IN", type=existing_file(*MESH_FORMATS),
+                   help=f"input mesh ({', '.join(MESH_FORMATS)})")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.ply", type=output_file(".ply"),
                    help="output PLY file")
-    p.add_argument("--units", choices=sorted(UNITS_MM), default="mm",
-                   help="length unit of the input mesh (default: mm); the curvature is written in 1/mm")
-    p.add_argument("--radius", type=int_range(IGL_RADIUS, MAX_RADIUS), default=IGL_RADIUS,
-                   help=f"libigl neighbourhood radius in average edge lengths, {IGL_RADIUS} to "
-                   f"{MAX_RADIUS} (default: {IGL_RADIUS}); the work grows as the radius squared")
+    mesh_options(p)
+    p.add_argument("--table", metavar="FILE", type=existing_file(".h5"), default=None,
+                   help="a CDBRDF file: its measured patch sets the default neighbourhood and its kappa "
+                   "range is checked (default: the paper's range)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..curvature import max_curvature
+    from ..grid import PAPER_KAPPA
     from ..render.meshio import read_mesh, write_ply
-    from ..render.scenes import UNITS_MM
+    from ..render.scenes import prepare_mesh
+    from ._progress import ProgressBars
 
-    if not str(args.output).lower().endswith(".ply"):
-        raise ValueError(f"{args.output}: the output must be a .ply file")
+    table = None
+    if args.table:
+        from ..table import load
+
+        table = load(args.table)
     mesh = read_mesh(args.mesh)
-    if not args.quiet and mesh.faces.shape[0] >= LARGE_MESH_FACES:
-        print(f"{args.mesh}: {mesh.faces.shape[0]:,} faces; estimating the curvature "
-              f"(radius {args.radius}) can take a while", file=sys.stderr)
-    k = max_curvature(mesh.vertices, mesh.faces, normals=mesh.normals, radius=args.radius)
-    mesh.attributes["curvature"] = k / UNITS_MM[args.units]
-    write_ply(args.output, mesh)
+    big = mesh.faces.shape[0] >= LARGE_MESH_FACES
+    with ProgressBars(quiet=args.quiet or not big, unit="vtx") as bars:
+        out = prepare_mesh(mesh, units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame,
+                           table=table, kappa_range=(float(PAPER_KAPPA.min()), float(PAPER_KAPPA.max())),
+                           progress=bars.callback("curvature"))
+    write_ply(args.output, out)
     if not args.quiet:
-        kk = mesh.attributes["curvature"]
+        print_mesh_report(str(args.mesh), out)
+        k = out.attributes["curvature"]
+        share = out.metadata.get("outside_share")
+        rng = "the table's" if table is not None else "the paper's"
         print(
-            f"{args.output}: {mesh.n_vertices} vertices, {mesh.faces.shape[0]} faces, "
-            f"UVs {'yes' if mesh.uv is not None else 'NO (rendering needs them)'}; curvature 1/mm: "
-            f"min {kk.min():.4g}, median {np.median(kk):.4g}, max {kk.max():.4g}",
+            f"{args.output}: {out.n_vertices} vertices, {out.faces.shape[0]} faces; curvature 1/mm: "
+            f"min {k.min():.4g}, median {np.median(k):.4g}, max {k.max():.4g}"
+            + (f"; {share:.1%} of the surface outside {rng} kappa range" if share is not None else ""),
             file=sys.stderr,
         )
     return 0

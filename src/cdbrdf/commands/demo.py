@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "the CDBRDF; writes DIR/report.html.",
     )
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (replaced whole if it "
-                   "holds an earlier cdbrdf output)")
+                   "holds an earlier cdbrdf output and nothing added to it since)")
     p.add_argument("--quick", action="store_true", help="coarse grid and small images: a few minutes")
     p.add_argument("--material", action="append", dest="materials", metavar="NAME", type=_material,
                    help="bundled material to run (repeatable; default: denim and shot)")

@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..table import CDBRDF
 
 __all__ = ["register", "run", "describe"]
 
@@ -30,7 +34,7 @@ def _axis(a: np.ndarray, unit: str) -> str:
     return f"{a.size:3d} [{vals}]{step} {unit}"
 
 
-def describe(table) -> dict:
+def describe(table: CDBRDF) -> dict[str, Any]:
     """The information ``cdbrdf info`` shows, as a JSON-ready dict."""
     v = table.values
     ranges = {

@@ -67,11 +67,9 @@ def _output(path_text: str) -> tuple[Path, str]:
             f"{out}: cannot tell the output format from {got}; use one of "
             + ", ".join(FORMATS)
         )
-    folder = out.parent if str(out.parent) else Path(".")
-    if not folder.is_dir():
-        raise FileNotFoundError(f"{out}: the folder {folder} does not exist")
-    if out.is_dir():
-        raise IsADirectoryError(f"{out}: is a folder, give a file name")
+    from ..fsutil import check_output_file
+
+    check_output_file(out)  # a folder, a missing folder, a device or FIFO: before any work
     return out, fmt
 
 

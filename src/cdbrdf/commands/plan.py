@@ -31,7 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="largest elevation, degrees, below 90 (75)")
     p.add_argument("--phi-step", type=finite_float(0, 360, lo_open=True, unit="deg"), default=30.0,
                    help="azimuth step, degrees, dividing 360 (30)")
-    p.add_argument("--face-width", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None, help="fabric face width (arc), mm (6)")
+    p.add_argument("--face-width", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
+                   help="fabric face width (arc), mm (6)")
     p.add_argument("--wall-height", type=finite_float(0, 1000, unit="mm"), default=None,
                    help="concave stands: wall height above the face's edges, mm (1)")
     p.add_argument("--pixel-mm", type=finite_float(0, 1000, unit="mm"), default=0.0,
@@ -71,13 +72,17 @@ def check_grid_rows(grid, *, white: bool = True, brackets: int = 1) -> None:  # 
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..measure.capture import CAPTURE_FILE, write_plan
+    from ..fsutil import check_output_file
+    from ..measure.capture import CAPTURE_FILE, STAND_FILE, write_plan
     from ..measure.stands import DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM, Stand, hidden_mask
     from ..table import PAPER_KAPPA, Grid
 
     out = Path(args.output)
     if (out / CAPTURE_FILE).exists() and not args.force:
         raise FileExistsError(f"{out / CAPTURE_FILE}: already exists (use --force to overwrite)")
+    if out.is_dir():  # a device or FIFO in place of one of the plan's files: refused before any is written
+        for name in (CAPTURE_FILE, STAND_FILE, "plan.png"):
+            check_output_file(out / name)
     kappa = PAPER_KAPPA if args.kappa is None else np.array(sorted(args.kappa))
     grid = Grid.regular(theta_step_deg=args.theta_step, phi_step_deg=args.phi_step,
                         theta_max_deg=args.theta_max, kappa=kappa)

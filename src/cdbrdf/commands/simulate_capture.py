@@ -50,15 +50,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("material", type=_material, help="preset name (see cdbrdf.materials) or a CDBRDF file")
     p.add_argument("-o", "--output", required=True, metavar="DIR",
-                   help="capture folder to write (new, empty, or an earlier simulated capture, replaced whole)")
-    p.add_argument("--plan", type=existing_file(".csv"), default=None, help="capture.csv to render (default: the material's grid, "
-                   "the paper's stands, white references)")
-    p.add_argument("--size", type=square_size(lo=8, hi=8192), default=64, help="image size in pixels, 8 to 8192 (64)")
-    p.add_argument("--field", type=finite_float(0, 1e4, lo_open=True, unit="mm"), default=2.0, help="camera field width at the stand, mm (2)")
+                   help="capture folder to write (new, empty, or an earlier simulated capture, replaced "
+                   "whole unless files were added to it since)")
+    p.add_argument("--plan", type=existing_file(".csv"), default=None,
+                   help="capture.csv to render (default: the material's grid, the paper's stands, white references)")
+    p.add_argument("--size", type=square_size(lo=8, hi=8192), default=64,
+                   help="image size in pixels, 8 to 8192 (64)")
+    p.add_argument("--field", type=finite_float(0, 1e4, lo_open=True, unit="mm"), default=2.0,
+                   help="camera field width at the stand, mm (2)")
     p.add_argument("--spp", type=int_range(1, 65536), default=4, help="samples per pixel (4)")
     p.add_argument("--noise", type=_noise, default="20000,3",
                    help="'none' or FULL_WELL[,READ] electrons (default 20000,3)")
-    p.add_argument("--gain", type=finite_float(0, 1e12, lo_open=True), default=2.0, help="pixel value per unit radiance (2)")
+    p.add_argument("--gain", type=finite_float(0, 1e12, lo_open=True), default=2.0,
+                   help="pixel value per unit radiance (2)")
     p.add_argument("--exposures", type=float_list(0, 1e6, lo_open=True, max_len=16), default=[1.0],
                    help="exposure brackets of each sample photograph, e.g. 1,0.25 (default 1)")
     p.add_argument("--image", choices=tuple(IMAGE_KINDS), default="png16",

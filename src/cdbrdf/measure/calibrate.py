@@ -235,6 +235,8 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
         "capture": cap.folder.resolve().name,
         "capture_sha256": cap.digest,
         "patch_px": patch,
+        # the patch's side at the stand, mm: the default neighbourhood of mesh curvatures
+        "patch_mm": patch * float(cap.settings["pixel_mm"]) if cap.settings.get("pixel_mm") else None,
         "encoding": "linear" if linear else "srgb (unless the capture says linear)",
         "white_reference": bool(whites),
         "white_albedo": albedo if whites else None,

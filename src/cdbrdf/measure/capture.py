@@ -26,20 +26,32 @@ import csv
 import hashlib
 import io
 import math
+import posixpath
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
-from pathlib import Path
+from pathlib import Path, PurePosixPath, PureWindowsPath
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .. import limits
-from ..errors import CaptureError, TableError
+from ..errors import CaptureError, OptionError, TableError
+from ..fsutil import atomic_path, check_output_file
 from ..table import Grid
 from ..images import FORMATS
-from .stands import KAPPA_TOL_PER_MM, Stand, hidden_mask, load_json_object, parse_stands, write_stands
+from .stands import (
+    KAPPA_TOL_PER_MM,
+    Stand,
+    hidden_mask,
+    load_json_object,
+    parse_stands,
+    read_input,
+    read_json_object,
+    write_stands,
+)
 
 __all__ = [
     "CAPTURE_FILE",
@@ -49,9 +61,13 @@ __all__ = [
     "KINDS",
     "HIDDEN_NAMES",
     "ENCODINGS",
+    "STAND_FILE_KEYS",
     "CaptureRow",
     "Capture",
     "read_capture",
+    "read_plan",
+    "Plan",
+    "file_key",
     "read_rows",
     "row_kind",
     "plan_rows",
@@ -74,6 +90,9 @@ KINDS: tuple[str, ...] = ("sample", "white", "dark")
 HIDDEN_NAMES: Mapping[int, str] = {0: "", 1: "view", 2: "light", 3: "view+light"}
 #: Values of the ``encoding`` column and setting.
 ENCODINGS: tuple[str, ...] = ("srgb", "linear")
+#: The top-level keys ``stands.json`` may have (``docs/capture.md``); any other is refused.
+STAND_FILE_KEYS: tuple[str, ...] = ("stands", "grid", "white_albedo", "pixel_mm", "encoding", "material",
+                                    "simulated")
 _KNOWN = REQUIRED_COLUMNS + ("exposure", "cx", "cy", "kind", "hidden", "encoding")
 _AXES = ("kappa", "theta_l", "phi_l", "theta_v", "phi_v")
 _ANGLE_DECIMALS = 6
@@ -201,11 +220,8 @@ def _decode_csv(csv_path: Path, data: bytes) -> str:
 
 
 def _load_table(csv_path: Path) -> tuple[bytes, str]:
-    """``capture.csv``'s bytes and text, within the ``capture_rows`` limit."""
-    try:
-        data = csv_path.read_bytes()
-    except OSError as exc:
-        raise CaptureError(f"{csv_path}: cannot be read ({exc.strerror or exc})") from None
+    """``capture.csv``'s bytes and text: a regular file within the ``csv_bytes`` and ``capture_rows`` limits."""
+    data = read_input(csv_path, "csv_bytes", what=f"{csv_path}: CSV file")
     text = _decode_csv(csv_path, data)
     _check_rows_limit(csv_path, text)
     return data, text
@@ -279,8 +295,20 @@ def _check_rows_limit(csv_path: Path, text: str) -> None:
 
 
 def _settings(doc: dict[str, Any], stand_path: Path) -> dict[str, Any]:
-    """Validate the settings of ``stands.json`` (every key but ``stands`` and ``grid``)."""
+    """Validate the settings of ``stands.json`` (every key but ``stands`` and ``grid``).
+
+    An unknown key is refused, listing the valid ones (:data:`STAND_FILE_KEYS`):
+    a typo such as ``white_albdeo`` would otherwise silently scale the table.
+    """
+    unknown = [k for k in doc if k not in STAND_FILE_KEYS]
+    if unknown:
+        raise CaptureError(
+            f"{stand_path}: unknown key{'s' * (len(unknown) > 1)} {', '.join(repr(k[:40]) for k in unknown[:5])}; "
+            f"valid keys are {', '.join(STAND_FILE_KEYS)}"
+        )
     out = {k: v for k, v in doc.items() if k not in ("stands", "grid")}
+    if "simulated" in out and not isinstance(out["simulated"], bool):
+        raise CaptureError(f"{stand_path}: simulated: expected true or false, got {out['simulated']!r:.40}")
     if "white_albedo" in out:
         a = out["white_albedo"]
         if isinstance(a, bool) or not isinstance(a, (int, float)) or not 0 < a <= 1.5:
@@ -377,7 +405,7 @@ def read_capture(folder: str | PathLike[str], *, csv_name: str = CAPTURE_FILE, p
     if not root.is_dir():
         raise FileNotFoundError(f"{root}: no such capture folder")
     csv_path = root / csv_name
-    if not csv_path.is_file():
+    if not csv_path.exists() and not csv_path.is_symlink():
         raise FileNotFoundError(f"{csv_path}: the capture folder has no {csv_name}")
     csv_bytes, text = _load_table(csv_path)
 
@@ -388,44 +416,15 @@ def read_capture(folder: str | PathLike[str], *, csv_name: str = CAPTURE_FILE, p
     stand_path = root / STAND_FILE
     given_grid = None
     if stand_path.exists() or stand_path.is_symlink():
-        doc = load_json_object(stand_path)
-        stand_bytes = stand_path.read_bytes()
+        doc, stand_bytes = read_json_object(stand_path)  # read once: what is checked is what is hashed
         settings = _settings(doc, stand_path)
         given_grid = _explicit_grid(doc, stand_path)
         if "stands" in doc:
             stands = parse_stands(doc, stand_path)
 
-    reader = _open_reader(csv_path, text)
-    extra_cols = [c for c in reader.fieldnames or () if c not in _KNOWN]
-    rows: list[CaptureRow] = []
-    try:
-        for rec in reader:
-            rows.append(_parse_row(csv_path, reader.line_num, rec, extra_cols))
-    except csv.Error as exc:
-        raise _csv_error(csv_path, reader, exc) from None
-    samples = [r for r in rows if r.kind == "sample"]
-    if not samples:
-        raise CaptureError(f"{csv_path}: no sample rows")
-
-    if given_grid is not None:
-        for r in samples:
-            for name in _AXES:
-                v = getattr(r, name)
-                if not np.any(given_grid[name] == v):
-                    raise CaptureError(
-                        f"{csv_path}: line {r.line}: {name} = {v:g} is not on the grid of {STAND_FILE}"
-                    )
-        axes = given_grid
-        where = f"{stand_path}: grid"
-    else:
-        _stray_values(csv_path, samples)
-        axes = {name: np.unique(np.array([getattr(r, name) for r in samples])) for name in _AXES}
-        where = f"{csv_path}: the sample rows"
-    limits.check("table_samples", math.prod(len(v) for v in axes.values()), what=f"{where}: a grid of")
-    try:
-        grid = Grid(**axes)
-    except TableError as exc:
-        raise CaptureError(f"{where} do not form a table grid: {exc}") from None
+    rows, columns, _records = _parse_table(csv_path, text)
+    extra_cols = [c for c in columns if c not in _KNOWN]
+    grid = _table_grid(csv_path, rows, given_grid, stand_path)
 
     if stands is not None:
         missing_k = [k for k in grid.kappa if not any(abs(k - s) <= KAPPA_TOL_PER_MM for s in stands)]
@@ -455,6 +454,166 @@ def read_capture(folder: str | PathLike[str], *, csv_name: str = CAPTURE_FILE, p
     return Capture(root, rows, grid, stands, hidden, settings, digest, extra_cols, index)
 
 
+def _name(fname: str) -> str:
+    """A file name for a message: quoted, its middle elided beyond 80 characters."""
+    return repr(fname if len(fname) <= 80 else f"{fname[:38]}...{fname[-38:]}")
+
+
+def _check_file_name(where: str, fname: str) -> None:
+    """Refuse a ``file`` that is not a relative path inside the capture folder."""
+    win = PureWindowsPath(fname)
+    parts = re.split(r"[/\\]", fname)
+    if PurePosixPath(fname).is_absolute() or win.is_absolute() or win.drive or win.root:
+        why = "is an absolute path"
+    elif ".." in parts:
+        why = "has a '..' component"
+    elif not parts[-1] or parts[-1] == ".":
+        why = "names a folder, not a file"
+    else:
+        return
+    raise CaptureError(
+        f"{where}: file {_name(fname)} {why}; photographs must be named by a relative path "
+        "inside the capture folder (e.g. k0/photo.png)"
+    )
+
+
+def file_key(fname: str) -> str:
+    """The name two rows that name the same photograph share (``k0/./a.png`` and ``k0//a.png`` -> ``k0/a.png``)."""
+    return posixpath.normpath(fname.strip())
+
+
+def _check_duplicates(csv_path: Path, names: Sequence[tuple[int, str]]) -> None:
+    """Refuse two rows that name the same photograph (``names``: ``(line, file)`` in file order)."""
+    seen: dict[str, int] = {}
+    for line, fname in names:
+        key = file_key(fname)
+        first = seen.setdefault(key, line)
+        if first != line:
+            raise CaptureError(
+                f"{csv_path}: line {line}: file {_name(fname.strip())} is also the file of line {first}; "
+                "every row needs its own photograph"
+            )
+
+
+def _parse_table(csv_path: Path, text: str) -> tuple[list[CaptureRow], list[str], list[dict[str, str]]]:
+    """Every row of a ``capture.csv``'s text: parsed rows, the columns, the records as text.
+
+    One rule per column (:func:`_parse_row`), file names inside the folder
+    and each photograph named by one row only; at least one sample row.
+    """
+    reader = _open_reader(csv_path, text)
+    extra_cols = [c for c in reader.fieldnames or () if c not in _KNOWN]
+    rows: list[CaptureRow] = []
+    records: list[dict[str, str]] = []
+    try:
+        for rec in reader:
+            rows.append(_parse_row(csv_path, reader.line_num, rec, extra_cols))
+            records.append({k: v or "" for k, v in rec.items()})
+    except csv.Error as exc:
+        raise _csv_error(csv_path, reader, exc) from None
+    _check_duplicates(csv_path, [(r.line, r.file) for r in rows])
+    if not any(r.kind == "sample" for r in rows):
+        raise CaptureError(f"{csv_path}: no sample rows")
+    return rows, list(reader.fieldnames or ()), records
+
+
+def _table_grid(csv_path: Path, rows: list[CaptureRow], given_grid: dict[str, NDArray[np.float64]] | None,
+                stand_path: Path) -> Grid:
+    """The grid of the sample rows: ``stands.json``'s ``grid`` (rows must lie on it), else derived."""
+    samples = [r for r in rows if r.kind == "sample"]
+    if given_grid is not None:
+        for r in samples:
+            for name in _AXES:
+                v = getattr(r, name)
+                if not np.any(given_grid[name] == v):
+                    raise CaptureError(
+                        f"{csv_path}: line {r.line}: {name} = {v:g} is not on the grid of {STAND_FILE}"
+                    )
+        axes = given_grid
+        where = f"{stand_path}: grid"
+    else:
+        _stray_values(csv_path, samples)
+        axes = {name: np.unique(np.array([getattr(r, name) for r in samples])) for name in _AXES}
+        where = f"{csv_path}: the sample rows"
+    limits.check("table_samples", math.prod(len(v) for v in axes.values()), what=f"{where}: a grid of")
+    try:
+        return Grid(**axes)
+    except TableError as exc:
+        raise CaptureError(f"{where} do not form a table grid: {exc}") from None
+
+
+@dataclass
+class Plan:
+    """A capture plan (a ``capture.csv`` to photograph or render), checked like a capture.
+
+    Attributes
+    ----------
+    path
+        The plan's CSV file.
+    columns
+        Its header (names stripped).
+    records
+        Its rows as text, as in the file (for a tool that re-writes them).
+    rows
+        The same rows parsed by the rules of :func:`read_capture`.
+    grid
+        The grid the sample rows cover.
+    stands
+        The stands of the ``stands.json`` beside the plan (empty without one).
+    settings
+        That file's other settings (validated as by :func:`read_capture`).
+    given_grid
+        That file's ``grid``, as written, or None.
+    """
+
+    path: Path
+    columns: list[str]
+    records: list[dict[str, str]]
+    rows: list[CaptureRow]
+    grid: Grid
+    stands: dict[float, Stand]
+    settings: dict[str, Any]
+    given_grid: dict[str, list[float]] | None
+
+
+def read_plan(path: str | PathLike[str]) -> Plan:
+    """Read a capture plan and check it with the rules of :func:`read_capture`, before any photograph exists.
+
+    The rows are parsed by the same parser (every column's rule, file names
+    that are relative paths inside the folder, no photograph named twice, no
+    stray row); a ``stands.json`` beside the plan is read and checked as
+    well (its ``stands`` need not cover every curvature: the rig gives the
+    others a default stand).
+
+    Raises
+    ------
+    FileNotFoundError
+        When ``path`` does not exist.
+    CaptureError
+        The first problem, naming the file and line (or key).
+    LimitError
+        As :func:`read_capture`.
+    """
+    csv_path = Path(path)
+    if not csv_path.exists() and not csv_path.is_symlink():
+        raise FileNotFoundError(f"{csv_path}: no such capture plan")
+    _csv_bytes, text = _load_table(csv_path)
+    stand_path = csv_path.parent / STAND_FILE
+    stands: dict[float, Stand] = {}
+    settings: dict[str, Any] = {}
+    given_grid = given_raw = None
+    if stand_path.exists() or stand_path.is_symlink():
+        doc = load_json_object(stand_path)
+        settings = _settings(doc, stand_path)
+        given_grid = _explicit_grid(doc, stand_path)
+        given_raw = doc.get("grid") if given_grid is not None else None
+        if "stands" in doc:
+            stands = parse_stands(doc, stand_path)
+    rows, columns, records = _parse_table(csv_path, text)
+    grid = _table_grid(csv_path, rows, given_grid, stand_path)
+    return Plan(csv_path, columns, records, rows, grid, stands, settings, given_raw)
+
+
 def _parse_row(csv_path: Path, line: int, rec: dict, extra_cols: list[str]) -> CaptureRow:
     """One record of ``capture.csv`` (``line``: its last physical line)."""
     where = f"{csv_path}: line {line}"
@@ -468,6 +627,7 @@ def _parse_row(csv_path: Path, line: int, rec: dict, extra_cols: list[str]) -> C
         raise CaptureError(f"{where}: column 'file' is empty")
     if not fname.isprintable():
         raise CaptureError(f"{where}: file {fname!r:.60} contains control characters")
+    _check_file_name(where, fname)
     if Path(fname).suffix.lower() not in FORMATS:
         raise CaptureError(
             f"{where}: {fname!r:.60} has an unsupported extension; valid: {', '.join(FORMATS)}"
@@ -537,9 +697,9 @@ def plan_rows(
     ``white`` one white-reference row per light direction follows, with the
     camera along the normal (``white/l<theta_l>_<phi_l>.<ext>``, blank kappa).
     """
-    ext = extension.lstrip(".").lower()
+    ext = extension.lstrip(".").lower() if isinstance(extension, str) else ""
     if f".{ext}" not in (".png", ".tif", ".tiff", ".exr"):
-        raise ValueError(f"extension: {extension!r} is not one of png, tif, tiff, exr")
+        raise OptionError(f"extension: {extension!r:.40} is not one of png, tif, tiff, exr")
     hid = hidden_mask(grid, stands, pixel_mm=pixel_mm, patch_px=patch_px)
     rows: list[dict[str, Any]] = []
     for k, kappa in enumerate(grid.kappa):
@@ -589,8 +749,24 @@ def bracket_rows(rows: Sequence[Mapping[str, Any]], exposures: Sequence[float]) 
 
 def write_rows(path: str | PathLike[str], rows: Sequence[Mapping[str, Any]],
                columns: Sequence[str] = PLAN_COLUMNS) -> None:
-    """Write ``rows`` (dicts keyed by column) as a ``capture.csv`` with the header ``columns``."""
-    with open(path, "w", newline="", encoding="utf-8") as fh:
+    """Write ``rows`` (dicts keyed by column) as a ``capture.csv`` with the header ``columns``.
+
+    Each row's ``file`` must be a relative path inside the capture folder,
+    and no two rows may name the same photograph (the rules of
+    :func:`read_capture`): :class:`CaptureError` naming the line otherwise,
+    before anything is written. The file is written atomically
+    (:func:`cdbrdf.fsutil.atomic_path`: never over a device or a FIFO).
+    """
+    names = []
+    for line, r in enumerate(rows, start=2):
+        fname = str(r.get("file") or "").strip()
+        where = f"{path}: line {line}"
+        if not fname:
+            raise CaptureError(f"{where}: column 'file' is empty")
+        _check_file_name(where, fname)
+        names.append((line, fname))
+    _check_duplicates(Path(path), names)
+    with atomic_path(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=list(columns))
         w.writeheader()
         w.writerows(rows)
@@ -616,6 +792,8 @@ def write_plan(
     """
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
+    for name in (CAPTURE_FILE, STAND_FILE):
+        check_output_file(out / name)  # before either is written
     rows = plan_rows(grid, stands, extension=extension, white=white, pixel_mm=pixel_mm,
                      patch_px=patch_px)
     if len(exposures) != 1 or float(exposures[0]) != 1.0:

@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import re
+import shutil
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -21,7 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..fsutil import OWNER_MARK, atomic_path, is_owned, mark_owned, remove_owned, sweep_stale
+from ..fsutil import OWNER_MARK, atomic_path, is_owned, mark_owned, remove_owned, sweep_stale, temp_sibling
 from .preflight import first_line
 
 __all__ = ["Checkpoint", "checkpoint_path", "CHECKPOINT_VERSION"]
@@ -40,19 +42,8 @@ def checkpoint_path(output: str | PathLike[str]) -> Path:
 _CKPT_KIND = "checkpoint"
 _KEY_FILE = "key.json"
 _BATCH_RE = re.compile(r"^batch-\d{8}\.npz$")
-#: names in a checkpoint written by cdbrdf before folders carried the owner mark
-_LEGACY_RE = re.compile(r"^(key\.json|batch-\d{8}\.npz|\.batch-[A-Za-z0-9_]+\.npz)$")
 #: temporaries of :func:`cdbrdf.fsutil.atomic_path` inside a checkpoint: ``.<dest>.<pid>.<host>.<rand>.tmp``
 _TEMP_DEST_RE = re.compile(r"^\.(key\.json|batch-\d{8}\.npz)\.\d+\.[0-9a-f]{8}\.[0-9a-f]{8}\.tmp$")
-
-
-def _checkpoint_layout(folder: Path) -> bool:
-    """True when ``folder`` holds nothing but what cdbrdf's checkpoints hold."""
-    try:
-        names = [p.name for p in folder.iterdir()]
-    except OSError:
-        return False
-    return all(n == OWNER_MARK or _LEGACY_RE.match(n) or _TEMP_DEST_RE.match(n) for n in names)
 
 
 def _read_key(folder: Path) -> object:
@@ -66,10 +57,10 @@ class Checkpoint:
     """Results of finished images, one ``.npz`` file per batch (each written atomically).
 
     The folder carries cdbrdf's owner mark (:func:`cdbrdf.fsutil.mark_owned`);
-    a folder of that name that cdbrdf did not make is never touched. A folder
-    of the layout written by earlier versions (``key.json`` and
-    ``batch-*.npz`` only) is adopted. An unreadable batch is ignored (its
-    photographs are read again) with a warning.
+    a folder of that name without the mark is refused and never touched,
+    whatever it holds (names like ``key.json`` or ``batch-*.npz`` prove
+    nothing). An unreadable batch is ignored (its photographs are read
+    again) with a warning.
     """
 
     def __init__(self, folder: Path | None, key: str, *, legacy_keys: tuple[str, ...] = (),
@@ -78,22 +69,21 @@ class Checkpoint:
         self.key = key
         self.patch = patch
         self.done: dict[int, tuple[tuple[int, int], int, NDArray | None, NDArray | None, str]] = {}
+        #: the folder was created by this object (not resumed), and batches it saved since
+        self.created = False
+        self.saved = 0
         if folder is None:
             return
         self._sweep_leftovers()
         accepted = [{"key": k, "version": CHECKPOINT_VERSION} for k in (key, *legacy_keys)]
         if folder.exists() or folder.is_symlink():
             if not is_owned(folder, _CKPT_KIND):
-                legacy = folder.is_dir() and not folder.is_symlink() and not (folder / OWNER_MARK).exists() \
-                    and _checkpoint_layout(folder)
-                if not legacy:
-                    raise FileExistsError(
-                        f"{folder}: exists and is not a checkpoint made by cdbrdf measure; "
-                        "move it away or choose another output name"
-                    )
-                for p in folder.glob(".batch-*.npz"):  # temporaries of earlier versions
-                    p.unlink(missing_ok=True)
-                mark_owned(folder, _CKPT_KIND)
+                # whatever it holds (even only a key.json or batch files, or nothing): not ours to delete
+                raise FileExistsError(
+                    f"{folder}: exists and is not a checkpoint made by cdbrdf measure (it has no "
+                    f"{OWNER_MARK} mark) and is left untouched; move it away (or delete it if it is a "
+                    "checkpoint of an older cdbrdf), or choose another output name"
+                )
             if _read_key(folder) not in accepted:
                 _LOG.warning("%s: checkpoint of a different run; starting afresh", folder)
                 remove_owned(folder, _CKPT_KIND)
@@ -104,32 +94,31 @@ class Checkpoint:
             if _read_key(folder) != accepted[0]:
                 self._write_key()
         else:
-            folder.mkdir()
-            mark_owned(folder, _CKPT_KIND)
-            self._write_key()
+            # made complete (marked, keyed) under a pid-tagged name, then renamed: a run killed
+            # half-way leaves a temporary that the next run sweeps, never an unmarked OUT.ckpt
+            tmp = temp_sibling(folder, "partial")
+            tmp.mkdir()
+            try:
+                mark_owned(tmp, _CKPT_KIND)
+                with atomic_path(tmp / _KEY_FILE) as key_tmp:
+                    key_tmp.write_text(json.dumps({"key": self.key, "version": CHECKPOINT_VERSION}),
+                                       encoding="utf-8")
+                os.rename(tmp, folder)
+            except BaseException:
+                shutil.rmtree(tmp, ignore_errors=True)
+                raise
+            self.created = True
 
     def _sweep_leftovers(self) -> None:
         """Remove what killed runs left: temporaries inside, half-removed checkpoints beside.
 
         :func:`cdbrdf.fsutil.remove_owned` renames the folder to a temporary
-        name before deleting it; a run killed then leaves that folder, maybe
-        without its marker. One that holds only checkpoint files gets the
-        marker back so that :func:`cdbrdf.fsutil.sweep_stale` (which checks
-        that its process is gone) removes it.
+        name (``.NAME.<pid>...old``) before deleting it; a run killed then
+        leaves that folder, maybe without its marker, which
+        :func:`cdbrdf.fsutil.sweep_stale` removes once its process is gone.
         """
         assert self.folder is not None
         folder = self.folder
-        prefix = f".{folder.name}."
-        try:
-            siblings = [p for p in folder.parent.iterdir() if p.name.startswith(prefix) and p.name.endswith(".old")]
-        except OSError:
-            siblings = []
-        for p in siblings:
-            try:
-                if p.is_dir() and not p.is_symlink() and not (p / OWNER_MARK).exists() and _checkpoint_layout(p):
-                    mark_owned(p, _CKPT_KIND)
-            except OSError:  # pragma: no cover - removed meanwhile
-                pass
         sweep_stale(folder)
         if is_owned(folder, _CKPT_KIND):
             dests = set()
@@ -197,6 +186,12 @@ class Checkpoint:
         with atomic_path(self.folder / f"batch-{rows[0]:08d}.npz") as tmp:
             with open(tmp, "wb") as fh:
                 np.savez(fh, **arrays)
+        self.saved += 1
+
+    def discard_if_empty(self) -> None:
+        """Delete the folder if this run created it and saved nothing in it (a run that failed at once)."""
+        if self.folder is not None and self.created and not self.saved:
+            remove_owned(self.folder, _CKPT_KIND)
 
     def remove(self) -> None:
         """Delete the checkpoint folder (once the output is written)."""

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import numbers
 from collections.abc import Callable
 from os import PathLike
 from pathlib import Path
@@ -37,13 +38,24 @@ from typing import Any
 
 from numpy.typing import NDArray
 
+from ..errors import OptionError
+from ..fsutil import check_output_file
 from ..table import CDBRDF
 from .calibrate import MeasureReport, assemble
 from .capture import CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
 from ..images import ImageError
 from .patch import read_patch
-from .preflight import bad_list_path, describe, preflight, problem, refuse_bad, refuse_overlap, remove_bad_list
+from .preflight import (
+    bad_list_path,
+    describe,
+    first_line,
+    preflight,
+    problem,
+    refuse_bad,
+    refuse_overlap,
+    remove_bad_list,
+)
 
 __all__ = [
     "measure",
@@ -80,23 +92,68 @@ def _read_task(path: str, n: int, cx: int | None, cy: int | None, linear: bool
     return 0, v, s, ""
 
 
+def _is_client(scheduler: Any) -> bool:
+    """Whether ``scheduler`` looks like a :class:`distributed.Client` (it maps and gathers)."""
+    return callable(getattr(scheduler, "map", None)) and callable(getattr(scheduler, "gather", None))
+
+
+def _check_scheduler(scheduler: Any) -> None:
+    """Refuse a ``scheduler`` that is none of the accepted kinds (before any work)."""
+    if scheduler is None or _is_client(scheduler):
+        return
+    if isinstance(scheduler, str):
+        if scheduler in LOCAL_SCHEDULERS:
+            return
+        addr = scheduler.strip()
+        if addr and addr == scheduler and addr.isprintable() and " " not in addr \
+                and ("://" in addr or ":" in addr) and not addr.endswith((":", "://")):
+            return
+    raise OptionError(
+        f"scheduler: {scheduler!r:.60} is neither a scheduler address (tcp://host:port), "
+        f"a distributed.Client nor one of {', '.join(LOCAL_SCHEDULERS)}"
+    )
+
+
 def _open_client(scheduler: Any):  # noqa: ANN202
     """A distributed client for an address or a Client; None for local schedulers."""
     if scheduler is None or (isinstance(scheduler, str) and scheduler in LOCAL_SCHEDULERS):
         return None, False
     if isinstance(scheduler, str):
-        if "://" not in scheduler and ":" not in scheduler:
-            raise ValueError(
-                f"scheduler: {scheduler!r} is neither a scheduler address (tcp://host:port) "
-                f"nor one of {', '.join(LOCAL_SCHEDULERS)}"
-            )
         from distributed import Client
 
         try:
             return Client(scheduler, timeout="10s", set_as_default=False), True
-        except OSError as exc:
-            raise OSError(f"scheduler {scheduler}: cannot connect ({exc})") from None
+        except (OSError, ValueError, TypeError) as exc:  # unreachable, or an address distributed refuses
+            raise OSError(f"scheduler {scheduler}: cannot connect ({first_line(exc) or type(exc).__name__})"
+                          ) from None
     return scheduler, False
+
+
+def _positive_int(name: str, value: Any, *, none_ok: bool = False) -> None:
+    if value is None and none_ok:
+        return
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise OptionError(f"{name}: expected a positive whole number{' or None' if none_ok else ''}, "
+                          f"got {value!r:.40}")
+
+
+def _check_options(*, patch: Any, batch_size: Any, num_workers: Any, scheduler: Any, white_albedo: Any,
+                   material: Any, progress: Any) -> None:
+    """Refuse a bad option of :func:`measure` before anything is read or created."""
+    _positive_int("patch", patch)
+    _positive_int("batch_size", batch_size)
+    _positive_int("num_workers", num_workers, none_ok=True)
+    _check_scheduler(scheduler)
+    if white_albedo is not None:
+        a = white_albedo
+        if isinstance(a, bool) or not isinstance(a, numbers.Real) or not 0 < float(a) <= 1.5:
+            raise OptionError(f"white_albedo: expected a number in (0, 1.5] or None, got {a!r:.40}")
+    if material is not None and (not isinstance(material, str) or not material.strip()
+                                 or len(material) > 200 or not material.isprintable()):
+        raise OptionError(f"material: expected a printable name (1 to 200 characters) or None, "
+                          f"got {material!r:.40}")
+    if progress is not None and not callable(progress):
+        raise OptionError(f"progress: expected a callable progress(done, total) or None, got {progress!r:.40}")
 
 
 def _compute(jobs: list[tuple], scheduler: Any, client: Any, num_workers: int | None) -> list:
@@ -111,6 +168,52 @@ def _compute(jobs: list[tuple], scheduler: Any, client: Any, num_workers: int | 
     if num_workers and kw["scheduler"] != "synchronous":
         kw["num_workers"] = num_workers
     return list(dask.compute(*tasks, **kw))
+
+
+def _run(cap: Any, needed: list[int], bad: dict[int, tuple[int, str]], stats: dict[int, tuple[int, int]],
+         paths: dict[int, Path], ck: Checkpoint, lin: Callable[[CaptureRow], bool], *, patch: int,
+         batch_size: int, scheduler: Any, client: Any, num_workers: int | None,
+         progress: Callable[[int, int], None] | None, interrupt_after: int | None,
+         ) -> tuple[dict[int, tuple[int, NDArray | None, NDArray | None, str]], dict[int, tuple[int, str]], int]:
+    """Read every needed photograph not in the checkpoint; ``(results, failed, resumed)``."""
+    results: dict[int, tuple[int, NDArray | None, NDArray | None, str]] = {}
+    for i, (status, why) in bad.items():
+        results[i] = (status, None, None, why)
+    resumed = 0
+    for i in needed:
+        if i in results:
+            continue
+        got = ck.done.get(i)
+        if got is not None and got[0] == stats[i] and got[1] == 0:  # failures are tried again
+            results[i] = got[1:]
+            resumed += 1
+    todo = [i for i in needed if i not in results]
+    total = len(needed)
+    if progress is not None:
+        progress(len(results), total)
+    failed: dict[int, tuple[int, str]] = {i: (r[0], r[3]) for i, r in results.items() if r[0] != 0 and i not in bad}
+    done_now = 0
+    for b in range(0, len(todo), batch_size):
+        batch = todo[b : b + batch_size]
+        jobs = [
+            (str(paths[i]), patch, cap.rows[i].cx, cap.rows[i].cy, lin(cap.rows[i]))
+            for i in batch
+        ]
+        out = _compute(jobs, scheduler, client, num_workers)
+        new = {}
+        for i, (status, v, s, msg) in zip(batch, out):
+            if status != 0:
+                failed[i] = (status, msg)
+            new[i] = (stats[i], status, v, s, msg)
+        ck.add(new)
+        for i, val in new.items():
+            results[i] = val[1:]
+        done_now += len(batch)
+        if progress is not None:
+            progress(len(results), total)
+        if interrupt_after is not None and done_now >= interrupt_after:
+            raise MeasurementInterrupted(f"test hook: interrupted after {done_now} photographs")
+    return results, failed, resumed
 
 
 def measure(
@@ -191,34 +294,36 @@ def measure(
     CaptureError
         The capture table or stand file is malformed, or an output would
         replace an input.
+    OptionError
+        An option has an invalid value (``patch``, ``batch_size``,
+        ``num_workers``, ``scheduler``, ``white_albedo``, ``material``,
+        ``progress``); checked before anything is read or created.
+    IsADirectoryError, FileNotFoundError
+        ``output`` is empty or a folder, or its folder does not exist
+        (before any work).
     FileExistsError
-        ``output`` exists and ``overwrite`` is False, or ``<output>.ckpt``
-        exists and is not a checkpoint cdbrdf made.
+        ``output`` exists and ``overwrite`` is False, exists and is not a
+        regular file (a device, a FIFO: never replaced), or ``<output>.ckpt``
+        exists and is not a checkpoint cdbrdf made (all before any work).
+    OSError
+        A scheduler address that cannot be reached (before the checkpoint
+        is created).
     """
-    if int(patch) != patch or patch < 1:
-        raise ValueError(f"patch: expected a positive integer, got {patch!r}")
-    if batch_size < 1:
-        raise ValueError(f"batch_size: must be positive, got {batch_size!r}")
-    out_path = None if output is None else Path(output)
+    _check_options(patch=patch, batch_size=batch_size, num_workers=num_workers, scheduler=scheduler,
+                   white_albedo=white_albedo, material=material, progress=progress)
+    patch = int(patch)
+    out_path = None if output is None else check_output_file(output)  # a folder, a device: refused now
     if out_path is not None:
-        out_dir = out_path.parent
-        if not out_dir.is_dir():
-            raise FileNotFoundError(f"{output}: the folder {out_dir} does not exist")
-    cap = read_capture(folder, patch=int(patch))
+        check_output_file(bad_list_path(out_path))
+        if not overwrite and (out_path.exists() or out_path.is_symlink()):
+            raise FileExistsError(f"{out_path}: already exists (use --force to overwrite)")
+    cap = read_capture(folder, patch=patch)
     ck_path = checkpoint_path(out_path) if (out_path is not None and checkpoint) else None
     if out_path is not None:
         refuse_overlap(cap, [ck_path] if ck_path is not None else [],
                        [out_path, bad_list_path(out_path)])
-        if not overwrite and (out_path.exists() or out_path.is_symlink()):
-            raise FileExistsError(f"{out_path}: already exists (use --force to overwrite)")
     enc = cap.settings.get("encoding")
-    albedo = white_albedo if white_albedo is not None else cap.settings.get("white_albedo", 1.0)
-    try:
-        albedo = float(albedo)
-    except (TypeError, ValueError):
-        raise ValueError(f"white_albedo: expected a number, got {albedo!r}") from None
-    if not 0 < albedo <= 1.5:
-        raise ValueError(f"white_albedo: expected a value in (0, 1.5], got {albedo:g}")
+    albedo = float(white_albedo if white_albedo is not None else cap.settings.get("white_albedo", 1.0))
 
     # which rows are read
     needed: list[int] = []
@@ -231,7 +336,7 @@ def measure(
     except (OSError, RuntimeError):
         root = cap.folder.absolute()
     paths = {i: root / cap.rows[i].file for i in needed}
-    stats, bad = preflight(cap, needed, paths, int(patch))
+    stats, bad = preflight(cap, needed, paths, patch)
     if bad and not skip_bad:
         refuse_bad(cap, bad, paths, out_path, during=False)
 
@@ -242,59 +347,34 @@ def measure(
             return enc == "linear"
         return bool(linear)
 
-    key_doc: dict[str, Any] = {"capture": cap.digest, "patch": int(patch), "linear": bool(linear),
+    key_doc: dict[str, Any] = {"capture": cap.digest, "patch": patch, "linear": bool(linear),
                                "needed": len(needed)}
     key = hashlib.sha256(json.dumps(key_doc, sort_keys=True).encode()).hexdigest()
     # checkpoints of earlier versions also hashed skip_bad (which does not change what is read)
     legacy = hashlib.sha256(json.dumps({**key_doc, "skip_bad": bool(skip_bad)}, sort_keys=True).encode()
                             ).hexdigest()
-    ck = Checkpoint(ck_path, key, legacy_keys=(legacy,), patch=int(patch))
-    results: dict[int, tuple[int, NDArray | None, NDArray | None, str]] = {}
-    for i, (status, why) in bad.items():
-        results[i] = (status, None, None, why)
-    resumed = 0
-    for i in needed:
-        if i in results:
-            continue
-        got = ck.done.get(i)
-        if got is not None and got[0] == stats[i] and got[1] == 0:  # failures are tried again
-            results[i] = got[1:]
-            resumed += 1
-    todo = [i for i in needed if i not in results]
-    total = len(needed)
-    if progress is not None:
-        progress(len(results), total)
-    failed: dict[int, tuple[int, str]] = {i: (r[0], r[3]) for i, r in results.items() if r[0] != 0 and i not in bad}
-    client, own_client = _open_client(scheduler)
+    client, own_client = _open_client(scheduler)  # an unreachable scheduler: before the checkpoint exists
     try:
-        done_now = 0
-        for b in range(0, len(todo), batch_size):
-            batch = todo[b : b + batch_size]
-            jobs = [
-                (str(paths[i]), int(patch), cap.rows[i].cx, cap.rows[i].cy, lin(cap.rows[i]))
-                for i in batch
-            ]
-            out = _compute(jobs, scheduler, client, num_workers)
-            new = {}
-            for i, (status, v, s, msg) in zip(batch, out):
-                if status != 0:
-                    failed[i] = (status, msg)
-                new[i] = (stats[i], status, v, s, msg)
-            ck.add(new)
-            for i, val in new.items():
-                results[i] = val[1:]
-            done_now += len(batch)
-            if progress is not None:
-                progress(len(results), total)
-            if _interrupt_after is not None and done_now >= _interrupt_after:
-                raise MeasurementInterrupted(f"test hook: interrupted after {done_now} photographs")
+        ck = Checkpoint(ck_path, key, legacy_keys=(legacy,), patch=patch)
+    except BaseException:
+        if own_client:
+            client.close()
+        raise
+    try:
+        results, failed, resumed = _run(cap, needed, bad, stats, paths, ck, lin, patch=patch,
+                                        batch_size=batch_size, scheduler=scheduler, client=client,
+                                        num_workers=num_workers, progress=progress,
+                                        interrupt_after=_interrupt_after)
+    except BaseException:
+        ck.discard_if_empty()  # made by this run and nothing saved: leave nothing behind
+        raise
     finally:
         if own_client:
             client.close()
     if failed and not skip_bad:
         refuse_bad(cap, failed, paths, out_path, during=True)
 
-    table, report = assemble(cap, results, albedo=albedo, patch=int(patch), linear=bool(linear),
+    table, report = assemble(cap, results, albedo=albedo, patch=patch, linear=bool(linear),
                              material=material)
     report.n_images_resumed = resumed
     if out_path is not None:

@@ -54,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import limits
 from ..errors import CaptureError
 from ..frames import direction_from_angles
+from ..fsutil import atomic_path, read_regular
 from ..table import Grid
 
 __all__ = [
@@ -63,6 +64,8 @@ __all__ = [
     "hidden_mask",
     "footprint_mm",
     "load_json_object",
+    "read_json_object",
+    "read_input",
     "parse_stands",
     "read_stands",
     "write_stands",
@@ -239,10 +242,13 @@ def hidden_mask(
 def load_json_object(path: str | PathLike[str]) -> dict[str, Any]:
     """Read a small JSON object file (``stands.json``) defensively.
 
-    The file's size is checked against the ``json_bytes`` limit before it is
-    read; bytes that are not UTF-8, invalid JSON, nesting too deep for the
-    parser, integers too long to convert and a top level that is not an object
-    are refused.
+    The file must be a regular file (a FIFO or a device such as
+    ``/dev/zero`` is refused before it is opened, so reading neither blocks
+    nor runs without end) and is read with a bounded read: at most the
+    ``json_bytes`` limit plus one byte, a larger file being refused. Bytes
+    that are not UTF-8, invalid JSON, nesting too deep for the parser,
+    integers too long to convert and a top level that is not an object are
+    refused.
 
     Raises
     ------
@@ -251,16 +257,13 @@ def load_json_object(path: str | PathLike[str]) -> dict[str, Any]:
     LimitError
         When the file is larger than the ``json_bytes`` limit.
     """
+    return read_json_object(path)[0]
+
+
+def read_json_object(path: str | PathLike[str]) -> tuple[dict[str, Any], bytes]:
+    """:func:`load_json_object` and the bytes it parsed (read once)."""
     p = Path(path)
-    try:
-        size = p.stat().st_size
-    except OSError as exc:
-        raise CaptureError(f"{p}: cannot be read ({exc.strerror or exc})") from None
-    limits.check("json_bytes", size, what=f"{p}: JSON file")
-    try:
-        raw = p.read_bytes()
-    except OSError as exc:
-        raise CaptureError(f"{p}: cannot be read ({exc.strerror or exc})") from None
+    raw = read_input(p, "json_bytes", what=f"{p}: JSON file")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -276,7 +279,33 @@ def load_json_object(path: str | PathLike[str]) -> dict[str, Any]:
         raise CaptureError(f"{p}: not valid JSON ({str(exc).splitlines()[0]})") from None
     if not isinstance(doc, dict):
         raise CaptureError(f"{p}: expected a JSON object, got {type(doc).__name__}")
-    return doc
+    return doc, raw
+
+
+def read_input(path: str | PathLike[str], limit_name: str, *, what: str) -> bytes:
+    """The bytes of a small input file of the capture folder (``stands.json``, ``capture.csv``).
+
+    The file must be a regular file (:func:`cdbrdf.fsutil.read_regular`: a
+    FIFO or a device is refused before it is opened) and is read with a
+    bounded read of at most the limit ``limit_name`` (bytes) plus one.
+
+    Raises
+    ------
+    CaptureError
+        When it is not a regular file or cannot be read (names the file).
+    LimitError
+        When it is larger than the limit.
+    """
+    p = Path(path)
+    cap = limits.limit(limit_name).value()
+    try:
+        raw = read_regular(p, max_bytes=cap)
+        size = len(raw) if len(raw) <= cap else max(len(raw), p.stat().st_size)
+    except OSError as exc:  # not a regular file (no strerror: the message says what it is), unreadable
+        why = f"cannot be read ({exc.strerror})" if exc.strerror else str(exc).removeprefix(f"{p}: ")
+        raise CaptureError(f"{p}: {why}") from None
+    limits.check(limit_name, size, what=what)
+    return raw
 
 
 def _reject_constant(name: str) -> float:
@@ -360,6 +389,7 @@ def read_stands(path: str | PathLike[str]) -> dict[float, Stand]:
 
 
 def write_stands(path: str | PathLike[str], stands: Iterable[Stand], **extra: Any) -> None:
-    """Write ``stands.json``: ``{"stands": [...], ...extra}``."""
+    """Write ``stands.json``: ``{"stands": [...], ...extra}`` (atomically: :func:`cdbrdf.fsutil.atomic_path`)."""
     doc = {"stands": [s.to_dict() for s in stands], **extra}
-    Path(path).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")

@@ -40,7 +40,9 @@ __all__ = [
 FIGURE_FORMATS: Mapping[str, str] = MappingProxyType({".png": "png", ".pdf": "pdf", ".svg": "svg"})
 
 
-def luminance(values: ArrayLike, *, channel: int | str | None = None, channels: Sequence[str] | None = None) -> NDArray[np.float64]:
+def luminance(
+    values: ArrayLike, *, channel: int | str | None = None, channels: Sequence[str] | None = None
+) -> NDArray[np.float64]:
     """Luminance (or one channel) of linear values ``(..., channel)``, as figures show it.
 
     :func:`cdbrdf.colour.luminance` for RGB; tables with other channel counts

@@ -132,19 +132,24 @@ def plot_slice(
                 yy = luminance(v, channel=channel, channels=table.channels)
                 meas = table.measured[ik, jl, il, jv][sel]
                 ax.scatter(sign * tv[meas], yy[meas], s=12, color=c, zorder=3, linewidths=0)
-                ax.scatter(sign * tv[~meas], yy[~meas], s=14, facecolors="white", edgecolors=c, zorder=3, linewidths=0.9)
+                ax.scatter(sign * tv[~meas], yy[~meas], s=14, facecolors="white", edgecolors=c, zorder=3,
+                           linewidths=0.9)
 
     ax.axvline(tl, color="0.5", lw=0.6, ls="--")
     ax.axvline(-tl, color="0.5", lw=0.6, ls=":")
     ax.axvline(0, color="0.8", lw=0.5)
     ax.set_xlim(-tmax, tmax)
     ax.set_ylim(bottom=min(0.0, float(np.min(y))))
-    side = {"incidence": ("light side", "mirror side"), "perpendicular": ("\u03c6$_l$+270\u00b0", "\u03c6$_l$+90\u00b0")}[plane]
+    side = {
+        "incidence": ("light side", "mirror side"),
+        "perpendicular": ("\u03c6$_l$+270\u00b0", "\u03c6$_l$+90\u00b0"),
+    }[plane]
     ax.set_xlabel(f"signed view elevation \u03b8$_v$ [\u00b0]  ({side[0]} \u2190 | \u2192 {side[1]})", fontsize=8)
     unit = unit_label(table.quantity)
-    what = "luminance Y" if channel is None and table.n_channels == 3 else (
-        f"channel {table.channels[channel_index(channel, table.n_channels, table.channels)]}" if channel is not None else table.channels[0]
-    )
+    if channel is None:
+        what = "luminance Y" if table.n_channels == 3 else table.channels[0]
+    else:
+        what = f"channel {table.channels[channel_index(channel, table.n_channels, table.channels)]}"
     ax.set_ylabel(f"{what} [{unit}]", fontsize=8)
     ax.tick_params(labelsize=7)
     name = table.attrs.get("material") or "CDBRDF"

@@ -25,6 +25,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from ..curvature import ATTRIBUTES
 from ..errors import TableError
 from ..interp import LookupGrid, prepare
 from . import _lookup_jit as lj
@@ -54,11 +55,10 @@ MODES: tuple[str, ...] = ("cdbrdf", "brdf")
 #: Valid values of the ``sampling`` parameter.
 SAMPLINGS: tuple[str, ...] = ("table", "cosine")
 
-#: ``curvature_mode`` -> the mesh attribute it reads (mm^-1, written by ``cdbrdf curvature``).
-CURVATURE_MODES: Mapping[str, str] = MappingProxyType({
-    "max": "vertex_curvature",  # principal curvature of larger magnitude, signed
-    "directional": "vertex_curvature_dir",  # normal curvature along the material x axis
-})
+#: ``curvature_mode`` -> the mesh attribute it reads (mm^-1, written by ``cdbrdf curvature``):
+#: ``max`` the principal curvature of larger magnitude, signed; ``directional`` the normal
+#: curvature along the material's x axis (owned by :data:`cdbrdf.curvature.ATTRIBUTES`).
+CURVATURE_MODES: Mapping[str, str] = MappingProxyType(dict(ATTRIBUTES))
 
 #: Valid values of ``storage``: how the table is held on the device (``auto``:
 #: ``packed`` RGB fixed point, ``float`` when a gradient is requested or in spectral variants).

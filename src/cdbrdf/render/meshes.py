@@ -6,6 +6,13 @@ and concave valleys, growing towards the hem. It exercises both signs of
 curvature over the range of the paper's stands (|kappa| up to about
 0.2 mm^-1) on one surface, with a planar UV map (u along x, v along y), so
 the material's reference tangent x is the same everywhere seen from above.
+
+:func:`skirt_mesh` is a garment as a fashion CAD tool exports it: Y-up, in
+millimetres, two panels (front and back) sewn along the side seams with
+*opposite* winding (each panel wound as it was drawn), vertical folds growing
+towards the hem, one UV chart per panel (u around the body, across the
+folds), and a sash hanging at the front that is a *double-sided* panel: the
+same triangles twice, once with each winding.
 """
 
 from __future__ import annotations
@@ -13,10 +20,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .meshio import Mesh
 
-__all__ = ["DrapedCloth", "draped_cloth_height", "draped_cloth_mesh"]
+__all__ = ["DrapedCloth", "draped_cloth_height", "draped_cloth_mesh", "Skirt", "skirt_mesh"]
 
 
 @dataclass(frozen=True)
@@ -57,7 +65,7 @@ class DrapedCloth:
             raise ValueError(f"resolution: must be an integer >= 8, got {self.resolution!r}")
 
 
-def draped_cloth_height(x_mm, y_mm, cloth: DrapedCloth = DrapedCloth()):
+def draped_cloth_height(x_mm: ArrayLike, y_mm: ArrayLike, cloth: DrapedCloth = DrapedCloth()) -> NDArray[np.float64]:
     """Height (mm) of the draped cloth at ``(x, y)`` (mm)."""
     x = np.asarray(x_mm, dtype=np.float64)
     y = np.asarray(y_mm, dtype=np.float64)
@@ -95,4 +103,104 @@ def draped_cloth_mesh(cloth: DrapedCloth = DrapedCloth()) -> Mesh:
     c = b + 1  # +x +y
     d = a + 1  # +y
     F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]).astype(np.int64)
-    return Mesh(V, F, N.reshape(-1, 3), U, {})
+    return Mesh(V, F, N.reshape(-1, 3), U, {}, metadata={"units": "mm", "up": "z"})
+
+
+@dataclass(frozen=True)
+class Skirt:
+    """Parameters of :func:`skirt_mesh` (lengths in mm).
+
+    Attributes
+    ----------
+    length_mm
+        Height from the hem (y = 0) to the waist.
+    waist_radius_mm, hem_radius_mm
+        Radius of the body at the waist and at the hem (a flared cone between).
+    folds
+        Number of vertical folds around the body.
+    fold_amplitude_mm
+        Radial amplitude of the folds at the hem (0 at the waist).
+    sash
+        Whether to add the double-sided sash at the front.
+    around, down
+        Vertices around each panel and from the waist to the hem.
+    """
+
+    length_mm: float = 560.0
+    waist_radius_mm: float = 130.0
+    hem_radius_mm: float = 300.0
+    folds: int = 22
+    fold_amplitude_mm: float = 22.0
+    sash: bool = True
+    around: int = 161
+    down: int = 121
+
+    def __post_init__(self) -> None:
+        for name in ("length_mm", "waist_radius_mm", "hem_radius_mm"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"{name}: must be a positive length in mm, got {v!r}")
+        if not (np.isfinite(self.fold_amplitude_mm) and 0 <= self.fold_amplitude_mm < self.waist_radius_mm):
+            raise ValueError(f"fold_amplitude_mm: must be in [0, waist_radius_mm), got {self.fold_amplitude_mm!r}")
+        if int(self.folds) != self.folds or self.folds < 0:
+            raise ValueError(f"folds: must be an integer >= 0, got {self.folds!r}")
+        for name in ("around", "down"):
+            v = getattr(self, name)
+            if int(v) != v or v < 4:
+                raise ValueError(f"{name}: must be an integer >= 4, got {v!r}")
+
+
+def _skirt_radius(theta: NDArray[np.float64], y: NDArray[np.float64], sk: Skirt) -> NDArray[np.float64]:
+    t = 1.0 - y / sk.length_mm  # 0 at the waist, 1 at the hem
+    r = sk.waist_radius_mm + (sk.hem_radius_mm - sk.waist_radius_mm) * t
+    return r + sk.fold_amplitude_mm * t**1.5 * np.cos(sk.folds * theta)
+
+
+def _grid_faces(n_a: int, n_d: int, offset: int, outward: bool) -> NDArray[np.int64]:
+    i, j = np.meshgrid(np.arange(n_a - 1), np.arange(n_d - 1), indexing="ij")
+    a = (i * n_d + j).ravel() + offset
+    b = a + n_d  # next around
+    c = b + 1  # next around, next down
+    d = a + 1  # next down
+    f = np.concatenate([np.stack([a, c, b], 1), np.stack([a, d, c], 1)]).astype(np.int64)
+    return f if outward else f[:, ::-1]
+
+
+def skirt_mesh(skirt: Skirt = Skirt()) -> Mesh:
+    """The skirt of :class:`Skirt` as a mesh with per-panel UVs (see the module's description).
+
+    Vertices are Y-up in mm (the body's axis is y; the front faces +z); the
+    front panel winds counter-clockwise seen from outside, the back panel
+    the other way; the sash's two layers share positions and have their
+    own vertices, UVs and opposite windings. No normals are given (as in
+    many exports): which side is the front follows from the repair.
+    """
+    sk = skirt
+    y = np.linspace(sk.length_mm, 0.0, sk.down)
+    parts_v, parts_uv, parts_f = [], [], []
+    offset = 0
+    for k, (t0, t1) in enumerate(((-np.pi / 2, np.pi / 2), (np.pi / 2, 3 * np.pi / 2))):
+        th = np.linspace(t0, t1, sk.around)
+        T, Y = np.meshgrid(th, y, indexing="ij")
+        R = _skirt_radius(T, Y, sk)
+        V = np.stack([R * np.sin(T), Y, R * np.cos(T)], axis=-1).reshape(-1, 3)
+        U = np.stack([(T - t0) / (t1 - t0), Y / sk.length_mm], axis=-1).reshape(-1, 2)
+        parts_v.append(V)
+        parts_uv.append(U)
+        parts_f.append(_grid_faces(sk.around, sk.down, offset, outward=(k == 0)))
+        offset += V.shape[0]
+    if sk.sash:
+        n_a, n_d = 13, 61
+        th = np.linspace(-0.12, 0.12, n_a)
+        ys = np.linspace(sk.length_mm - 15.0, 0.55 * sk.length_mm, n_d)
+        T, Y = np.meshgrid(th, ys, indexing="ij")
+        R = _skirt_radius(T, Y, sk) + 12.0 + 4.0 * np.sin(np.pi * (sk.length_mm - Y) / (0.45 * sk.length_mm))
+        V = np.stack([R * np.sin(T), Y, R * np.cos(T)], axis=-1).reshape(-1, 3)
+        U = np.stack([(T - th[0]) / (th[-1] - th[0]), (Y - ys[-1]) / (ys[0] - ys[-1])], axis=-1).reshape(-1, 2)
+        for outward in (True, False):
+            parts_v.append(V)
+            parts_uv.append(U)
+            parts_f.append(_grid_faces(n_a, n_d, offset, outward=outward))
+            offset += V.shape[0]
+    return Mesh(np.concatenate(parts_v), np.concatenate(parts_f), None, np.concatenate(parts_uv), {},
+                metadata={"units": "mm", "up": "y", "format": "obj"})

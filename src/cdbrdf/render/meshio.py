@@ -1,52 +1,98 @@
-"""Small PLY / OBJ reader and PLY writer for triangle meshes with UVs and attributes.
+"""Mesh files in and out: PLY, OBJ, glTF/GLB, STL and OFF in; PLY (what Mitsuba reads) out.
 
-Only what the renderer needs: positions, optional normals and UVs, per-vertex
-scalar attributes, polygon faces (triangulated as fans). The PLY writer uses
-``binary_little_endian`` and names the curvature property so that Mitsuba's
-PLY loader turns it into the mesh attribute ``vertex_curvature``: Mitsuba keeps
-an unknown vertex property only when its name ends in a channel suffix
-(``curvature_x`` -> ``vertex_curvature`` with one channel; ``curvature_k`` is
-refused and a bare ``curvature`` dropped, each with a warning).
+Reading (:func:`read_mesh`, chosen by the file's suffix):
+
+- **PLY** with cdbrdf's reader (:mod:`cdbrdf.render._ply`): ASCII and binary,
+  any scalar types, polygons of any size, triangle strips, per-corner
+  ``texcoord`` lists, and the header's ``comment cdbrdf ...`` lines in which
+  :func:`write_ply` records the mesh's unit, up axis and how its curvature
+  was computed;
+- **OBJ, glTF/GLB, STL, OFF** through trimesh (``process=False``: nothing
+  merged or reordered): every object, group and glTF node (its transform
+  applied), polygons triangulated, OBJ's separate ``vt``/``vn`` indices
+  resolved into vertices, UVs (glTF: ``TEXCOORD_0`` of primitives with a
+  material, v flipped to OBJ's convention by trimesh; the frame uses dP/du,
+  which the flip leaves alone) and the file's own normals (not computed
+  ones).
+
+Every failure, of any kind, is one :class:`~cdbrdf.errors.MeshError` naming
+the file (no warning, no foreign exception); counts a header declares are
+checked against the file's size and the ``mesh_faces`` limit before anything
+is allocated.
+
+Writing (:func:`write_ply`): binary little-endian PLY, float32 positions,
+normals ``nx ny nz``, UVs ``u v``, tangents ``tangent_x ...`` and each
+attribute ``NAME`` as the property ``NAME_x``, which Mitsuba's PLY loader
+turns into the mesh attribute ``vertex_NAME`` (the curvature ``curvature``
+-> ``curvature_x`` -> ``vertex_curvature``; ``curvature_dir`` ->
+``vertex_curvature_dir``).
 """
 
 from __future__ import annotations
 
+import logging
+import math
 import re
+import warnings
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Mesh", "read_mesh", "read_ply", "read_obj", "write_ply", "CURVATURE_PLY_PROPERTY"]
+from ..errors import CDBRDFError, MeshError
+from ..limits import check
 
+__all__ = [
+    "MESH_FORMATS",
+    "CURVATURE_PLY_PROPERTY",
+    "Mesh",
+    "read_mesh",
+    "read_ply",
+    "read_obj",
+    "write_ply",
+]
+
+_LOG = logging.getLogger(__name__)
+
+#: Mesh file suffixes read by :func:`read_mesh`, and their format.
+MESH_FORMATS: dict[str, str] = {
+    ".ply": "ply", ".obj": "obj", ".gltf": "gltf", ".glb": "glb", ".stl": "stl", ".off": "off",
+}
 
 #: PLY vertex property written for the curvature (Mitsuba: attribute ``vertex_curvature``).
 CURVATURE_PLY_PROPERTY = "curvature_x"
 
-_PLY_TYPES = {
-    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
-    "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
-    "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
-    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
-}
+_UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
+_TANGENT_NAMES = (("tangent_x", "tangent_y", "tangent_z"), ("tx", "ty", "tz"))
+_KNOWN = {"x", "y", "z", "nx", "ny", "nz"} | {n for pair in _UV_NAMES for n in pair} | {
+    n for tri in _TANGENT_NAMES for n in tri}
 
 
 @dataclass
 class Mesh:
-    """A triangle mesh.
+    """A triangle mesh with what the renderer needs.
 
     Attributes
     ----------
     vertices
-        ``(n, 3)`` float64 positions.
+        ``(n, 3)`` float64 positions, in the mesh's unit.
     faces
         ``(m, 3)`` int64 vertex indices (counter-clockwise = front).
-    normals, uv
-        Optional ``(n, 3)`` vertex normals and ``(n, 2)`` texture coordinates.
+    normals, uv, tangents
+        Optional ``(n, 3)`` vertex normals, ``(n, 2)`` texture coordinates and
+        ``(n, 3)`` tangents.
     attributes
-        Extra per-vertex scalar arrays by name (e.g. ``"curvature"`` in mm^-1).
+        Per-vertex scalar arrays by name (``"curvature"``, ``"curvature_dir"``
+        in mm^-1).
+    metadata
+        What is known about the mesh: ``"format"``, ``"units"`` (as given to
+        :func:`cdbrdf.curvature.parse_units`), ``"up"`` (``"y"`` or ``"z"``),
+        ``"curvature_units"`` (``"1/mm"`` when the curvature is in mm^-1),
+        ``"neighbourhood_mm"``, ``"frame"``, and after
+        :func:`cdbrdf.render.scenes.prepare_mesh` ``"repairs"`` and ``"notes"``.
     """
 
     vertices: NDArray[np.float64]
@@ -54,232 +100,238 @@ class Mesh:
     normals: NDArray[np.float64] | None = None
     uv: NDArray[np.float64] | None = None
     attributes: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    tangents: NDArray[np.float64] | None = None
+    metadata: dict[str, Any] = field(default_factory=dict)
 
     @property
     def n_vertices(self) -> int:
+        """Number of vertices."""
         return int(self.vertices.shape[0])
+
+    def copy(self) -> Mesh:
+        """A copy whose arrays and dicts can be replaced without touching this mesh."""
+        return Mesh(self.vertices, self.faces, self.normals, self.uv, dict(self.attributes), self.tangents,
+                    dict(self.metadata))
 
 
 def read_mesh(path: str | PathLike[str]) -> Mesh:
-    """Read a ``.ply`` or ``.obj`` file (chosen by extension)."""
+    """Read a mesh file chosen by its suffix (:data:`MESH_FORMATS`).
+
+    Raises
+    ------
+    MeshError
+        For an unknown suffix or a file that cannot be read as a mesh (the
+        message names the file).
+    LimitError
+        For more faces than the ``mesh_faces`` limit.
+    """
     p = Path(path)
-    ext = p.suffix.lower()
-    if ext == ".ply":
-        return read_ply(p)
-    if ext == ".obj":
-        return read_obj(p)
-    raise ValueError(f"{p}: unknown mesh format {ext!r}; expected .ply or .obj")
+    fmt = MESH_FORMATS.get(p.suffix.lower())
+    if fmt is None:
+        raise MeshError(f"{p}: unknown mesh format {p.suffix.lower()!r}; expected {', '.join(MESH_FORMATS)}")
+    mesh = read_ply(p) if fmt == "ply" else _read_trimesh(p, fmt)
+    mesh.metadata.setdefault("source", str(p))
+    return mesh
 
 
-def _fan(polys: list[list[int]]) -> NDArray[np.int64]:
-    tris = []
-    for poly in polys:
-        for k in range(1, len(poly) - 1):
-            tris.append((poly[0], poly[k], poly[k + 1]))
-    return np.asarray(tris, dtype=np.int64).reshape(-1, 3)
+def _read_bytes(p: Path) -> bytes:
+    try:
+        return p.read_bytes()
+    except OSError as exc:
+        raise MeshError(f"{p}: cannot be read ({exc.strerror or exc})") from None
+
+
+def _metadata(comments: list[str]) -> dict[str, Any]:
+    meta: dict[str, Any] = {}
+    for c in comments:
+        w = c.split(None, 2)
+        if len(w) == 3 and w[0] == "cdbrdf":
+            meta[w[1]] = w[2].strip()
+    return meta
 
 
 def read_ply(path: str | PathLike[str]) -> Mesh:
-    """Read a PLY file (ASCII or binary) with a vertex and a face element."""
+    """Read a PLY file (see the module's description)."""
+    from ._ply import parse_ply
+
     p = Path(path)
-    with open(p, "rb") as fh:
-        if fh.readline().strip() != b"ply":
-            raise ValueError(f"{p}: not a PLY file (no 'ply' magic line)")
-        fmt = None
-        elements: list[tuple[str, int, list[tuple]]] = []
-        while True:
-            line = fh.readline()
-            if not line:
-                raise ValueError(f"{p}: PLY header has no end_header")
-            words = line.decode("ascii", "replace").split()
-            if not words or words[0] in ("comment", "obj_info"):
-                continue
-            if words[0] == "end_header":
-                break
-            if words[0] == "format":
-                fmt = words[1]
-            elif words[0] == "element":
-                elements.append((words[1], int(words[2]), []))
-            elif words[0] == "property":
-                if not elements:
-                    raise ValueError(f"{p}: PLY property before any element")
-                if words[1] == "list":
-                    elements[-1][2].append(("list", words[4], _PLY_TYPES[words[2]], _PLY_TYPES[words[3]]))
-                else:
-                    if words[1] not in _PLY_TYPES:
-                        raise ValueError(f"{p}: unknown PLY type {words[1]!r}")
-                    elements[-1][2].append(("scalar", words[2], _PLY_TYPES[words[1]]))
-        if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
-            raise ValueError(f"{p}: unsupported PLY format {fmt!r}")
-        data = fh.read()
-    end = "<" if fmt == "binary_little_endian" else ">"
-    vert = None
-    faces = None
-    pos = 0
-    tokens = data.split() if fmt == "ascii" else None
-    for name, count, props in elements:
-        if fmt == "ascii":
-            if all(pr[0] == "scalar" for pr in props):
-                n = len(props)
-                arr = np.asarray(tokens[pos:pos + n * count], dtype=np.float64).reshape(count, n)
-                pos += n * count
-                rec = {pr[1]: arr[:, i] for i, pr in enumerate(props)}
-            else:
-                rec = {}
-                polys = []
-                for _ in range(count):
-                    for pr in props:
-                        if pr[0] == "list":
-                            k = int(tokens[pos])
-                            vals = [int(t) for t in tokens[pos + 1:pos + 1 + k]]
-                            pos += 1 + k
-                            if pr[1] in ("vertex_indices", "vertex_index"):
-                                polys.append(vals)
-                        else:
-                            pos += 1
-                rec["__polys"] = polys
-        else:
-            if all(pr[0] == "scalar" for pr in props):
-                dt = np.dtype([(pr[1], end + pr[2]) for pr in props])
-                arr = np.frombuffer(data, dtype=dt, count=count, offset=pos)
-                pos += dt.itemsize * count
-                rec = {pr[1]: arr[pr[1]].astype(np.float64) for pr in props}
-            else:
-                rec = {}
-                polys = []
-                # Fast path: one list property of triangles.
-                if len(props) == 1 and props[0][0] == "list":
-                    _, pname, ct, it = props[0]
-                    dt = np.dtype([("n", end + ct), ("i", end + it, (3,))])
-                    if count and int(np.frombuffer(data, dtype=end + ct, count=1, offset=pos)[0]) == 3:
-                        arr = np.frombuffer(data, dtype=dt, count=count, offset=pos)
-                        if np.all(arr["n"] == 3):
-                            pos += dt.itemsize * count
-                            rec["__tris"] = arr["i"].astype(np.int64)
-                if "__tris" not in rec:
-                    for _ in range(count):
-                        for pr in props:
-                            if pr[0] == "list":
-                                cdt = np.dtype(end + pr[2])
-                                k = int(np.frombuffer(data, dtype=cdt, count=1, offset=pos)[0])
-                                pos += cdt.itemsize
-                                idt = np.dtype(end + pr[3])
-                                vals = np.frombuffer(data, dtype=idt, count=k, offset=pos).tolist()
-                                pos += idt.itemsize * k
-                                if pr[1] in ("vertex_indices", "vertex_index"):
-                                    polys.append(vals)
-                            else:
-                                pos += np.dtype(pr[2]).itemsize
-                    rec["__polys"] = polys
-        if name == "vertex":
-            vert = rec
-        elif name == "face":
-            faces = rec["__tris"] if "__tris" in rec else _fan(rec.get("__polys", []))
-    if vert is None or not all(k in vert for k in "xyz"):
-        raise ValueError(f"{p}: PLY file has no vertex element with x, y, z")
-    if faces is None:
-        raise ValueError(f"{p}: PLY file has no face element")
+    data = _read_bytes(p)
+    with np.errstate(all="ignore"):
+        ply = parse_ply(data, str(p))
+    vert = ply.vertex
     v = np.stack([vert["x"], vert["y"], vert["z"]], axis=1)
-    normals = np.stack([vert[k] for k in ("nx", "ny", "nz")], axis=1) if all(k in vert for k in ("nx", "ny", "nz")) else None
-    uv = None
-    for a, b in (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t")):
-        if a in vert and b in vert:
-            uv = np.stack([vert[a], vert[b]], axis=1)
-            break
-    known = {"x", "y", "z", "nx", "ny", "nz", "u", "v", "s", "t", "texture_u", "texture_v", "texture_s", "texture_t"}
+    n = v.shape[0]
+    normals = np.stack([vert[k] for k in ("nx", "ny", "nz")], axis=1) if all(
+        k in vert for k in ("nx", "ny", "nz")) else None
+    uv = next((np.stack([vert[a], vert[b]], axis=1) for a, b in _UV_NAMES if a in vert and b in vert), None)
+    tangents = next((np.stack([vert[a] for a in tri], axis=1) for tri in _TANGENT_NAMES
+                     if all(a in vert for a in tri)), None)
     attrs = {}
     for k, a in vert.items():
-        if k in known:
+        if k in _KNOWN:
             continue
-        m = re.fullmatch(r"(.+)_[a-z]", k)
-        attrs[m.group(1) if m else k] = np.asarray(a, dtype=np.float64)
-    return Mesh(v, faces, normals, uv, attrs)
+        m = re.fullmatch(r"(.+)_x", k)
+        if m:
+            attrs[m.group(1)] = a
+    faces = ply.faces
+    if faces.size and int(faces.max()) >= n:
+        raise MeshError(f"{p}: faces refer to vertex {int(faces.max())} but there are {n}")
+    mesh = Mesh(v, faces, normals, uv, attrs, tangents, {"format": "ply", **_metadata(ply.comments)})
+    if ply.corner_uv is not None:
+        mesh = _split_corner_uv(mesh, ply.corner_uv)
+    return mesh
+
+
+def _split_corner_uv(mesh: Mesh, corner_uv: NDArray[np.float64]) -> Mesh:
+    """One vertex per distinct (vertex, UV) of the faces' corners (per-corner UVs -> per-vertex)."""
+    corners = mesh.faces.reshape(-1)
+    key = np.c_[corners.astype(np.float64), corner_uv.reshape(-1, 2)]
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    src = corners[first]
+    pick = (lambda a: None if a is None else a[src])  # noqa: E731 - tiny local helper
+    return Mesh(mesh.vertices[src], inv.reshape(-1, 3).astype(np.int64), pick(mesh.normals),
+                corner_uv.reshape(-1, 2)[first], {k: a[src] for k, a in mesh.attributes.items()},
+                pick(mesh.tangents), mesh.metadata)
 
 
 def read_obj(path: str | PathLike[str]) -> Mesh:
-    """Read a Wavefront OBJ (v, vt, vn, f); corners with distinct (v, vt, vn) become vertices."""
-    p = Path(path)
-    pos, tex, nor, polys = [], [], [], []
-    with open(p, encoding="utf-8", errors="replace") as fh:
-        for line in fh:
-            if not line or line[0] == "#":
-                continue
-            w = line.split()
-            if not w:
-                continue
-            if w[0] == "v":
-                pos.append([float(x) for x in w[1:4]])
-            elif w[0] == "vt":
-                tex.append([float(x) for x in w[1:3]])
-            elif w[0] == "vn":
-                nor.append([float(x) for x in w[1:4]])
-            elif w[0] == "f":
-                corners = []
-                for c in w[1:]:
-                    parts = (c.split("/") + ["", ""])[:3]
-                    idx = []
-                    for part, n in zip(parts, (len(pos), len(tex), len(nor))):
-                        if part == "":
-                            idx.append(-1)
-                        else:
-                            i = int(part)
-                            idx.append(i - 1 if i > 0 else n + i)
-                    corners.append(tuple(idx))
-                polys.append(corners)
-    if not pos:
-        raise ValueError(f"{p}: OBJ file has no vertices")
-    if not polys:
-        raise ValueError(f"{p}: OBJ file has no faces")
-    key: dict[tuple, int] = {}
-    out_polys = []
-    for poly in polys:
-        out_polys.append([key.setdefault(c, len(key)) for c in poly])
-    corners = np.asarray(list(key.keys()), dtype=np.int64).reshape(-1, 3)
-    P = np.asarray(pos, dtype=np.float64)
+    """Read a Wavefront OBJ (every object and group; see the module's description)."""
+    return _read_trimesh(Path(path), "obj")
+
+
+def _file_normals(geom: Any) -> NDArray[np.float64] | None:
+    """The normals a trimesh geometry was given by its file (not ones it would compute)."""
+    cache = getattr(getattr(geom, "_cache", None), "cache", None)
+    if isinstance(cache, dict) and "vertex_normals" in cache:
+        nn = np.asarray(cache["vertex_normals"], dtype=np.float64)
+        if nn.shape == geom.vertices.shape:
+            return nn
+    return None
+
+
+def _count_obj_faces(data: bytes) -> int:
+    return data.count(b"\nf ") + data.count(b"\nf\t") + int(data.startswith(b"f "))
+
+
+def _read_trimesh(p: Path, fmt: str) -> Mesh:
+    import trimesh
+
+    data = _read_bytes(p)
+    if fmt == "obj":
+        check("mesh_faces", _count_obj_faces(data), what=f"{p}: OBJ faces")
+    elif fmt == "stl" and len(data) >= 84 and not data[:5].lower() == b"solid":
+        check("mesh_faces", int.from_bytes(data[80:84], "little"), what=f"{p}: STL triangles")
     try:
-        v = P[corners[:, 0]]
-        has_t = tex and np.all(corners[:, 1] >= 0)
-        has_n = nor and np.all(corners[:, 2] >= 0)
-        uv = np.asarray(tex, dtype=np.float64)[corners[:, 1]] if has_t else None
-        normals = np.asarray(nor, dtype=np.float64)[corners[:, 2]] if has_n else None
-    except IndexError:
-        raise ValueError(f"{p}: a face refers to a vertex, UV or normal that does not exist") from None
-    return Mesh(v, _fan(out_polys), normals, uv, {})
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            scene = trimesh.load_scene(str(p), file_type=fmt, process=False)
+            parts = _scene_parts(scene)
+    except CDBRDFError:
+        raise
+    except (MemoryError, RecursionError):
+        raise MeshError(f"{p}: the file asks for more memory or nesting than it can hold (corrupt?)") from None
+    except Exception as exc:  # noqa: BLE001 - any failure of the foreign reader is the file's fault
+        msg = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise MeshError(f"{p}: cannot be read as {fmt.upper()} ({msg})") from None
+    if not parts:
+        raise MeshError(f"{p}: the file holds no triangle mesh")
+    vs, fs, uvs, ns = [], [], [], []
+    offset = 0
+    for v, f, uv, nn in parts:
+        vs.append(v)
+        fs.append(f + offset)
+        uvs.append(uv)
+        ns.append(nn)
+        offset += v.shape[0]
+    v_all = np.concatenate(vs)
+    f_all = np.concatenate(fs).astype(np.int64)
+    check("mesh_faces", f_all.shape[0], what=f"{p}: faces")
+    meta: dict[str, Any] = {"format": fmt}
+    if fmt in ("gltf", "glb"):
+        meta["units"] = "m"  # glTF's unit is the metre (glTF 2.0, 3.6)
+        meta["up"] = "y"  # and +Y is up
+    uv_all = np.concatenate(uvs) if all(u is not None for u in uvs) else None
+    if uv_all is None and any(u is not None for u in uvs):
+        meta["notes"] = [f"{sum(u is None for u in uvs)} of {len(uvs)} parts have no UVs: the UVs are not used"]
+    n_all = np.concatenate(ns) if all(n is not None for n in ns) else None
+    return Mesh(v_all, f_all, n_all, uv_all, {}, None, meta)
+
+
+def _scene_parts(scene: Any) -> list[tuple[NDArray[np.float64], NDArray[np.int64], Any, Any]]:
+    """Vertices (transformed), faces, UVs and file normals of every triangle mesh of a trimesh scene."""
+    import trimesh
+
+    parts = []
+    for node in scene.graph.nodes_geometry:
+        transform, gname = scene.graph[node]
+        geom = scene.geometry.get(gname)
+        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
+            continue
+        t = np.asarray(transform, dtype=np.float64)
+        v = np.asarray(geom.vertices, dtype=np.float64)
+        f = np.asarray(geom.faces, dtype=np.int64)
+        if f.ndim != 2 or f.shape[1] != 3:
+            raise MeshError("faces are not triangles")
+        v = v @ t[:3, :3].T + t[:3, 3]
+        uv = getattr(geom.visual, "uv", None) if geom.visual is not None else None
+        uv = np.asarray(uv, dtype=np.float64) if uv is not None and len(uv) == len(v) else None
+        nn = _file_normals(geom)
+        if nn is not None:
+            m = t[:3, :3]
+            try:
+                nn = nn @ np.linalg.inv(m)  # normals transform with the inverse transpose
+            except np.linalg.LinAlgError:
+                nn = None
+        parts.append((v, f, uv, nn))
+    return parts
+
+
+def _check_column(name: str, a: NDArray[Any] | None, shape: tuple[int, ...]) -> None:
+    if a is not None and np.shape(a) != shape:
+        raise MeshError(f"mesh: {name}: expected shape {shape}, got {np.shape(a)}")
 
 
 def write_ply(path: str | PathLike[str], mesh: Mesh) -> None:
     """Write ``mesh`` as binary little-endian PLY (float32 vertex data), atomically.
 
     Attributes are written as ``NAME_x`` float properties (Mitsuba loads them
-    as ``vertex_NAME``); the attribute ``curvature`` becomes ``curvature_x``.
+    as ``vertex_NAME``); the metadata ``units``, ``up``, ``curvature_units``,
+    ``neighbourhood_mm`` and ``frame`` as ``comment cdbrdf KEY VALUE`` lines.
     """
-    from ..io import atomic_path
+    from .._version import __version__
+    from ..fsutil import atomic_path
+    from ._ply import write_ply_bytes
 
     n = mesh.n_vertices
-    cols = [("x", mesh.vertices[:, 0]), ("y", mesh.vertices[:, 1]), ("z", mesh.vertices[:, 2])]
+    _check_column("vertices", mesh.vertices, (n, 3))
+    _check_column("normals", mesh.normals, (n, 3))
+    _check_column("uv", mesh.uv, (n, 2))
+    _check_column("tangents", mesh.tangents, (n, 3))
+    f = np.asarray(mesh.faces, dtype=np.int64)
+    if f.ndim != 2 or f.shape[1] != 3 or (f.size and (f.min() < 0 or f.max() >= n)):
+        raise MeshError(f"mesh: faces: expected (m, 3) indices of the {n} vertices")
+    cols: list[tuple[str, NDArray[Any]]] = [(c, mesh.vertices[:, i]) for i, c in enumerate("xyz")]
     if mesh.normals is not None:
-        cols += [("nx", mesh.normals[:, 0]), ("ny", mesh.normals[:, 1]), ("nz", mesh.normals[:, 2])]
+        cols += [(c, mesh.normals[:, i]) for i, c in enumerate(("nx", "ny", "nz"))]
     if mesh.uv is not None:
         cols += [("u", mesh.uv[:, 0]), ("v", mesh.uv[:, 1])]
+    if mesh.tangents is not None:
+        cols += [(c, mesh.tangents[:, i]) for i, c in enumerate(_TANGENT_NAMES[0])]
     for name, a in mesh.attributes.items():
         a = np.asarray(a, dtype=np.float64)
         if a.shape != (n,):
-            raise ValueError(f"attribute {name!r}: expected shape ({n},), got {a.shape}")
+            raise MeshError(f"mesh: attribute {name!r}: expected shape ({n},), got {a.shape}")
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
+            raise MeshError(f"mesh: attribute {name!r}: not a valid PLY property name")
         cols.append((f"{name}_x", a))
-    dt = np.dtype([(c, "<f4") for c, _ in cols])
-    vrec = np.empty(n, dtype=dt)
-    for c, a in cols:
-        vrec[c] = a
-    f = np.asarray(mesh.faces, dtype=np.int64)
-    frec = np.empty(f.shape[0], dtype=np.dtype([("n", "u1"), ("i", "<i4", (3,))]))
-    frec["n"] = 3
-    frec["i"] = f
-    header = ["ply", "format binary_little_endian 1.0", "comment written by cdbrdf",
-              f"element vertex {n}"]
-    header += [f"property float {c}" for c, _ in cols]
-    header += [f"element face {f.shape[0]}", "property list uchar int vertex_indices", "end_header"]
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as fh:
-            fh.write(("\n".join(header) + "\n").encode("ascii"))
-            fh.write(vrec.tobytes())
-            fh.write(frec.tobytes())
+    comments = [f"written by cdbrdf {__version__}"]
+    for key in ("units", "up", "curvature_units", "neighbourhood_mm", "frame"):
+        val = mesh.metadata.get(key)
+        if val is not None:
+            text = f"{val:g}" if isinstance(val, float) and math.isfinite(val) else str(val)
+            if "\n" in text or "\r" in text:
+                raise MeshError(f"mesh: metadata {key!r}: one line expected")
+            comments.append(f"cdbrdf {key} {text}")
+    data = write_ply_bytes(cols, f, comments)
+    with atomic_path(path, suffix=".ply") as tmp:
+        Path(tmp).write_bytes(data)

@@ -13,8 +13,9 @@ Mitsuba instantiates the objects:
   ``m_file / (s * unit_mm)``, with ``s`` the uniform scale of the shape's
   ``to_world``, ``unit_mm`` the scene's unit (mm per scene unit, default 1)
   and ``m_file`` the mesh file's unit (mm per file unit) when its PLY header
-  records one (``comment cdbrdf unit_mm=10``), else 1 (the project's
-  convention: lengths in mm unless a unit is given). The factor is given to the
+  records one (``comment cdbrdf units cm``, as :func:`cdbrdf.render.meshio.write_ply`
+  writes it), else 1 (the project's convention: lengths in mm unless a unit
+  is given). The factor is given to the
   shape's BSDF as ``curvature_scale`` (times any ``curvature_scale`` the
   scene sets); shapes with different factors get their own copy of the BSDF.
   A non-uniform ``to_world`` scale would change the curvature differently in
@@ -47,8 +48,8 @@ __all__ = ["LoadReport", "load_file", "ply_unit_mm", "uniform_scale"]
 
 _LOG = logging.getLogger(__name__)
 
-#: The PLY header comment that records a mesh file's unit, e.g. ``comment cdbrdf unit_mm=10``.
-_UNIT_COMMENT = re.compile(r"^comment\s+cdbrdf\b.*?\bunits?_mm\s*[=:]?\s*([-+0-9.eE]+)", re.IGNORECASE)
+#: The PLY header comment that records a mesh file's unit (``comment cdbrdf units cm``, ``... units 2.5``).
+_UNIT_COMMENT = re.compile(r"^comment\s+cdbrdf\s+units\s+(.+)$")
 
 #: Relative tolerance on the singular values of a "uniform" scale.
 _UNIFORM_RTOL = 1e-5
@@ -87,7 +88,14 @@ def uniform_scale(matrix: Any, *, what: str = "to_world") -> float:
 
 
 def ply_unit_mm(path: str | PathLike[str]) -> float | None:
-    """The unit (mm per file unit) a PLY header records (``comment cdbrdf unit_mm=...``), or None."""
+    """The unit (mm per file unit) a PLY header records (``comment cdbrdf units ...``), or None.
+
+    Reads the header only; a unit :func:`cdbrdf.curvature.parse_units` does
+    not accept counts as none recorded.
+    """
+    from ..curvature import parse_units
+    from ..errors import MeshError
+
     try:
         with open(path, "rb") as fh:
             for _ in range(256):
@@ -99,9 +107,8 @@ def ply_unit_mm(path: str | PathLike[str]) -> float | None:
                     break
                 m = _UNIT_COMMENT.match(text)
                 if m:
-                    v = float(m.group(1))
-                    return v if math.isfinite(v) and v > 0 else None
-    except (OSError, ValueError):
+                    return float(parse_units(m.group(1).strip()).mm_per_unit)
+    except (OSError, MeshError):
         return None
     return None
 

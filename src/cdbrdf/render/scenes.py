@@ -1,11 +1,47 @@
-"""Scenes for rendering a CDBRDF: the paper's sine sheet and any user mesh.
+"""Scenes for rendering a CDBRDF: the paper's sine sheet and any user mesh, framed and lit.
 
-World frame: z up, lengths in mm. The light is Mitsuba's ``directional``
-emitter given by the direction *towards* the light as elevation ``theta``
-from +z and azimuth ``phi`` from +x towards +y (degrees), and its irradiance
-(W m^-2 on a surface facing it). The default irradiance is pi, so a white
-Lambertian surface (f = 1/pi) facing the light has radiance 1: with the
-PNG exposure of 0 EV it is just white.
+World frame: z up, lengths in the mesh's unit (the curvature is in mm^-1
+whatever the unit: :func:`prepare_mesh`). A Y-up mesh (OBJ, glTF and the
+tools that write them) is turned into this frame by ``(x, y, z) -> (x, -z,
+y)``, so its front (+z) faces the default camera at azimuth -90 degrees.
+
+**Up axis** (:func:`detect_up`): the one the file records (a PLY written by
+cdbrdf; glTF is Y-up by its specification); else a flat object (its extent
+along y or z below a fifth of the other two) lies on that axis; else the
+format's convention: Y for OBJ, glTF and OFF, Z for PLY and STL (Blender's
+PLY and STL exporters and most CAD and 3-D printing tools). ``up="y"`` or
+``"z"`` overrides it.
+
+**Camera** (:func:`frame_camera`): perspective, looking at the object from
+an elevation above the ground plane and an azimuth (from +x towards +y), at
+the distance at which its projected vertices fill :data:`FRAME_FILL` of the
+frame's limiting side, centred.
+
+**Lighting** (:data:`LIGHTINGS`):
+
+``"paper"``
+    one directional light (Mitsuba's ``directional``), given by the direction
+    *towards* it as elevation ``theta`` from the up axis and azimuth ``phi``
+    from +x towards +y (degrees) and its irradiance (W m^-2 on a surface
+    facing it); plus the user's environment map if any. The default
+    irradiance is pi, so a white Lambertian surface (f = 1/pi) facing the
+    light has radiance 1: with an exposure of 0 EV it is just white.
+``"studio"``
+    a key light (the same ``directional`` light; by default from 45 degrees
+    above and 45 degrees to the camera's left) and an environment: the
+    user's map, or a soft studio sky (:func:`studio_environment`: radiance
+    0.35 at the zenith falling to 0.25 at the horizon and 0.12 below it,
+    relative to the key's pi), which fills the shadows as a photo studio's
+    walls do. The built-in sky is not seen by the camera: the picture's
+    background is a neutral backdrop (:func:`composite`).
+
+**Exposure** (:func:`exposure_from_render`): the exposure (EV) that maps the
+99th percentile of the object's luminance (pixels it covers) to 0.85 of
+display white (:func:`cdbrdf.colour.auto_exposure_ev`), but at most
+:data:`MAX_AUTO_EV` stops above the physical exposure (at which a white
+Lambertian surface facing a key light of the default irradiance pi is
+white), so that a dark fabric such as denim stays dark instead of being
+pushed to pastel.
 
 The sine sheet (the paper's test surface, Figs. 9-10) is
 ``z = A sin(2 pi x / L)`` swept along y: the bending direction is x, which is
@@ -19,37 +55,85 @@ from __future__ import annotations
 import logging
 import math
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..curvature import sine_sheet_curvature, sine_sheet_height
+from ..errors import MeshError, OptionError
 from ..frames import direction_from_angles
 from .meshio import Mesh, read_mesh, write_ply
 
 __all__ = [
     "UNITS_MM",
     "DEFAULT_IRRADIANCE",
+    "LIGHTINGS",
+    "UP_AXES",
+    "FRAME_FILL",
+    "DEFAULT_MESH_VIEW",
+    "DEFAULT_SINE_VIEW",
+    "STUDIO_KEY",
+    "BACKDROP",
+    "MAX_AUTO_EV",
     "SineSheet",
     "sine_sheet_mesh",
     "prepare_mesh",
+    "detect_up",
+    "to_z_up",
+    "frame_camera",
     "directional_light",
+    "studio_environment",
     "sine_scene",
     "mesh_scene",
     "render_scene",
+    "exposure_from_render",
+    "composite",
 ]
 
 _LOG = logging.getLogger(__name__)
 
-#: Length units accepted for meshes: millimetres per unit.
-UNITS_MM: dict[str, float] = {"mm": 1.0, "cm": 10.0, "m": 1000.0}
+#: Named length units accepted for meshes: millimetres per unit (a number is accepted too).
+UNITS_MM: dict[str, float] = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}
 
 #: Default irradiance of the directional light (W m^-2): white Lambertian -> radiance 1.
 DEFAULT_IRRADIANCE = math.pi
+
+#: Lighting set-ups of mesh scenes (see the module's description).
+LIGHTINGS: tuple[str, ...] = ("studio", "paper")
+
+#: Up axes: detected, or given.
+UP_AXES: tuple[str, ...] = ("auto", "y", "z")
+
+#: Share of the frame's limiting side that the framed object fills.
+FRAME_FILL = 0.75
+
+#: Default camera (elevation above the ground plane, azimuth) for meshes, degrees.
+DEFAULT_MESH_VIEW: tuple[float, float] = (20.0, -65.0)
+
+#: Default camera for the sine sheet, degrees.
+DEFAULT_SINE_VIEW: tuple[float, float] = (40.0, -90.0)
+
+#: The studio key light: elevation from the up axis, azimuth relative to the camera's, degrees.
+STUDIO_KEY: tuple[float, float] = (45.0, -45.0)
+
+#: Studio sky radiance at the zenith, at the horizon and below it, for a key of irradiance pi.
+STUDIO_SKY: tuple[float, float, float] = (0.35, 0.25, 0.12)
+
+#: Display value (linear, before encoding) of the backdrop behind a studio render.
+BACKDROP = 0.5
+
+#: Largest automatic exposure, in stops above the physical one (see the module's description).
+MAX_AUTO_EV = 2.0
+
+#: Vertices used to frame the camera (a subsample of larger meshes).
+FRAME_POINTS = 20000
+
+_Y_TO_Z = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
 
 @dataclass(frozen=True)
@@ -92,8 +176,10 @@ class SineSheet:
 def sine_sheet_mesh(sheet: SineSheet = SineSheet()) -> Mesh:
     """The sine sheet as a mesh with UVs, analytic normals and curvature.
 
-    The mesh's attribute ``"curvature"`` holds the analytic signed curvature
-    (mm^-1) of every vertex; faces wind counter-clockwise seen from +z.
+    The mesh's attributes ``"curvature"`` and ``"curvature_dir"`` hold the
+    analytic signed curvature (mm^-1) of every vertex (x, the bending
+    direction, is a principal direction, so both modes agree); faces wind
+    counter-clockwise seen from +z.
     """
     nx = max(2, int(round(sheet.width_mm / sheet.wavelength_mm * sheet.vertices_per_wavelength)) + 1)
     dx = sheet.width_mm / (nx - 1)
@@ -117,124 +203,344 @@ def sine_sheet_mesh(sheet: SineSheet = SineSheet()) -> Mesh:
     d = a + 1   # +y
     F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
     k = sine_sheet_curvature(X.ravel(), amplitude_mm=A, wavelength_mm=L)
-    return Mesh(V, F.astype(np.int64), N, U, {"curvature": k})
+    # x (= dP/du) is the bending direction, a principal direction: the directional curvature is kappa
+    return Mesh(V, F.astype(np.int64), N, U, {"curvature": k, "curvature_dir": k.copy()},
+                metadata={"units": "mm", "up": "z", "curvature_units": "1/mm", "frame": "uv"})
 
 
 def prepare_mesh(
-    path: str | PathLike[str] | Mesh, *, units: str = "mm", recompute: bool = False
+    source: str | PathLike[str] | Mesh,
+    *,
+    units: str | float | None = None,
+    neighbourhood_mm: float | None = None,
+    frame: str | None = None,
+    table: Any = None,
+    kappa_range: tuple[float, float] | None = None,
+    recompute: bool = False,
+    progress: Callable[[int, int], None] | None = None,
 ) -> Mesh:
-    """Read a user mesh for rendering: check its UVs, compute its curvature if absent.
+    """Read a user mesh for rendering: repair it, give it a frame and its curvatures in mm^-1.
 
-    ``path`` may also be a :class:`~cdbrdf.render.meshio.Mesh` already in memory
-    (it is not modified; a copy with the curvature is returned).
+    Parameters
+    ----------
+    source
+        A mesh file (any of :data:`cdbrdf.render.meshio.MESH_FORMATS`) or a
+        :class:`~cdbrdf.render.meshio.Mesh` (not modified).
+    units
+        The mesh's length unit (``mm``, ``cm``, ``m``, ``in`` or mm per unit);
+        default: the one the file records (a PLY written by cdbrdf, glTF's
+        metre), else mm.
+    neighbourhood_mm
+        Diameter of the neighbourhood the curvature is fitted over, mm;
+        default: the table's measured patch when its provenance records it
+        (:func:`cdbrdf.curvature.neighbourhood_from_table`), else
+        :data:`cdbrdf.curvature.DEFAULT_NEIGHBOURHOOD_MM`.
+    frame
+        Source of the material's x axis (:data:`cdbrdf.curvature.FRAMES`,
+        default ``"auto"``).
+    table
+        The table to be rendered: its provenance gives the default
+        neighbourhood, its kappa range the check of the curvature (a warning
+        with the share of the surface outside it, and the likely unit).
+    kappa_range
+        Without a table: the kappa range to check the curvature against.
+    recompute
+        Compute the curvature even when the file has it.
+    progress
+        ``progress(done, total)`` while fitting, in vertices.
 
-    The curvature (attribute ``"curvature"``, mm^-1) is taken from the file
-    when present (written by ``cdbrdf curvature``), otherwise computed with
-    :func:`cdbrdf.curvature.max_curvature` and converted from ``units``.
+    Returns
+    -------
+    Mesh
+        The renderable mesh: repaired faces, normals, UVs carrying the frame,
+        attributes ``"curvature"`` (maximum) and ``"curvature_dir"``
+        (directional) in mm^-1; its metadata says what was done
+        (``"repairs"``, ``"notes"``, ``"units"``, ``"neighbourhood_mm"``,
+        ``"frame"``, and with a table ``"outside_share"``).
 
     Raises
     ------
-    ValueError
-        When the mesh has no UV coordinates (the material frame's x is dP/du)
-        or the unit is unknown.
+    MeshError
+        For a file that cannot be read, a mesh with nothing to render, an
+        unknown unit or frame.
+
+    Notes
+    -----
+    The curvature of a file written by ``cdbrdf curvature`` is used as it
+    is when the file records its unit and was computed with the unit,
+    neighbourhood and frame asked for (or none is asked for); otherwise it
+    is computed again (a curvature of unknown unit is never used).
     """
-    from ..curvature import max_curvature
+    from ..curvature import (
+        DEFAULT_NEIGHBOURHOOD_MM,
+        check_kappa_range,
+        check_neighbourhood,
+        neighbourhood_from_table,
+        parse_units,
+        surface_curvature,
+    )
 
-    if units not in UNITS_MM:
-        raise ValueError(f"units: {units!r} is not one of {', '.join(UNITS_MM)}")
-    if isinstance(path, Mesh):
-        mesh = Mesh(path.vertices, path.faces, path.normals, path.uv, dict(path.attributes))
-        path = "mesh"
+    if isinstance(source, Mesh):
+        mesh, name = source.copy(), str(source.metadata.get("source", "mesh"))
     else:
-        mesh = read_mesh(path)
-    if mesh.uv is None:
-        raise ValueError(
-            f"{path}: the mesh has no UV coordinates; the CDBRDF's reference direction x is "
-            "dP/du of the UV map, so a mesh without UVs has no anisotropy frame (add UVs, "
-            "u along the bending direction)"
-        )
-    if recompute or "curvature" not in mesh.attributes:
-        _LOG.info("computing the curvature of %s (%d vertices)", path, mesh.n_vertices)
-        k = max_curvature(mesh.vertices, mesh.faces, normals=mesh.normals)
-        mesh.attributes["curvature"] = k / UNITS_MM[units]
-    return mesh
+        mesh, name = read_mesh(source), str(source)
+    meta = mesh.metadata
+    notes: list[str] = list(meta.get("notes", []))
+    recorded_units = meta.get("units")
+    if units is not None:
+        u = parse_units(units)
+        units_note = f"units: {u} (given)"
+    elif recorded_units is not None:
+        u = parse_units(recorded_units)
+        units_note = f"units: {u} (recorded in the file)" if meta.get("format") == "ply" else \
+            f"units: {u} ({str(meta.get('format', '')).upper()}'s unit)"
+    else:
+        u = parse_units("mm")
+        units_note = "units: mm (none given or recorded; give the mesh's unit if it is not mm)"
+    if neighbourhood_mm is not None:
+        nb, nb_note = check_neighbourhood(neighbourhood_mm), "given"
+    elif table is not None:
+        nb, nb_note = neighbourhood_from_table(getattr(table, "attrs", None))
+    else:
+        nb, nb_note = DEFAULT_NEIGHBOURHOOD_MM, "the default"
+    reuse = (not recompute and "curvature" in mesh.attributes and "curvature_dir" in mesh.attributes
+             and meta.get("curvature_units") == "1/mm" and recorded_units is not None
+             and mesh.uv is not None
+             and (units is None or parse_units(recorded_units) == u)
+             and (neighbourhood_mm is None or _same_number(meta.get("neighbourhood_mm"), nb))
+             and (frame is None or meta.get("frame") == frame))
+    if reuse:
+        repairs: list[str] = []
+        notes.append("curvature: as recorded in the file")
+        if _is_number(meta.get("neighbourhood_mm")):
+            nb, nb_note = float(meta["neighbourhood_mm"]), "recorded in the file"
+        out = mesh
+    else:
+        if "curvature" in mesh.attributes and not recompute:
+            notes.append("curvature: computed again (the file's has no recorded unit, or other settings)")
+        s = surface_curvature(mesh.vertices, mesh.faces, uv=mesh.uv, normals=mesh.normals, tangents=mesh.tangents,
+                              units=u, neighbourhood_mm=nb, frame=frame or "auto", name=name, progress=progress)
+        repairs = list(s.repairs)
+        notes.extend(s.notes)
+        attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in ("curvature", "curvature_dir")}
+        attrs["curvature"] = s.kappa
+        attrs["curvature_dir"] = s.directional
+        out = Mesh(mesh.vertices[s.source], s.faces, s.normals, s.uv, attrs,
+                   None if mesh.tangents is None else mesh.tangents[s.source], dict(meta))
+        out.metadata.update({"curvature_units": "1/mm", "neighbourhood_mm": nb, "frame": s.frame})
+    out.metadata["units"] = u.name
+    out.metadata["repairs"] = repairs
+    out.metadata["neighbourhood_note"] = f"neighbourhood: {nb:g} mm ({nb_note})"
+    out.metadata["units_note"] = units_note
+    if table is not None:
+        kappa = np.asarray(table.kappa, dtype=np.float64)
+        kappa_range = (float(kappa.min()), float(kappa.max()))
+    if kappa_range is not None:
+        areas = _vertex_areas(out.vertices, out.faces)
+        diag = float(np.linalg.norm(out.vertices.max(0) - out.vertices.min(0)))
+        chk = check_kappa_range(out.attributes["curvature"], areas, kappa_range, units=u, size_units=diag)
+        out.metadata["outside_share"] = chk.outside_share
+        if chk.message:
+            _LOG.warning("%s: %s", name, chk.message)
+    out.metadata["notes"] = notes
+    return out
 
 
-def directional_light(theta_deg: float = 45.0, phi_deg: float = 0.0, irradiance: float = DEFAULT_IRRADIANCE) -> dict:
-    """Mitsuba ``directional`` emitter dict for the direction towards the light."""
-    if not (0.0 <= theta_deg < 90.0):
-        raise ValueError(f"light theta: elevation must lie in [0, 90) degrees, got {theta_deg}")
-    if not (math.isfinite(irradiance) and irradiance > 0):
-        raise ValueError(f"irradiance: must be positive, got {irradiance}")
-    # The world frame (z up) is the local frame of a horizontal surface: theta from +z, phi from +x towards +y.
-    to_light = direction_from_angles(theta_deg, phi_deg).tolist()
-    return {"type": "directional", "direction": [-c for c in to_light], "irradiance": {"type": "rgb", "value": float(irradiance)}}
+def _is_number(x: Any) -> bool:
+    try:
+        return math.isfinite(float(x))
+    except (TypeError, ValueError):
+        return False
 
 
-def _camera(mi, lo, hi, width: int, height: int, *, elevation_deg: float, azimuth_deg: float, fov_deg: float, spp: int) -> dict:
-    """Perspective camera looking at the box ``[lo, hi]`` from the given direction, framing it."""
-    # Towards the camera in the world frame (z up); its elevation is above the horizontal plane,
-    # i.e. 90 degrees minus the elevation from +z that frames uses.
+def _same_number(a: Any, b: float) -> bool:
+    return _is_number(a) and math.isclose(float(a), b, rel_tol=1e-6)
+
+
+def _vertex_areas(v: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
+    p = v[f]
+    a = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    return np.bincount(f.reshape(-1), weights=np.repeat(a / 3.0, 3), minlength=v.shape[0]).astype(np.float64)
+
+
+def detect_up(mesh: Mesh) -> tuple[str, str]:
+    """The up axis of a mesh (``"y"`` or ``"z"``) and why (see the module's description)."""
+    rec = mesh.metadata.get("up")
+    if rec in ("y", "z"):
+        why = "glTF's convention" if mesh.metadata.get("format") in ("gltf", "glb") else "recorded in the file"
+        return str(rec), why
+    e = mesh.vertices.max(0) - mesh.vertices.min(0) if mesh.n_vertices else np.ones(3)
+    if e[2] < 0.2 * min(e[0], e[1]):
+        return "z", "the object is flat along z"
+    if e[1] < 0.2 * min(e[0], e[2]):
+        return "y", "the object is flat along y"
+    fmt = str(mesh.metadata.get("format", "ply"))
+    if fmt in ("obj", "gltf", "glb", "off"):
+        return "y", f"{fmt.upper()}'s usual convention"
+    return "z", f"{fmt.upper()}'s usual convention"
+
+
+def to_z_up(points: NDArray[np.float64], up: str) -> NDArray[np.float64]:
+    """Points (or normals) of a ``up``-up mesh in the z-up world frame."""
+    if up == "z":
+        return points
+    if up == "y":
+        return points @ _Y_TO_Z.T
+    raise MeshError(f"up: {up!r} is not one of y, z")
+
+
+def frame_camera(
+    points: NDArray[np.float64], *, width: int, height: int, elevation_deg: float, azimuth_deg: float,
+    fov_deg: float, fill: float = FRAME_FILL,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+    """Camera origin and target that frame ``points`` (z-up world) to fill ``fill`` of the frame.
+
+    The view direction comes from the elevation (above the ground plane)
+    and azimuth (from +x towards +y, of the camera seen from the object);
+    the distance is the smallest at which every point projects inside
+    ``fill`` of the half-frame, after centring the projected extent (two
+    passes). Returns origin, target and the distance.
+    """
+    if not 0.0 < fill <= 1.0:
+        raise ValueError(f"fill: expected (0, 1], got {fill}")
     d = direction_from_angles(90.0 - elevation_deg, azimuth_deg)
-    center = (np.asarray(lo) + np.asarray(hi)) / 2
     up0 = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.999 else np.array([0.0, 1.0, 0.0])
     right = np.cross(up0, d)
     right /= np.linalg.norm(right)
     up = np.cross(d, right)
-    t_small = math.tan(math.radians(fov_deg) / 2)
-    t_x = t_small * max(1.0, width / height)
-    t_y = t_small * max(1.0, height / width)
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]) - center
-    need = corners @ d + np.maximum(np.abs(corners @ right) / t_x, np.abs(corners @ up) / t_y)
-    dist = max(float(need.max()) * 1.08, 1e-3)
-    origin = center + dist * d
-    extent = float(np.linalg.norm(np.asarray(hi) - np.asarray(lo)))
+    t = math.tan(math.radians(fov_deg) / 2)
+    t_x = t * max(1.0, width / height)
+    t_y = t * max(1.0, height / width)
+    p = np.asarray(points, dtype=np.float64)
+    target = 0.5 * (p.min(0) + p.max(0))
+    dist = 1.0
+    for _ in range(4):
+        q = p - target
+        a, x, y = q @ d, q @ right, q @ up
+        dist = float(np.max(a + np.maximum(np.abs(x) / (fill * t_x), np.abs(y) / (fill * t_y))))
+        depth = np.maximum(dist - a, 1e-12 * max(dist, 1e-300))
+        u, v = x / depth, y / depth
+        mid_u, mid_v = 0.5 * (u.min() + u.max()), 0.5 * (v.min() + v.max())
+        target = target + right * mid_u * dist + up * mid_v * dist
+    q = p - target
+    a, x, y = q @ d, q @ right, q @ up
+    dist = float(np.max(a + np.maximum(np.abs(x) / (fill * t_x), np.abs(y) / (fill * t_y))))
+    dist = max(dist, 1e-6 * float(np.linalg.norm(p.max(0) - p.min(0))), 1e-9)
+    return target + dist * d, target, dist
+
+
+def directional_light(theta_deg: float = 45.0, phi_deg: float = 0.0, irradiance: float = DEFAULT_IRRADIANCE) -> dict:
+    """Mitsuba ``directional`` emitter dict for the direction towards the light (z-up world).
+
+    Raises
+    ------
+    OptionError
+        When ``theta_deg`` is not in [0, 90) degrees, ``phi_deg`` is not a
+        finite number or ``irradiance`` is not a finite positive number.
+    """
+    def number(name: str, v: Any) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not math.isfinite(v):
+            raise OptionError(f"{name}: expected a finite number, got {v!r:.40}")
+        return float(v)
+
+    theta_deg = number("light theta", theta_deg)
+    phi_deg = number("light phi", phi_deg)
+    irradiance = number("irradiance", irradiance)
+    if not (0.0 <= theta_deg < 90.0):
+        raise OptionError(f"light theta: elevation must lie in [0, 90) degrees, got {theta_deg:g}")
+    if not irradiance > 0:
+        raise OptionError(f"irradiance: must be positive, got {irradiance:g}")
+    # The world frame (z up) is the local frame of a horizontal surface: theta from +z, phi from +x towards +y.
+    to_light = direction_from_angles(theta_deg, phi_deg).tolist()
+    return {"type": "directional", "direction": [-c for c in to_light],
+            "irradiance": {"type": "rgb", "value": float(irradiance)}}
+
+
+def studio_environment(*, width: int = 64, scale: float = 1.0) -> NDArray[np.float32]:
+    """The studio sky as a latitude-longitude map (rows from the zenith down), radiance per :data:`STUDIO_SKY`.
+
+    Radiance ``zenith`` at the top falling as ``horizon + (zenith - horizon)
+    sin(elevation)`` to the horizon, ``ground`` below it; times ``scale``.
+    """
+    top, horizon, ground = STUDIO_SKY
+    h = width // 2
+    elev = 90.0 - (np.arange(h) + 0.5) * 180.0 / h  # degrees above the horizon, row centres
+    row = np.where(elev > 0, horizon + (top - horizon) * np.sin(np.radians(np.maximum(elev, 0))), ground)
+    img = np.broadcast_to((row * scale)[:, None, None], (h, width, 3))
+    return np.ascontiguousarray(img, dtype=np.float32)
+
+
+def _camera(mi: Any, points: NDArray[np.float64], width: int, height: int, *, elevation_deg: float,
+            azimuth_deg: float, fov_deg: float, spp: int, fill: float = FRAME_FILL) -> dict:
+    """Perspective camera framing ``points`` from the given direction."""
+    origin, target, dist = frame_camera(points, width=width, height=height, elevation_deg=elevation_deg,
+                                        azimuth_deg=azimuth_deg, fov_deg=fov_deg, fill=fill)
+    d = (origin - target) / dist
+    up0 = [0.0, 0.0, 1.0] if abs(d[2]) < 0.999 else [0.0, 1.0, 0.0]
+    extent = float(np.linalg.norm(points.max(0) - points.min(0)))
+    near = max(dist - extent, dist * 1e-3)
     return {
         "type": "perspective",
         "fov": fov_deg,
         "fov_axis": "smaller",
-        "near_clip": max(dist * 1e-3, 1e-4),
-        "far_clip": dist + 2 * extent,
-        "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=center.tolist(), up=up0.tolist()),
-        "film": {"type": "hdrfilm", "width": int(width), "height": int(height), "rfilter": {"type": "gaussian"}},
+        "near_clip": near,
+        "far_clip": dist + 2 * extent + near,
+        "to_world": mi.ScalarTransform4f().look_at(origin=origin.tolist(), target=target.tolist(), up=up0),
+        "film": {"type": "hdrfilm", "width": int(width), "height": int(height), "pixel_format": "rgba",
+                 "rfilter": {"type": "gaussian"}},
         "sampler": {"type": "independent", "sample_count": int(spp)},
     }
 
 
-def _bsdf_entry(table: Any, mode: str, scale: float) -> dict:
-    return {"type": "cdbrdf", "table": table, "mode": mode, "curvature": "vertex_curvature", "scale": scale}
+def _bsdf_entry(table: Any, mode: str, scale: float, curvature_mode: str = "max") -> dict:
+    from ..curvature import ATTRIBUTES, CURVATURE_MODES
+
+    if curvature_mode not in ATTRIBUTES:
+        raise ValueError(f"curvature mode: {curvature_mode!r} is not one of {', '.join(CURVATURE_MODES)}")
+    return {"type": "cdbrdf", "table": table, "mode": mode, "curvature": ATTRIBUTES[curvature_mode], "scale": scale}
 
 
-def _scene_dict(mi, mesh: Mesh, ply_path: Path, bsdf: Any, *, size, spp, light, envmap, max_depth, elevation_deg, azimuth_deg, fov_deg) -> dict:
-    write_ply(ply_path, mesh)
-    lo, hi = mesh.vertices.min(0), mesh.vertices.max(0)
-    d: dict[str, Any] = {
-        "type": "scene",
-        "integrator": {"type": "path", "max_depth": int(max_depth)},
-        "sensor": _camera(mi, lo, hi, size[0], size[1], elevation_deg=elevation_deg,
-                          azimuth_deg=azimuth_deg, fov_deg=fov_deg, spp=spp),
-        "object": {"type": "ply", "filename": str(ply_path), "bsdf": bsdf},
-    }
-    if envmap is not None:
-        d["envmap"] = {"type": "envmap", "filename": str(envmap)}
-    if light is not None:
-        d["light"] = directional_light(*light)
-    if envmap is None and light is None:
-        raise ValueError("the scene needs a light: give a directional light or an environment map")
-    return d
+def _subsample(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    if v.shape[0] <= FRAME_POINTS:
+        return v
+    idx = np.linspace(0, v.shape[0] - 1, FRAME_POINTS).astype(np.int64)
+    extremes = np.r_[np.argmin(v, axis=0), np.argmax(v, axis=0)]
+    return v[np.unique(np.r_[idx, extremes])]
 
 
-def _build(mesh: Mesh, table: Any, *, mode, scale, size, spp, light, envmap, max_depth, elevation_deg, azimuth_deg, fov_deg, bsdf=None):
+def _build(mesh: Mesh, table: Any, *, mode: str, scale: float, size: tuple[int, int], spp: int,
+           lights: list[dict], envmap: Any, hide_env: bool, max_depth: int, elevation_deg: float,
+           azimuth_deg: float, fov_deg: float, bsdf: Any = None, curvature_mode: str = "max",
+           fill: float = FRAME_FILL) -> Any:
     import mitsuba as mi
 
     from . import load_dict
 
     if bsdf is None:
-        bsdf = _bsdf_entry(table, mode, scale)
+        bsdf = _bsdf_entry(table, mode, scale, curvature_mode)
+    if not lights and envmap is None:
+        raise ValueError("the scene needs a light: give a directional light or an environment map")
     with tempfile.TemporaryDirectory(prefix="cdbrdf-") as tmp:
-        d = _scene_dict(mi, mesh, Path(tmp) / "object.ply", bsdf, size=size, spp=spp, light=light,
-                        envmap=envmap, max_depth=max_depth, elevation_deg=elevation_deg,
-                        azimuth_deg=azimuth_deg, fov_deg=fov_deg)
+        ply = Path(tmp) / "object.ply"
+        write_ply(ply, mesh)
+        d: dict[str, Any] = {
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": int(max_depth), "hide_emitters": bool(hide_env)},
+            "sensor": _camera(mi, _subsample(mesh.vertices), size[0], size[1], elevation_deg=elevation_deg,
+                              azimuth_deg=azimuth_deg, fov_deg=fov_deg, spp=spp, fill=fill),
+            "object": {"type": "ply", "filename": str(ply), "bsdf": bsdf},
+        }
+        if envmap is not None:
+            if isinstance(envmap, np.ndarray):
+                env_path = Path(tmp) / "studio.exr"
+                mi.Bitmap(envmap).write(str(env_path))
+                envmap = env_path
+            # the map's up (+y) is the world's up (+z)
+            d["envmap"] = {"type": "envmap", "filename": str(envmap),
+                           "to_world": mi.ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0)}
+        for i, light in enumerate(lights):
+            d[f"light{i}"] = light
         return load_dict(d)
 
 
@@ -248,11 +554,12 @@ def sine_scene(
     spp: int = 64,
     max_depth: int = 3,
     scale: float = 1.0,
-    elevation_deg: float = 40.0,
-    azimuth_deg: float = -90.0,
+    elevation_deg: float = DEFAULT_SINE_VIEW[0],
+    azimuth_deg: float = DEFAULT_SINE_VIEW[1],
     fov_deg: float = 40.0,
     bsdf: Any = None,
-):
+    curvature_mode: str = "max",
+) -> Any:
     """The paper's sine sheet under a directional light, seen by a perspective camera.
 
     Parameters
@@ -277,58 +584,119 @@ def sine_scene(
     bsdf
         A BSDF dict or instance used instead of the plug-in (e.g. Mitsuba's
         ``diffuse`` for comparisons).
+    curvature_mode
+        ``"max"`` or ``"directional"`` (identical on the sheet).
 
     Returns
     -------
     mitsuba.Scene
     """
+    lights = [directional_light(*light)] if light is not None else []
     return _build(sine_sheet_mesh(sheet), table, mode=mode, scale=scale, size=size, spp=spp,
-                  light=light, envmap=None, max_depth=max_depth, elevation_deg=elevation_deg,
-                  azimuth_deg=azimuth_deg, fov_deg=fov_deg, bsdf=bsdf)
+                  lights=lights, envmap=None, hide_env=False, max_depth=max_depth, elevation_deg=elevation_deg,
+                  azimuth_deg=azimuth_deg, fov_deg=fov_deg, bsdf=bsdf, curvature_mode=curvature_mode, fill=0.9)
 
 
 def mesh_scene(
     table: Any,
     mesh: Mesh | str | PathLike[str],
     *,
-    units: str = "mm",
+    units: str | float | None = None,
     mode: str = "cdbrdf",
-    light: tuple[float, float, float] | None = (45.0, 0.0, DEFAULT_IRRADIANCE),
+    curvature_mode: str = "max",
+    lighting: str = "studio",
+    light: tuple[float, float, float] | None | str = "auto",
     envmap: str | PathLike[str] | None = None,
     size: tuple[int, int] = (512, 384),
     spp: int = 64,
     max_depth: int = 3,
     scale: float = 1.0,
-    elevation_deg: float = 35.0,
-    azimuth_deg: float = -90.0,
-    fov_deg: float = 40.0,
-):
-    """A user mesh (PLY/OBJ with UVs) with the CDBRDF, lit by a directional light and/or an envmap.
+    elevation_deg: float = DEFAULT_MESH_VIEW[0],
+    azimuth_deg: float = DEFAULT_MESH_VIEW[1],
+    fov_deg: float = 30.0,
+    up: str = "auto",
+    fill: float = FRAME_FILL,
+) -> Any:
+    """A user mesh with the CDBRDF, framed by the camera and lit (see the module's description).
 
-    The curvature comes from the file (``curvature_x`` vertex property) or is
-    computed (see :func:`prepare_mesh`). Set ``light=None`` to light with the
-    environment map alone. Other parameters as in :func:`sine_scene`.
+    Parameters
+    ----------
+    table
+        A :class:`~cdbrdf.table.CDBRDF` or a file name.
+    mesh
+        A mesh file or a :class:`Mesh`; without a ``"curvature"`` attribute it
+        goes through :func:`prepare_mesh` first (with ``units``).
+    mode
+        ``"cdbrdf"`` or ``"brdf"``.
+    curvature_mode
+        The curvature the BSDF reads: ``"max"`` (the paper's) or
+        ``"directional"`` (normal curvature along the material's x).
+    lighting
+        ``"studio"`` or ``"paper"`` (:data:`LIGHTINGS`).
+    light
+        ``(theta_deg, phi_deg, irradiance)`` of the directional light (the
+        key light in the studio), ``"auto"`` for the lighting's default
+        (paper: (45, 0, pi); studio: :data:`STUDIO_KEY` relative to the
+        camera, pi), or None for none.
+    envmap
+        An environment map (.exr/.hdr) instead of the studio sky, or beside
+        the paper's light.
+    up
+        ``"auto"`` (:func:`detect_up`), ``"y"`` or ``"z"``.
+    size, spp, max_depth, scale, elevation_deg, azimuth_deg, fov_deg
+        As in :func:`sine_scene`; the elevation is above the ground plane of
+        the up axis.
+    fill
+        Share of the frame's limiting side the object fills.
     """
-    if not isinstance(mesh, Mesh):
-        mesh = prepare_mesh(mesh, units=units)
-    elif mesh.uv is None:
-        raise ValueError("mesh: no UV coordinates, so no anisotropy frame (dP/du) for the CDBRDF")
-    elif "curvature" not in mesh.attributes:
-        raise ValueError("mesh: no 'curvature' attribute (use prepare_mesh)")
-    return _build(mesh, table, mode=mode, scale=scale, size=size, spp=spp, light=light,
-                  envmap=envmap, max_depth=max_depth, elevation_deg=elevation_deg,
-                  azimuth_deg=azimuth_deg, fov_deg=fov_deg)
+    if lighting not in LIGHTINGS:
+        raise ValueError(f"lighting: {lighting!r} is not one of {', '.join(LIGHTINGS)}")
+    if up not in UP_AXES:
+        raise ValueError(f"up: {up!r} is not one of {', '.join(UP_AXES)}")
+    from ..curvature import MESH_ATTRIBUTES
+
+    if curvature_mode not in MESH_ATTRIBUTES:
+        raise ValueError(f"curvature mode: {curvature_mode!r} is not one of {', '.join(MESH_ATTRIBUTES)}")
+    if not isinstance(mesh, Mesh) or MESH_ATTRIBUTES[curvature_mode] not in mesh.attributes:
+        mesh = prepare_mesh(mesh, units=units, table=table if not isinstance(table, (str, PathLike)) else None)
+    if mesh.uv is None:
+        raise MeshError("mesh: no UV coordinates, so no anisotropy frame (dP/du) for the CDBRDF")
+    axis = detect_up(mesh)[0] if up == "auto" else up
+    world = mesh.copy()
+    world.vertices = to_z_up(mesh.vertices, axis)
+    if mesh.normals is not None:
+        world.normals = to_z_up(mesh.normals, axis)
+    if mesh.tangents is not None:
+        world.tangents = to_z_up(mesh.tangents, axis)
+    lights: list[dict] = []
+    if light == "auto":
+        if lighting == "paper":
+            lights.append(directional_light(45.0, 0.0, DEFAULT_IRRADIANCE))
+        else:
+            lights.append(directional_light(STUDIO_KEY[0], azimuth_deg + STUDIO_KEY[1], DEFAULT_IRRADIANCE))
+    elif light is not None:
+        if isinstance(light, str):
+            raise ValueError(f"light: expected (theta, phi, irradiance), 'auto' or None, got {light!r}")
+        lights.append(directional_light(*light))
+    env: Any = envmap
+    hide = False
+    if lighting == "studio" and envmap is None:
+        env, hide = studio_environment(), True
+    return _build(world, table, mode=mode, scale=scale, size=size, spp=spp, lights=lights, envmap=env,
+                  hide_env=hide, max_depth=max_depth, elevation_deg=elevation_deg, azimuth_deg=azimuth_deg,
+                  fov_deg=fov_deg, curvature_mode=curvature_mode, fill=fill)
 
 
 def render_scene(
-    scene,
+    scene: Any,
     *,
     spp: int | None = None,
     seed: int = 0,
     passes: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    alpha: bool = False,
 ) -> NDArray[np.float32]:
-    """Render ``scene`` in passes; returns linear RGB ``(H, W, 3)`` float32.
+    """Render ``scene`` in passes; returns linear RGB ``(H, W, 3)`` float32 (RGBA with ``alpha``).
 
     Parameters
     ----------
@@ -340,6 +708,9 @@ def render_scene(
         Number of passes (default: about 16 spp each); the image is their mean.
     progress
         Called as ``progress(samples_done, samples_total)`` after each pass.
+    alpha
+        Also return the coverage (1 where the object is seen; with the
+        studio lighting's hidden sky, 0 on the background), as a 4th channel.
     """
     import mitsuba as mi
 
@@ -353,10 +724,49 @@ def render_scene(
     acc = None
     done = 0
     for i, c in enumerate(chunks):
-        img = np.asarray(mi.render(scene, spp=c, seed=seed + i), dtype=np.float64)
+        img = np.asarray(mi.render(scene, spp=c, seed=seed + i), dtype=np.float64)  # type: ignore[arg-type]
         acc = img * c if acc is None else acc + img * c
         done += c
         if progress is not None:
             progress(done, total)
+    assert acc is not None
     out = (acc / total).astype(np.float32)
+    if alpha:
+        if out.shape[-1] >= 4:
+            return out[..., :4]
+        return np.concatenate([out[..., :3], np.ones(out.shape[:-1] + (1,), np.float32)], axis=-1)
     return out[..., :3]
+
+
+def exposure_from_render(image: NDArray[np.floating], *, irradiance: float = DEFAULT_IRRADIANCE) -> float:
+    """The exposure (EV) of a render: its object's 99th luminance percentile to 0.85 of white.
+
+    ``image`` is RGB or RGBA; with alpha only the pixels the object covers
+    (alpha >= 0.5) count. At most :data:`MAX_AUTO_EV` stops above the
+    physical exposure for a key light of ``irradiance`` (``log2(pi /
+    irradiance)``). See :func:`cdbrdf.colour.auto_exposure_ev`.
+    """
+    from ..colour import auto_exposure_ev
+
+    if not (math.isfinite(irradiance) and irradiance > 0):
+        raise ValueError(f"irradiance: must be positive, got {irradiance}")
+    top = MAX_AUTO_EV + math.log2(DEFAULT_IRRADIANCE / irradiance)
+    img = np.asarray(image, dtype=np.float64)
+    if img.shape[-1] >= 4:
+        cover = img[..., 3] >= 0.5
+        if cover.any():
+            return auto_exposure_ev(img[cover][:, :3], max_ev=top)
+    return auto_exposure_ev(img[..., :3], max_ev=top)
+
+
+def composite(image: NDArray[np.floating], *, exposure_ev: float, backdrop: float = BACKDROP) -> NDArray[np.float32]:
+    """An RGBA render over a uniform backdrop that shows as ``backdrop`` (display value) at ``exposure_ev``.
+
+    Returns linear RGB ``rgb + (1 - alpha) * backdrop * 2**-exposure_ev``; an
+    RGB image is returned as it is.
+    """
+    img = np.asarray(image, dtype=np.float64)
+    if img.shape[-1] < 4:
+        return img.astype(np.float32)
+    a = np.clip(img[..., 3:4], 0.0, 1.0)
+    return (img[..., :3] + (1.0 - a) * backdrop * 2.0 ** (-exposure_ev)).astype(np.float32)

@@ -50,7 +50,7 @@ class NoiseModel:
     read_e: float = 3.0
 
     @classmethod
-    def parse(cls, text: str) -> "NoiseModel":
+    def parse(cls, text: str) -> NoiseModel:
         """``"none"`` or ``"FULL_WELL[,READ]"`` (electrons), e.g. ``"20000,3"``."""
         t = text.strip().lower()
         if t in ("none", "off", "0"):

@@ -12,20 +12,21 @@ folder reads back with :func:`cdbrdf.measure.measure`.
 
 from __future__ import annotations
 
-import shutil
+import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from os import PathLike
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Any
 
 import numpy as np
 
+from ..errors import CaptureError, OptionError
 from ..frames import direction_from_angles
-from ..measure.capture import CAPTURE_FILE, STAND_FILE, read_rows, row_kind, write_plan, write_rows
 from ..images import FORMATS
-from ..measure.stands import KAPPA_TOL_PER_MM, Stand, default_stand, read_stands, stand_for, write_stands
+from ..measure.capture import CAPTURE_FILE, STAND_FILE, CaptureRow, Plan, file_key, read_plan, write_plan, write_rows
+from ..measure.stands import KAPPA_TOL_PER_MM, Stand, default_stand, stand_for, write_stands
 from ..table import CDBRDF, Grid
 from .camera import light_to_world, sensor_to_world
 from .scenes import stand_scene, white_scene
@@ -100,12 +101,17 @@ def simulate_capture(
     folder
         Output capture folder. It is built as a partial folder beside it and
         swapped in whole once complete (:func:`cdbrdf.fsutil.output_folder`):
-        an earlier capture written by cdbrdf is replaced, a non-empty folder
-        cdbrdf did not make is refused, and an error or interrupt leaves no
-        half-written folder.
+        an earlier capture written by cdbrdf is replaced, unless files were
+        added to it since (a measured table, notes: refused, naming them); a
+        non-empty folder cdbrdf did not make is refused, and an error or
+        interrupt leaves no half-written folder.
     plan
         A ``capture.csv`` to render (its ``stands.json``, if beside it, gives
-        the stand geometry). Default: a plan for ``grid`` (default the
+        the stand geometry). It is checked before anything is rendered with
+        the rules :func:`cdbrdf.measure.measure` applies to the capture
+        (:func:`cdbrdf.measure.capture.read_plan`: every column's rule, file
+        names that are relative paths inside the folder, no photograph named
+        by two rows, no stray row). Default: a plan for ``grid`` (default the
         material's own grid) and ``stands`` (default: one per kappa of the
         grid, default geometry), written like ``cdbrdf plan``.
     size
@@ -137,19 +143,24 @@ def simulate_capture(
     progress
         ``progress(done, total)`` after each photograph.
     """
-    if image_kind not in IMAGE_KINDS:
-        raise ValueError(f"image_kind: {image_kind!r} is not one of {', '.join(IMAGE_KINDS)}")
-    if size < 8:
-        raise ValueError(f"size: must be at least 8 pixels, got {size}")
-    if not (field_mm > 0 and gain > 0 and spp >= 1):
-        raise ValueError("field_mm, gain and spp must be positive")
+    if not isinstance(image_kind, str) or image_kind not in IMAGE_KINDS:
+        raise OptionError(f"image_kind: {image_kind!r:.40} is not one of {', '.join(IMAGE_KINDS)}")
+    for name, v, lo in (("size", size, 8), ("spp", spp, 1)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
+            raise OptionError(f"{name}: expected a whole number >= {lo}, got {v!r:.40}")
+    for name, x in (("field_mm", field_mm), ("gain", gain), ("white_albedo", white_albedo)):
+        if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) \
+                or not (math.isfinite(x) and x > 0):
+            raise OptionError(f"{name}: expected a finite positive number, got {x!r:.40}")
     from ..fsutil import check_output_folder, output_folder
 
     final = check_output_folder(folder)  # refuse a foreign folder before any work
+    # the plan is checked by the capture format's own parser before anything is rendered
+    the_plan = read_plan(plan) if plan is not None else None
     table = load_material(material)
     with output_folder(final) as partial:
         rep = _fill_capture(
-            partial, table, plan=plan, grid=grid, stands=stands, size=size, field_mm=field_mm,
+            partial, table, plan=the_plan, grid=grid, stands=stands, size=size, field_mm=field_mm,
             spp=spp, noise=noise, gain=gain, exposures=exposures, image_kind=image_kind,
             white_albedo=white_albedo, white=white, patch_px=patch_px, seed=seed,
             progress=progress,
@@ -162,7 +173,7 @@ def _fill_capture(
     out: Path,
     table: CDBRDF,
     *,
-    plan: str | PathLike[str] | None,
+    plan: Plan | None,
     grid: Grid | None,
     stands: Sequence[Stand] | None,
     size: int,
@@ -180,16 +191,20 @@ def _fill_capture(
 ) -> SimulationReport:
     """Write the capture into the (empty, partial) folder ``out``; see :func:`simulate_capture`."""
     ext = extension(image_kind)
+    extra: dict[str, Any] = {}
     if plan is not None:
-        rows, stand_list = _copy_plan(Path(plan), out, ext)
+        rows, stand_list = _copy_plan(plan, out, ext)
+        if plan.given_grid is not None:
+            extra["grid"] = plan.given_grid  # the measurement checks the rows against it, as the plan was
     else:
         g = grid if grid is not None else table.grid
         stand_list = list(stands) if stands is not None else [default_stand(k) for k in g.kappa]
-        rows = write_plan(out, g, stand_list, extension=ext, white=white,
-                          pixel_mm=field_mm / size, patch_px=patch_px, exposures=exposures)
+        write_plan(out, g, stand_list, extension=ext, white=white,
+                   pixel_mm=field_mm / size, patch_px=patch_px, exposures=exposures)
+        rows = read_plan(out / CAPTURE_FILE).rows
     write_stands(out / STAND_FILE, stand_list, white_albedo=float(white_albedo),
                  material=str(table.attrs.get("material", "unknown")), simulated=True,
-                 pixel_mm=field_mm / size)
+                 pixel_mm=field_mm / size, **extra)
 
     import cdbrdf.render as cr
 
@@ -200,8 +215,7 @@ def _fill_capture(
     rep = SimulationReport(out)
     by_scene: dict[Any, list[int]] = {}
     for i, r in enumerate(rows):
-        kind = row_kind(r)
-        key = "dark" if kind == "dark" else ("white" if kind == "white" else float(r["kappa"]))
+        key = r.kind if r.kind in ("dark", "white") else r.kappa
         by_scene.setdefault(key, []).append(i)
     total = len(rows)
     done = 0
@@ -216,27 +230,26 @@ def _fill_capture(
         params = mi.traverse(scene) if scene is not None else None
         for i in idx:
             r = rows[i]
-            exposure = float(r.get("exposure") or 1.0)
             if scene is None or params is None:
                 lin = np.zeros((size, size, 3))
                 rep.n_dark += 1
             else:
-                v = direction_from_angles(float(r["theta_v"]), float(r["phi_v"]))
-                light = direction_from_angles(float(r["theta_l"]), float(r["phi_l"]))
+                v = direction_from_angles(r.theta_v, r.phi_v)
+                light = direction_from_angles(r.theta_l, r.phi_l)
                 params["sensor.to_world"] = sensor_to_world(mi, v, size, field_mm)
                 params["light.to_world"] = light_to_world(mi, light)
                 params.update()
                 img = np.asarray(mi.render(scene, seed=(seed * 1000003 + i) % 2**32),  # type: ignore[arg-type]
                                  dtype=np.float64)
-                lin = img[..., :3] * gain * exposure
+                lin = img[..., :3] * gain * r.exposure
                 if key == "white":
                     rep.n_white += 1
             rng = np.random.default_rng([int(seed), i])
             lin = noise.apply(lin, rng)
             codes, nsat = encode(lin, image_kind)
             rep.n_saturated_pixels += nsat
-            write_photograph(out / r["file"], codes, image_kind)
-            rep.files.append(r["file"])
+            write_photograph(out / r.file, codes, image_kind)
+            rep.files.append(r.file)
             rep.n_images += 1
             done += 1
             if progress is not None:
@@ -245,46 +258,45 @@ def _fill_capture(
     return rep
 
 
-def _copy_plan(plan_path: Path, out: Path, ext: str) -> tuple[list[dict[str, str]], list[Stand]]:
-    """Put a given plan into ``out`` as the capture table; its rows and the stands to render.
+def _copy_plan(plan: Plan, out: Path, ext: str) -> tuple[list[CaptureRow], list[Stand]]:
+    """Put a checked plan into ``out`` as the capture table; its rows (as rendered) and the stands.
 
     The stands come from the plan's ``stands.json`` (when beside it); a
     sample curvature it does not describe gets the default stand.
     """
-    if not plan_path.is_file():
-        raise FileNotFoundError(f"{plan_path}: no such capture plan")
-    columns, rows = read_rows(plan_path)
-    src_stands = plan_path.parent / STAND_FILE
-    stand_map = read_stands(src_stands) if src_stands.is_file() else {}
-    if _match_extension(plan_path, rows, ext):
-        # file names renamed to the image kind's extension: write the plan as rendered
-        write_rows(out / CAPTURE_FILE, rows, columns)
-    elif plan_path.resolve() != (out / CAPTURE_FILE).resolve():
-        shutil.copyfile(plan_path, out / CAPTURE_FILE)
-    kappas = sorted({float(r["kappa"]) for r in rows if row_kind(r) == "sample"})
-    for k in kappas:
+    rows = _match_extension(plan, ext)
+    # the rows as read (never the file read again), with the names as rendered
+    write_rows(out / CAPTURE_FILE, plan.records, plan.columns)
+    stand_map = dict(plan.stands)
+    for k in sorted({r.kappa for r in rows if r.kind == "sample"}):
         if not any(abs(k - s) <= KAPPA_TOL_PER_MM for s in stand_map):
             stand_map[k] = default_stand(k)
     return rows, [stand_map[s] for s in sorted(stand_map)]
 
 
-def _match_extension(plan: Path, rows: list[dict[str, str]], ext: str) -> bool:
-    """Give every row's file the extension of the image kind (``a.png`` -> ``a.tif``); True if any changed.
+def _match_extension(plan: Plan, ext: str) -> list[CaptureRow]:
+    """The plan's rows with every file given the extension of the image kind (``a.png`` -> ``a.tif``).
 
     A plan names its photographs ``.png`` (``cdbrdf plan``'s default): rendered
     as TIFF or EXR they must not be written under a name whose extension
-    selects another format. Refuses renames that would make two rows share a file.
+    selects another format. ``plan.records`` get the new names too. Refuses
+    renames that would make two rows share a file.
     """
     want = FORMATS["." + ext]
+    rows = list(plan.rows)
     changed = False
-    for r in rows:
-        name = r["file"]
-        if FORMATS.get(Path(name).suffix.lower()) != want:
-            r["file"] = str(Path(name).with_suffix("." + ext).as_posix())
+    for i, r in enumerate(rows):
+        if FORMATS.get(Path(r.file).suffix.lower()) != want:
+            name = str(PurePosixPath(r.file).with_suffix("." + ext))
+            rows[i] = replace(r, file=name)
+            plan.records[i]["file"] = name
             changed = True
-    if changed:
-        names = [r["file"] for r in rows]
-        if len(set(names)) != len(names):
-            dup = next(n for n in names if names.count(n) > 1)
-            raise ValueError(f"{plan}: giving the files the .{ext} extension makes two rows share {dup}")
-    return changed
+    if not changed:
+        return plan.rows
+    seen: dict[str, int] = {}
+    for r in rows:
+        first = seen.setdefault(file_key(r.file), r.line)
+        if first != r.line:
+            raise CaptureError(f"{plan.path}: line {r.line}: giving the files the .{ext} extension makes "
+                               f"it share {r.file} with line {first}")
+    return rows

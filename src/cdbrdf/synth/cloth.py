@@ -237,7 +237,7 @@ class ClothParams:
         """Valid parameter names."""
         return [f.name for f in fields(cls)]
 
-    def replace(self, **changes: Any) -> "ClothParams":
+    def replace(self, **changes: Any) -> ClothParams:
         """A copy with some parameters changed (validated).
 
         Raises

@@ -142,8 +142,8 @@ def _albedo_kernel(views, p, mode, n_theta, n_phi):
                     tr = math.asin(min(max(sr, -1.0), 1.0))
                     th = 0.5 * (ti + tr)
                     if mode == 0:
-                        ax, ay, az = 0.0, ly, lz
-                        bx, by, bz = 0.0, vy, vz
+                        ay, az = ly, lz  # both projected onto the plane normal to the fibre (x = 0)
+                        by, bz = vy, vz
                         na = math.sqrt(ay * ay + az * az)
                         nb = math.sqrt(by * by + bz * bz)
                         cphi = (ay * by + az * bz) / (na * nb) if na > 1e-9 and nb > 1e-9 else 1.0

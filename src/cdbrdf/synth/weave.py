@@ -231,7 +231,9 @@ class Heightfield:
         }
 
 
-def _crimp(u: NDArray[np.float64], h: NDArray[np.float64], pitch: float, transition: float):
+def _crimp(
+    u: NDArray[np.float64], h: NDArray[np.float64], pitch: float, transition: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Centre-line height and slope of a yarn whose crossings are at (k + 0.5) pitch.
 
     Between two crossings the height changes along a half cosine over the
@@ -330,7 +332,19 @@ def build_heightfield(
     tangent[..., 0] = 1.0
     kind = np.full(X.shape, BACKING, dtype=np.int8)
 
-    def add(along_coord, across_coord, centre, period, half_w, half_h, zc, dzc, twist, k, along_is_y):
+    def add(
+        along_coord: NDArray[np.float64],
+        across_coord: NDArray[np.float64],
+        centre: float,
+        period: float,
+        half_w: float,
+        half_h: float,
+        zc: NDArray[np.float64],
+        dzc: NDArray[np.float64],
+        twist: float,
+        k: int,
+        along_is_y: bool,
+    ) -> None:
         d = (across_coord - centre + period / 2) % period - period / 2
         inside = np.abs(d) < half_w
         if not inside.any():

@@ -1,0 +1,296 @@
+"""From a user's mesh to what the renderer needs: repaired faces, normals, frame and curvatures.
+
+:func:`surface_curvature` runs the whole path: :func:`~cdbrdf.curvature.repair.repair`,
+the scale-aware fit (:func:`~cdbrdf.curvature.estimate.fit_curvatures`) in
+mm^-1 for the given unit and neighbourhood, the material's x axis
+(:mod:`cdbrdf.curvature.frames`) and the two curvatures the ``cdbrdf`` BSDF can
+read (:data:`~cdbrdf.curvature.CURVATURE_MODES`): the signed principal
+curvature of larger magnitude (the paper's) and the signed normal curvature
+along the material's x axis (the directional mode of the conventions).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import MeshError
+from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, PrincipalCurvatures, fit_curvatures
+from .frames import FRAMES, face_frame_uv, face_uv_tangents, project_tangents, seam_jumps, vertex_tangents
+from .repair import RepairedMesh, repair
+from .units import Units, parse_units
+
+__all__ = ["CURVATURE_MODES", "SurfaceCurvature", "surface_curvature", "check_neighbourhood"]
+
+_LOG = logging.getLogger(__name__)
+
+#: The curvatures the BSDF can be given: the paper's, and the normal curvature along x.
+CURVATURE_MODES: tuple[str, ...] = ("max", "directional")
+
+#: Largest neighbourhood, as a share of the mesh's size (bounding-box diagonal): a larger one is
+#: reduced to it, with a note (a wrong unit?); beyond it a quadric cannot follow the surface.
+MAX_NEIGHBOURHOOD_SHARE = 0.5
+
+
+@dataclass(frozen=True)
+class SurfaceCurvature:
+    """The renderable mesh of :func:`surface_curvature`, with its curvatures (mm^-1).
+
+    Every per-vertex array has one row per *output* vertex; ``source`` maps
+    it to the input vertex it was made from (for positions and other
+    attributes), ``faces`` index them.
+
+    Attributes
+    ----------
+    source
+        ``(n,)`` input vertex of each output vertex.
+    faces
+        ``(m, 3)`` oriented faces.
+    normals
+        ``(n, 3)`` unit shading normals; every curvature's sign is relative to them.
+    uv
+        ``(n, 2)`` texture coordinates whose dP/du is the material's x axis:
+        the input's for ``frame == "uv"``, generated per face otherwise;
+        None when the input had none and none were generated.
+    kappa
+        Signed principal curvature of larger magnitude (> 0 convex).
+    directional
+        Signed normal curvature along the material's x axis.
+    k1, k2
+        Principal curvatures, ``k1 >= k2``.
+    d1, d2
+        ``(n, 3)`` their unit directions.
+    side
+        ``(n,)`` +1, or -1 on the back layer of a double-sided panel (whose
+        normal is the opposite of its front twin's).
+    tangent
+        ``(n, 3)`` unit material x axis at each vertex (NaN where undefined).
+    frame
+        Where x comes from: ``"uv"``, ``"tangent"`` or ``"principal"``.
+    units
+        The mesh's unit.
+    neighbourhood_mm
+        Diameter of the fitted neighbourhood, mm.
+    areas
+        ``(n,)`` area around each output vertex (model units squared).
+    representative
+        For every *input* vertex the input vertex standing for it in the
+        output (itself, or the first of its identical twins).
+    repairs, notes
+        What was repaired; what else the user should know (one line each).
+    """
+
+    source: NDArray[np.int64]
+    faces: NDArray[np.int64]
+    normals: NDArray[np.float64]
+    uv: NDArray[np.float64] | None
+    kappa: NDArray[np.float64]
+    directional: NDArray[np.float64]
+    k1: NDArray[np.float64]
+    k2: NDArray[np.float64]
+    d1: NDArray[np.float64]
+    d2: NDArray[np.float64]
+    side: NDArray[np.float64]
+    tangent: NDArray[np.float64]
+    frame: str
+    units: Units
+    neighbourhood_mm: float
+    areas: NDArray[np.float64]
+    representative: NDArray[np.int64]
+    repairs: tuple[str, ...]
+    notes: tuple[str, ...]
+
+    def curvature(self, mode: str) -> NDArray[np.float64]:
+        """The curvature of ``mode`` (``"max"`` or ``"directional"``), mm^-1."""
+        if mode == "max":
+            return self.kappa
+        if mode == "directional":
+            return self.directional
+        raise MeshError(f"curvature mode: {mode!r} is not one of {', '.join(CURVATURE_MODES)}")
+
+
+def check_neighbourhood(neighbourhood_mm: float) -> float:
+    """The neighbourhood as a float, or :class:`MeshError` outside :data:`NEIGHBOURHOOD_RANGE_MM`."""
+    lo, hi = NEIGHBOURHOOD_RANGE_MM
+    try:
+        x = float(neighbourhood_mm)
+    except (TypeError, ValueError):
+        raise MeshError(f"neighbourhood: expected a number of mm, got {neighbourhood_mm!r}") from None
+    if not (math.isfinite(x) and lo <= x <= hi):
+        raise MeshError(f"neighbourhood: expected {lo:g} to {hi:g} mm, got {neighbourhood_mm!r}")
+    return x
+
+
+def _per_output(rep: RepairedMesh, pc: PrincipalCurvatures, mm_per_unit: float) -> PrincipalCurvatures:
+    """The analysis curvatures at the output vertices, in mm^-1, relative to each side's normal."""
+    a = rep.out_vertex
+    front = rep.out_side > 0
+    k1a, k2a = pc.k1[a] / mm_per_unit, pc.k2[a] / mm_per_unit
+    k1 = np.where(front, k1a, -k2a)
+    k2 = np.where(front, k2a, -k1a)
+    d1 = np.where(front[:, None], pc.d1[a], pc.d2[a])
+    d2 = np.where(front[:, None], pc.d2[a], pc.d1[a])
+    return PrincipalCurvatures(k1, k2, d1, d2)
+
+
+def _vertex_areas(positions: NDArray[np.float64], faces: NDArray[np.int64], n: int) -> NDArray[np.float64]:
+    p = positions[faces]
+    a = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    return np.bincount(faces.reshape(-1), weights=np.repeat(a / 3.0, 3), minlength=n).astype(np.float64)
+
+
+def surface_curvature(  # noqa: C901 - the steps in order
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    *,
+    uv: ArrayLike | None = None,
+    normals: ArrayLike | None = None,
+    tangents: ArrayLike | None = None,
+    units: str | float | Units = "mm",
+    neighbourhood_mm: float = DEFAULT_NEIGHBOURHOOD_MM,
+    frame: str | None = "auto",
+    name: str = "mesh",
+    progress: Callable[[int, int], None] | None = None,
+) -> SurfaceCurvature:
+    """Repair a mesh and compute its curvatures and frame for rendering.
+
+    Parameters
+    ----------
+    vertices, faces
+        ``(n, 3)`` positions in ``units`` and ``(m, 3)`` triangles (any
+        winding; see :mod:`cdbrdf.curvature.repair`).
+    uv, normals, tangents
+        Optional ``(n, 2)`` texture coordinates, ``(n, 3)`` vertex normals
+        (the shading normals; they decide which side is the front) and
+        ``(n, 3)`` tangents.
+    units
+        The vertices' length unit: ``"mm"``, ``"cm"``, ``"m"``, ``"in"`` or
+        millimetres per unit (:func:`~cdbrdf.curvature.units.parse_units`).
+    neighbourhood_mm
+        Diameter of the surface patch each vertex's curvature is fitted over, mm.
+    frame
+        Source of the material's x axis, one of :data:`~cdbrdf.curvature.frames.FRAMES`;
+        None for none (no UVs are generated; ``directional`` is NaN).
+    name
+        For messages (the file's name).
+    progress
+        ``progress(done, total)`` during the fit, in vertices.
+
+    Returns
+    -------
+    SurfaceCurvature
+
+    Raises
+    ------
+    MeshError
+        For an unusable mesh, an unknown frame or unit, a frame the mesh has
+        no data for, or a neighbourhood out of range.
+    """
+    if frame is not None and frame not in FRAMES:
+        raise MeshError(f"frame: {frame!r} is not one of {', '.join(FRAMES)}")
+    u = parse_units(units)
+    nb = check_neighbourhood(neighbourhood_mm)
+    v = np.asarray(vertices, dtype=np.float64) if not isinstance(vertices, np.ndarray) else vertices
+    uv_in = None
+    if uv is not None:
+        uv_in = np.asarray(uv, dtype=np.float64)
+        if uv_in.shape != (len(v), 2):
+            raise MeshError(f"{name}: uv: expected shape {(len(v), 2)}, got {uv_in.shape}")
+        if not np.isfinite(uv_in).all():
+            raise MeshError(f"{name}: {int((~np.isfinite(uv_in).all(axis=1)).sum())} vertices have NaN or "
+                            "infinite texture coordinates")
+    tan_in = None
+    if tangents is not None:
+        tan_in = np.asarray(tangents, dtype=np.float64)
+        if tan_in.shape != (len(v), 3):
+            raise MeshError(f"{name}: tangents: expected shape {(len(v), 3)}, got {tan_in.shape}")
+    if frame == "uv" and uv_in is None:
+        raise MeshError(f"{name}: the mesh has no UV coordinates, so frame 'uv' has no x axis (dP/du); "
+                        "use frame 'principal' (or 'auto')")
+    if frame == "tangent" and tan_in is None:
+        raise MeshError(f"{name}: the mesh has no tangent attribute for frame 'tangent'")
+    notes: list[str] = []
+    if frame == "auto":
+        frame = "uv" if uv_in is not None else "tangent" if tan_in is not None else "principal"
+        if frame == "tangent":
+            notes.append("no UV coordinates: the material's x axis is the file's tangent attribute")
+        elif frame == "principal":
+            notes.append("no UV coordinates: the material's x axis is the bending direction "
+                         "(of the principal curvature of larger magnitude)")
+    rep = repair(v, faces, normals=normals, uv=uv_in, name=name)
+    pos_in = np.asarray(rep.vertices)
+    diag = float(np.linalg.norm(pos_in.max(0) - pos_in.min(0)))
+    radius = 0.5 * nb / u.mm_per_unit
+    if diag > 0 and 2 * radius > MAX_NEIGHBOURHOOD_SHARE * diag:
+        used = MAX_NEIGHBOURHOOD_SHARE * diag * u.mm_per_unit
+        notes.append(f"the neighbourhood ({nb:g} mm) is {2 * radius / diag:.0%} of the mesh's size "
+                     f"({diag * u.mm_per_unit:.4g} mm across in unit {u}): fitted over {used:.3g} mm instead; "
+                     "is the unit right?")
+        radius = 0.5 * MAX_NEIGHBOURHOOD_SHARE * diag
+    pc_a, _, n_bad = fit_curvatures(rep.vertices, rep.normals, components=rep.components, radius=radius,
+                                    edge_length=rep.mean_edge_length, progress=progress)
+    if n_bad:
+        notes.append(f"{n_bad} vertices have too few neighbours with a similar normal to fit; their curvature is 0")
+    pc = _per_output(rep, pc_a, u.mm_per_unit)
+    src = rep.out_source
+    side = rep.out_side
+    out_faces = rep.out_faces
+    normals_o = rep.out_normals
+    positions_o = v[src]
+    n_o = src.size
+    uv_o: NDArray[np.float64] | None = None
+    if frame is None:
+        tangent = np.full((n_o, 3), np.nan)
+        directional = np.full(n_o, np.nan)
+    elif frame == "uv":
+        assert uv_in is not None
+        uv_o = uv_in[src]
+        ft, ok = face_uv_tangents(positions_o, out_faces, uv_o)
+        w = 0.5 * np.linalg.norm(np.cross(positions_o[out_faces[:, 1]] - positions_o[out_faces[:, 0]],
+                                          positions_o[out_faces[:, 2]] - positions_o[out_faces[:, 0]]), axis=1)
+        tangent = vertex_tangents(out_faces, ft, w * ok, normals_o)
+        n_seam, n_jump = seam_jumps(positions_o, uv_o, ft, ok, rep.adjacent, rep.faces, out_faces)
+        if n_jump:
+            notes.append(f"the UV map turns the material's x axis by more than 30 degrees across {n_jump} of "
+                         f"its {n_seam} seam edges: an anisotropic table shows seams there (for a model that is "
+                         "not cloth, take the frame from the principal directions)")
+        if (~ok).any():
+            notes.append(f"{int((~ok).sum())} faces have degenerate UVs (no dP/du there)")
+        directional = pc.normal_curvature(np.nan_to_num(tangent))
+    else:
+        if frame == "tangent":
+            assert tan_in is not None
+            tangent = project_tangents(tan_in[src], normals_o)
+            directional = pc.normal_curvature(np.nan_to_num(tangent))
+        else:
+            tangent = pc.kappa_direction.copy()
+            directional = pc.kappa.copy()
+        # per-face UVs whose dP/du is the face's mean tangent: one output vertex per corner
+        corner_uv, _ = face_frame_uv(positions_o, out_faces, tangent[out_faces], align=frame == "principal")
+        corners = out_faces.reshape(-1)
+        src = src[corners]
+        side = side[corners]
+        normals_o = normals_o[corners]
+        tangent = tangent[corners]
+        directional = directional[corners]
+        pc = PrincipalCurvatures(pc.k1[corners], pc.k2[corners], pc.d1[corners], pc.d2[corners])
+        uv_o = corner_uv.reshape(-1, 2)
+        out_faces = np.arange(corners.size, dtype=np.int64).reshape(-1, 3)
+        positions_o = v[src]
+        n_o = src.size
+    undefined = ~np.isfinite(directional)
+    if frame is not None and undefined.any():
+        notes.append(f"{int(undefined.sum())} vertices have no material x axis; their directional curvature "
+                     "is the maximum one")
+        directional = np.where(undefined, pc.kappa, directional)
+    areas = _vertex_areas(positions_o, out_faces, n_o)
+    for note in notes:
+        _LOG.info("%s: %s", name, note)
+    return SurfaceCurvature(src, out_faces, normals_o, uv_o, pc.kappa, directional, pc.k1, pc.k2, pc.d1, pc.d2,
+                            side, tangent, frame or "none", u, nb, areas, rep.representative, rep.repairs,
+                            tuple(notes))

@@ -1,0 +1,197 @@
+"""Length units of meshes, and the check that a mesh's curvature fits a table's range.
+
+A mesh file stores numbers; its unit is a convention of the tool that wrote it
+(fashion CAD tools export millimetres, Blender and glTF metres, many CAD and
+3-D printing tools inches, scans and game models are often unitless). The
+curvature the CDBRDF is looked up with is in mm^-1, so every path from a mesh
+to a render takes a unit: a name (:data:`UNITS_MM`) or a number, the
+millimetres per model unit (a free scale for unitless models).
+
+A wrong unit shows as curvature outside the table's kappa range: a garment in
+metres read as millimetres is 1000 times too small and 1000 times too curved,
+so all of it would be clamped to the table's last kappa. :func:`check_kappa_range`
+measures the share of the surface (by area) outside the range and, when most
+of it is, names the unit under which the least would be.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import MeshError
+
+__all__ = [
+    "UNITS_MM",
+    "Units",
+    "parse_units",
+    "KappaRangeCheck",
+    "check_kappa_range",
+    "WARN_OUTSIDE_SHARE",
+    "SUGGEST_OUTSIDE_SHARE",
+]
+
+#: Named length units: millimetres per unit.
+UNITS_MM: dict[str, float] = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}
+
+#: Smallest and largest free scale accepted (millimetres per model unit).
+SCALE_RANGE_MM: tuple[float, float] = (1e-9, 1e9)
+
+#: Share of the surface (by area) outside the table's kappa range above which a warning is given.
+WARN_OUTSIDE_SHARE = 0.10
+
+#: Share above which the likely unit is suggested.
+SUGGEST_OUTSIDE_SHARE = 0.5
+
+
+@dataclass(frozen=True)
+class Units:
+    """A mesh's length unit.
+
+    Attributes
+    ----------
+    mm_per_unit
+        Millimetres per model unit (1 for mm, 25.4 for inches, any positive
+        number for a free scale).
+    name
+        The unit's name (``"mm"``, ``"cm"``, ``"m"``, ``"in"``) or the number
+        as given (``"2.5"``).
+    """
+
+    mm_per_unit: float
+    name: str
+
+    def __str__(self) -> str:
+        if self.name in UNITS_MM:
+            return self.name
+        return f"{self.mm_per_unit:g} mm per unit"
+
+
+def parse_units(value: str | float | Units) -> Units:
+    """The :class:`Units` of a name (``mm``, ``cm``, ``m``, ``in``) or a number (mm per unit).
+
+    Raises
+    ------
+    MeshError
+        For an unknown name or a number that is not positive and finite (the
+        message lists the valid values).
+    """
+    if isinstance(value, Units):
+        return value
+    if isinstance(value, str):
+        text = value.strip()
+        if text in UNITS_MM:
+            return Units(UNITS_MM[text], text)
+        try:
+            x = float(text)
+        except ValueError:
+            raise MeshError(
+                f"units: {value!r} is neither one of {', '.join(UNITS_MM)} nor a number of "
+                "millimetres per model unit") from None
+    else:
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
+            raise MeshError(f"units: expected one of {', '.join(UNITS_MM)} or a number, got {value!r}") from None
+        text = f"{x:g}"
+    lo, hi = SCALE_RANGE_MM
+    if not (math.isfinite(x) and lo <= x <= hi):
+        raise MeshError(f"units: a scale must be a number of millimetres per model unit in "
+                        f"[{lo:g}, {hi:g}], got {value!r}")
+    for name, mm in UNITS_MM.items():
+        if x == mm:
+            return Units(mm, name)
+    return Units(x, text)
+
+
+@dataclass(frozen=True)
+class KappaRangeCheck:
+    """How much of a surface lies outside a table's kappa range.
+
+    Attributes
+    ----------
+    outside_share
+        Share of the surface (by area) with kappa outside ``kappa_range``
+        (rendered with the clamped, nearest end of the table).
+    kappa_range
+        The table's ``(min, max)`` kappa, mm^-1.
+    likely_units
+        When most of the surface is outside: the named unit under which the
+        least would be, with that share; else None.
+    message
+        A one-line warning when :attr:`outside_share` exceeds
+        :data:`WARN_OUTSIDE_SHARE`, else None.
+    """
+
+    outside_share: float
+    kappa_range: tuple[float, float]
+    likely_units: tuple[str, float] | None
+    message: str | None
+
+
+def _outside(kappa: np.ndarray, weights: np.ndarray, lo: float, hi: float, tol: float) -> float:
+    out = (kappa < lo - tol) | (kappa > hi + tol)
+    total = float(weights.sum())
+    return float(weights[out].sum() / total) if total > 0 else 0.0
+
+
+def check_kappa_range(
+    kappa_mm: ArrayLike,
+    areas: ArrayLike,
+    kappa_range: tuple[float, float],
+    *,
+    units: Units,
+    size_units: float | None = None,
+) -> KappaRangeCheck:
+    """The share of a surface outside a table's kappa range, and the likely unit when it is large.
+
+    Parameters
+    ----------
+    kappa_mm
+        Per-vertex curvature (mm^-1) computed with ``units``.
+    areas
+        Per-vertex area (any unit; only the shares matter).
+    kappa_range
+        The table's smallest and largest kappa (mm^-1).
+    units
+        The unit the curvature was computed with.
+    size_units
+        The mesh's size (bounding-box diagonal) in model units, for the
+        message.
+
+    Returns
+    -------
+    KappaRangeCheck
+        The likely unit is looked for among the named units by rescaling
+        the curvature (``kappa / mm_per_unit`` per unit); with a different
+        unit the neighbourhood of the estimate changes too, so the shares it
+        quotes are estimates.
+    """
+    k = np.asarray(kappa_mm, dtype=np.float64)
+    w = np.asarray(areas, dtype=np.float64)
+    ok = np.isfinite(k) & np.isfinite(w) & (w >= 0)
+    k, w = k[ok], w[ok]
+    lo, hi = float(min(kappa_range)), float(max(kappa_range))
+    tol = 1e-9 * max(1.0, abs(lo), abs(hi))
+    share = _outside(k, w, lo, hi, tol)
+    likely = None
+    if share > SUGGEST_OUTSIDE_SHARE:
+        k_model = k * units.mm_per_unit  # per model unit
+        best = min(((name, _outside(k_model / mm, w, lo, hi, tol)) for name, mm in UNITS_MM.items()),
+                   key=lambda t: t[1])
+        if best[0] != units.name and best[1] < 0.5 * share:
+            likely = best
+    message = None
+    if share > WARN_OUTSIDE_SHARE:
+        size = ""
+        if size_units is not None and math.isfinite(size_units):
+            size = f"; the mesh is {size_units * units.mm_per_unit:.4g} mm across in unit {units}"
+        message = (f"{share:.0%} of the surface (by area) has a curvature outside the table's range "
+                   f"[{lo:g}, {hi:g}] 1/mm and is rendered with the nearest end{size}")
+        if likely is not None:
+            message += (f"; the unit is probably wrong: with --units {likely[0]} about {likely[1]:.0%} "
+                        "would be outside")
+    return KappaRangeCheck(share, (lo, hi), likely, message)

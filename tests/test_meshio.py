@@ -1,0 +1,303 @@
+"""Mesh files: PLY (every layout), OBJ, glTF/GLB, STL, OFF in; PLY out; corrupt and hostile files refused.
+
+Known answers: files written here from known arrays; trimesh's own readers
+and writers as the reference for the formats cdbrdf reads through it.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from cdbrdf.errors import CDBRDFError, LimitError, MeshError
+from cdbrdf.render.meshio import Mesh, read_mesh, read_obj, read_ply, write_ply
+from cdbrdf.render.scenes import SineSheet, prepare_mesh, sine_sheet_mesh
+
+from .mesh_helpers import R_CYL, cylinder_patch, shared_mesh, write_ascii_ply, write_obj
+
+
+def binary_ply(path, v, lists, *, endian="<", count_type="u1", index_type="i4", element="face",
+               extra_vertex=(), comments=()):
+    """A binary PLY written by hand: x y z [extra] float32, one list element."""
+    bo = {"<": "binary_little_endian", ">": "binary_big_endian"}[endian]
+    names = {"u1": "uchar", "i4": "int", "u4": "uint", "i2": "short", "i1": "char"}
+    head = ["ply", f"format {bo} 1.0", *[f"comment {c}" for c in comments], f"element vertex {len(v)}",
+            "property float x", "property float y", "property float z"]
+    head += [f"property float {n}" for n, _ in extra_vertex]
+    head += [f"element {element} {len(lists)}",
+             f"property list {names[count_type]} {names[index_type]} vertex_indices", "end_header"]
+    cols = [np.asarray(v, dtype=endian + "f4")] + [np.asarray(a, dtype=endian + "f4")[:, None] for _, a in extra_vertex]
+    body = np.hstack(cols).astype(endian + "f4").tobytes()
+    for lst in lists:
+        body += np.array([len(lst)], dtype=endian + count_type).tobytes()
+        body += np.asarray(lst, dtype=endian + index_type).tobytes()
+    path.write_bytes(("\n".join(head) + "\n").encode() + body)
+    return path
+
+
+def quad_grid(n=4):
+    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float), indexing="ij")
+    v = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
+    quads = [[i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1, i * n + j + 1]
+             for i in range(n - 1) for j in range(n - 1)]
+    return v, quads
+
+
+# -- PLY -------------------------------------------------------------------------------------
+def test_ply_round_trip_keeps_everything_and_records_the_metadata(tmp_path):
+    m = sine_sheet_mesh(SineSheet(width_mm=20, depth_mm=10, vertices_per_wavelength=16))
+    m.tangents = np.tile([1.0, 0.0, 0.0], (m.n_vertices, 1))
+    m.metadata.update({"units": "in", "neighbourhood_mm": 2.5})
+    path = tmp_path / "s.ply"
+    write_ply(path, m)
+    r = read_ply(path)
+    assert np.allclose(r.vertices, m.vertices, atol=1e-5)
+    assert np.array_equal(r.faces, m.faces)
+    assert np.allclose(r.uv, m.uv, atol=1e-6)
+    assert np.allclose(r.normals, m.normals, atol=1e-6)
+    assert np.allclose(r.tangents, m.tangents)
+    for name in ("curvature", "curvature_dir"):
+        assert np.allclose(r.attributes[name], m.attributes[name], atol=1e-6)
+    assert r.metadata["units"] == "in" and r.metadata["up"] == "z" and r.metadata["curvature_units"] == "1/mm"
+    assert float(r.metadata["neighbourhood_mm"]) == 2.5
+    header = path.read_bytes().split(b"end_header")[0]
+    assert b"property float curvature_x" in header and b"property float curvature_dir_x" in header
+    # the same as trimesh reads
+    import trimesh
+
+    t = trimesh.load(path, process=False)
+    assert np.allclose(t.vertices, r.vertices) and np.array_equal(t.faces, r.faces)
+
+
+def test_ascii_ply_with_quads_and_polygons(tmp_path):
+    v, quads = quad_grid()
+    polys = quads[:-1] + [[0, 1, 5, 6, 2]]  # a pentagon
+    m = read_mesh(write_ascii_ply(tmp_path / "q.ply", v, polys, uv=v[:, :2] / 3))
+    assert m.faces.shape == (2 * 8 + 3, 3)
+    assert m.faces[:2].tolist() == [[0, 4, 5], [0, 5, 1]]  # a quad as a fan
+    assert np.allclose(m.uv[5], v[5, :2] / 3)
+
+
+@pytest.mark.parametrize("endian", ["<", ">"])
+def test_binary_ply_with_mixed_triangles_and_quads(tmp_path, endian):
+    v, quads = quad_grid()
+    lists = [q[:3] if k % 2 else q for k, q in enumerate(quads)]
+    m = read_mesh(binary_ply(tmp_path / "m.ply", v, lists, endian=endian))
+    n_tri = sum(len(lst) - 2 for lst in lists)
+    assert m.faces.shape == (n_tri, 3)
+    assert m.faces[0].tolist() == [0, 4, 5] and m.faces[1].tolist() == [0, 5, 1]
+    assert np.allclose(m.vertices, v)
+
+
+def test_ply_triangle_strips(tmp_path):
+    v, _ = quad_grid(3)
+    # one strip over the 2x2 cells of the first row, a restart, then one triangle
+    strips = [[0, 3, 1, 4, 2, 5, -1, 3, 6, 4]]
+    m = read_mesh(binary_ply(tmp_path / "t.ply", v, strips, element="tristrips"))
+    assert m.faces.tolist() == [[0, 3, 1], [1, 3, 4], [1, 4, 2], [2, 4, 5], [3, 6, 4]]  # odd ones (n+1, n, n+2)
+    # every triangle faces the same way (strips alternate their order)
+    n = np.cross(m.vertices[m.faces[:, 1]] - m.vertices[m.faces[:, 0]],
+                 m.vertices[m.faces[:, 2]] - m.vertices[m.faces[:, 0]])
+    assert np.all(np.sign(n[:, 2]) == np.sign(n[0, 2]))
+
+
+def test_ply_per_corner_texcoords_split_the_vertices(tmp_path):
+    text = "\n".join([
+        "ply", "format ascii 1.0", "element vertex 4", "property float x", "property float y", "property float z",
+        "element face 2", "property list uchar int vertex_indices", "property list uchar float texcoord",
+        "end_header", "0 0 0", "1 0 0", "1 1 0", "0 1 0",
+        "3 0 1 2 6 0 0 1 0 1 1", "3 0 2 3 6 0.5 0.5 1 1 0 1", ""])
+    (tmp_path / "w.ply").write_text(text)
+    m = read_mesh(tmp_path / "w.ply")
+    assert m.n_vertices == 5  # vertex 0 has two UVs
+    assert m.uv is not None and np.allclose(m.uv[m.faces[1, 0]], [0.5, 0.5])
+    assert np.allclose(m.vertices[m.faces[1, 0]], [0, 0, 0])
+
+
+def test_ply_foreign_properties_and_unit_comments(tmp_path):
+    v, quads = quad_grid()
+    p = binary_ply(tmp_path / "f.ply", v, quads,
+                   extra_vertex=[("quality", np.ones(16)), ("thickness_x", np.arange(16))],
+                   comments=["made by a scanner", "cdbrdf units cm", "cdbrdf up y"])
+    m = read_mesh(p)
+    assert "thickness" in m.attributes and "quality" not in m.attributes
+    assert m.metadata["units"] == "cm" and m.metadata["up"] == "y" and m.metadata["source"] == str(p)
+
+
+# -- OBJ, glTF, STL, OFF through trimesh -------------------------------------------------------
+def test_obj_with_separate_indices_groups_quads_and_objects(tmp_path):
+    text = """# quads, groups, objects, separate vt/vn indices, negative indices
+o first
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 2 0 0
+v 2 1 0
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vt 0.5 0.5
+vn 0 0 1
+g panelA
+f 1/1/1 2/2/1 3/3/1 4/4/1
+g panelB
+usemtl blue
+f 2/5/1 5/2/1 6/3/1 3/4/1
+o second
+v 0 0 1
+v 1 0 1
+v 1 1 1
+f -3/1/1 -2/2/1 -1/3/1
+"""
+    (tmp_path / "m.obj").write_text(text)
+    m = read_obj(tmp_path / "m.obj")
+    assert m.faces.shape == (5, 3) and m.uv is not None and m.normals is not None
+    # vertex 2 (1, 0, 0) appears with two UVs: (1, 0) in panel A and (0.5, 0.5) in panel B
+    at = np.flatnonzero(np.all(m.vertices == [1, 0, 0], axis=1))
+    assert sorted(map(tuple, m.uv[at].tolist())) == [(0.5, 0.5), (1.0, 0.0)]
+    assert m.metadata["format"] == "obj"
+    s = prepare_mesh(m)
+    assert s.faces.shape[0] == 5 and "curvature" in s.attributes
+
+
+def test_gltf_and_glb_with_uvs_normals_and_node_transforms(tmp_path):
+    import trimesh
+
+    v, f, uv, _ = cylinder_patch(R_CYL / 1000.0, n=12)  # in metres
+    n = v * np.array([1.0, 0.0, 1.0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    mesh = trimesh.Trimesh(v, f, vertex_normals=n, process=False,
+                           visual=trimesh.visual.TextureVisuals(uv=uv, material=trimesh.visual.material.PBRMaterial()))
+    scene = trimesh.Scene()
+    scene.add_geometry(mesh, node_name="a", geom_name="a")
+    scene.add_geometry(mesh, node_name="b", geom_name="b",
+                       transform=trimesh.transformations.translation_matrix([0.0, 0.0, 0.02]))
+    for ext in ("glb", "gltf"):
+        path = tmp_path / f"c.{ext}"
+        scene.export(path)
+        m = read_mesh(path)
+        assert m.faces.shape == (2 * len(f), 3) and m.uv is not None and m.normals is not None
+        assert m.metadata["units"] == "m" and m.metadata["up"] == "y"
+        assert np.isclose(m.vertices[:, 2].max(), v[:, 2].max() + 0.02, atol=1e-6)  # the transform applied
+        assert np.allclose(np.linalg.norm(m.normals, axis=1), 1.0, atol=1e-5)
+        s = prepare_mesh(m)  # metres, from the file: kappa 0.22 / mm on both parts
+        assert s.metadata["units"] == "m"
+        assert np.median(s.attributes["curvature"]) == pytest.approx(0.22, rel=0.05)
+
+
+def test_stl_triangle_soup_and_off(tmp_path):
+    import trimesh
+
+    v, f, uv, _ = cylinder_patch(R_CYL, n=12)
+    t = trimesh.Trimesh(v, f, process=False)
+    for ext in ("stl", "off"):
+        t.export(tmp_path / f"c.{ext}")
+        m = read_mesh(tmp_path / f"c.{ext}")
+        assert m.faces.shape == f.shape and m.uv is None
+        s = prepare_mesh(m)
+        if ext == "stl":
+            assert any(r.startswith("welded") for r in s.metadata["repairs"])
+        assert s.metadata["frame"] == "principal" and s.uv is not None
+
+
+def test_unknown_format_and_missing_file(tmp_path):
+    with pytest.raises(MeshError, match="unknown mesh format"):
+        read_mesh(tmp_path / "m.fbx")
+    with pytest.raises(MeshError, match="cannot be read"):
+        read_mesh(tmp_path / "missing.ply")
+
+
+# -- corrupt and hostile files -----------------------------------------------------------------
+def ply_text(vertex_count=3, face_count=1, body="0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", fmt="ascii"):
+    return (f"ply\nformat {fmt} 1.0\nelement vertex {vertex_count}\nproperty float x\nproperty float y\n"
+            f"property float z\nelement face {face_count}\nproperty list uchar int vertex_indices\nend_header\n"
+            + body)
+
+
+HOSTILE = {
+    "1e12 faces (ascii)": ply_text(face_count=10**12),
+    "1e12 faces (binary)": ply_text(face_count=10**12, fmt="binary_little_endian", body="\x00" * 64),
+    "1e12 vertices": ply_text(vertex_count=10**12, fmt="binary_little_endian", body="\x00" * 64),
+    "nan coordinates": ply_text(body="nan 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+    "1e308 coordinates": ply_text(body="1e308 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+    "inf coordinates": ply_text(body="inf 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+    "index out of range": ply_text(body="0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"),
+    "negative index": ply_text(body="0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n"),
+    "list runs past the end": ply_text(body="0 0 0\n1 0 0\n0 1 0\n200 0 1 2\n"),
+    "truncated": ply_text()[:-12],
+    "words in the data": ply_text(body="0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n"),
+    "no end_header": "ply\nformat ascii 1.0\nelement vertex 3\n",
+    "not ply": "solid nothing\n",
+    "bad format": ply_text(fmt="binary_middle_endian"),
+    "point cloud": "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                   "end_header\n0 0 0\n",
+    "all degenerate": ply_text(body="0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n"),
+    "fractional index": ply_text(body="0 0 0\n1 0 0\n0 1 0\n3 0 1.5 2\n"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(HOSTILE))
+def test_corrupt_ply_is_one_mesh_error_naming_the_file(tmp_path, name):
+    p = tmp_path / "bad.ply"
+    p.write_bytes(HOSTILE[name].encode("latin-1"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(CDBRDFError) as info:
+            prepare_mesh(p)
+    assert isinstance(info.value, MeshError | LimitError)
+    msg = str(info.value)
+    assert "\n" not in msg and (str(p) in msg or "mesh" in msg)
+
+
+@pytest.mark.parametrize("ext, data", [
+    ("obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99\n"),
+    ("obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+    ("obj", "v 1e308 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+    ("obj", "this is not an obj\n"),
+    ("obj", ""),
+    ("stl", "\x00" * 80 + "\xff\xff\xff\x7f" + "\x00" * 50),
+    ("glb", "glTF\x02\x00\x00\x00" + "\xff" * 40),
+    ("gltf", '{"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 7}}]}]}'),
+    ("off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"),
+])
+def test_corrupt_files_of_other_formats_are_one_mesh_error(tmp_path, ext, data):
+    p = tmp_path / f"bad.{ext}"
+    p.write_bytes(data.encode("latin-1"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(CDBRDFError) as info:
+            prepare_mesh(p)
+    assert "\n" not in str(info.value) and str(p) in str(info.value)
+
+
+def test_faces_beyond_the_limit_are_refused_before_reading(tmp_path, monkeypatch):
+    v, f, uv, _ = cylinder_patch(R_CYL, n=10)
+    p = tmp_path / "c.ply"
+    write_ply(p, Mesh(v, f))
+    monkeypatch.setenv("CDBRDF_MAX_MESH_FACES", "10")
+    with pytest.raises(LimitError, match="CDBRDF_MAX_MESH_FACES"):
+        read_mesh(p)
+    write_obj(tmp_path / "c.obj", v, f)
+    with pytest.raises(LimitError, match="CDBRDF_MAX_MESH_FACES"):
+        read_mesh(tmp_path / "c.obj")
+
+
+def test_write_refuses_bad_meshes_and_writes_nothing(tmp_path):
+    v, f, uv, _ = cylinder_patch(R_CYL, n=10)
+    with pytest.raises(MeshError, match="faces"):
+        write_ply(tmp_path / "x.ply", Mesh(v, f + 1000))
+    with pytest.raises(MeshError, match="attribute"):
+        write_ply(tmp_path / "x.ply", Mesh(v, f, attributes={"curvature": np.zeros(3)}))
+    assert not list(tmp_path.iterdir())
+
+
+# -- the real meshes ---------------------------------------------------------------------------
+def test_real_meshes_read():
+    spot = read_mesh(shared_mesh("spot.obj"))
+    assert spot.n_vertices == 3225 and spot.faces.shape == (5856, 3) and spot.uv is not None
+    fan = read_mesh(shared_mesh("fandisk.obj"))
+    assert fan.uv is None and fan.faces.shape == (12946, 3)
