@@ -120,11 +120,15 @@ def scene(mi, *, light: str, env: Path, size, bsdf) -> object:
     with tempfile.TemporaryDirectory() as tmp:
         ply = Path(tmp) / "sheet.ply"
         write_ply(ply, mesh)
+        e = math.radians(40.0)  # the camera 40 degrees above the sheet, from -y (across the corrugations)
         return cr.load_dict({
             "type": "scene",
             "integrator": {"type": "path", "max_depth": 3},
-            "sensor": scenes._camera(mi, mesh.vertices.min(0), mesh.vertices.max(0), size[0], size[1],
-                                     elevation_deg=40.0, azimuth_deg=-90.0, fov_deg=40.0, spp=16),
+            "sensor": {"type": "perspective", "fov": 40.0, "fov_axis": "smaller",
+                       "to_world": T().look_at(origin=[0.0, -110.0 * math.cos(e), 110.0 * math.sin(e)],
+                                               target=[0, 0, 0], up=[0, 0, 1]),
+                       "film": {"type": "hdrfilm", "width": size[0], "height": size[1]},
+                       "sampler": {"type": "independent", "sample_count": 16}},
             "sheet": {"type": "ply", "filename": str(ply), "bsdf": bsdf},
             "light": emitter,
         })

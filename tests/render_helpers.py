@@ -70,3 +70,25 @@ def hemisphere_quadrature(n=200):
     d = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3)
     dw = (np.pi / 2 / n) * (2 * np.pi / (2 * n)) * np.sin(T).ravel()
     return d, dw
+
+
+def sheet_scene_dict(tmp_path, bsdf, *, emitter, size=(16, 12), spp=16, max_depth=2, width_mm=20.0):
+    """A small sine sheet (its curvature stored) seen from 40 degrees above -y, with ``bsdf`` and ``emitter``."""
+    from cdbrdf.render.meshio import write_ply
+    from cdbrdf.render.scenes import SineSheet, sine_sheet_mesh
+
+    ply = tmp_path / "sheet.ply"
+    write_ply(ply, sine_sheet_mesh(SineSheet(width_mm=width_mm, depth_mm=width_mm, vertices_per_wavelength=16)))
+    d = 1.6 * width_mm
+    e = np.radians(40.0)
+    return {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": max_depth},
+        "sensor": {"type": "perspective", "fov": 40.0,
+                   "to_world": mi.ScalarTransform4f().look_at(origin=[0.0, -d * np.cos(e), d * np.sin(e)],
+                                                              target=[0, 0, 0], up=[0, 0, 1]),
+                   "film": {"type": "hdrfilm", "width": size[0], "height": size[1], "rfilter": {"type": "box"}},
+                   "sampler": {"type": "independent", "sample_count": spp}},
+        "sheet": {"type": "ply", "filename": str(ply), "bsdf": bsdf},
+        "light": emitter,
+    }

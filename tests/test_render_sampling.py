@@ -15,7 +15,17 @@ import pytest
 import cdbrdf
 from cdbrdf.render import _sampling
 
-from .render_helpers import constant_table, dr, glossy_table, hemisphere_quadrature, local_si, mi, needs_llvm, vec
+from .render_helpers import (
+    constant_table,
+    dr,
+    glossy_table,
+    hemisphere_quadrature,
+    local_si,
+    mi,
+    needs_llvm,
+    sheet_scene_dict,
+    vec,
+)
 
 
 @pytest.fixture(scope="module")
@@ -233,21 +243,19 @@ def test_importance_transport_samples_the_cosine(variant, glossy):
 @needs_llvm
 def test_table_sampling_renders_the_same_as_cosine(variant, tmp_path):
     """Same expected image with both samplers (equal up to noise), a glossy table under a sky."""
-    from cdbrdf.render.scenes import SineSheet, mesh_scene, render_scene, sine_sheet_mesh
+    from cdbrdf.render.scenes import render_scene
 
     env = tmp_path / "sky.exr"
     sky = np.ones((16, 32, 3), dtype=np.float32)
     sky[:4] = 5.0  # a bright band near the zenith
     mi.Bitmap(sky).write(str(env))
     t = glossy_table(exponent=20.0, ks=0.5, kd=0.05, theta_step=15.0, phi_step=30.0)
-    mesh = sine_sheet_mesh(SineSheet(width_mm=20, depth_mm=20, vertices_per_wavelength=16))
-    kw = dict(light=None, envmap=env, size=(16, 12), spp=512, max_depth=2)
-    a = render_scene(mesh_scene(t, mesh, **kw), seed=1)
-    from cdbrdf.render import scenes
-
-    scenes_bsdf = {"type": "cdbrdf", "table": t, "sampling": "cosine"}
-    b = render_scene(scenes._build(mesh, t, mode="cdbrdf", scale=1.0, size=(16, 12), spp=512, light=None,
-                                   envmap=env, max_depth=2, elevation_deg=35.0, azimuth_deg=-90.0, fov_deg=40.0,
-                                   bsdf=scenes_bsdf), seed=2)
+    emitter = {"type": "envmap", "filename": str(env), "to_world": mi.ScalarTransform4f().rotate([1, 0, 0], 90.0)}
+    imgs = []
+    for seed, sampling in ((1, "table"), (2, "cosine")):
+        d = sheet_scene_dict(tmp_path, {"type": "cdbrdf", "table": t, "sampling": sampling}, emitter=emitter,
+                             spp=512)
+        imgs.append(render_scene(variant.load_dict(d), seed=seed))
+    a, b = imgs
     assert a.mean() > 0.01
     assert abs(a.mean() - b.mean()) < 0.02 * a.mean()

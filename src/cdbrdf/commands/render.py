@@ -57,8 +57,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     from ..render import VARIANTS
     from ..render.meshio import MESH_FORMATS
     from ..render.scenes import LIGHTINGS, UP_AXES
-    from ._args import (existing_file, finite_float, float_list, int_range, key_value, keyword, output_file, seed,
-                        size_wxh)
+    from ._args import (
+        existing_file,
+        finite_float,
+        float_list,
+        int_range,
+        key_value,
+        keyword,
+        output_file,
+        seed,
+        size_wxh,
+    )
     from .curvature import mesh_options
 
     p = sub.add_parser(
