@@ -6,6 +6,8 @@ import argparse
 import os
 from pathlib import Path
 
+from ..errors import OptionError
+
 __all__ = ["register", "run", "FORMATS"]
 
 #: Output formats, chosen by the output file's suffix.
@@ -63,7 +65,7 @@ def _output(path_text: str) -> tuple[Path, str]:
     fmt = FORMATS.get(out.suffix.lower())
     if fmt is None:
         got = f"{out.suffix!r}" if out.suffix else "no suffix"
-        raise ValueError(
+        raise OptionError(
             f"{out}: cannot tell the output format from {got}; use one of "
             + ", ".join(FORMATS)
         )
@@ -81,8 +83,8 @@ def _umask() -> int:
 
 def run(args: argparse.Namespace) -> int:
     from ..io import atomic_path
-    from ..table import load
     from ..plot import plot_mosaic
+    from ..table import load
 
     out, fmt = _output(args.output)
     table = load(args.file)

@@ -38,6 +38,8 @@ import math
 import sys
 from pathlib import Path
 
+from ..errors import OptionError
+
 __all__ = ["register", "run"]
 
 
@@ -187,9 +189,9 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
     ext = out.suffix.lower()
     if args.compare:
         if ext not in FIGURE_FORMATS:
-            raise ValueError(f"{out}: --compare writes a figure; use {', '.join(FIGURE_FORMATS)}")
+            raise OptionError(f"{out}: --compare writes a figure; use {', '.join(FIGURE_FORMATS)}")
     elif ext not in IMAGE_FORMATS:
-        raise ValueError(f"{out}: unknown image type {ext!r}; use {' or '.join(IMAGE_FORMATS)}")
+        raise OptionError(f"{out}: unknown image type {ext!r}; use {' or '.join(IMAGE_FORMATS)}")
     width, height = args.size
     is_mesh = args.scene != "sine"
     lighting = args.lighting or ("studio" if is_mesh else "paper")
@@ -206,16 +208,16 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
         light = (STUDIO_KEY[0], azim + STUDIO_KEY[1], args.irradiance)
     if not is_mesh:
         if args.envmap:
-            raise ValueError("--envmap: only for --mesh scenes")
+            raise OptionError("--envmap: only for --mesh scenes")
         if lighting == "studio":
-            raise ValueError("--lighting studio: only for --mesh scenes (the sine sheet is the paper's set-up)")
+            raise OptionError("--lighting studio: only for --mesh scenes (the sine sheet is the paper's set-up)")
         if light is None:
-            raise ValueError("--no-light: the sine sheet needs its light")
+            raise OptionError("--no-light: the sine sheet needs a light (the paper's directional light)")
         sw, sd = args.sheet_size
         sheet = SineSheet(amplitude_mm=args.amplitude, wavelength_mm=args.wavelength, width_mm=sw, depth_mm=sd)
         _check_sheet(sheet)
     elif light is None and args.envmap is None and lighting == "paper":
-        raise ValueError("--no-light: the scene needs a light; give --envmap or use --lighting studio")
+        raise OptionError("--no-light: the scene needs a light; give --envmap or use --lighting studio")
     table = load(args.file)
     cr.set_variant(args.variant)
     common = dict(size=(width, height), spp=args.spp, max_depth=args.max_depth,

@@ -9,6 +9,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..errors import OptionError
+
 __all__ = ["register", "run", "parse_grid", "parse_sets"]
 
 _GRIDS = "paper | regular:THETA_STEP,PHI_STEP"
@@ -81,13 +83,13 @@ def parse_sets(items: list[str]) -> dict:
     out = {}
     for item in items:
         if "=" not in item:
-            raise ValueError(f"--set: expected NAME=VALUE, got {item!r}")
+            raise OptionError(f"--set: expected NAME=VALUE, got {item!r}")
         name, value = item.split("=", 1)
         name = name.strip()
         parsed = ClothParams.parse_value(name, value)
         numbers = parsed if isinstance(parsed, tuple) else (parsed,)
         if any(isinstance(x, float) and not math.isfinite(x) for x in numbers):
-            raise ValueError(f"--set: {name}: expected finite numbers, got {value!r}")
+            raise OptionError(f"--set: {name}: expected finite numbers, got {value!r}")
         out[name] = parsed
     return out
 
@@ -114,11 +116,11 @@ def parse_grid(spec: str, kappa: str | Sequence[float] | None = None):  # noqa: 
         else:
             k = np.asarray(kappa, dtype=float)
     except argparse.ArgumentTypeError as exc:
-        raise ValueError(f"--kappa: {exc}") from None
+        raise OptionError(f"--kappa: {exc}") from None
     try:
         steps = _parse_grid_spec(spec)
     except argparse.ArgumentTypeError as exc:
-        raise ValueError(f"--grid: {exc}") from None
+        raise OptionError(f"--grid: {exc}") from None
     if steps is None:
         return Grid.paper(kappa=k)
     t, p = steps
