@@ -181,9 +181,9 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
     if Path(args.file).suffix.lower() == ".xml":
         return _run_scene_file(args)
     if args.scene is None and args.mesh is None:
-        raise ValueError("give --scene sine or --mesh MESH for a CDBRDF file (or render a scene file SCENE.xml)")
+        raise OptionError("give --scene sine or --mesh MESH for a CDBRDF file (or render a scene file SCENE.xml)")
     if args.define:
-        raise ValueError("-D: only for a scene file (SCENE.xml)")
+        raise OptionError("-D: only for a scene file (SCENE.xml)")
     args.spp = 64 if args.spp is None else args.spp
     out = Path(args.output)
     ext = out.suffix.lower()
@@ -282,15 +282,15 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     from ._progress import ProgressBars
 
     if args.scene is not None or args.mesh is not None:
-        raise ValueError(f"{args.file}: a scene file brings its own shapes; --scene and --mesh are not used")
+        raise OptionError(f"{args.file}: a scene file brings its own shapes; --scene and --mesh are not used")
     defaults = getattr(args, "defaults_", {})
     changed = [k for k in _SCENE_FILE_IGNORES if k in defaults and getattr(args, k) != defaults[k]]
     if changed:
-        raise ValueError(f"--{changed[0].replace('_', '-')}: not used with a scene file (the scene defines "
-                         "camera, film, lights and integrator; use -D for its parameters)")
+        raise OptionError(f"--{changed[0].replace('_', '-')}: not used with a scene file (the scene defines "
+                          "camera, film, lights and integrator; use -D for its parameters)")
     out = Path(args.output)
     if out.suffix.lower() not in IMAGE_FORMATS:
-        raise ValueError(f"{out}: unknown image type {out.suffix.lower()!r}; use {' or '.join(IMAGE_FORMATS)}")
+        raise OptionError(f"{out}: unknown image type {out.suffix.lower()!r}; use {' or '.join(IMAGE_FORMATS)}")
     unit_mm = 1.0 if args.units is None else parse_units(args.units).mm_per_unit
     cr.set_variant(args.variant)
     import mitsuba as mi

@@ -57,7 +57,7 @@ import logging
 from collections.abc import Callable, Iterator
 from typing import Any
 
-from ..errors import SceneError
+from ..errors import OptionError, SceneError
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
 
@@ -127,11 +127,11 @@ def set_variant(variant: str = DEFAULT_VARIANT) -> str:
         For another variant.
     """
     if variant not in VARIANTS:
-        raise ValueError(f"variant: {variant!r} is not one of {', '.join(VARIANTS)}")
+        raise OptionError(f"variant: {variant!r} is not one of {', '.join(VARIANTS)}")
     import mitsuba as mi
 
     if variant not in mi.variants():
-        raise ValueError(f"variant: {variant!r} is not built into the installed Mitsuba; it has "
+        raise OptionError(f"variant: {variant!r} is not built into the installed Mitsuba; it has "
                          f"{', '.join(available_variants())}")
     if variant.startswith("llvm") and mi.variant() != variant:
         check_llvm()
@@ -211,7 +211,7 @@ def _replace_tables(d: Any) -> Any:
         if d.get("type") == PLUGIN_NAME and "table" in d:
             unknown = set(d) - _DICT_KEYS
             if unknown:
-                raise ValueError(f"cdbrdf BSDF: unknown parameter(s) {sorted(unknown)}")
+                raise OptionError(f"cdbrdf BSDF: unknown parameter(s) {sorted(unknown)}")
             kw = {k: v for k, v in d.items() if k not in ("type", "table", "id")}
             return make_bsdf(d["table"], **kw)
         return {k: _replace_tables(v) for k, v in d.items()}

@@ -26,7 +26,7 @@ from typing import Any, cast
 import numpy as np
 
 from ..curvature import ATTRIBUTES
-from ..errors import TableError
+from ..errors import OptionError, TableError
 from ..interp import LookupGrid, prepare
 from . import _lookup_jit as lj
 from . import _sampling
@@ -96,7 +96,7 @@ def load_table(source: Any) -> Any:
 def _choice(name: str, value: Any, choices: tuple[str, ...] | Mapping[str, str]) -> str:
     v = str(value)
     if v not in choices:
-        raise ValueError(f"cdbrdf BSDF: {name} {v!r} is not one of {', '.join(choices)}")
+        raise OptionError(f"cdbrdf BSDF: {name} {v!r} is not one of {', '.join(choices)}")
     return v
 
 
@@ -140,7 +140,7 @@ class Settings:
         sampling = _choice("sampling", sampling, SAMPLINGS)
         storage = _choice("storage", storage, STORAGES)
         if curvature is not None and curvature_mode is not None:
-            raise ValueError("cdbrdf BSDF: give either 'curvature' (an attribute name or a constant) or "
+            raise OptionError("cdbrdf BSDF: give either 'curvature' (an attribute name or a constant) or "
                              "'curvature_mode', not both")
         attr: str | None
         k = 0.0
@@ -149,7 +149,7 @@ class Settings:
         elif isinstance(curvature, str):
             name = curvature.strip()
             if not name:
-                raise ValueError("cdbrdf BSDF: curvature attribute name is empty")
+                raise OptionError("cdbrdf BSDF: curvature attribute name is empty")
             try:
                 k = float(name)
                 attr = None
@@ -159,13 +159,13 @@ class Settings:
             k = float(curvature)
             attr = None
         if attr is None and not math.isfinite(k):
-            raise ValueError(f"cdbrdf BSDF: constant curvature must be finite, got {curvature}")
+            raise OptionError(f"cdbrdf BSDF: constant curvature must be finite, got {curvature}")
         cs = float(curvature_scale)
         if not (math.isfinite(cs) and cs > 0.0):
-            raise ValueError(f"cdbrdf BSDF: curvature_scale must be finite and > 0, got {curvature_scale}")
+            raise OptionError(f"cdbrdf BSDF: curvature_scale must be finite and > 0, got {curvature_scale}")
         cw = _sampling.DEFAULT_COSINE_WEIGHT if cosine_weight is None else float(cosine_weight)
         if not (0.0 < cw <= 1.0):
-            raise ValueError(f"cdbrdf BSDF: cosine_weight must lie in (0, 1], got {cosine_weight}")
+            raise OptionError(f"cdbrdf BSDF: cosine_weight must lie in (0, 1], got {cosine_weight}")
         if mode == "brdf":
             # The plain BRDF does not depend on curvature: never read the attribute.
             attr, k = None, 0.0
@@ -180,7 +180,7 @@ def check_variant(variant: str | None) -> str:
             "cdbrdf BSDF: no Mitsuba variant is set; call cdbrdf.render.set_variant() first"
         )
     if variant not in SUPPORTED_VARIANTS:
-        raise ValueError(
+        raise OptionError(
             f"cdbrdf BSDF: Mitsuba variant {variant!r} is not supported; use one of "
             f"{', '.join(SUPPORTED_VARIANTS)} (polarised variants are not supported)"
         )
@@ -244,7 +244,7 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             mi.BSDF.__init__(self, props)
             if table is None:
                 if "filename" not in props:
-                    raise ValueError(
+                    raise OptionError(
                         "cdbrdf BSDF: give 'filename' (a CDBRDF file), or build the "
                         "BSDF from a table with cdbrdf.render.make_bsdf(table)"
                     )
@@ -264,7 +264,7 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                 curvature_scale=get("curvature_scale", 1.0), sampling=get("sampling", "table"),
                 cosine_weight=get("cosine_weight"), storage=get("storage", "auto"))
             if table.n_channels not in (1, 3):
-                raise ValueError(
+                raise TableError(
                     f"cdbrdf BSDF: the table has {table.n_channels} channels; the renderer needs 1 or 3"
                 )
             self.table = table
@@ -276,14 +276,14 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                 if props.type("scale") in (mi.Properties.Type.Float, mi.Properties.Type.Integer):
                     s = float(props["scale"])
                     if not (math.isfinite(s) and s >= 0):
-                        raise ValueError(f"cdbrdf BSDF: scale must be finite and >= 0, got {s}")
+                        raise OptionError(f"cdbrdf BSDF: scale must be finite and >= 0, got {s}")
                     self.scale = mi.Float(s)
                 else:
                     self.scale_texture = props.get_texture("scale")
             self.record = ("one" if colour == "mono" or table.n_channels == 1
                            else "spectral" if colour == "spectral" else "rgb")
             if self.settings.storage == "packed" and self.record == "spectral":
-                raise ValueError("cdbrdf BSDF: storage 'packed' holds RGB or grey values; spectral variants "
+                raise OptionError("cdbrdf BSDF: storage 'packed' holds RGB or grey values; spectral variants "
                                  "use 'float' (or 'auto')")
             self.values = mi.TensorXf(np.ascontiguousarray(self._eval_table.values, dtype=np.float32))
             self._maps: Any = None
@@ -329,7 +329,7 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                 return
             if differentiable:
                 if self.record == "spectral":
-                    raise ValueError("cdbrdf BSDF: gradients with respect to the table are available in the "
+                    raise OptionError("cdbrdf BSDF: gradients with respect to the table are available in the "
                                      "rgb and mono variants (spectral upsampling is not differentiable)")
                 if self._maps is None:
                     g = self._eval_table.grid
