@@ -138,11 +138,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--variant", choices=VARIANTS, default="llvm_ad_rgb",
                    help="Mitsuba variant (default: llvm_ad_rgb; spectral and mono variants too; "
                    "scalar_*: one Python call per ray, debugging only)")
-    defaults = {}
-    for action in p._actions:  # the parsed defaults, to tell options a scene file does not use
-        if action.dest in _SCENE_FILE_IGNORES:
-            d = action.default
-            defaults[action.dest] = action.type(d) if isinstance(d, str) and callable(action.type) else d
+    # the defaults (and the types that parse them), to tell the options a scene file does not use
+    defaults = {a.dest: (a.default, a.type) for a in p._actions if a.dest in _SCENE_FILE_IGNORES}
     p.set_defaults(func=run, defaults_=defaults)
 
 
@@ -283,8 +280,15 @@ def _run_scene_file(args: argparse.Namespace) -> int:
 
     if args.scene is not None or args.mesh is not None:
         raise OptionError(f"{args.file}: a scene file brings its own shapes; --scene and --mesh are not used")
-    defaults = getattr(args, "defaults_", {})
-    changed = [k for k in _SCENE_FILE_IGNORES if k in defaults and getattr(args, k) != defaults[k]]
+    changed = []
+    for k, (default, kind) in getattr(args, "defaults_", {}).items():
+        if isinstance(default, str) and callable(kind):
+            try:
+                default = kind(default)
+            except (argparse.ArgumentTypeError, ValueError):
+                continue  # its default cannot be parsed here (e.g. a limit variable): not comparable
+        if getattr(args, k) != default:
+            changed.append(k)
     if changed:
         raise OptionError(f"--{changed[0].replace('_', '-')}: not used with a scene file (the scene defines "
                           "camera, film, lights and integrator; use -D for its parameters)")
