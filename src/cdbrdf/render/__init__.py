@@ -21,34 +21,49 @@ variant, registers); every helper here that builds or renders a scene calls
 Plug-in ``cdbrdf`` parameters
 -----------------------------
 
-=============  ===============  ==================================================
-Parameter      Type             Description
-=============  ===============  ==================================================
-``filename``   string           A CDBRDF file (HDF5). Instead, a table object can
-                                be given: ``"table": table`` in a dict passed to
-                                :func:`cdbrdf.render.load_dict`, or
-                                :func:`make_bsdf` (Mitsuba's own properties cannot
-                                hold Python objects).
-``mode``       string           ``"cdbrdf"`` (default): 5-D lookup with the
-                                curvature; ``"brdf"``: the plain BRDF (the table's
-                                kappa = 0 slice), curvature ignored.
-``curvature``  string or float  Name of the mesh attribute holding the curvature
-                                in mm^-1 (default ``"vertex_curvature"``, i.e. a
-                                PLY vertex property ``curvature_x`` as written by
-                                ``cdbrdf curvature``), or a constant in mm^-1.
-``scale``      float            Factor on the reflectance (default 1).
-=============  ===============  ==================================================
+===================  ================  ================================================
+Parameter            Type              Description
+===================  ================  ================================================
+``filename``         string            A CDBRDF file (HDF5), found through Mitsuba's
+                                       file resolver (relative to the scene file).
+                                       Instead, a table object: ``"table": table`` in a
+                                       dict passed to :func:`load_dict`, or
+                                       :func:`make_bsdf`.
+``mode``             string            ``"cdbrdf"`` (default): 5-D lookup with the
+                                       curvature; ``"brdf"``: the plain BRDF (kappa = 0).
+``curvature``        string or float   Mesh attribute holding the curvature (mm^-1), or a
+                                       constant in mm^-1.
+``curvature_mode``   string            ``"max"`` (default, attribute ``vertex_curvature``)
+                                       or ``"directional"`` (``vertex_curvature_dir``).
+``curvature_scale``  float             Factor on the attribute (to_world scale and scene
+                                       unit; set by :func:`load_file`).
+``scale``            float or texture  Factor on the reflectance (default 1); any Mitsuba
+                                       texture multiplies it per channel.
+``sampling``         string            ``"table"`` (default): importance sampling from
+                                       the table; ``"cosine"``: cosine-weighted.
+``cosine_weight``    float             Share of cosine sampling in the table sampler
+                                       (default 0.1).
+``storage``          string            ``"auto"`` (default), ``"packed"`` (21-bit RGB) or
+                                       ``"float"`` (float32 packets, differentiable).
+===================  ================  ================================================
 
 The BSDF is diffuse-like (non-delta) and two-sided: seen from the back, the
 local frame is turned 180 degrees about x (normal and y flip) and the curvature
-changes sign (a crest seen from below is a trough). ``eval`` returns
-``f * cos(theta_l)``, ``sample`` draws cosine-weighted directions and ``pdf``
-is the matching density. The view direction is Mitsuba's ``si.wi`` and the
-light direction ``wo`` in radiance transport (swapped in importance
-transport, so light tracers see the same reflectance). The local x axis is
-``si.sh_frame.s`` (dP/du): meshes must have UVs; :func:`check_scene` refuses
-meshes without them (Mitsuba's analytic shapes have their own UV
-parametrisation and are accepted, with a constant curvature).
+changes sign (a crest seen from below is a trough); Mitsuba's ``twosided``
+wrapper would not do that, so :func:`check_scene` refuses it and
+:func:`load_file` removes it. ``eval`` returns ``f * cos(theta_l)``. With
+``sampling="table"``, ``sample`` draws the light direction from the table
+times the cosine, conditioned on curvature and view
+(:mod:`cdbrdf.render._sampling`), mixed with cosine sampling; ``pdf`` is the
+matching density. The view direction is Mitsuba's ``si.wi`` and the light
+direction ``wo`` in radiance transport (swapped in importance transport,
+where sampling is cosine). The local x axis is ``si.sh_frame.s`` (dP/du):
+meshes must have UVs; :func:`check_scene` refuses meshes without them or
+without the curvature attribute (Mitsuba's analytic shapes have their own UV
+parametrisation and are accepted, with a constant curvature). Spectral
+variants blend the spectra of the table samples (Mitsuba's sRGB upsampling of
+pi f), mono variants use the luminance. ``mi.traverse`` exposes ``values``
+(the table) and ``scale``; see ``docs/rendering.md``.
 """
 
 from __future__ import annotations
