@@ -183,6 +183,10 @@ def test_scene_checks_run_on_load(cr, tmp_path):
         cr.load_file(tmp_path / "missing.xml")
     with pytest.raises(SceneError, match=r"unused parameters.*\$bogus"):
         cr.load_file(path, variables={"bogus": 1})
+    (tmp_path / "noattr" / "kappa.h5").unlink()
+    with pytest.raises(SceneError, match=r"line \d+.*table file 'kappa.h5' not found") as exc:
+        cr.load_file(path)
+    assert "Traceback" not in str(exc.value) and "\n" not in str(exc.value)
 
 
 def test_scale_texture_multiplies_the_reflectance(cr):

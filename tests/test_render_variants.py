@@ -167,3 +167,12 @@ def test_scalar_variant_samples_with_the_same_rule(cr):
         np.testing.assert_allclose(np.array(w), f / float(bs.pdf), rtol=1e-5)
         np.testing.assert_allclose(wo, ref_wo[i], atol=2e-4)
         np.testing.assert_allclose(np.array(w), ref_w[i], rtol=2e-3)
+
+
+def test_a_variant_this_machine_cannot_run_is_one_error(cr):
+    if dr.has_backend(dr.JitBackend.CUDA):
+        pytest.skip("this machine has a CUDA device")
+    from cdbrdf.errors import OptionError
+
+    with pytest.raises(OptionError, match="'cuda_ad_rgb' cannot be used on this machine"):
+        cr.set_variant("cuda_ad_rgb")

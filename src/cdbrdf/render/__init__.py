@@ -150,7 +150,11 @@ def set_variant(variant: str = DEFAULT_VARIANT) -> str:
                          f"{', '.join(available_variants())}")
     if variant.startswith("llvm") and mi.variant() != variant:
         check_llvm()
-    mi.set_variant(variant)
+    try:
+        mi.set_variant(variant)
+    except (ImportError, RuntimeError) as exc:  # e.g. a cuda variant without a GPU
+        why = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise OptionError(f"variant: {variant!r} cannot be used on this machine ({why})") from None
     register()
     return variant
 

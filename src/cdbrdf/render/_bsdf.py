@@ -250,6 +250,10 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                     )
                 name = str(props["filename"])
                 path = mi.file_resolver().resolve(name)
+                if not os.path.isfile(str(path)):
+                    raise FileNotFoundError(
+                        f"cdbrdf BSDF: table file {name!r} not found (looked next to the scene file and in "
+                        "the folders of Mitsuba's file resolver)")
                 table = load_table(str(path))
                 self.filename: str | None = str(path)
             else:

@@ -178,6 +178,11 @@ def _prepare(state: Any, *, unit_mm: float, mi: Any) -> LoadReport:
 def _message(exc: Exception) -> str:
     """Mitsuba's message on one line, without its source-file prefixes (``[parser.cpp:111]``)."""
     text = re.sub(r"\[[A-Za-z0-9_]+\.(?:cpp|h):\d+\]\s*", "", str(exc))
+    if "Traceback (most recent call last)" in text:
+        # a Python plug-in's exception as Mitsuba reports it: keep where, and the exception's own line
+        head, _, tail = text.partition("Traceback (most recent call last)")
+        last = [ln.strip() for ln in tail.splitlines() if ln.strip()][-1:]
+        text = head.rstrip(" :\n") + ": " + " ".join(last)
     lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
     return " ".join(lines) if lines else type(exc).__name__
 
