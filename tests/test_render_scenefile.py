@@ -214,6 +214,9 @@ def test_render_command_with_a_scene_file(cr, tmp_path):
     assert main(["-q", "render", str(path), "-o", str(png), "--spp", "2", "--units", "cm",
                  "--variant", "llvm_ad_spectral"]) == 0
     assert png.stat().st_size > 0
+    grey = tmp_path / "grey.png"  # mono: one channel, written as grey
+    assert main(["-q", "render", str(path), "-o", str(grey), "--spp", "2", "--variant", "llvm_ad_mono"]) == 0
+    assert grey.stat().st_size > 0
     def status(argv):
         try:
             return main(argv)

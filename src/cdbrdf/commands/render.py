@@ -271,6 +271,8 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
 
 def _run_scene_file(args: argparse.Namespace) -> int:
     """``cdbrdf render SCENE.xml``: load with :func:`cdbrdf.render.load_file`, check, render, write."""
+    import numpy as np
+
     from .. import render as cr
     from ..curvature import parse_units
     from ..errors import SceneError
@@ -307,11 +309,12 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     with ProgressBars(quiet=args.quiet, unit="spp", leave=True) as bars:
         image = render_scene(scene, spp=args.spp, seed=args.seed, progress=bars.callback("rendering"))
     if out.suffix.lower() == ".exr":
-        write_render(out, image)
+        write_render(out, image)  # grey (one channel) in mono variants
         expo = ""
     else:
-        ev = exposure_from_render(image) if args.exposure == "auto" else float(args.exposure)
-        write_render(out, image, exposure_ev=ev)
+        rgb = np.repeat(image, 3, axis=-1) if image.shape[-1] == 1 else image[..., :3]
+        ev = exposure_from_render(rgb) if args.exposure == "auto" else float(args.exposure)
+        write_render(out, rgb, exposure_ev=ev)
         expo = f", exposure {ev:+.2f} EV ({'auto' if args.exposure == 'auto' else 'given'})"
     if not args.quiet:
         h, w = image.shape[:2]
