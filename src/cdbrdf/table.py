@@ -49,8 +49,10 @@ from .schema import (
     REFLECTANCE,
     REFLECTANCE_STD,
     SAMPLE_AXES,
+    SYMMETRY_ATTR,
     TableParts,
     channel_names,
+    check_symmetry,
     variable_attrs,
     with_channel_names,
 )
@@ -99,7 +101,13 @@ class CDBRDF:
         Optional per-sample standard deviation, same shape as ``values``.
     attrs
         Metadata: ``quantity`` ("brdf" or "relative"), ``colour_space``,
-        ``material``, ``provenance`` (any JSON-serialisable value), ``channels``.
+        ``material``, ``provenance`` (any JSON-serialisable value), ``channels``,
+        ``symmetry``.
+    symmetry
+        ``"anisotropic"`` or ``"isotropic"`` (:data:`cdbrdf.schema.SYMMETRIES`);
+        default: ``attrs["symmetry"]``, else anisotropic. An isotropic table
+        has ``phi_l = [0]`` and its ``phi_v`` axis is the azimuth difference
+        ``phi_v - phi_l``; its attributes then hold ``symmetry = "isotropic"``.
 
     Raises
     ------
@@ -133,8 +141,10 @@ class CDBRDF:
         fill_source: ArrayLike | None = None,
         std: ArrayLike | None = None,
         attrs: Mapping[str, Any] | None = None,
+        symmetry: str | None = None,
     ) -> None:
-        grid = Grid(kappa=kappa, theta_l=theta_l, phi_l=phi_l, theta_v=theta_v, phi_v=phi_v)
+        sym = self._check_symmetry(symmetry, attrs)
+        grid = Grid(kappa=kappa, theta_l=theta_l, phi_l=phi_l, theta_v=theta_v, phi_v=phi_v, symmetry=sym)
         self._grid = grid
         self._values = self._check_values("values", values, grid)
         if std is None:
@@ -149,9 +159,27 @@ class CDBRDF:
         self._measured = self._check_mask(measured, grid.shape)
         self._fill_source = self._check_fill(fill_source, self._measured)
         self._attrs = self._check_attrs(attrs)
+        if sym == "isotropic":
+            self._attrs[SYMMETRY_ATTR] = sym
         self._lookup: LookupGrid | None = None  # filled by lookup_grid()
 
     # -- validation -------------------------------------------------------------
+    @staticmethod
+    def _check_symmetry(symmetry: str | None, attrs: Mapping[str, Any] | None) -> str:
+        """The table's symmetry: the argument, else ``attrs["symmetry"]``, else anisotropic; both must agree."""
+        stored = attrs.get(SYMMETRY_ATTR) if isinstance(attrs, Mapping) else None
+        if stored is not None:
+            try:
+                check_symmetry(stored)
+            except TableError as exc:
+                raise TableError(f"attrs[{SYMMETRY_ATTR!r}]: {str(exc).partition(': ')[2]}") from None
+        if symmetry is None:
+            return "anisotropic" if stored is None else str(stored)
+        check_symmetry(symmetry)
+        if stored is not None and stored != symmetry:
+            raise TableError(f"symmetry: {symmetry!r} disagrees with attrs[{SYMMETRY_ATTR!r}] = {stored!r}")
+        return symmetry
+
     @staticmethod
     def _check_values(name: str, values: ArrayLike, grid: Grid) -> NDArray[np.floating]:
         v = read_array(name, values)
@@ -298,6 +326,16 @@ class CDBRDF:
     def quantity(self) -> str:
         """``"brdf"`` (sr^-1) or ``"relative"`` (unknown scale)."""
         return str(self._attrs["quantity"])
+
+    @property
+    def symmetry(self) -> str:
+        """``"anisotropic"`` or ``"isotropic"`` (``phi_v`` is the azimuth difference)."""
+        return self._grid.symmetry
+
+    @property
+    def isotropic(self) -> bool:
+        """Whether the table is isotropic (see :attr:`symmetry`)."""
+        return self._grid.isotropic
 
     # -- operations ---------------------------------------------------------------
     def evaluate(
@@ -459,7 +497,7 @@ class CDBRDF:
         return cls(parts.values, **parts.table_kwargs())
 
     def with_attrs(self, **attrs: Any) -> "CDBRDF":
-        """A copy with ``attrs`` updated."""
+        """A copy with ``attrs`` updated (the symmetry cannot change this way)."""
         a = copy.deepcopy(self._attrs)
         a.update(attrs)
         return CDBRDF(
@@ -469,6 +507,7 @@ class CDBRDF:
             fill_source=self._fill_source,
             std=self._std,
             attrs=a,
+            symmetry=self.symmetry,
         )
 
     def __eq__(self, other: object) -> bool:
