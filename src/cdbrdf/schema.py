@@ -324,7 +324,7 @@ class TableParts:
     attrs: Mapping[str, Any]
 
     @classmethod
-    def of(cls, table: Any) -> "TableParts":
+    def of(cls, table: Any) -> TableParts:
         """The parts of a table: anything with the attributes of :class:`cdbrdf.CDBRDF` (no copies)."""
         return cls(
             values=table.values,

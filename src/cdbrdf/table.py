@@ -376,7 +376,7 @@ class CDBRDF:
 
         return evaluate(self, theta_v, phi_v, theta_l, phi_l, kappa)
 
-    def lookup_grid(self) -> "LookupGrid":
+    def lookup_grid(self) -> LookupGrid:
         """The table prepared for lookup (:class:`cdbrdf.interp.LookupGrid`).
 
         Built by :func:`cdbrdf.interp.prepare` on first use and kept by the
@@ -389,7 +389,7 @@ class CDBRDF:
             self._lookup = prepare(self)
         return self._lookup
 
-    def brdf(self, kappa: float = 0.0) -> "CDBRDF":
+    def brdf(self, kappa: float = 0.0) -> CDBRDF:
         """The plain BRDF: the table at one curvature as a one-kappa table.
 
         With the default ``kappa = 0`` and a table that samples 0 this is the
@@ -472,7 +472,7 @@ class CDBRDF:
         return xr.Dataset(data, coords=coords, attrs=copy.deepcopy(self._attrs))
 
     @classmethod
-    def from_xarray(cls, ds: Any) -> "CDBRDF":
+    def from_xarray(cls, ds: Any) -> CDBRDF:
         """A table from a :class:`xarray.Dataset` laid out as :meth:`to_xarray` makes.
 
         Dimensions are transposed into the table's order when needed; values
@@ -496,7 +496,7 @@ class CDBRDF:
         )
         return cls(parts.values, **parts.table_kwargs())
 
-    def with_attrs(self, **attrs: Any) -> "CDBRDF":
+    def with_attrs(self, **attrs: Any) -> CDBRDF:
         """A copy with ``attrs`` updated (the symmetry cannot change this way)."""
         a = copy.deepcopy(self._attrs)
         a.update(attrs)
