@@ -436,6 +436,45 @@ class CDBRDF:
             attrs=attrs,
         )
 
+    def expanded(self, *, max_azimuths: int | None = None) -> CDBRDF:
+        """The anisotropic table holding an isotropic table's values for every light azimuth.
+
+        Both azimuth axes of the result are (a subset of) the isotropic table's
+        azimuth-difference nodes, so every value is an exact copy: light azimuths
+        ``0, s, 2 s, ...`` and view azimuths ``phi_v[0] + (0, s, 2 s, ...)``, with
+        ``s`` the difference step times the smallest divisor ``k`` of ``n_phi_v``
+        for which at most ``max_azimuths`` azimuths remain (default: all). Value
+        ``(phi_l = i s, phi_v = phi_v[0] + j s)`` is the isotropic table's
+        sample at the difference ``(j - i) s``. An anisotropic table is returned
+        as it is.
+        """
+        if not self.isotropic:
+            return self
+        n = self.phi_v.size
+        if max_azimuths is not None and (isinstance(max_azimuths, bool) or not isinstance(max_azimuths, int)
+                                         or max_azimuths < 1):
+            raise TableError(f"max_azimuths: expected a positive integer, got {max_azimuths!r}")
+        k = 1
+        if max_azimuths is not None:
+            k = next(d for d in range(1, n + 1) if n % d == 0 and n // d <= max_azimuths)
+        m = n // k
+        step = 360.0 / m
+        idx = (k * (np.arange(m)[None, :] - np.arange(m)[:, None])) % n  # [i_l, j_v] -> difference node
+
+        def expand(a: NDArray[Any]) -> NDArray[Any]:
+            # (kappa, 1, theta_l, dphi, theta_v, ...) -> (kappa, phi_l, theta_l, phi_v, theta_v, ...)
+            return np.moveaxis(a[:, 0][:, :, idx], 2, 1)
+
+        attrs = copy.deepcopy(self._attrs)
+        attrs.pop(SYMMETRY_ATTR, None)
+        attrs["expanded_from"] = "isotropic"
+        meas = expand(self._measured)
+        return CDBRDF(
+            expand(self._values), kappa=self.kappa, theta_l=self.theta_l, phi_l=np.arange(m) * step,
+            theta_v=self.theta_v, phi_v=self.phi_v[0] + np.arange(m) * step, measured=meas,
+            fill_source=np.where(meas, -1, -2), std=None if self._std is None else expand(self._std), attrs=attrs,
+        )
+
     def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
         """Write the table to an HDF5 file (atomically); see ``docs/format.md`` and :func:`cdbrdf.io.write`."""
         _io.write(TableParts.of(self), path, compression=compression)

@@ -220,8 +220,10 @@ def table_from(source: Source, grid: Grid, *, spacing_deg: float = DEFAULT_SPACI
         measured = (res.measured >= 0.5)[None]
         fill, std = None, None
     if res.negative:
-        _LOG.warning("%s: %d of %d table values below 0 (negative source values, or the deblurring step at a sharp "
-                     "edge) set to 0", source.path, res.negative, res.values.size)
+        level = logging.WARNING if res.negative_share > 1e-3 else logging.INFO
+        _LOG.log(level, "%s: %d of %d table values below 0 (negative source values, or the deblurring step at a "
+                 "sharp edge) set to 0; they held %.3g %% of the table's magnitude", source.path, res.negative,
+                 res.values.size, 100 * res.negative_share)
     attrs: dict[str, Any] = {
         "quantity": source.quantity,
         "colour_space": source.colour_space,

@@ -228,7 +228,9 @@ class Resampled:
     peak
         The largest luminance the source returned at a quadrature point.
     negative
-        Cell means below 0 (set to 0).
+        Values below 0 (set to 0).
+    negative_share
+        Their magnitude over the sum of all magnitudes (what setting them to 0 changed).
     exact
         True when the source is a table on this very grid and was copied.
     """
@@ -242,6 +244,7 @@ class Resampled:
     exact: bool = False
     method: str = "cell"
     correction: str = "deblur"
+    negative_share: float = 0.0
 
     def details(self) -> dict[str, Any]:
         """The resampling's facts for the provenance (JSON-ready)."""
@@ -257,7 +260,8 @@ class Resampled:
             "quadrature": "Gauss-Legendre per interval",
             "spacing_deg": round(self.spacing_deg, 6),
             "evaluations": self.evaluations,
-            "negative_cells_clamped": self.negative,
+            "negative_values_set_to_0": self.negative,
+            "negative_share": round(self.negative_share, 8),
         }
 
 
@@ -353,18 +357,22 @@ def resample(
     for r in rules[1:]:
         norm = np.multiply.outer(norm, r.norm)
     means = acc / norm[..., None]
-    if correction != "mean":
+    if correction != "mean":  # on the values only (the measured share stays a mean)
+        vals = means[..., :-1]
         for axis, r in enumerate(rules):
             a = r.mass()
             op = np.linalg.inv(a) if correction == "projection" else 2.0 * np.eye(a.shape[0]) - a
-            means = np.moveaxis(np.tensordot(op, means, axes=([1], [axis])), 0, axis)
+            vals = np.moveaxis(np.tensordot(op, vals, axes=([1], [axis])), 0, axis)
+        means = np.concatenate([vals, means[..., -1:]], axis=-1)
     if grid.isotropic:  # (theta_l, theta_v, dphi, ch) -> (phi_l = 1, theta_l, dphi, theta_v, ch)
         means = np.transpose(means, (0, 2, 1, 3))[None]
     values, measured = means[..., :-1], np.clip(means[..., -1], 0.0, 1.0)
     negative = int(np.count_nonzero(values < 0.0))
+    total = float(np.sum(np.abs(values)))
+    share = float(-np.sum(np.minimum(values, 0.0)) / total) if total > 0 else 0.0
     values = np.maximum(values, 0.0)
     return Resampled(values=values, measured=measured, spacing_deg=spacing, evaluations=_count(rules),
-                     peak=peak, negative=negative, correction=correction)
+                     peak=peak, negative=negative, correction=correction, negative_share=share)
 
 
 def _point(source: Source, grid: Grid) -> Resampled:
@@ -465,7 +473,7 @@ def _cosine_directions(rng: np.random.Generator, n: int) -> tuple[NDArray[np.flo
     return np.minimum(theta, 89.999), 360.0 * u2
 
 
-def estimate_error(source: Source, table: Any, *, n: int = 1 << 16, n_views: int = 24, n_lights: int = 1 << 14,
+def estimate_error(source: Source, table: Any, *, n: int = 1 << 16, n_views: int = 16, albedo_step_deg: float = 0.5,
                    seed: int = 0, peak: float | None = None) -> dict[str, Any]:
     """How far the imported ``table`` is from its ``source``.
 
@@ -477,8 +485,11 @@ def estimate_error(source: Source, table: Any, *, n: int = 1 << 16, n_views: int
         The table made from it (any curvature; its first one is used).
     n
         Random direction pairs for the point error (both distributed as the measure).
-    n_views, n_lights
-        Views and light directions (cosine distributed, the same set for both) for the albedo error.
+    n_views
+        Random views (cosine distributed) for the albedo error.
+    albedo_step_deg
+        Step of the midpoint quadrature of the albedo over the light hemisphere
+        (the same directions for both, fine enough for narrow lobes).
     seed
         Seed of the random directions.
     peak
@@ -497,28 +508,31 @@ def estimate_error(source: Source, table: Any, *, n: int = 1 << 16, n_views: int
     """
     rng = np.random.default_rng(seed)
     k = float(table.kappa[0])
+
+    def lum(a: Any) -> NDArray[np.float64]:
+        a = np.asarray(a, dtype=np.float64)
+        return luminance(a[:, :3]) if a.shape[1] >= 3 else a[:, 0]
+
     tv, pv = _cosine_directions(rng, n)
     tl, pl = _cosine_directions(rng, n)
-    fs, _ = source.evaluate(tv, pv, tl, pl)
-    ys = luminance(np.asarray(fs)[:, :3]) if np.shape(fs)[1] >= 3 else np.asarray(fs)[:, 0]
-    ft = table.evaluate(tv, pv, tl, pl, k)
-    yt = luminance(ft[:, :3]) if ft.shape[1] >= 3 else ft[:, 0]
+    ys = lum(source.evaluate(tv, pv, tl, pl)[0])
+    yt = lum(table.evaluate(tv, pv, tl, pl, k))
     total = float(np.sum(np.abs(ys)))
     rel = float(np.sum(np.abs(yt - ys)) / total) if total > 0 else 0.0
-    # directional albedo: the same cosine-distributed light directions for both (pi * mean f)
+    # directional albedo by a midpoint rule over the light hemisphere, the same directions for both
+    nt, npz = round(90.0 / albedo_step_deg), round(360.0 / albedo_step_deg)
+    th = (np.arange(nt) + 0.5) * (90.0 / nt)
+    ph = (np.arange(npz) + 0.5) * (360.0 / npz)
+    lt, lp = (a.ravel() for a in np.meshgrid(th, ph, indexing="ij"))
+    w = np.repeat(np.sin(np.radians(th)) * np.cos(np.radians(th)), npz)
     vt, vp = _cosine_directions(rng, n_views)
-    lt, lp = _cosine_directions(rng, n_lights)
     errs = []
     for t_v, p_v in zip(vt, vp):
-        qv_t = np.full(n_lights, t_v)
-        qv_p = np.full(n_lights, p_v)
-        a_s, _ = source.evaluate(qv_t, qv_p, lt, lp)
-        a_s = np.asarray(a_s)
-        a_t = table.evaluate(qv_t, qv_p, lt, lp, k)
-        y_s = float(np.mean(luminance(a_s[:, :3]) if a_s.shape[1] >= 3 else a_s[:, 0]))
-        y_t = float(np.mean(luminance(a_t[:, :3]) if a_t.shape[1] >= 3 else a_t[:, 0]))
-        if y_s > 0:
-            errs.append(abs(y_t - y_s) / y_s)
+        qt, qp = np.full(lt.size, t_v), np.full(lt.size, p_v)
+        a_s = float(np.sum(w * lum(source.evaluate(qt, qp, lt, lp)[0])))
+        a_t = float(np.sum(w * lum(table.evaluate(qt, qp, lt, lp, k))))
+        if a_s > 0:
+            errs.append(abs(a_t - a_s) / a_s)
     med = float(np.median(ys))
     low = (tv <= 75.0) & (tl <= 75.0)  # grazing evaluations (1 / cos) are left out of the peak
     top = float(ys[low].max()) if np.any(low) else float(ys.max())
@@ -530,6 +544,6 @@ def estimate_error(source: Source, table: Any, *, n: int = 1 << 16, n_views: int
         "max_luminance": round(max(float(ys.max()), peak or 0.0), 6),
         "pairs": n,
         "views": n_views,
-        "lights_per_view": n_lights,
+        "albedo_step_deg": albedo_step_deg,
         "seed": seed,
     }
