@@ -55,7 +55,8 @@ def add_import_options(p: argparse.ArgumentParser) -> None:
                    help="after the cell means (default deblur: one step against the interpolation's blur)")
     p.add_argument("--encoding", choices=ENCODINGS, default="srgb",
                    help="UTIA files: how the values are stored (default srgb)")
-    p.add_argument("--float64", action="store_true", help="store the values as float64 (default float32)")
+    p.add_argument("--float64", action="store_true", help="store the values as float64 (default float32; CDBRDF files copied onto their own "
+                   "grid keep their dtype)")
 
 
 def import_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -64,7 +65,7 @@ def import_options(args: argparse.Namespace) -> dict[str, Any]:
 
     kw: dict[str, Any] = dict(format=args.format, symmetry=args.symmetry, material=args.material,
                               spacing_deg=args.spacing, method=args.method, correction=args.correction,
-                              dtype=np.float64 if args.float64 else np.float32)
+                              dtype=np.float64 if args.float64 else None)
     if args.format in ("auto", "utia") and args.encoding != "srgb":
         kw["encoding"] = args.encoding
     return kw

@@ -204,7 +204,7 @@ def _grid_summary(g: Grid) -> dict[str, Any]:
 
 def table_from(source: Source, grid: Grid, *, spacing_deg: float = DEFAULT_SPACING_DEG,
                max_evaluations: int = MAX_EVALUATIONS, method: str = "cell", correction: str = "deblur",
-               dtype: Any = np.float32, estimate: bool = True,
+               dtype: Any = None, estimate: bool = True,
                progress: Callable[[int, int], None] | None = None) -> Any:
     """The table of ``source`` on ``grid`` (one curvature), with its provenance (see :func:`import_brdf`)."""
     from .._version import __version__
@@ -236,9 +236,11 @@ def table_from(source: Source, grid: Grid, *, spacing_deg: float = DEFAULT_SPACI
             "resampling": res.details(),
         },
     }
+    if dtype is None:  # exact copies keep the source's dtype; resampled values are float32
+        dtype = np.asarray(values).dtype if res.exact else np.float32
     table = table_on(grid, np.asarray(values).astype(dtype), measured=measured, fill_source=fill, std=std,
                      attrs=attrs)
-    if estimate:
+    if estimate and not res.exact:  # an exact copy is the source itself
         est = estimate_error(source, table, peak=res.peak)
         prov = dict(attrs["provenance"])
         prov["expected_error"] = est
@@ -258,7 +260,7 @@ def import_brdf(
     max_evaluations: int = MAX_EVALUATIONS,
     method: str = "cell",
     correction: str = "deblur",
-    dtype: Any = np.float32,
+    dtype: Any = None,
     estimate: bool = True,
     progress: Callable[[int, int], None] | None = None,
     **options: Any,
@@ -289,7 +291,8 @@ def import_brdf(
         ``"deblur"`` (default), ``"mean"`` or ``"projection"``
         (:data:`~cdbrdf.importers.resample.CORRECTIONS`).
     dtype
-        Storage of the values (float32 default; float64).
+        Storage of the values: float32 or float64; default float32, or the
+        source table's own dtype when it is copied exactly.
     estimate
         Measure the error of the table against the source (a fraction of a second).
     progress
@@ -310,7 +313,7 @@ def import_brdf(
     """
     source = read_source(path, format=format, material=material, **options)
     g = target_grid(grid, source, kappa=float(kappa), symmetry=symmetry)
-    if np.dtype(dtype) not in (np.float32, np.float64):
+    if dtype is not None and np.dtype(dtype) not in (np.float32, np.float64):
         raise TableError(f"dtype: {dtype!r} is not float32 or float64")
     if method not in METHODS or correction not in CORRECTIONS:
         raise TableError(f"method, correction: {method!r}, {correction!r} are not among {', '.join(METHODS)} and "

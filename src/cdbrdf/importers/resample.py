@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..colour import luminance
+from ..colour import LUMINANCE_WEIGHTS, luminance
 from ..errors import TableError
 from ..grid import Grid
 from .source import Source
@@ -79,7 +79,7 @@ CORRECTIONS: tuple[str, ...] = ("mean", "deblur", "projection")
 #: Largest distance between the quadrature points of one cell, degrees (before the budget applies).
 DEFAULT_SPACING_DEG = 1.0
 #: Most source evaluations one resampling may take; beyond it the spacing grows.
-MAX_EVALUATIONS = 1 << 26
+MAX_EVALUATIONS = 1 << 24
 #: The measure of the cell means (for the provenance).
 MEASURE = "projected solid angle of both directions (cos theta_l dw_l cos theta_v dw_v)"
 
@@ -402,7 +402,10 @@ def _evaluate(source: Source, tv: NDArray[np.float64], pv: NDArray[np.float64], 
 
 def _peak(f: NDArray[np.floating]) -> float:
     """The largest luminance (or first channel) of channel-first values with the measured share last."""
-    return float(luminance(f[:3].T).max()) if f.shape[0] >= 4 else float(f[0].max())
+    if f.shape[0] >= 4:
+        w = LUMINANCE_WEIGHTS
+        return float((w[0] * f[0] + w[1] * f[1] + w[2] * f[2]).max())
+    return float(f[0].max())
 
 
 def _resample_isotropic(source: Source, rules: list[AxisRule],
@@ -473,7 +476,7 @@ def _cosine_directions(rng: np.random.Generator, n: int) -> tuple[NDArray[np.flo
     return np.minimum(theta, 89.999), 360.0 * u2
 
 
-def estimate_error(source: Source, table: Any, *, n: int = 1 << 16, n_views: int = 16, albedo_step_deg: float = 0.5,
+def estimate_error(source: Source, table: Any, *, n: int = 1 << 15, n_views: int = 8, albedo_step_deg: float = 1.0,
                    seed: int = 0, peak: float | None = None) -> dict[str, Any]:
     """How far the imported ``table`` is from its ``source``.
 

@@ -89,7 +89,9 @@ def stack(
     material: str | None = None,
     spacing_deg: float = DEFAULT_SPACING_DEG,
     max_evaluations: int = MAX_EVALUATIONS,
-    dtype: Any = np.float32,
+    method: str = "cell",
+    correction: str = "deblur",
+    dtype: Any = None,
     estimate: bool = True,
     progress: Callable[[int, int], None] | None = None,
     **options: Any,
@@ -110,7 +112,7 @@ def stack(
         ``"auto"``: isotropic when every source is, else anisotropic.
     material
         Name of the stacked material (needed when the files name theirs differently).
-    spacing_deg, max_evaluations, dtype, estimate, options
+    spacing_deg, max_evaluations, method, correction, dtype, estimate, options
         As for :func:`cdbrdf.importers.import_brdf` (``estimate``: per slice).
     progress
         ``progress(done, total)`` over the files.
@@ -157,8 +159,8 @@ def stack(
     slices = []
     for j, (k, s) in enumerate(zip(kappas, sources)):
         gk = target_grid(base, s, kappa=k, symmetry=sym)
-        slices.append(table_from(s, gk, spacing_deg=spacing_deg, max_evaluations=max_evaluations, dtype=dtype,
-                                 estimate=estimate))
+        slices.append(table_from(s, gk, spacing_deg=spacing_deg, max_evaluations=max_evaluations, method=method,
+                                 correction=correction, dtype=dtype, estimate=estimate))
         if progress is not None:
             progress(j + 1, len(sources))
     per = int(np.prod(base.shape[1:]))

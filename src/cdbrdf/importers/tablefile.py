@@ -36,11 +36,11 @@ def read(path: str | PathLike[str], *, material: str | None = None) -> Source:
     if table.n_channels != 3:
         raise FormatError(f"{p}: has {table.n_channels} channels; stacking and import need RGB (3)")
     k = float(table.kappa[0])
-    mask = table_on(table.grid, table.measured[..., None].astype(np.float64))
+    mask = None if table.measured.all() else table_on(table.grid, table.measured[..., None].astype(np.float64))
 
     def evaluate(theta_v: Any, phi_v: Any, theta_l: Any, phi_l: Any) -> tuple[Any, Any]:
-        return (table.evaluate(theta_v, phi_v, theta_l, phi_l, k),
-                mask.evaluate(theta_v, phi_v, theta_l, phi_l, k)[:, 0])
+        f = table.evaluate(theta_v, phi_v, theta_l, phi_l, k)
+        return f, None if mask is None else mask.evaluate(theta_v, phi_v, theta_l, phi_l, k)[:, 0]
 
     prov = table.attrs.get("provenance")
     return Source(

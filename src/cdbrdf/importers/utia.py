@@ -78,11 +78,12 @@ def read(path: str | PathLike[str], *, material: str | None = None, encoding: st
     g = native_grid()
     table = table_on(g, v, measured=measured, attrs={"quantity": "relative"})
 
-    def evaluate(theta_v: Any, phi_v: Any, theta_l: Any, phi_l: Any) -> tuple[Any, Any]:
-        return table.evaluate(theta_v, phi_v, theta_l, phi_l, 0.0), _mask.evaluate(theta_v, phi_v, theta_l, phi_l,
-                                                                                   0.0)[:, 0]
+    mask = None if measured.all() else table_on(g, measured[..., None].astype(np.float64))
 
-    _mask = table_on(g, measured[..., None].astype(np.float64))
+    def evaluate(theta_v: Any, phi_v: Any, theta_l: Any, phi_l: Any) -> tuple[Any, Any]:
+        f = table.evaluate(theta_v, phi_v, theta_l, phi_l, 0.0)
+        return f, None if mask is None else mask.evaluate(theta_v, phi_v, theta_l, phi_l, 0.0)[:, 0]
+
     details: dict[str, Any] = {
         "layout": "3 x 6 x 48 x 6 x 48 float64 [channel][theta_i][phi_i][theta_v][phi_v], no header",
         "encoding": encoding,
