@@ -1,4 +1,4 @@
-"""MERL ``.binary`` and UTIA ``.bin`` files written by the tests from analytic BRDFs, through the readers and the import.
+"""MERL ``.binary`` and UTIA ``.bin`` files written from analytic BRDFs, through the readers and the import.
 
 Known answers: the readers return the stored values at the sample centres
 (MERL, with its channel scales) and directions (UTIA, sRGB-decoded); the

@@ -16,7 +16,7 @@ from cdbrdf.importers import estimate_error, resample
 from cdbrdf.importers.resample import azimuth_rule, elevation_rule
 from cdbrdf.importers.source import table_on
 
-from .import_helpers import aniso_brdf, analytic_source, lobe_brdf
+from .import_helpers import analytic_source, aniso_brdf, lobe_brdf
 
 
 def _iso(step=15.0, phi=30.0, top=75.0):

@@ -55,7 +55,8 @@ def add_import_options(p: argparse.ArgumentParser) -> None:
                    help="after the cell means (default deblur: one step against the interpolation's blur)")
     p.add_argument("--encoding", choices=ENCODINGS, default="srgb",
                    help="UTIA files: how the values are stored (default srgb)")
-    p.add_argument("--float64", action="store_true", help="store the values as float64 (default float32; CDBRDF files copied onto their own "
+    p.add_argument("--float64", action="store_true",
+                   help="store the values as float64 (default float32; CDBRDF files copied onto their own "
                    "grid keep their dtype)")
 
 

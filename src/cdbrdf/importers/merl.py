@@ -135,6 +135,9 @@ def read(path: str | PathLike[str], *, material: str | None = None) -> Source:
     bad = int(np.count_nonzero(~np.isfinite(raw)))
     if bad:
         raise _fail(p, f"holds {bad} NaN or infinite value(s)")
+    top = float(np.abs(raw).max())
+    if top > 1e15:
+        raise _fail(p, f"holds values up to {top:.3g}: damaged or not a MERL file")
     valid = np.all(raw >= 0.0, axis=0)
     if not valid.any():
         raise _fail(p, "holds no measured sample (every value is negative)")

@@ -50,7 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..colour import LUMINANCE_WEIGHTS, luminance
-from ..errors import TableError
+from ..errors import FormatError, TableError
 from ..grid import Grid
 from .source import Source
 
@@ -394,6 +394,9 @@ def _evaluate(source: Source, tv: NDArray[np.float64], pv: NDArray[np.float64], 
     f = np.asarray(f)
     if f.ndim != 2 or f.shape[0] != tv.size:
         raise TableError(f"{source.path}: the evaluator returned shape {f.shape} for {tv.size} queries")
+    bad = int(np.count_nonzero(~np.isfinite(f).all(axis=1)))
+    if bad:
+        raise FormatError(f"{source.path}: its values are NaN or infinite at {bad} of {tv.size} directions")
     out = np.empty((f.shape[1] + 1, tv.size), dtype=np.float32)
     out[:-1] = f.T
     out[-1] = 1.0 if m is None else np.asarray(m).reshape(tv.size)

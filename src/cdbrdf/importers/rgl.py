@@ -61,6 +61,8 @@ DTYPES: Mapping[int, str] = {1: "u1", 2: "i1", 3: "<u2", 4: "<i2", 5: "<u4", 6: 
 _CODES = {np.dtype(v).str.lstrip("<|"): k for k, v in DTYPES.items()}
 _MAX_FIELDS = 4096
 _DEG = float(np.pi / 180.0)
+#: Largest magnitude a field may hold (float32 sums of the plug-in stay finite).
+_MAX_ABS = 1e30
 _MAX_NDIM = 16
 
 #: Fields of a polarised (Mueller-matrix) RGL file, read by Mitsuba's ``measured_polarized``.
@@ -112,6 +114,9 @@ def read_tensor_file(path: Path, data: bytes) -> dict[str, NDArray[Any]]:
                 raise _fail(path, f"field {name!r} declares {ndim} dimensions: damaged file")
             shape = struct.unpack_from(f"<{ndim}Q", data, pos)
             pos += 8 * ndim
+            if any(s > len(data) for s in shape):
+                raise _fail(path, f"field {name!r} declares a dimension of {max(shape)}, more than the file's "
+                                  f"{len(data)} bytes: damaged file")
             if code not in DTYPES:
                 raise _fail(path, f"field {name!r} has the unknown type code {code}")
             dt = np.dtype(DTYPES[code])
@@ -178,6 +183,41 @@ def _field(path: Path, f: Mapping[str, NDArray[Any]], name: str, ndim: int, kind
     return a
 
 
+def _check_values(path: Path, out: Mapping[str, Any]) -> None:
+    """Finite, bounded values; incident elevations from 0 within [0, 90]; distributions that can be sampled."""
+    th, ph = out["theta_i"], out["phi_i"]
+    n_ph = ph.size
+    for name, a in out.items():
+        if isinstance(a, np.ndarray) and a.dtype.kind == "f" and not np.all(np.isfinite(a)):
+            raise _fail(path, f"field {name!r} holds {int(np.count_nonzero(~np.isfinite(a)))} NaN or infinite "
+                              "value(s)")
+    if abs(float(th[0])) > 1e-6:
+        raise _fail(path, f"'theta_i' starts at {np.degrees(th[0]):.4g} degrees; the material's incident "
+                          "elevations must start at 0")
+    if np.any(np.diff(th) <= 0) or th[0] < 0 or th[-1] > np.pi / 2 + 1e-4:
+        if th[-1] > np.pi / 2 + 1e-4:
+            raise _fail(path, f"incident elevations up to {np.degrees(th[-1]):.1f} degrees: transmission (BTDF) "
+                              "data are not supported, only reflection")
+        raise _fail(path, "'theta_i' is not increasing within [0, 90] degrees")
+    if np.any(np.diff(ph) <= 0) or np.any(np.abs(ph) > 2 * np.pi + 1e-4):
+        raise _fail(path, "'phi_i' is not increasing within one turn")
+    if n_ph > 2 and ph[-1] - ph[0] <= 0:
+        raise _fail(path, "'phi_i' spans no angle")
+    for name in ("vndf", "luminance", "ndf", "sigma"):
+        if np.any(out[name] < 0) or not np.any(out[name] > 0):
+            raise _fail(path, f"field {name!r} holds negative values or only zeros: not a distribution")
+    for name in ("vndf", "luminance"):
+        sums = out[name].astype(np.float64).sum(axis=(2, 3))
+        if np.any(sums <= 0):
+            i = np.argwhere(sums <= 0)[0]
+            raise _fail(path, f"field {name!r} is all zeros at incident direction {tuple(int(x) for x in i)}: "
+                              "not a distribution")
+    for name, a in out.items():
+        if isinstance(a, np.ndarray) and a.dtype.kind == "f" and a.size and float(np.abs(a).max()) > _MAX_ABS:
+            raise _fail(path, f"field {name!r} holds values up to {float(np.abs(a).max()):.3g}, beyond "
+                              f"+-{_MAX_ABS:g}: damaged")
+
+
 def _validate(path: Path, f: Mapping[str, NDArray[Any]]) -> dict[str, Any]:
     """The checked fields (float32 copies) of an RGL material, and whether it is spectral."""
     _check_kind(path, f)
@@ -224,22 +264,7 @@ def _validate(path: Path, f: Mapping[str, NDArray[Any]]) -> dict[str, Any]:
     for name in ("ndf", "sigma"):
         if min(out[name].shape) < 2:
             raise _fail(path, f"{name!r} has shape {out[name].shape}, too small")
-    for name, a in out.items():
-        if isinstance(a, np.ndarray) and a.dtype.kind == "f" and not np.all(np.isfinite(a)):
-            raise _fail(path, f"field {name!r} holds {int(np.count_nonzero(~np.isfinite(a)))} NaN or infinite "
-                              "value(s)")
-    if np.any(np.diff(th) <= 0) or th[0] < 0 or th[-1] > np.pi / 2 + 1e-4:
-        if th[-1] > np.pi / 2 + 1e-4:
-            raise _fail(path, f"incident elevations up to {np.degrees(th[-1]):.1f} degrees: transmission (BTDF) "
-                              "data are not supported, only reflection")
-        raise _fail(path, "'theta_i' is not increasing within [0, 90] degrees")
-    if np.any(np.diff(ph) <= 0) or np.any(np.abs(ph) > 2 * np.pi + 1e-4):
-        raise _fail(path, "'phi_i' is not increasing within one turn")
-    if n_ph > 2 and ph[-1] - ph[0] <= 0:
-        raise _fail(path, "'phi_i' spans no angle")
-    for name in ("vndf", "luminance", "ndf", "sigma"):
-        if np.any(out[name] < 0) or not np.any(out[name] > 0):
-            raise _fail(path, f"field {name!r} holds negative values or only zeros: not a distribution")
+    _check_values(path, out)
     n_valid = n_ph * n_th * ny * nx
     if "valid" in f:
         v = f["valid"]
@@ -315,6 +340,7 @@ class _Evaluator:
             raise _fail(path, f"Mitsuba's measured plug-in refuses it ({str(exc).splitlines()[-1][:200]})") from None
         finally:
             self._tmp.cleanup()
+        self.path = path
         ph = fields["phi_i"].astype(np.float64)
         th = fields["theta_i"].astype(np.float64)
         self.isotropic = ph.size <= 2
@@ -326,6 +352,25 @@ class _Evaluator:
             self.vndf = mi.MarginalContinuous2D2(np.array(fields["vndf"], dtype=np.float32), self.params, True, True)
             self.valid = mi.MarginalContinuous2D2(np.array(fields["valid"], dtype=np.float32), self.params, False,
                                                   False)
+        self._probe(path)
+
+    def _probe(self, path: Path) -> None:
+        """Evaluate at a spread of directions: a file whose distributions the plug-in cannot use gives NaN."""
+        rng = np.random.default_rng(0)
+        n = 512
+        q = [rng.uniform(0, 89.9, n), rng.uniform(-180, 180, n), rng.uniform(0, 89.9, n), rng.uniform(-180, 180, n)]
+        for a in (q[0], q[2]):  # along the normal and grazing too
+            a[:64] = 0.0
+            a[64:96] = 89.9
+        self(*q)
+
+    def _check(self, f: NDArray[np.float64], m: NDArray[np.float64] | None) -> None:
+        bad = int(np.count_nonzero(~np.isfinite(f).all(axis=1)))
+        if m is not None:
+            bad += int(np.count_nonzero(~np.isfinite(m)))
+        if bad:
+            raise _fail(self.path, f"Mitsuba's measured plug-in gives NaN or infinite values at {bad} of {f.shape[0]} "
+                                   "directions: the file's distributions are damaged")
 
     def __call__(self, theta_v: NDArray[np.float64], phi_v: NDArray[np.float64], theta_l: NDArray[np.float64],
                  phi_l: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
@@ -340,10 +385,14 @@ class _Evaluator:
         si.wi = wi
         f = self.bsdf.eval(mi.BSDFContext(), si, wo) / dr.maximum(wo.z, 1e-6)  # f cos(theta_l) -> f
         if self.valid is None:
-            return np.array(f, dtype=np.float64).T, None
+            out = np.array(f, dtype=np.float64).T
+            self._check(out, None)
+            return out, None
         val = self._measured(wi, wo)
         dr.eval(f, val)
-        return np.array(f, dtype=np.float64).T, np.clip(np.array(val, dtype=np.float64), 0.0, 1.0)
+        out, share = np.array(f, dtype=np.float64).T, np.array(val, dtype=np.float64)
+        self._check(out, share)
+        return out, np.clip(share, 0.0, 1.0)
 
     def _measured(self, wi: Any, wo: Any) -> Any:
         """The ``valid`` bits interpolated at each evaluation's position in the reflectance grid.

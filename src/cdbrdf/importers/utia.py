@@ -39,6 +39,8 @@ FILE_BYTES = 8 * int(np.prod(SHAPE))
 THETA_DEG = np.arange(6, dtype=np.float64) * 15.0
 #: Azimuths of the samples, degrees.
 PHI_DEG = np.arange(48, dtype=np.float64) * 7.5
+#: Largest magnitude of a stored value (the database's are sRGB-encoded, near 1).
+_MAX_ABS = 1e6
 #: How the stored values are encoded: choices of ``read(..., encoding=)``.
 ENCODINGS: tuple[str, ...] = ("srgb", "linear")
 
@@ -67,6 +69,9 @@ def read(path: str | PathLike[str], *, material: str | None = None, encoding: st
     bad = int(np.count_nonzero(~np.isfinite(raw)))
     if bad:
         raise FormatError(f"{p}: holds {bad} NaN or infinite value(s)")
+    top = float(np.abs(raw).max())
+    if top > _MAX_ABS:
+        raise FormatError(f"{p}: holds values up to {top:.3g} (the database's are near 1): damaged or not a UTIA file")
     # (c, ti, pi, tv, pv) -> (kappa = 1, phi_l, theta_l, phi_v, theta_v, c)
     v = np.transpose(raw, (2, 1, 4, 3, 0))[None]
     measured = np.all(v >= 0.0, axis=-1)
