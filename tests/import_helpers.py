@@ -8,6 +8,7 @@ written by the tests from analytic BRDFs, in the formats' published layouts.
 
 from __future__ import annotations
 
+import functools
 import os
 from pathlib import Path
 
@@ -96,14 +97,24 @@ def merl_centres():
     return tv, pv, tl, pl
 
 
-def write_merl(path, f=lobe_brdf, *, below_horizon_negative=True):
-    """A MERL ``.binary`` file of ``f`` at the sample centres; directions below the horizon stored as -1."""
+@functools.cache
+def _merl_bytes() -> bytes:
+    """The bytes of the lobe BRDF's MERL file (made once per process)."""
+    import tempfile
+
     tv, pv, tl, pl = merl_centres()
-    vals = f(tv, pv, tl, pl)
-    if below_horizon_negative:
-        vals = np.where(((tv >= 90) | (tl >= 90))[..., None], -1.0 * np.array(merl.SCALES), vals)
-    merl.write(path, vals)
-    return path
+    vals = lobe_brdf(tv, pv, tl, pl)
+    vals = np.where(((tv >= 90) | (tl >= 90))[..., None], -1.0 * np.array(merl.SCALES), vals)
+    with tempfile.TemporaryDirectory() as tmp:
+        p = Path(tmp) / "x.binary"
+        merl.write(p, vals)
+        return p.read_bytes()
+
+
+def write_merl(path):
+    """A MERL ``.binary`` file of :func:`lobe_brdf` at the sample centres; directions below the horizon stored as -1."""
+    Path(path).write_bytes(_merl_bytes())
+    return Path(path)
 
 
 def write_utia(path, f=aniso_brdf, *, encoding="srgb"):

@@ -93,7 +93,7 @@ def test_seeds_read():
                 assert target(data, Path(tmp)) == "ok"
 
 
-@pytest.mark.parametrize("kind,n", [("rgl", 120), ("merl", 24), ("utia", 120)])
+@pytest.mark.parametrize("kind,n", [("rgl", 120), ("merl", 12), ("utia", 60)])
 def test_fuzz_readers_small(kind, n):
     if kind == "rgl":
         from .import_helpers import need_mitsuba

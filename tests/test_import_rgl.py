@@ -88,13 +88,13 @@ def test_import_of_the_matte_file(tmp_path):
     need_mitsuba()
     p = rgl_path("matte")
     assert detect_format(p) == "rgl"
-    t = import_brdf(p, grid="regular:5,5", kappa=0.13)
+    t = import_brdf(p, grid="regular:10,10", kappa=0.13)
     assert t.isotropic and t.kappa.tolist() == [0.13] and t.quantity == "brdf"
     assert t.attrs["material"] == "White A4 paper (160 gsm)"
     prov = t.attrs["provenance"]
     assert prov["kind"] == "imported" and prov["source"]["format"] == "rgl"
     assert prov["source"]["file_name"] == p.name and len(prov["source"]["sha256"]) == 64
-    assert prov["grid"]["theta_l"]["step"] == 5.0 and prov["resampling"]["spacing_deg"] == 1.0
+    assert prov["grid"]["theta_l"]["step"] == 10.0 and prov["resampling"]["spacing_deg"] == 1.0
     assert prov["expected_error"]["brdf_relative_l1"] < 0.02
     # a matte white paper: albedo near 0.8, nearly constant f
     assert 0.2 < float(np.median(t.values)) < 0.35

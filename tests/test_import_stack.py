@@ -88,7 +88,7 @@ def test_material_name_override_and_other_refusals(tmp_path):
     with pytest.raises(TableError, match=r"its grid, anisotropic 4x3x4x3 .* differs from .*; give a target grid"):
         stack([(0.0, p1), (0.2, p3)])
     # with a target grid every file is resampled onto it
-    s = stack([(0.0, p1), (0.2, p3)], grid="paper", spacing_deg=5.0, estimate=False)
+    s = stack([(0.0, p1), (0.2, p3)], grid="paper", spacing_deg=10.0, estimate=False)
     assert s.grid.shape[1:] == Grid.paper().shape[1:]
     multi = tmp_path / "multi.h5"
     make_table(Grid.paper(), seed=0, attrs={"material": "denim", "quantity": "brdf"}).save(multi)
@@ -110,7 +110,7 @@ def test_stack_of_merl_files_is_isotropic_and_mixed_formats_anisotropic(tmp_path
 def test_cli_import_and_stack_and_the_toolchain(tmp_path, capsys):
     a = write_merl(tmp_path / "lobe.binary")
     out = tmp_path / "lobe.h5"
-    assert main(["import", str(a), "-o", str(out), "--grid", "regular:10,10", "--spacing", "5", "--kappa", "0.1"]) == 0
+    assert main(["import", str(a), "-o", str(out), "--grid", "regular:15,30", "--spacing", "7.5", "--kappa", "0.1"]) == 0
     line = capsys.readouterr().out
     assert "wrote" in line and "isotropic" in line and "expected error" in line
     t = cdbrdf.load(out)
@@ -119,7 +119,7 @@ def test_cli_import_and_stack_and_the_toolchain(tmp_path, capsys):
     info = json.loads(capsys.readouterr().out)
     assert info["symmetry"] == "isotropic" and info["provenance"]["source"]["format"] == "merl"
     p2 = tmp_path / "flat.h5"
-    assert main(["-q", "import", str(a), "-o", str(p2), "--grid", "regular:10,10", "--spacing", "5"]) == 0
+    assert main(["-q", "import", str(a), "-o", str(p2), "--grid", "regular:15,30", "--spacing", "7.5"]) == 0
     st = tmp_path / "stack.h5"
     assert main(["stack", "--kappa", "0", str(p2), "--kappa", "0.1", str(out), "-o", str(st)]) == 0
     s = cdbrdf.load(st)
@@ -143,8 +143,11 @@ def test_cli_errors_are_one_line_and_write_nothing(tmp_path, capsys):
     assert main(["stack", "--kappa", "0", str(p1), "--kappa", "0.1", str(p2), "-o", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert "quantity" in err and str(p2) in err and not out.exists()
-    assert main(["stack", "--kappa", "zero", str(p1), "--kappa", "0.1", str(p2), "-o", str(out)]) == 2
-    assert "--kappa zero" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as ex:  # a token that is neither a curvature nor a file: refused while parsing
+        main(["stack", "--kappa", "zero", str(p1), "--kappa", "0.1", str(p2), "-o", str(out)])
+    assert ex.value.code == 2 and "zero: no such file" in capsys.readouterr().err
+    assert main(["stack", "--kappa", str(p1), str(p1), "--kappa", "0.1", str(p2), "-o", str(out)]) == 2
+    assert f"--kappa {p1} {p1}" in capsys.readouterr().err and not out.exists()
     with pytest.raises(SystemExit) as ex:
         main(["import", str(bad), "-o", str(out), "--grid", "regular:0,5"])
     assert ex.value.code == 2

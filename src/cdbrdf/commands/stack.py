@@ -14,6 +14,18 @@ def _kappa(text: str) -> float:
     return finite_float(-100, 100, unit="1/mm")(text)
 
 
+def _kappa_or_file(text: str) -> str:
+    """One token of ``--kappa K FILE``: a curvature in range, or an existing file (the pairs are checked in run)."""
+    from ._args import existing_file
+
+    try:
+        float(text)
+    except ValueError:
+        return existing_file()(text)
+    _kappa(text)
+    return text
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     from ._args import output_file
     from .import_ import add_import_options
@@ -30,6 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog="example: cdbrdf stack --kappa 0 flat.h5 --kappa 0.13 stand1.h5 --kappa 0.22 stand2.h5 -o denim.h5",
     )
     p.add_argument("--kappa", dest="entries", nargs=2, action="append", required=True, metavar=("K", "FILE"),
+                   type=_kappa_or_file,
                    help="a stand's curvature in 1/mm and its plain BRDF file (repeat for every stand)")
     p.add_argument("-o", "--output", required=True, type=output_file(".h5", ".nc"), help="the CDBRDF file to write")
     add_import_options(p)
