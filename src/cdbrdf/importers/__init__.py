@@ -9,7 +9,9 @@ project's conventions plus metadata):
   own ``measured`` plug-in;
 - :mod:`cdbrdf.importers.merl`: MERL-MIT ``.binary`` files (isotropic);
 - :mod:`cdbrdf.importers.utia`: UTIA BRDF ``.bin`` files (anisotropic);
-- :mod:`cdbrdf.importers.tablefile`: one-curvature CDBRDF files.
+- :mod:`cdbrdf.importers.tablefile`: one-curvature CDBRDF files;
+- :mod:`cdbrdf.importers.mitsuba`: any Mitsuba 3 BSDF (an analytic material
+  with a known answer, e.g. for the reference renders).
 
 :mod:`cdbrdf.importers.resample` turns a source into table samples that each
 represent their cell (hat-weighted means over the projected solid angle) and
