@@ -110,7 +110,8 @@ def test_stack_of_merl_files_is_isotropic_and_mixed_formats_anisotropic(tmp_path
 def test_cli_import_and_stack_and_the_toolchain(tmp_path, capsys):
     a = write_merl(tmp_path / "lobe.binary")
     out = tmp_path / "lobe.h5"
-    assert main(["import", str(a), "-o", str(out), "--grid", "regular:15,30", "--spacing", "7.5", "--kappa", "0.1"]) == 0
+    args = ["import", str(a), "-o", str(out), "--grid", "regular:15,30", "--spacing", "7.5", "--kappa", "0.1"]
+    assert main(args) == 0
     line = capsys.readouterr().out
     assert "wrote" in line and "isotropic" in line and "expected error" in line
     t = cdbrdf.load(out)

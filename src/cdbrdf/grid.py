@@ -266,8 +266,9 @@ class Grid:
             self.theta_v.size,
         )
 
-    def axes(self) -> dict[str, NDArray[np.float64]]:
-        """The axes by name, in storage order."""
+    def axes(self) -> dict[str, Any]:
+        """The axes by name, in storage order (float64 arrays; typed Any so that ``CDBRDF(v, **g.axes())``
+        type-checks beside the table's other keywords)."""
         return {name: getattr(self, name) for name in AXES[:-1]}
 
     def mesh(self) -> dict[str, NDArray[np.float64]]:
