@@ -55,7 +55,10 @@ __all__ = [
     "DIGEST_ATTR",
     "WRITER_ATTRS",
     "CONVENTIONS",
+    "SYMMETRY_ATTR",
+    "SYMMETRIES",
     "check_quantity",
+    "check_symmetry",
     "reflectance_units",
     "variable_attrs",
     "default_channels",
@@ -69,7 +72,7 @@ __all__ = [
 #: Value of the global attribute ``format``.
 FORMAT_NAME = "cdbrdf"
 #: ``MAJOR.MINOR`` of the layout: readers accept any minor version of their major version.
-FORMAT_VERSION = "1.1"
+FORMAT_VERSION = "1.2"
 
 # -- dimensions -------------------------------------------------------------------------
 #: Dimension names of the reflectance, in storage order (``docs/conventions.md``).
@@ -95,6 +98,15 @@ _REFLECTANCE_LONG_NAMES: Mapping[str, str] = MappingProxyType({
     "brdf": "BRDF, cosine of the light direction not included",
     "relative": "relative reflectance (BRDF up to an unknown scale)",
 })
+
+# -- symmetry ---------------------------------------------------------------------------
+#: Table attribute (and global attribute of the file, since 1.2) naming the table's symmetry.
+SYMMETRY_ATTR = "symmetry"
+#: Valid values of :data:`SYMMETRY_ATTR`. ``"anisotropic"`` (also when the attribute is
+#: absent): the five axes as they are. ``"isotropic"``: the value depends on the light and
+#: view elevations and the azimuth difference only; ``phi_l`` is the single azimuth 0 and
+#: ``phi_v`` holds ``phi_v - phi_l`` (``docs/format.md``).
+SYMMETRIES: tuple[str, ...] = ("anisotropic", "isotropic")
 
 # -- data variables ---------------------------------------------------------------------
 #: The samples, :data:`AXES`.
@@ -161,6 +173,19 @@ def check_quantity(quantity: Any) -> str:
     if not isinstance(quantity, str) or quantity not in QUANTITIES:
         raise TableError(f"attrs['quantity']: {quantity!r} is not one of {', '.join(QUANTITIES)}")
     return quantity
+
+
+def check_symmetry(symmetry: Any) -> str:
+    """``symmetry`` when it is one of :data:`SYMMETRIES`.
+
+    Raises
+    ------
+    TableError
+        Otherwise; the message lists the valid symmetries.
+    """
+    if not isinstance(symmetry, str) or symmetry not in SYMMETRIES:
+        raise TableError(f"symmetry: {symmetry!r} is not one of {', '.join(SYMMETRIES)}")
+    return symmetry
 
 
 def reflectance_units(quantity: str) -> str:
@@ -299,7 +324,7 @@ class TableParts:
     attrs: Mapping[str, Any]
 
     @classmethod
-    def of(cls, table: Any) -> "TableParts":
+    def of(cls, table: Any) -> TableParts:
         """The parts of a table: anything with the attributes of :class:`cdbrdf.CDBRDF` (no copies)."""
         return cls(
             values=table.values,

@@ -49,8 +49,10 @@ from .schema import (
     REFLECTANCE,
     REFLECTANCE_STD,
     SAMPLE_AXES,
+    SYMMETRY_ATTR,
     TableParts,
     channel_names,
+    check_symmetry,
     variable_attrs,
     with_channel_names,
 )
@@ -99,7 +101,13 @@ class CDBRDF:
         Optional per-sample standard deviation, same shape as ``values``.
     attrs
         Metadata: ``quantity`` ("brdf" or "relative"), ``colour_space``,
-        ``material``, ``provenance`` (any JSON-serialisable value), ``channels``.
+        ``material``, ``provenance`` (any JSON-serialisable value), ``channels``,
+        ``symmetry``.
+    symmetry
+        ``"anisotropic"`` or ``"isotropic"`` (:data:`cdbrdf.schema.SYMMETRIES`);
+        default: ``attrs["symmetry"]``, else anisotropic. An isotropic table
+        has ``phi_l = [0]`` and its ``phi_v`` axis is the azimuth difference
+        ``phi_v - phi_l``; its attributes then hold ``symmetry = "isotropic"``.
 
     Raises
     ------
@@ -133,8 +141,10 @@ class CDBRDF:
         fill_source: ArrayLike | None = None,
         std: ArrayLike | None = None,
         attrs: Mapping[str, Any] | None = None,
+        symmetry: str | None = None,
     ) -> None:
-        grid = Grid(kappa=kappa, theta_l=theta_l, phi_l=phi_l, theta_v=theta_v, phi_v=phi_v)
+        sym = self._check_symmetry(symmetry, attrs)
+        grid = Grid(kappa=kappa, theta_l=theta_l, phi_l=phi_l, theta_v=theta_v, phi_v=phi_v, symmetry=sym)
         self._grid = grid
         self._values = self._check_values("values", values, grid)
         if std is None:
@@ -149,9 +159,27 @@ class CDBRDF:
         self._measured = self._check_mask(measured, grid.shape)
         self._fill_source = self._check_fill(fill_source, self._measured)
         self._attrs = self._check_attrs(attrs)
+        if sym == "isotropic":
+            self._attrs[SYMMETRY_ATTR] = sym
         self._lookup: LookupGrid | None = None  # filled by lookup_grid()
 
     # -- validation -------------------------------------------------------------
+    @staticmethod
+    def _check_symmetry(symmetry: str | None, attrs: Mapping[str, Any] | None) -> str:
+        """The table's symmetry: the argument, else ``attrs["symmetry"]``, else anisotropic; both must agree."""
+        stored = attrs.get(SYMMETRY_ATTR) if isinstance(attrs, Mapping) else None
+        if stored is not None:
+            try:
+                check_symmetry(stored)
+            except TableError as exc:
+                raise TableError(f"attrs[{SYMMETRY_ATTR!r}]: {str(exc).partition(': ')[2]}") from None
+        if symmetry is None:
+            return "anisotropic" if stored is None else str(stored)
+        check_symmetry(symmetry)
+        if stored is not None and stored != symmetry:
+            raise TableError(f"symmetry: {symmetry!r} disagrees with attrs[{SYMMETRY_ATTR!r}] = {stored!r}")
+        return symmetry
+
     @staticmethod
     def _check_values(name: str, values: ArrayLike, grid: Grid) -> NDArray[np.floating]:
         v = read_array(name, values)
@@ -299,6 +327,16 @@ class CDBRDF:
         """``"brdf"`` (sr^-1) or ``"relative"`` (unknown scale)."""
         return str(self._attrs["quantity"])
 
+    @property
+    def symmetry(self) -> str:
+        """``"anisotropic"`` or ``"isotropic"`` (``phi_v`` is the azimuth difference)."""
+        return self._grid.symmetry
+
+    @property
+    def isotropic(self) -> bool:
+        """Whether the table is isotropic (see :attr:`symmetry`)."""
+        return self._grid.isotropic
+
     # -- operations ---------------------------------------------------------------
     def evaluate(
         self,
@@ -338,7 +376,7 @@ class CDBRDF:
 
         return evaluate(self, theta_v, phi_v, theta_l, phi_l, kappa)
 
-    def lookup_grid(self) -> "LookupGrid":
+    def lookup_grid(self) -> LookupGrid:
         """The table prepared for lookup (:class:`cdbrdf.interp.LookupGrid`).
 
         Built by :func:`cdbrdf.interp.prepare` on first use and kept by the
@@ -351,7 +389,7 @@ class CDBRDF:
             self._lookup = prepare(self)
         return self._lookup
 
-    def brdf(self, kappa: float = 0.0) -> "CDBRDF":
+    def brdf(self, kappa: float = 0.0) -> CDBRDF:
         """The plain BRDF: the table at one curvature as a one-kappa table.
 
         With the default ``kappa = 0`` and a table that samples 0 this is the
@@ -398,6 +436,45 @@ class CDBRDF:
             attrs=attrs,
         )
 
+    def expanded(self, *, max_azimuths: int | None = None) -> CDBRDF:
+        """The anisotropic table holding an isotropic table's values for every light azimuth.
+
+        Both azimuth axes of the result are (a subset of) the isotropic table's
+        azimuth-difference nodes, so every value is an exact copy: light azimuths
+        ``0, s, 2 s, ...`` and view azimuths ``phi_v[0] + (0, s, 2 s, ...)``, with
+        ``s`` the difference step times the smallest divisor ``k`` of ``n_phi_v``
+        for which at most ``max_azimuths`` azimuths remain (default: all). Value
+        ``(phi_l = i s, phi_v = phi_v[0] + j s)`` is the isotropic table's
+        sample at the difference ``(j - i) s``. An anisotropic table is returned
+        as it is.
+        """
+        if not self.isotropic:
+            return self
+        n = self.phi_v.size
+        if max_azimuths is not None and (isinstance(max_azimuths, bool) or not isinstance(max_azimuths, int)
+                                         or max_azimuths < 1):
+            raise TableError(f"max_azimuths: expected a positive integer, got {max_azimuths!r}")
+        k = 1
+        if max_azimuths is not None:
+            k = next(d for d in range(1, n + 1) if n % d == 0 and n // d <= max_azimuths)
+        m = n // k
+        step = 360.0 / m
+        idx = (k * (np.arange(m)[None, :] - np.arange(m)[:, None])) % n  # [i_l, j_v] -> difference node
+
+        def expand(a: NDArray[Any]) -> NDArray[Any]:
+            # (kappa, 1, theta_l, dphi, theta_v, ...) -> (kappa, phi_l, theta_l, phi_v, theta_v, ...)
+            return np.moveaxis(a[:, 0][:, :, idx], 2, 1)
+
+        attrs = copy.deepcopy(self._attrs)
+        attrs.pop(SYMMETRY_ATTR, None)
+        attrs["expanded_from"] = "isotropic"
+        meas = expand(self._measured)
+        return CDBRDF(
+            expand(self._values), kappa=self.kappa, theta_l=self.theta_l, phi_l=np.arange(m) * step,
+            theta_v=self.theta_v, phi_v=self.phi_v[0] + np.arange(m) * step, measured=meas,
+            fill_source=np.where(meas, -1, -2), std=None if self._std is None else expand(self._std), attrs=attrs,
+        )
+
     def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
         """Write the table to an HDF5 file (atomically); see ``docs/format.md`` and :func:`cdbrdf.io.write`."""
         _io.write(TableParts.of(self), path, compression=compression)
@@ -434,7 +511,7 @@ class CDBRDF:
         return xr.Dataset(data, coords=coords, attrs=copy.deepcopy(self._attrs))
 
     @classmethod
-    def from_xarray(cls, ds: Any) -> "CDBRDF":
+    def from_xarray(cls, ds: Any) -> CDBRDF:
         """A table from a :class:`xarray.Dataset` laid out as :meth:`to_xarray` makes.
 
         Dimensions are transposed into the table's order when needed; values
@@ -458,8 +535,8 @@ class CDBRDF:
         )
         return cls(parts.values, **parts.table_kwargs())
 
-    def with_attrs(self, **attrs: Any) -> "CDBRDF":
-        """A copy with ``attrs`` updated."""
+    def with_attrs(self, **attrs: Any) -> CDBRDF:
+        """A copy with ``attrs`` updated (the symmetry cannot change this way)."""
         a = copy.deepcopy(self._attrs)
         a.update(attrs)
         return CDBRDF(
@@ -469,6 +546,7 @@ class CDBRDF:
             fill_source=self._fill_source,
             std=self._std,
             attrs=a,
+            symmetry=self.symmetry,
         )
 
     def __eq__(self, other: object) -> bool:

@@ -233,6 +233,9 @@ def mosaic_arrays(table: CDBRDF, *, kappa: float | ArrayLike | None = None) -> M
     """
     if not isinstance(table, CDBRDF):
         raise TypeError(f"table: expected a CDBRDF, got {type(table).__name__}")
+    iso = table.isotropic
+    if iso:  # shown expanded: each light azimuth's rows are the stored difference axis, turned by one group
+        table = table.expanded(max_azimuths=12)
     idx = _select_kappa(table, kappa)
     _, npl, ntl, npv, ntv, nc = table.shape
     rows, cols = npl * ntl, npv * ntv
@@ -264,7 +267,7 @@ def mosaic_arrays(table: CDBRDF, *, kappa: float | ArrayLike | None = None) -> M
         theta_v=np.array(table.theta_v),
         channels=tuple(table.channels),
         quantity=table.quantity,
-        material=str(table.attrs.get("material", "") or ""),
+        material=str(table.attrs.get("material", "") or "") + (" [isotropic]" if iso else ""),
     )
 
 

@@ -11,7 +11,9 @@ spacings, azimuth origins and inverse steps) with interp's constants:
 curvature and elevations linear and clamped at both ends, azimuths linear and
 periodic, every weight snapped to exactly 0 or 1 within
 ``interp.snap_tolerance`` of the variant's precision (1e-6 in float32), and
-the pole rule (at elevation node 0 with weight 0 the azimuth weight is 0).
+the pole rule (at elevation node 0 with weight 0 the azimuth weight is 0)
+and, on isotropic tables, the rotation of the query (the view azimuth axis
+holds ``phi_v - phi_l``).
 It differs from the float64 lookup in two documented ways only:
 
 - arithmetic in the variant's precision (float32 in ``llvm_ad_rgb``) and RGB
@@ -175,14 +177,20 @@ def lookup_jit(mi: Any, grid: LookupGrid, packed: tuple[Any, float, float], thet
     Float, UInt = mi.Float, mi.UInt32
     tol = _tolerance(dr, Float)
     nk, npl, ntl, npv, ntv, nc = grid.values.shape
+    if grid.isotropic:  # the view azimuth axis holds phi_v - phi_l (interp's rotation)
+        phi_v = phi_v - phi_l
     ik, wk = _locate(dr, Float, UInt, grid.kappa, grid.kappa_inv_d, kappa, tol)
     itl, wtl = _locate(dr, Float, UInt, grid.theta_l, grid.theta_l_inv_d, theta_l, tol)
     itv, wtv = _locate(dr, Float, UInt, grid.theta_v, grid.theta_v_inv_d, theta_v, tol)
     ipl, wpl = _locate_periodic(dr, Float, UInt, grid.phi_l0, grid.phi_l_inv_step, npl, phi_l, tol)
     ipv, wpv = _locate_periodic(dr, Float, UInt, grid.phi_v0, grid.phi_v_inv_step, npv, phi_v, tol)
     # Pole: node 0 of an elevation axis is theta = 0 (one value for every azimuth).
-    wpl = dr.select((itl == 0) & (wtl == 0.0), 0.0, wpl)
-    wpv = dr.select((itv == 0) & (wtv == 0.0), 0.0, wpv)
+    light_pole = (itl == 0) & (wtl == 0.0)
+    wpl = dr.select(light_pole, 0.0, wpl)
+    view_pole = (itv == 0) & (wtv == 0.0)
+    if grid.isotropic:  # the stored azimuth difference depends on the light azimuth too
+        view_pole = view_pole | light_pole
+    wpv = dr.select(view_pole, 0.0, wpv)
     ipl1 = dr.select(ipl + 1 < npl, ipl + 1, 0)
     ipv1 = dr.select(ipv + 1 < npv, ipv + 1, 0)
     k_nodes = [(ik, 1.0 - wk), (ik + 1, wk)] if nk > 1 else [(ik, Float(1.0))]
