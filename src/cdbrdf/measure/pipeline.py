@@ -41,6 +41,7 @@ from ..table import CDBRDF
 from .calibrate import MeasureReport, assemble
 from .capture import CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
+from .fill import DEFAULT_FILL, check_fill_method
 from ..images import ImageError
 from .patch import read_patch
 from .preflight import bad_list_path, describe, preflight, problem, refuse_bad, refuse_overlap, remove_bad_list
@@ -128,6 +129,7 @@ def measure(
     num_workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
     overwrite: bool = True,
+    fill: str = DEFAULT_FILL,
     _interrupt_after: int | None = None,
 ) -> tuple[CDBRDF, MeasureReport]:
     """Measure a capture folder into a CDBRDF.
@@ -172,6 +174,13 @@ def measure(
         An output, its checkpoint folder or its list of unusable photographs
         that is one of the run's inputs (``capture.csv``, ``stands.json``, a
         photograph, found also through links) is always refused.
+    fill
+        How invalid samples are filled, one of
+        :data:`cdbrdf.measure.fill.FILL_METHODS`: ``"kappa-fit"`` (default:
+        the same direction on the other stands, fitted along the curvature),
+        ``"nearest-stand"``, or ``"nearest"`` (the paper's rule: the nearest
+        measured direction at the same curvature). It does not change what
+        is read, so a checkpoint serves every method.
 
     Returns
     -------
@@ -199,6 +208,7 @@ def measure(
         raise ValueError(f"patch: expected a positive integer, got {patch!r}")
     if batch_size < 1:
         raise ValueError(f"batch_size: must be positive, got {batch_size!r}")
+    fill = check_fill_method(fill)
     out_path = None if output is None else Path(output)
     if out_path is not None:
         out_dir = out_path.parent
@@ -295,7 +305,7 @@ def measure(
         refuse_bad(cap, failed, paths, out_path, during=True)
 
     table, report = assemble(cap, results, albedo=albedo, patch=int(patch), linear=bool(linear),
-                             material=material)
+                             material=material, fill_method=fill)
     report.n_images_resumed = resumed
     if out_path is not None:
         table.save(out_path)
