@@ -38,8 +38,9 @@ estimated standard deviation of its error, ``sigma = value * sqrt(s0^2 +
 ``|log(value / f_first)|``, the change from the nearest stand's value; for
 ``nearest`` the distance ``d`` in degrees; 0 for a copy from another stand)
 and ``s0``, ``alpha`` are fitted by maximum likelihood to a check made on
-the same table: the measured samples of the same stand, predicted in the
-same way from the same stands (``kappa``) or from their nearest other
+the same table: measured samples of the same stand, predicted in the same
+way from the same stands (the :data:`CHECK_FRACTION` of them nearest to the
+filled samples, which resemble them most) or from their nearest other
 measured direction (``nearest``), against their measured values.
 """
 
@@ -74,6 +75,7 @@ __all__ = [
     "angle_between_deg",
     "TIE_TOLERANCE_DEG",
     "MIN_CHECK_SAMPLES",
+    "CHECK_FRACTION",
 ]
 
 _LOG = logging.getLogger(__name__)
@@ -95,6 +97,10 @@ DEFAULT_FILL = "kappa-fit"
 #: Fewest measured samples a check must have for its own uncertainty fit; smaller
 #: checks are pooled over the stand, then over the table.
 MIN_CHECK_SAMPLES = 30
+
+#: Share of a stand's measured samples the check of a curvature fit uses: those nearest (in
+#: ``angle(v, v') + angle(l, l')``) to the samples it fills, which resemble them most.
+CHECK_FRACTION = 0.25
 
 #: Relative uncertainty given when no check is possible (too few measured samples).
 _UNKNOWN_SIGMA = 1.0
@@ -512,8 +518,8 @@ def fill(
                     ok = (first > _TINY) & (filled > _TINY)
                     std_k[k, ids] = std_k[stands[0], ids] * np.where(ok, filled / np.where(ok, first, 1.0), 1.0)
                 groups.append((k, stands, ids, w))
-                # the check: the measured samples of this stand, predicted from the same stands
-                chk = np.flatnonzero(valid_k[k] & valid_k[list(stands)].all(axis=0))
+                # the check: the measured samples of this stand nearest to these, predicted from the same stands
+                chk = _nearest_checks(np.flatnonzero(valid_k[k] & valid_k[list(stands)].all(axis=0)), ids, grid)
                 if chk.size:
                     pred = _combine(vk[list(stands)][:, chk], w)
                     checks.add("kappa", k, stands, _reach(pred, vk[stands[0], chk]), _log_error(pred, vk[k, chk]))
@@ -576,6 +582,26 @@ def fill(
         fill_std=fstd.reshape(vals.shape),
         summary={"method": method, "samples": counts, "uncertainty": models},
     )
+
+
+def _nearest_checks(candidates: NDArray[np.intp], targets: NDArray[np.intp], grid: Grid) -> NDArray[np.intp]:
+    """The :data:`CHECK_FRACTION` of ``candidates`` (at least :data:`MIN_CHECK_SAMPLES`) nearest to ``targets``.
+
+    Indices are over the four direction axes of one curvature; the distance
+    of a candidate is ``angle(v, v') + angle(l, l')`` to its nearest target.
+    """
+    n_keep = min(candidates.size, max(MIN_CHECK_SAMPLES, math.ceil(CHECK_FRACTION * candidates.size)))
+    if n_keep == candidates.size:
+        return candidates
+    n_v = grid.phi_v.size * grid.theta_v.size
+    d_l = _pair_distances(grid.theta_l, grid.phi_l)
+    d_v = _pair_distances(grid.theta_v, grid.phi_v)
+    tl, tv = np.divmod(targets, n_v)
+    dmin = np.empty(candidates.size)
+    for a in range(0, candidates.size, 256):
+        cl, cv = np.divmod(candidates[a : a + 256], n_v)
+        dmin[a : a + 256] = (d_l[cl][:, tl] + d_v[cv][:, tv]).min(axis=1)
+    return np.sort(candidates[np.argsort(dmin, kind="stable")[:n_keep]])
 
 
 def _stand_mask(valid: NDArray[np.bool_], k: int) -> NDArray[np.bool_]:
