@@ -435,9 +435,9 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
     fill_name = results[0].fill_method if results else ""
     compared = results[0].compared_fill.get("method", COMPARED_FILL) if results else COMPARED_FILL
     intro.table(
-        f"Filled samples against the ground truth: the default fill <code>{fill_name}</code> (the same "
-        "direction on the other stands, fitted along the curvature) and, beside it, the paper's rule "
-        f"<code>{compared}</code> (the nearest measured direction at the same curvature); relative error "
+        f"Filled samples against the ground truth: the default fill, {fill_name} (the same "
+        "direction on the other stands, fitted along the curvature) and, beside it, the paper's rule, "
+        f"{compared} (the nearest measured direction at the same curvature); relative error "
         "of the luminance, and the share of filled samples whose error lies within 1 and 2 of the "
         "standard deviations the fill estimated for them (a calibrated estimate gives about 68 % and 95 %)",
         ["material", "kappa (1/mm)", "filled", f"median {fill_name}", f"95th pct {fill_name}",
