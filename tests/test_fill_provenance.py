@@ -228,3 +228,22 @@ def test_cli_measure_fill_option(wiggly_capture, tmp_path, capsys):
         main(["measure", str(wiggly_capture), "-o", str(out), "--fill", "paper"])
     assert exc.value.code == 2
     assert "expected one of kappa-fit, nearest-stand, nearest" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "damage, message",
+    [
+        (lambda f: f["fill_method"].__setitem__((0, 0, 0, 0, 2), 7), "fill_method: codes must be one of"),
+        (lambda f: f["fill_method"].__setitem__((1, 0, 0, 0, 0), 4), "must be 0 .measured. exactly where"),
+        (lambda f: f["fill_sources"].__setitem__((0, 0, 0, 0, 2, 1), 2), "not measured"),
+        (lambda f: f["fill_weights"].__setitem__((0, 0, 0, 0, 2, 0), np.nan), "'fill_weights' holds NaN"),
+        (lambda f: f["fill_std"].__setitem__((1, 0, 0, 0, 0, 0), 0.5), "fill_std: must be 0 wherever"),
+    ],
+)
+def test_files_with_inconsistent_provenance_are_refused(tmp_path, damage, message):
+    p = tmp_path / "t.h5"
+    _measured().save(p)
+    with h5py.File(p, "r+") as f:
+        damage(f)
+    with pytest.raises(cdbrdf.FormatError, match=r"t\.h5: .*" + message):
+        cdbrdf.load(p)
