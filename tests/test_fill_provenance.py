@@ -11,6 +11,7 @@ import pytest
 
 import cdbrdf
 from cdbrdf import CDBRDF, Grid, TableError, io
+from cdbrdf.errors import OptionError
 from cdbrdf.measure import measure
 from cdbrdf.measure.fill import refill
 from cdbrdf.schema import FILL_METHOD_CODES, TableParts
@@ -211,7 +212,7 @@ def test_measure_fills_by_the_chosen_method_and_keeps_measured_samples(wiggly_ca
     assert set(names[0][others]) == {"kappa_fit"}
     assert (kfit.fill_sources[0][others] // int(np.prod(GRID.shape[1:])) == [1, 2]).all()
     assert kfit.attrs["provenance"]["fill_summary"]["samples"]["kappa_fit"] == 32 - 1
-    with pytest.raises(ValueError, match="fill: 'paper' is not one of kappa-fit, nearest-stand, nearest"):
+    with pytest.raises(OptionError, match="fill: 'paper' is not one of kappa-fit, nearest-stand, nearest"):
         measure(wiggly_capture, fill="paper")
 
 

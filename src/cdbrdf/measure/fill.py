@@ -57,7 +57,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import TableError
+from ..errors import OptionError, TableError
 from ..frames import direction_from_angles
 from ..schema import FILL_METHOD_CODES
 from ..table import CDBRDF, Grid
@@ -115,11 +115,11 @@ def check_fill_method(method: object) -> str:
 
     Raises
     ------
-    ValueError
-        Otherwise; the message lists the valid methods.
+    OptionError
+        Otherwise (a :class:`ValueError`); the message lists the valid methods.
     """
     if not isinstance(method, str) or method not in FILL_METHODS:
-        raise ValueError(f"fill: {method!r} is not one of {', '.join(FILL_METHODS)}")
+        raise OptionError(f"fill: {method!r} is not one of {', '.join(FILL_METHODS)}")
     return method
 
 
