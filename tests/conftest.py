@@ -12,7 +12,7 @@ def make_table(grid: cdbrdf.Grid, *, seed: int = 0, channels: int = 3, dtype=np.
     """A table of random values in [0.1, 1.1) on ``grid``."""
     rng = np.random.default_rng(seed)
     values = (0.1 + rng.random(grid.shape + (channels,))).astype(dtype)
-    return cdbrdf.CDBRDF(values, **grid.axes(), **kw)
+    return cdbrdf.CDBRDF(values, **grid.axes(), symmetry=grid.symmetry, **kw)
 
 
 @pytest.fixture

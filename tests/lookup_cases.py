@@ -48,7 +48,7 @@ def _kappas(n: int) -> np.ndarray:
 
 
 def kernel_tables() -> dict[str, CDBRDF]:
-    """One table per kernel path: RGB, generic 1-channel, > 8 curvatures, uneven elevations, 1 kappa.
+    """One table per kernel path: RGB, generic 1-channel, > 8 curvatures, uneven elevations, 1 kappa, isotropic.
 
     Also the tables of the lookup fuzzer (``tests/test_fuzz_lookup.py``).
     """
@@ -65,6 +65,11 @@ def kernel_tables() -> dict[str, CDBRDF]:
         "single_kappa": make_table(Grid.paper(kappa=[0.0]), seed=16),
         "fine_azimuth": make_table(Grid(kappa=[0.0], theta_l=[0.0, 30.0, 60.0], phi_l=np.arange(720) * 0.5,
                                         theta_v=[0.0, 30.0, 60.0], phi_v=np.arange(720) * 0.5), seed=17),
+        # isotropic: phi_l = [0], phi_v is the azimuth difference (RGB kernel, then the generic one)
+        "iso_rgb": make_table(Grid.paper(symmetry="isotropic"), seed=40),
+        "iso_uneven": make_table(Grid(kappa=[-0.2, 0.1], theta_l=[5.0, 20.0, 60.0], phi_l=[0.0],
+                                      theta_v=[0.0, 30.0, 60.0, 80.0], phi_v=np.arange(0.0, 360.0, 72.0) + 10.0,
+                                      symmetry="isotropic"), seed=41, channels=1, dtype=np.float32),
     }
 
 
@@ -87,6 +92,11 @@ def _build_tables() -> dict[str, CDBRDF]:
                                                theta_v=[0.0, 45.0, 70.0], phi_v=[40.0]), seed=7)
     tables["single_elevation"] = make_table(Grid(kappa=[-0.1, 0.0, 0.1], theta_l=[30.0], phi_l=[0.0, 120.0, 240.0],
                                                  theta_v=[0.0], phi_v=[0.0, 90.0, 180.0, 270.0]), seed=9)
+    tables["iso_fine"] = make_table(Grid.regular(theta_step_deg=5.0, phi_step_deg=2.0, theta_max_deg=85.0,
+                                                 kappa=[0.0], symmetry="isotropic"), seed=42, dtype=np.float32)
+    tables["iso_five_channel"] = make_table(Grid(kappa=[0.0, 0.2], theta_l=[0.0, 45.0], phi_l=[0.0],
+                                                 theta_v=[10.0, 40.0, 70.0], phi_v=[0.0, 120.0, 240.0],
+                                                 symmetry="isotropic"), seed=43, channels=5)
     tables["uneven_float32"] = make_table(Grid(kappa=[-0.2, 0.0, 0.2], theta_l=[0.0, 10.0, 35.0, 70.0],
                                                phi_l=np.arange(0.0, 360.0, 45.0), theta_v=[5.0, 20.0, 60.0],
                                                phi_v=np.arange(0.0, 360.0, 72.0) + 10.0), seed=18, dtype=np.float32)
@@ -146,7 +156,7 @@ def _drjit(layout: str) -> Callable[[CDBRDF, np.ndarray], np.ndarray]:
         elif layout == "float":
             up = lj.float_table(mi, lg, record)
         else:  # the differentiable upload: raw values through the sparse maps
-            maps = lj.packet_maps(t.values.shape, t.grid.theta_l, t.grid.theta_v, record)
+            maps = lj.packet_maps(t.values.shape, t.grid.theta_l, t.grid.theta_v, record, isotropic=lg.isotropic)
             up = lj.linear_upload(mi, mi.Float(np.asarray(t.values, dtype=np.float32).reshape(-1)), maps, record)
         args = [mi.Float(np.ascontiguousarray(x, dtype=np.float32)) for x in q]
         got = np.array(lj.lookup_jit(mi, lg, up, *args), dtype=np.float64).T
@@ -213,10 +223,10 @@ class Impl:
 
 
 #: The tables the renderer's other layouts run on: every axis kind (pole at 0 and virtual, single
-#: azimuth and elevation, uneven elevations, > 8 curvatures, one channel, float32). Not the
-#: 720-azimuth table: its index math is the packed layout's, and its packets hold 75 M floats.
+#: azimuth and elevation, uneven elevations, > 8 curvatures, one channel, float32, isotropic). Not
+#: the 720-azimuth tables: their index math is the packed layout's, and their packets are huge.
 LAYOUT_TABLES = ("rgb", "one_channel", "many_kappa", "uneven_float32", "virtual_pole", "single_azimuth",
-                 "single_elevation", "kappa_1")
+                 "single_elevation", "kappa_1", "iso_rgb", "iso_uneven")
 
 
 IMPLS = {
@@ -292,7 +302,8 @@ def _node_case(t: CDBRDF, precision: str, rng: np.random.Generator) -> Case:
                 axis, which = axes[row]
                 step = np.array([_spacing(axis, i) for i in idx[which]])
             else:
-                n = (g.phi_v if row == 1 else g.phi_l).size
+                # isotropic: moving phi_l moves the query along the azimuth difference axis
+                n = (g.phi_v if (row == 1 or g.isotropic) else g.phi_l).size
                 step = np.full(base.shape[1], 360.0 / n)
             q[row] = base[row] + side * 0.3 * tol * step
             if precision == "float32":
@@ -322,8 +333,11 @@ def _pole_case(t: CDBRDF, precision: str) -> Case:
     view_at_pole = lg.theta_v.size == 1
     want_v = v[-1, :, -1, :, 0].mean(axis=1)
     want_v = want_v.mean(axis=0) if light_at_pole else want_v[0]
-    want_l = v[0, :, 0, :, -1].mean(axis=0)
-    want_l = want_l.mean(axis=0) if view_at_pole else want_l[0]
+    if g.isotropic:  # the light pole holds the mean over the azimuth difference ring
+        want_l = v[0, 0, 0, :, -1].mean(axis=0)
+    else:
+        want_l = v[0, :, 0, :, -1].mean(axis=0)
+        want_l = want_l.mean(axis=0) if view_at_pole else want_l[0]
     near = [1e-9, 1e-6] if precision == "float64" else [1e-7, 1e-5]
     groups.append(_stack(np.array(near)[:, None], np.array([0.0, 77.0, 200.0]), g.theta_l[-1], g.phi_l[0],
                          g.kappa[-1]))
@@ -335,6 +349,13 @@ def _pole_case(t: CDBRDF, precision: str) -> Case:
         groups.append(_stack(0.5 * lg.theta_v[1], g.phi_v[j], g.theta_l[-1], g.phi_l[0], g.kappa[-1]))
         ring = v[-1, :, -1, j, iv].mean(axis=0) if light_at_pole else v[-1, 0, -1, j, iv]
         info["half"] = 0.5 * (want_v + ring)
+    if g.isotropic and lg.theta_l.size > 1:
+        # halfway between the light pole and the next light elevation, at a stored azimuth difference
+        j = g.phi_v.size - 1
+        il = 1 if g.theta_l[0] == 0.0 else 0
+        a = 37.0
+        groups.append(_stack(g.theta_v[-1], g.phi_v[j] + a, 0.5 * lg.theta_l[1], a, g.kappa[0]))
+        info["half_l"] = 0.5 * (want_l + v[0, 0, il, j, -1])
     info["sizes"] = [x.shape[1] for x in groups]
     return Case(np.concatenate(groups, axis=1), info)
 
@@ -453,7 +474,25 @@ def _huge_case(t: CDBRDF, precision: str) -> Case:
     return Case(q, {})
 
 
-CASES = ("nodes", "pole", "clamps", "wrap", "random", "directions", "scipy", "bad", "huge")
+def _rotation_case(t: CDBRDF, precision: str, rng: np.random.Generator) -> Case:
+    """Queries turned about the normal by several angles (every table; the isotropic ones must not change)."""
+    g = t.grid
+    m = 40
+    base = _stack(rng.uniform(0, 89, m), rng.uniform(-180, 180, m), rng.uniform(0, 89, m), rng.uniform(-180, 180, m),
+                  rng.uniform(g.kappa[0], g.kappa[-1], m))
+    base[0, :4] = 0.0  # view along the normal
+    base[2, 4:8] = 0.0  # light along the normal
+    turns = (17.0, -95.5, 180.0, 359.0)
+    qs = [base]
+    for a in turns:
+        q = base.copy()
+        q[1] += a
+        q[3] += a
+        qs.append(q)
+    return Case(np.concatenate(qs, axis=1), {"m": m, "n_turns": len(turns)})
+
+
+CASES = ("nodes", "pole", "clamps", "wrap", "random", "directions", "scipy", "bad", "huge", "rotation")
 
 
 @functools.cache
@@ -470,6 +509,7 @@ def _cases(table: str, precision: str) -> dict[str, Case]:
         "scipy": _scipy_case(t, precision, rng),
         "bad": _bad_case(t, precision),
         "huge": _huge_case(t, precision),
+        "rotation": _rotation_case(t, precision, rng),
     }
     if precision == "float32":
         with np.errstate(over="ignore"):
@@ -515,6 +555,11 @@ def pairs(case: str, *, skip_reference: bool = False, where: Callable[[CDBRDF], 
     return params
 
 
+def is_isotropic(t: CDBRDF) -> bool:
+    """Whether the table is isotropic (its phi_v axis is the azimuth difference)."""
+    return t.isotropic
+
+
 def has_off_pole(t: CDBRDF) -> bool:
     """Whether the table stores samples with both elevations above 0 (nodes the pole rule leaves alone)."""
     return bool(np.any(t.grid.theta_l > 0) and np.any(t.grid.theta_v > 0))
@@ -540,8 +585,15 @@ def close(im: Impl, got, want, scale, msg=""):
 
 
 def scipy_multilinear(t: CDBRDF, q: np.ndarray) -> np.ndarray:
-    """An independent multilinear interpolator: scipy's, azimuths padded by one period, singleton axes dropped."""
+    """An independent multilinear interpolator: scipy's, azimuths padded by one period, singleton axes dropped.
+
+    Isotropic tables: the query is turned to light azimuth 0 first (phi_v - phi_l on the phi_v axis).
+    """
     g = t.grid
+    if g.isotropic:
+        q = q.copy()
+        q[1] = q[1] - q[3]
+        q[3] = 0.0
     v = t.values.astype(np.float64)
     v = np.concatenate([v, v[:, :1]], axis=1)
     v = np.concatenate([v, v[:, :, :, :1]], axis=3)

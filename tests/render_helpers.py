@@ -27,23 +27,26 @@ def unit(theta_deg, phi_deg):
 
 
 def glossy_table(*, theta_step=10.0, phi_step=20.0, kappa=(-0.2, 0.0, 0.2), exponent=60.0, ks=2.0, kd=0.02,
-                 tint=(1.0, 0.8, 0.6), dtype=np.float64):
+                 tint=(1.0, 0.8, 0.6), dtype=np.float64, symmetry="anisotropic"):
     """A strong Blinn-Phong lobe around the mirror direction, brighter on convex curvature.
 
     Peak / diffuse about ``ks * (n + 2) / (2 pi) / kd`` (~ 1000 by default): a
-    sampler with a wrong density is rejected by the chi-square test.
+    sampler with a wrong density is rejected by the chi-square test. The
+    anisotropic table adds a weak cos^2 of the light azimuth; the isotropic
+    one (``phi_l = [0]``, ``phi_v`` the azimuth difference) has the lobe only.
     """
+    iso = symmetry == "isotropic"
     th = np.arange(0.0, 90.0 - 1e-9, theta_step)
     ph = np.arange(0.0, 360.0 - 1e-9, phi_step)
-    g = cdbrdf.Grid(kappa=list(kappa), theta_l=th, phi_l=ph, theta_v=th, phi_v=ph)
+    g = cdbrdf.Grid(kappa=list(kappa), theta_l=th, phi_l=[0.0] if iso else ph, theta_v=th, phi_v=ph,
+                    symmetry=symmetry)
     m = g.mesh()
     h = unit(m["theta_l"], m["phi_l"]) + unit(m["theta_v"], m["phi_v"])
     h /= np.linalg.norm(h, axis=-1, keepdims=True)
     lobe = ks * (exponent + 2) / (2 * np.pi) * np.clip(h[..., 2], 0, 1) ** exponent * (1 + 2 * m["kappa"])
-    # anisotropy: a second, weaker lobe shifted in azimuth
-    f = kd + lobe + 0.05 * np.cos(np.radians(m["phi_l"])) ** 2
+    f = kd + lobe + (0.0 if iso else 0.05 * np.cos(np.radians(m["phi_l"])) ** 2)
     v = f[..., None] * np.asarray(tint)
-    return cdbrdf.CDBRDF(v.astype(dtype), **g.axes())
+    return cdbrdf.CDBRDF(v.astype(dtype), **g.axes(), symmetry=symmetry)
 
 
 def constant_table(rgb, grid=None):

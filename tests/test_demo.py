@@ -45,6 +45,11 @@ def test_quick_demo_report_is_complete(quick_demo):
         assert t.quantity == "brdf"
     results = json.loads((folder / "results.json").read_text())
     assert [m["name"] for m in results["materials"]] == ["denim", "shot"]
+    assert "Filled samples against the ground truth" in page
+    for m in results["materials"]:
+        assert m["fill_method"] == "kappa-fit" and m["compared_fill"]["method"] == "nearest"
+        for key in ("median_rel_error_filled", "p95_rel_error_filled", "fill_within_1_sigma"):
+            assert 0 < m["error"][key] and all(0 < s[key] for s in m["per_stand"] if s["filled"])
 
 
 @pytest.mark.slow
@@ -56,12 +61,18 @@ def test_quick_demo_measures_the_ground_truth(quick_demo):
         assert filled[-0.22] > 0 and filled[-0.13] > 0
         assert filled[0.0] == 0 and filled[0.13] == 0 and filled[0.22] == 0
         assert (~t.measured).sum() == sum(filled.values())
-        # every filled sample names a measured source at the same curvature
-        src = t.fill_source[~t.measured]
-        assert (src >= 0).all() and t.measured.reshape(-1)[src].all()
+        # every filled sample names its measured sources: by default the same direction on other stands
+        src = t.fill_sources[~t.measured]
+        used = src >= 0
+        assert used[:, 0].all() and t.measured.reshape(-1)[src[used]].all()
         per = int(np.prod(t.grid.shape[1:]))
-        ks = np.nonzero(~t.measured)[0]
-        assert (src // per == ks).all()
+        own = np.flatnonzero(~t.measured.ravel())[:, None]
+        assert ((src % per == own % per) | ~used).all() and ((src // per != own // per) | ~used).all()
+        assert set(t.fill_method_names()[~t.measured]) == {"kappa_fit"} and m.fill_method == "kappa-fit"
+        # far better than the paper's rule, which the demo reports beside it
+        near = m.compared_fill
+        assert near["method"] == "nearest"
+        assert m.error["median_rel_error_filled"] < 0.25 * near["error"]["median_rel_error_filled"], (m.error, near)
         # measured samples reproduce the truth: noise of the rig is ~1 %
         assert m.error["median_rel_error_measured"] < 0.03, m.error
         assert m.error["p95_rel_error_measured"] < 0.15, m.error
@@ -157,6 +168,22 @@ def test_compare_with_truth_sees_a_known_error(small_grid):
     r = cdbrdf.CDBRDF(t.values * 7.0, **small_grid.axes(), attrs={"quantity": "relative"})
     stats, _ = compare_with_truth(r, t)
     assert stats["median_rel_error_measured"] < 1e-12
+
+
+def test_compare_with_truth_of_filled_samples_and_their_uncertainty(small_grid):
+    t = _pole_consistent(small_grid)
+    measured = np.ones(small_grid.shape, bool)
+    measured[0, :, 1:] = False  # 72 filled samples at kappa = -0.2, each 10 % too bright
+    values = np.where(measured[..., None], t.values, 1.1 * t.values)
+    fstd = np.zeros(values.shape)
+    fstd[0, :, 1:] = 0.04 * t.values[0, :, 1:]  # sigma 4 %: the 10 % errors lie beyond 2 sigma
+    fstd[0, :2, 1:] = 0.2 * t.values[0, :2, 1:]  # sigma 20 % for half of them: within 1 sigma
+    m = cdbrdf.CDBRDF(values, **small_grid.axes(), measured=measured, fill_std=fstd, attrs={"quantity": "brdf"})
+    stats, rows = compare_with_truth(m, t)
+    assert stats["median_rel_error_filled"] == pytest.approx(0.1) and stats["p95_rel_error_filled"] == pytest.approx(0.1)
+    assert stats["fill_within_1_sigma"] == pytest.approx(0.5) and stats["fill_within_2_sigma"] == pytest.approx(0.5)
+    assert rows[0]["filled"] == 72 and rows[0]["fill_within_1_sigma"] == pytest.approx(0.5)
+    assert np.isnan(rows[1]["median_rel_error_filled"]) and np.isnan(rows[1]["fill_within_1_sigma"])
 
 
 def test_work_folder_is_inside_the_partial_output(tmp_path, monkeypatch):

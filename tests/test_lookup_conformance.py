@@ -5,7 +5,8 @@ renderer's Dr.Jit lookup and the plug-in in ``scalar_rgb``), the tables and
 the queries live in ``tests/lookup_cases.py``. Tables: 1 to 9 curvatures,
 even and uneven elevations, a virtual pole, single-azimuth and
 single-elevation axes, 720 azimuths, 1, 3 and 5 channels, float32 and
-float64 values. Cases: nodes reproduced exactly and queries within the snap
+float64 values, isotropic tables (phi_v = the azimuth difference; every
+lookup rotates the query). Cases: nodes reproduced exactly and queries within the snap
 tolerance of a node, on either side, snapped to it; the pole rule; clamps;
 the periodic wrap; agreement with the reference and with scipy's independent
 interpolator; NaN, infinite and impossible queries; huge finite angles.
@@ -33,6 +34,7 @@ from .lookup_cases import (
     close,
     get_run,
     has_off_pole,
+    is_isotropic,
     kernel_tables,
     need_mitsuba,
     pairs,
@@ -85,8 +87,48 @@ def test_pole_rule(impl, table):
     if "half" in c.info:
         # linear blend from the pole to the next elevation node
         np.testing.assert_allclose(parts[5][0], c.info["half"], **ring_tol)
+    if "half_l" in c.info:
+        # isotropic: the same blend from the light pole, at any light azimuth
+        np.testing.assert_allclose(parts[-1][0], c.info["half_l"], **ring_tol)
     if impl != "reference":
         close(im, got, ref, scale)
+
+
+@pytest.mark.parametrize("impl,table", pairs("rotation", where=is_isotropic))
+def test_isotropic_tables_ignore_a_rotation_about_the_normal(impl, table):
+    im, t, c, got, ref, scale = get_run(impl, table, "rotation")
+    m = c.info["m"]
+    base = got[:m]
+    rtol = 1e-12 if im.precision == "float64" else im.rtol
+    for j in range(c.info["n_turns"]):
+        # both azimuths turned by the same angle: the same value (to rounding of the azimuth difference)
+        np.testing.assert_allclose(got[(j + 1) * m:(j + 2) * m], base, rtol=rtol, atol=rtol * scale,
+                                   err_msg=f"turn {j}")
+    # a direction along the normal: bit for bit independent of both azimuths
+    for j in range(c.info["n_turns"] + 1):
+        np.testing.assert_array_equal(got[j * m:j * m + 8], base[:8])
+    if impl != "reference":
+        close(im, got, ref, scale)
+
+
+def test_isotropic_table_equals_its_anisotropic_expansion_at_stored_light_azimuths():
+    """An isotropic table against the anisotropic table holding the same values rotated onto every light azimuth."""
+    t = tables()["iso_rgb"]
+    g = t.grid
+    n = g.phi_v.size
+    v = t.values[:, 0]  # (kappa, theta_l, dphi, theta_v, c)
+    shift = (np.arange(n)[None, :] - np.arange(n)[:, None]) % n  # [i_l, i_v] -> dphi index
+    expanded = np.moveaxis(v[:, :, shift], 2, 1)  # (kappa, phi_l, theta_l, phi_v, theta_v, c)
+    from cdbrdf import CDBRDF
+
+    a = CDBRDF(expanded, kappa=g.kappa, theta_l=g.theta_l, phi_l=g.phi_v, theta_v=g.theta_v, phi_v=g.phi_v)
+    rng = np.random.default_rng(5)
+    m = 500
+    # light azimuths on the stored nodes (where bilinear in (phi_l, phi_v) is linear in the difference)
+    pl = rng.choice(g.phi_v, m) + 360.0 * rng.integers(-2, 3, m)
+    q = (rng.uniform(1, 89, m), rng.uniform(-400, 400, m), rng.uniform(1, 89, m), pl, rng.uniform(-0.3, 0.3, m))
+    for kernel in ("rgb", "generic"):
+        np.testing.assert_allclose(evaluate(t, *q, kernel=kernel), evaluate(a, *q, kernel=kernel), rtol=1e-12)
 
 
 @pytest.mark.parametrize("impl,table", pairs("clamps"))
@@ -283,3 +325,7 @@ def test_suite_covers_every_implementation_and_the_table_kinds():
     assert {t.values.dtype for t in ts.values()} == {np.dtype(np.float32), np.dtype(np.float64)}
     assert any(t.grid.phi_v.size == 1 for t in ts.values()) and any(t.grid.theta_l.size == 1 for t in ts.values())
     assert any(t.grid.theta_v[0] > 0 for t in ts.values())
+    iso = [t for t in ts.values() if t.isotropic]
+    assert any(t.lookup_grid().rgb_kernel for t in iso) and any(not t.lookup_grid().rgb_kernel for t in iso)
+    assert any(t.grid.theta_l[0] > 0 for t in iso) and {t.values.dtype for t in iso} == {
+        np.dtype(np.float32), np.dtype(np.float64)}

@@ -138,8 +138,14 @@ def test_hidden_by_stand_not_read_and_filled(tmp_path):
     assert rep.n_hidden == int(cap.hidden.sum()) == rep.n_filled
     src = table.fill_source[~table.measured]
     assert np.all(src >= 0) and table.measured.ravel()[src].all()
-    # filled from the same curvature
+    # by default from the same direction on the other stands (flat first, then convex)
     per_k = int(np.prod(GRID.shape[1:]))
+    hid = np.flatnonzero(~table.measured.ravel())
+    np.testing.assert_array_equal(table.fill_sources[~table.measured], np.stack([hid + per_k, hid + 2 * per_k], 1))
+    # the paper's rule: from the same curvature
+    table, _ = measure(tmp_path, fill="nearest")
+    src = table.fill_source[~table.measured]
+    assert np.all(src >= 0) and table.measured.ravel()[src].all()
     assert np.all(src // per_k == 0)
 
 

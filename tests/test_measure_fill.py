@@ -1,13 +1,26 @@
-"""Filling invalid samples from the nearest measured direction at the same curvature."""
+"""Filling invalid samples: the paper's rule (nearest direction, same curvature) and the fill registry."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
 
 from cdbrdf import CDBRDF, Grid, TableError
 from cdbrdf.frames import direction_from_angles
-from cdbrdf.measure.fill import fill_nearest
+from cdbrdf.measure.fill import (
+    CHECK_FRACTION,
+    DEFAULT_FILL,
+    FILL_METHODS,
+    MIN_CHECK_SAMPLES,
+    check_fill_method,
+    fill,
+    fill_nearest,
+    kappa_fit_weights,
+    refill,
+)
+from cdbrdf.schema import FILL_METHOD_CODES
 
 
 def angular_distance_deg(t1, p1, t2, p2):
@@ -89,3 +102,180 @@ def test_curvature_without_measurement_raises(grid):
     valid[1] = False
     with pytest.raises(TableError, match="kappa = 0 1/mm: no sample was measured"):
         fill_nearest(np.ones(grid.shape + (3,)), valid, grid)
+
+
+# -- the registry --------------------------------------------------------------------------
+KGRID = Grid(kappa=[-0.22, -0.13, 0.0, 0.13, 0.22], theta_l=[0, 30, 60], phi_l=[0, 90, 180, 270],
+             theta_v=[0, 30, 60], phi_v=[0, 120, 240])
+
+
+def test_registry_lists_the_methods():
+    assert DEFAULT_FILL == "kappa-fit" and list(FILL_METHODS) == ["kappa-fit", "nearest-stand", "nearest"]
+    for name in FILL_METHODS:
+        assert check_fill_method(name) == name
+    for bad in ("Nearest", "", None, 3, "kappa"):
+        with pytest.raises(ValueError, match=r"fill: .* is not one of kappa-fit, nearest-stand, nearest$"):
+            check_fill_method(bad)
+    with pytest.raises(ValueError, match="is not one of kappa-fit"):
+        fill(np.ones(KGRID.shape + (1,)), np.ones(KGRID.shape, bool), KGRID, method="linear")
+
+
+def test_kappa_fit_weights_reproduce_lines():
+    ks = np.array([0.0, 0.13, 0.22])
+    w = kappa_fit_weights(ks, -0.22)
+    assert w.sum() == pytest.approx(1.0, abs=1e-12)
+    assert w @ ks == pytest.approx(-0.22, abs=1e-12)  # a line is reproduced at the target
+    # nearer stands weigh more: the weighted least-squares line, checked against numpy's polyfit
+    a = np.polyfit(ks + 0.22, np.array([1.0, 2.0, 5.0]), 1, w=np.sqrt(1 / np.abs(ks + 0.22)))
+    assert w @ np.array([1.0, 2.0, 5.0]) == pytest.approx(a[1], rel=1e-12)
+    np.testing.assert_array_equal(kappa_fit_weights(np.array([0.13]), -0.22), [1.0])
+
+
+def _smooth_table(grid, quadratic=0.0):
+    """log f = A(direction) + B(direction) kappa + C kappa^2: a known curvature dependence."""
+    m = grid.mesh()
+    a = -1.5 + 0.6 * np.cos(np.radians(m["theta_v"])) + 0.2 * np.sin(np.radians(m["phi_l"] + m["theta_l"]))
+    b = 1.2 * np.cos(np.radians(m["phi_v"] - m["phi_l"])) - 0.004 * m["theta_l"]
+    logf = a + b * m["kappa"] + quadratic * m["kappa"] ** 2
+    return np.exp(logf[..., None] + np.array([0.0, 0.1, -0.2]))
+
+
+def _hidden(grid):
+    """Grazing directions hidden on the two concave stands (more on the tighter one), as a stand does."""
+    valid = np.ones(grid.shape, bool)
+    valid[0, :, :, :, 2] = False  # theta_v = 60 hidden at -0.22
+    valid[0, :, 2] = False  # theta_l = 60 hidden at -0.22
+    valid[1, 0, 2, :, :] = False  # theta_l = 60, phi_l = 0 hidden at -0.13 too
+    return valid
+
+
+def test_kappa_fit_is_exact_for_a_log_linear_curvature_dependence():
+    truth = _smooth_table(KGRID)
+    valid = _hidden(KGRID)
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID)
+    np.testing.assert_allclose(r.values, truth, rtol=1e-12)
+    # measured samples are kept bit for bit
+    np.testing.assert_array_equal(r.values[valid], truth[valid])
+    assert r.summary["samples"] == {"measured": int(valid.sum()), "nearest": 0, "nearest_stand": 0,
+                                    "kappa_fit": int((~valid).sum())}
+
+
+def test_kappa_fit_error_is_the_second_order_term():
+    """For log f = A + B kappa + C kappa^2 the fill's log error is C (sum_s w_s kappa_s^2 - kappa_0^2)."""
+    c = 3.0
+    truth = _smooth_table(KGRID, quadratic=c)
+    valid = _hidden(KGRID)
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID)
+    ks = KGRID.kappa
+    for k, stands in ((0, [2, 3, 4]), (0, [1, 2, 3, 4]), (1, [2, 3, 4])):
+        rest = [s for s in range(5) if s not in stands and s != k]
+        sel = ~valid[k] & valid[stands].all(axis=0) & ~valid[rest].any(axis=0)
+        w = kappa_fit_weights(ks[stands], ks[k])
+        expected = c * (w @ ks[stands] ** 2 - ks[k] ** 2)
+        assert sel.any()
+        np.testing.assert_allclose(np.log(r.values[k][sel] / truth[k][sel]), expected, atol=1e-12)
+        assert abs(expected) > 0.01  # a real, visible second-order error
+
+
+def test_nearest_stand_copies_the_same_direction_of_the_nearest_stand():
+    truth = _smooth_table(KGRID)
+    valid = _hidden(KGRID)
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID, method="nearest-stand")
+    idx = np.arange(valid.size).reshape(valid.shape)
+    # hidden at -0.22 but measured at -0.13: from -0.13; hidden at both: from the flat stand (0)
+    for k in (0, 1):
+        for i in zip(*np.nonzero(~valid[k]), strict=True):
+            src = 1 if (k == 0 and valid[(1, *i)]) else 2
+            assert r.fill_source[(k, *i)] == idx[(src, *i)]
+            np.testing.assert_array_equal(r.values[(k, *i)], truth[(src, *i)])
+    assert set(np.unique(r.fill_method[~valid])) == {FILL_METHOD_CODES["nearest_stand"]}
+
+
+def test_provenance_reproduces_every_filled_value():
+    rng = np.random.default_rng(5)
+    truth = _smooth_table(KGRID) * (1 + 0.01 * rng.standard_normal(KGRID.shape + (3,)))
+    valid = _hidden(KGRID)
+    valid[2, 3, 1, 1, 1] = False  # a saturated sample on the flat stand: measured on every other stand
+    truth[2, 1, 2, 0, 0, 0] = -1e-4  # a dark-subtracted source below zero: that channel is combined linearly
+    t = CDBRDF(np.where(valid[..., None], truth, 0.0), **KGRID.axes(), measured=valid)
+    r = refill(t)
+    flat = r.values.reshape(-1, 3)
+    src = r.fill_sources.reshape(-1, r.fill_sources.shape[-1])
+    w = r.fill_weights.reshape(src.shape)
+    n_linear = 0
+    for i in np.flatnonzero(~valid.ravel()):
+        used = src[i] >= 0
+        v = flat[src[i][used]]
+        assert r.measured.ravel()[src[i][used]].all()
+        lin = (v <= 0).any(axis=0)
+        n_linear += int(lin.sum())
+        expect = np.where(lin, w[i][used] @ v, np.exp(w[i][used] @ np.log(np.where(v > 0, v, 1.0))))
+        np.testing.assert_allclose(flat[i], expect, rtol=1e-12)
+    assert r.fill_method[2, 3, 1, 1, 1] == FILL_METHOD_CODES["kappa_fit"]
+    assert (r.fill_sources[2, 3, 1, 1, 1] >= 0).sum() == 4  # all four other stands
+    assert r.attrs["provenance"]["fill_method"] == "kappa-fit"
+    assert n_linear == 1  # the one channel with a source below zero
+
+
+def test_direction_no_stand_measured_falls_back_to_the_paper_rule():
+    truth = _smooth_table(KGRID)
+    valid = np.ones(KGRID.shape, bool)
+    valid[:, 1, 1, 1, 1] = False  # one direction unmeasured on every stand
+    valid[3, 2, 1, 1, 1] = False  # another measured on four stands
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID)
+    near, src, _ = fill_nearest(np.where(valid[..., None], truth, np.nan), valid, KGRID)
+    np.testing.assert_array_equal(r.values[:, 1, 1, 1, 1], near[:, 1, 1, 1, 1])
+    np.testing.assert_array_equal(r.fill_source[:, 1, 1, 1, 1], src[:, 1, 1, 1, 1])
+    assert (r.fill_method[:, 1, 1, 1, 1] == FILL_METHOD_CODES["nearest"]).all()
+    assert r.fill_method[3, 2, 1, 1, 1] == FILL_METHOD_CODES["kappa_fit"]
+
+
+def test_nearest_method_is_the_paper_rule_bit_for_bit(grid):
+    rng = np.random.default_rng(1)
+    v = rng.random(grid.shape + (3,))
+    s = rng.random(grid.shape + (3,))
+    valid = rng.random(grid.shape) > 0.4
+    out, src, std = fill_nearest(np.where(valid[..., None], v, np.nan), valid, grid, std=s)
+    r = fill(np.where(valid[..., None], v, np.nan), valid, grid, method="nearest", std=s)
+    np.testing.assert_array_equal(r.values, out)
+    np.testing.assert_array_equal(r.fill_source, src)
+    np.testing.assert_array_equal(r.std, std)
+    np.testing.assert_array_equal(r.fill_sources[..., 0], np.where(valid, -1, src))
+    assert r.fill_sources.shape[-1] == 1 and (r.fill_weights[~valid] == 1).all()
+
+
+def test_uncertainty_is_calibrated_on_noisy_smooth_data():
+    """1 % multiplicative noise: the fitted sigma covers the true errors about as a normal law says."""
+    g = Grid(kappa=[-0.22, -0.13, 0.0, 0.13, 0.22], theta_l=[0, 15, 30, 45, 60, 75], phi_l=np.arange(0, 360, 45),
+             theta_v=[0, 15, 30, 45, 60, 75], phi_v=np.arange(0, 360, 45))
+    truth = _smooth_table(g)
+    noisy = truth * np.exp(0.01 * np.random.default_rng(2).standard_normal(truth.shape))
+    valid = np.ones(g.shape, bool)
+    valid[0, :, 4:] = False
+    valid[0, :, :, :, 4:] = False
+    r = fill(np.where(valid[..., None], noisy, np.nan), valid, g)
+    z = np.abs(np.log(r.values / truth))[~valid] / (r.fill_std[~valid] / r.values[~valid])
+    assert 0.6 <= np.mean(z <= 1) <= 0.9 and np.mean(z <= 2) >= 0.93
+    assert (r.fill_std[valid] == 0).all()
+    (model,) = r.summary["uncertainty"]
+    # the check: the quarter of the stand's measured samples nearest to the filled ones
+    assert model["check_samples"] == math.ceil(CHECK_FRACTION * valid[0].sum()) and model["check_pooled"] == "group"
+
+
+def test_too_few_checks_give_an_unknown_uncertainty():
+    g = Grid(kappa=[-0.2, 0.0, 0.2], theta_l=[0, 40], phi_l=[0, 180], theta_v=[0, 30], phi_v=[0, 180])
+    truth = _smooth_table(g)
+    valid = np.ones(g.shape, bool)
+    valid[0, :, 1, :, 1] = False
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, g)
+    assert valid[0].sum() < MIN_CHECK_SAMPLES
+    np.testing.assert_allclose(r.fill_std[~valid], r.values[~valid])  # 100 %: no check was possible
+    assert r.summary["uncertainty"][0]["check_pooled"] == "none"
+
+
+def test_every_method_refuses_a_curvature_with_nothing_measured(grid):
+    valid = np.ones(grid.shape, bool)
+    valid[0] = False
+    for method in FILL_METHODS:
+        with pytest.raises(TableError, match="kappa = -0.2 1/mm: no sample was measured"):
+            fill(np.ones(grid.shape + (3,)), valid, grid, method=method)

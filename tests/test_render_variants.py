@@ -176,3 +176,33 @@ def test_a_variant_this_machine_cannot_run_is_one_error(cr):
 
     with pytest.raises(OptionError, match="'cuda_ad_rgb' cannot be used on this machine"):
         cr.set_variant("cuda_ad_rgb")
+
+
+def test_auto_storage_keeps_precision_on_a_huge_dynamic_range(cr):
+    """A grazing peak 10^6 times the median: the fixed point keeps ~2 levels there, so auto takes float."""
+    import cdbrdf
+    from cdbrdf.frames import angles_from_direction
+    from cdbrdf.render import _lookup_jit as lj
+
+    cr.set_variant("llvm_ad_rgb")
+    g = cdbrdf.Grid.paper(kappa=[0.0])
+    v = 0.02 + 0.01 * np.random.default_rng(0).random(g.shape + (3,))
+    smooth = cdbrdf.CDBRDF(v.copy(), **g.axes())
+    v[:, :, -1, :, -1] = 2e4  # grazing light and view
+    peaked = cdbrdf.CDBRDF(v, **g.axes())
+    assert not lj.packing_is_fine(peaked.lookup_grid().values) and lj.packing_is_fine(smooth.lookup_grid().values)
+    auto = cr.make_bsdf(peaked, curvature=0.0)
+    packed = cr.make_bsdf(peaked, curvature=0.0, storage="packed")
+    assert auto.packed.layout == "float" and packed.packed.layout == "packed"
+    assert cr.make_bsdf(smooth, curvature=0.0).packed.layout == "packed"
+    rng = np.random.default_rng(1)
+    wi, wo = _dirs(rng, 200), _dirs(rng, 200)
+    wi, wo = wi[wi[:, 2] > 0.5], wo[wi[:, 2] > 0.5]  # away from the peak's samples
+    tv, pv = angles_from_direction(wi)
+    tl, pl = angles_from_direction(wo)
+    want = peaked.evaluate(tv, pv, tl, pl, 0.0) * wo[:, 2:3]
+    keep = tl < 60  # both elevations below the peak's cells
+    got = np.array(auto.eval(mi.BSDFContext(), _si(cr, wi), vec(wo))).T
+    np.testing.assert_allclose(got[keep], want[keep], rtol=3e-5)
+    coarse = np.array(packed.eval(mi.BSDFContext(), _si(cr, wi), vec(wo))).T
+    assert np.abs(coarse[keep] / want[keep] - 1).max() > 1e-3  # what the packed layout would give

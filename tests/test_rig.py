@@ -112,9 +112,13 @@ def test_hidden_marked_and_filled(captured):
     assert hid[0].any() and not hid[1:].any()
     np.testing.assert_array_equal(table.measured, ~hid)
     assert rep.n_hidden == hid.sum() == rep.n_filled
-    # every filled sample copies a measured one of its own curvature
-    src = table.fill_source[hid]
+    # by default from the same direction on the other stands
     per_k = int(np.prod(CAPTURE_GRID.shape[1:]))
+    src = table.fill_sources[hid]
+    assert (src[src >= 0] // per_k != 0).all() and (src[:, 0] % per_k == np.flatnonzero(hid.ravel()) % per_k).all()
+    # the paper's rule: every filled sample copies a measured one of its own curvature
+    table, rep = measure(folder, fill="nearest")
+    src = table.fill_source[hid]
     assert np.all(src // per_k == 0)
     flat = table.values.reshape(-1, table.n_channels)
     np.testing.assert_array_equal(table.values[hid], flat[src])

@@ -197,7 +197,7 @@ def test_xarray_round_trip(small_grid):
     assert float(v) == t.values[2, 1, 1, 1, 1, 1]
     assert CDBRDF.from_xarray(ds) == t
     # any dimension order is accepted
-    assert CDBRDF.from_xarray(ds.transpose("channel", "theta_v", "phi_v", "theta_l", "phi_l", "kappa")) == t
+    assert CDBRDF.from_xarray(ds.transpose("fill_slot", "channel", "theta_v", "phi_v", "theta_l", "phi_l", "kappa")) == t
     with pytest.raises(TableError, match="no variable 'reflectance'"):
         CDBRDF.from_xarray(ds.drop_vars("reflectance"))
     assert isinstance(ds, xr.Dataset)

@@ -9,7 +9,8 @@ The public surface is small:
   lookup), :mod:`cdbrdf.io` (the file), :mod:`cdbrdf.schema` (the names of
   the file and xarray layout), :mod:`cdbrdf.materials` (bundled fabrics),
   :mod:`cdbrdf.synth` (fabric model), :mod:`cdbrdf.rig` (simulated capture
-  rig), :mod:`cdbrdf.measure` (photographs to a table), :mod:`cdbrdf.curvature`,
+  rig), :mod:`cdbrdf.importers` (RGL, MERL, UTIA files; stacking per-stand
+  files), :mod:`cdbrdf.measure` (photographs to a table), :mod:`cdbrdf.curvature`,
   :mod:`cdbrdf.render` (Mitsuba 3 plug-in and scenes), :mod:`cdbrdf.plot`,
   :mod:`cdbrdf.report` and :mod:`cdbrdf.demo` (the paper end to end).
 """

@@ -7,7 +7,8 @@ parallelises with ``prange`` over all cores.
 
 The kernels implement the rule stated in :mod:`cdbrdf.interp` (clamped
 curvature and elevations, periodic azimuth with an exact ``fmod`` wrap, the
-pole rule, weights snapped to 0 or 1 within the tolerance ``tol``) on a
+pole rule, the rotation of queries on isotropic tables, weights snapped to 0
+or 1 within the tolerance ``tol``) on a
 :class:`cdbrdf.interp.LookupGrid`, which they take as one argument (a named
 tuple: numba reads its fields by name). The snap tolerance is an argument
 too, not a global of this module, so that numba's on-disk cache (keyed on
@@ -303,6 +304,7 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
     pl_inv = g.phi_l_inv_step
     pv0 = g.phi_v0
     pv_inv = g.phi_v_inv_step
+    iso = g.isotropic
     k_lo, kn1, kn2, kn3, kn4, kn5, kn6, k_hi = g.kappa_node
     _, ks1, ks2, ks3, ks4, ks5, ks6, _ = g.kappa_scan
     ki0, ki1, ki2, ki3, ki4, ki5, ki6, _ = g.kappa_slot_inv_d
@@ -330,9 +332,12 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
         for j in range(m):
             q = start + j
             qbuf[0, j] = q_tv[q * s_tv]
-            qbuf[1, j] = _wrap_azimuth(q_pv[q * s_pv])
+            pv = _wrap_azimuth(q_pv[q * s_pv])
+            pl = _wrap_azimuth(q_pl[q * s_pl])
+            # isotropic: the view azimuth axis is the difference phi_v - phi_l (phi_l has one node)
+            qbuf[1, j] = _wrap_azimuth(pv - pl) if iso else pv
             qbuf[2, j] = q_tl[q * s_tl]
-            qbuf[3, j] = _wrap_azimuth(q_pl[q * s_pl])
+            qbuf[3, j] = pl
             qbuf[4, j] = q_k[q * s_k]
         for j in range(m):
             tv = qbuf[0, j]
@@ -363,8 +368,9 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
             ipl, ipl1, wpl = _periodic_select(pl, pl0, pl_inv, n_pl, inv_npl, tol)
             ipv, ipv1, wpv = _periodic_select(pv, pv0, pv_inv, n_pv, inv_npv, tol)
             # pole rule, as in lookup_generic
-            wpl = 0.0 if (itl == 0 and wtl == 0.0) else wpl
-            wpv = 0.0 if (itv == 0 and wtv == 0.0) else wpv
+            light_pole = itl == 0 and wtl == 0.0
+            wpl = 0.0 if light_pole else wpl
+            wpv = 0.0 if ((itv == 0 and wtv == 0.0) or (iso and light_pole)) else wpv
             ibuf[0, j] = ((ik * n_pl + ipl) * n_tl + itl) * s_tlight
             ibuf[1, j] = (ipl1 - ipl) * n_tl * s_tlight
             ibuf[2, j] = ipv * s_view + itv * 4
@@ -436,6 +442,7 @@ def lookup_generic(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
     thl, thl_d, inv_tl = g.theta_l, g.theta_l_inv_d, g.theta_l_inv_step
     thv, thv_d, inv_tv = g.theta_v, g.theta_v_inv_d, g.theta_v_inv_step
     pl0, pl_inv, pv0, pv_inv = g.phi_l0, g.phi_l_inv_step, g.phi_v0, g.phi_v_inv_step
+    iso = g.isotropic
     s_tv = 1 if q_tv.shape[0] > 1 else 0
     s_pv = 1 if q_pv.shape[0] > 1 else 0
     s_tl = 1 if q_tl.shape[0] > 1 else 0
@@ -457,15 +464,20 @@ def lookup_generic(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
             for c in range(n_c):
                 out[row, c] = np.nan
             continue
+        if iso:  # rotate to light azimuth 0: the view azimuth axis is the difference phi_v - phi_l
+            pv = _wrap_azimuth(_wrap_azimuth(pv) - _wrap_azimuth(pl))
         ik, wk = _locate(kap, kap_d, n_k, 0.0, k, tol)
         itl, wtl = _locate(thl, thl_d, n_tl, inv_tl, tl, tol)
         itv, wtv = _locate(thv, thv_d, n_tv, inv_tv, tv, tol)
         ipl, wpl = _locate_periodic(pl0, pl_inv, n_pl, pl, tol)
         ipv, wpv = _locate_periodic(pv0, pv_inv, n_pv, pv, tol)
         # Pole: grid node 0 of each elevation axis is theta = 0, whose ring holds
-        # one value, so the azimuth weight must not matter there.
+        # one value, so the azimuth weight must not matter there (isotropic: the
+        # stored azimuth difference depends on the light azimuth too).
         if itl == 0 and wtl == 0.0:
             wpl = 0.0
+            if iso:
+                wpv = 0.0
         if itv == 0 and wtv == 0.0:
             wpv = 0.0
         ik1 = ik + 1 if n_k > 1 else ik

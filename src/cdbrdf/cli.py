@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import keyword
 import logging
 import re
 import sys
@@ -28,6 +29,8 @@ COMMANDS: tuple[str, ...] = (
     "demo",
     "info",
     "mosaic",
+    "import",
+    "stack",
     "plan",
     "measure",
     "simulate-capture",
@@ -56,6 +59,12 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
+def _module(command: str) -> str:
+    """The module of a sub-command: dashes become underscores, a Python keyword gets one appended (import_)."""
+    name = command.replace("-", "_")
+    return f"{name}_" if keyword.iskeyword(name) else name
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every sub-command registered."""
     from ._version import __version__
@@ -69,7 +78,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress bars or summaries")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
-        module = importlib.import_module(f"cdbrdf.commands.{name.replace('-', '_')}")
+        module = importlib.import_module(f"cdbrdf.commands.{_module(name)}")
         module.register(sub)
     return parser
 

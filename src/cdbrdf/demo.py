@@ -9,10 +9,12 @@ For each material (denim and shot fabric by default):
    its stand, white walls and all, with sensor noise, as 16-bit PNG
    (:func:`cdbrdf.rig.simulate_capture`);
 3. **measure** the photographs into a CDBRDF: 7 x 7 patch means, white
-   reference, hidden directions filled from the nearest measured direction
+   reference, hidden directions filled by the default method (``kappa-fit``:
+   the same direction on the other stands, fitted along the curvature)
    (:func:`cdbrdf.measure.measure`);
 4. **compare** the measured table with the ground truth (the material's own
-   table, which the rig rendered);
+   table, which the rig rendered), and the filled samples also with the
+   paper's rule (``nearest``, :func:`cdbrdf.measure.fill.refill`);
 5. **draw** the Fig. 7 mosaics (filled samples marked, differences to kappa = 0);
 6. **render** the paper's sine sheet and a draped cloth under one directional
    light with the plain BRDF and with the CDBRDF (Figs. 9-10);
@@ -42,9 +44,12 @@ from typing import Any
 import numpy as np
 
 from .colour import auto_exposure_ev, luminance, srgb_to_linear, tonemap_srgb8
-from .table import CDBRDF, Grid, PAPER_KAPPA
+from .table import CDBRDF, PAPER_KAPPA, Grid
 
-__all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth", "WORK_DIR"]
+__all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth", "WORK_DIR", "COMPARED_FILL"]
+
+#: The fill method the demo compares the default with (the paper's rule).
+COMPARED_FILL = "nearest"
 
 #: Work folder for intermediate files, inside the partial output folder (removed on success).
 WORK_DIR = ".work"
@@ -106,11 +111,11 @@ CONFIGS: dict[str, DemoConfig] = {
     "quick": DemoConfig(
         name="quick",
         grid=Grid(
-            kappa=PAPER_KAPPA,
-            theta_l=[0.0, 30.0, 60.0, 75.0],
-            phi_l=[0.0, 90.0, 180.0, 270.0],
-            theta_v=[0.0, 30.0, 60.0, 75.0],
-            phi_v=[0.0, 90.0, 180.0, 270.0],
+            kappa=np.asarray(PAPER_KAPPA, dtype=np.float64),
+            theta_l=np.array([0.0, 30.0, 60.0, 75.0]),
+            phi_l=np.array([0.0, 90.0, 180.0, 270.0]),
+            theta_v=np.array([0.0, 30.0, 60.0, 75.0]),
+            phi_v=np.array([0.0, 90.0, 180.0, 270.0]),
         ),
         image_px=64,
         capture_spp=4,
@@ -141,6 +146,8 @@ class MaterialResult:
     seconds: dict[str, float] = field(default_factory=dict)
     per_stand: list[dict[str, Any]] = field(default_factory=list)
     error: dict[str, float] = field(default_factory=dict)
+    fill_method: str = ""
+    compared_fill: dict[str, Any] = field(default_factory=dict)
     summary: str = ""
     figures: dict[str, str] = field(default_factory=dict)
     render_exposure_ev: float = 0.0
@@ -162,41 +169,65 @@ def compare_with_truth(measured: CDBRDF, truth: CDBRDF) -> tuple[dict[str, float
 
     The truth is evaluated at every sample of ``measured`` (exact at shared
     nodes). Returns overall statistics and one row per stand (curvature):
-    samples, measured, filled, and the median / 95th-percentile relative
-    error of the measured samples (luminance), plus the median relative error
-    of the filled samples.
+    samples, measured, filled, the median / 95th-percentile relative error
+    (luminance) of the measured samples and of the filled samples, and, when
+    the table records the fill's uncertainty (``fill_std``), the fraction of
+    filled samples whose error lies within 1 and 2 of their standard
+    deviations (luminance of ``fill_std``).
     """
     g = measured.grid.mesh()
     t = truth.evaluate(g["theta_v"], g["phi_v"], g["theta_l"], g["phi_l"], g["kappa"])
     m = measured.values.astype(np.float64)
     rgb = m.shape[-1] == 3
-    ym = luminance(m) if rgb else m.mean(axis=-1)
-    yt = luminance(t) if rgb else t.mean(axis=-1)
+
+    def lum(a: np.ndarray) -> np.ndarray:
+        return luminance(a) if rgb else a.mean(axis=-1)
+
+    ym, yt = lum(m), lum(t)
     scale = 1.0
     if measured.quantity == "relative":
         # unknown scale: compare after the least-squares scale over measured samples
         sel = measured.measured
         scale = float(np.sum(ym[sel] * yt[sel]) / max(np.sum(ym[sel] ** 2), 1e-30))
-    rel = np.abs(scale * ym - yt) / np.maximum(np.abs(yt), 1e-6)
+    err = np.abs(scale * ym - yt)
+    rel = err / np.maximum(np.abs(yt), 1e-6)
+    sigma = None if measured.fill_std is None else scale * np.abs(lum(measured.fill_std.astype(np.float64)))
+
+    def stat(f: Any, a: np.ndarray) -> float:
+        return float(f(a)) if a.size else float("nan")
+
+    def within(sel: np.ndarray, n: float) -> float:
+        if sigma is None or not sel.any():
+            return float("nan")
+        return float(np.mean(err[sel] <= n * sigma[sel]))
+
     rows = []
     for k, kappa in enumerate(measured.kappa):
         meas = measured.measured[k]
         r_m = rel[k][meas]
         r_f = rel[k][~meas]
+        sel = np.zeros(measured.measured.shape, dtype=bool)
+        sel[k] = ~meas
         rows.append({
             "kappa": float(kappa),
             "samples": int(meas.size),
             "measured": int(meas.sum()),
             "filled": int((~meas).sum()),
-            "median_rel_error_measured": float(np.median(r_m)) if r_m.size else float("nan"),
-            "p95_rel_error_measured": float(np.percentile(r_m, 95)) if r_m.size else float("nan"),
-            "median_rel_error_filled": float(np.median(r_f)) if r_f.size else float("nan"),
+            "median_rel_error_measured": stat(np.median, r_m),
+            "p95_rel_error_measured": stat(lambda a: np.percentile(a, 95), r_m),
+            "median_rel_error_filled": stat(np.median, r_f),
+            "p95_rel_error_filled": stat(lambda a: np.percentile(a, 95), r_f),
+            "fill_within_1_sigma": within(sel, 1.0),
+            "fill_within_2_sigma": within(sel, 2.0),
         })
     sel = measured.measured
     stats = {
         "median_rel_error_measured": float(np.median(rel[sel])),
         "p95_rel_error_measured": float(np.percentile(rel[sel], 95)),
-        "median_rel_error_filled": float(np.median(rel[~sel])) if (~sel).any() else float("nan"),
+        "median_rel_error_filled": stat(np.median, rel[~sel]),
+        "p95_rel_error_filled": stat(lambda a: np.percentile(a, 95), rel[~sel]),
+        "fill_within_1_sigma": within(~sel, 1.0),
+        "fill_within_2_sigma": within(~sel, 2.0),
         "scale_applied": scale,
     }
     return stats, rows
@@ -252,13 +283,14 @@ def _contact_sheet(capture_dir: Path, grid: Grid, path: Path, *, material: str) 
     fig.savefig(path)
 
 
-def _rect(x, y, w, h):
+def _rect(x: float, y: float, w: float, h: float) -> Any:
     from matplotlib.patches import Rectangle
 
     return Rectangle((x, y), w, h, fill=False, edgecolor="red", linewidth=1.0)
 
 
-def _render_pair(table: CDBRDF, scene_fn, *, config: DemoConfig, progress, label) -> tuple[dict, float]:
+def _render_pair(table: CDBRDF, scene_fn: Callable[[str], Any], *, config: DemoConfig,
+                 progress: Progress | None, label: str) -> tuple[dict, float]:
     from .render.scenes import render_scene
 
     images = {}
@@ -280,6 +312,7 @@ def _material(
     from . import materials
     from .measure import measure
     from .measure.capture import write_plan
+    from .measure.fill import refill
     from .measure.stands import default_stand
     from .plot import plot_mosaic, plot_render_comparison
     from .render.meshes import draped_cloth_mesh
@@ -304,7 +337,11 @@ def _material(
                             progress=_stage(progress, f"{name}: measuring"))
     res.seconds["measuring"] = time.perf_counter() - t0
     res.summary = rep.summary()
+    res.fill_method = rep.fill_method
     res.error, res.per_stand = compare_with_truth(measured, truth)
+    # the paper's rule on the same measured samples, for comparison
+    error, per_stand = compare_with_truth(refill(measured, method=COMPARED_FILL), truth)
+    res.compared_fill = {"method": COMPARED_FILL, "error": error, "per_stand": per_stand}
 
     t0 = time.perf_counter()
     _contact_sheet(capture, config.grid, folder / f"{name}-photos.png", material=name)
@@ -318,7 +355,7 @@ def _material(
     res.seconds["figures"] = time.perf_counter() - t0
 
     size = config.render_size
-    common = dict(size=size, spp=config.render_spp, light=(45.0, 0.0, math.pi))
+    common: dict[str, Any] = dict(size=size, spp=config.render_spp, light=(45.0, 0.0, math.pi))
     images, secs = _render_pair(measured, lambda mode: sine_scene(measured, mode=mode, **common),
                                 config=config, progress=progress, label=f"{name}: sine sheet")
     res.seconds["render_sine"] = secs
@@ -396,6 +433,24 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
           "-" if not s["filled"] else f"{100 * s['median_rel_error_filled']:.1f} %"]
          for m in results for s in m.per_stand],
     )
+    fill_name = results[0].fill_method if results else ""
+    compared = results[0].compared_fill.get("method", COMPARED_FILL) if results else COMPARED_FILL
+    intro.table(
+        f"Filled samples against the ground truth: the default fill, {fill_name} (the same "
+        "direction on the other stands, fitted along the curvature) and, beside it, the paper's rule, "
+        f"{compared} (the nearest measured direction at the same curvature); relative error "
+        "of the luminance, and the share of filled samples whose error lies within 1 and 2 of the "
+        "standard deviations the fill estimated for them (a calibrated estimate gives about 68 % and 95 %)",
+        ["material", "kappa (1/mm)", "filled", f"median {fill_name}", f"95th pct {fill_name}",
+         "within 1 sigma", "within 2 sigma", f"median {compared}", f"95th pct {compared}"],
+        [[m.name, f"{s['kappa']:+g}", s["filled"],
+          f"{100 * s['median_rel_error_filled']:.2f} %", f"{100 * s['p95_rel_error_filled']:.1f} %",
+          _pct(s["fill_within_1_sigma"]), _pct(s["fill_within_2_sigma"]),
+          f"{100 * c['median_rel_error_filled']:.1f} %", f"{100 * c['p95_rel_error_filled']:.1f} %"]
+         for m in results
+         for s, c in zip(m.per_stand, m.compared_fill.get("per_stand", m.per_stand), strict=True)
+         if s["filled"]],
+    )
     intro.table(
         "Times (seconds)",
         ["material", "photographs", "measuring", "figures", "render sine sheet", "render draped cloth"],
@@ -414,9 +469,11 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
         s.figure(m.figures["mosaic_measured"], "Measured CDBRDF (paper's Fig. 7)",
                  "One image per stand curvature: rows are light directions, columns view directions, "
                  "grouped by azimuth with the elevation increasing inside each group. Hatched, "
-                 "outlined cells were hidden by the stand and filled from the nearest measured "
-                 "direction; there are no white wall artefacts. The bottom row is the difference to "
-                 "the flat stand: red where bending brightens the fabric.")
+                 "outlined cells were hidden by the stand and filled: orange from the same direction "
+                 "on the other stands (fitted along the curvature), magenta from the nearest measured "
+                 "direction at the same curvature (where no stand measured the direction); there are "
+                 "no white wall artefacts. The bottom row is the difference to the flat stand: red "
+                 "where bending brightens the fabric.")
         s.figure(m.figures["mosaic_truth"], "Ground truth on the paper's grid",
                  "The fabric model's own table (72 x 72 directions per curvature), which the rig "
                  "rendered; the measured mosaic above should look like it at its coarser sampling.")
@@ -435,10 +492,19 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
                 ["quantity", "value"],
                 [["median relative error, measured samples", f"{100 * m.error['median_rel_error_measured']:.2f} %"],
                  ["95th percentile, measured samples", f"{100 * m.error['p95_rel_error_measured']:.2f} %"],
-                 ["median relative error, filled samples", f"{100 * m.error['median_rel_error_filled']:.1f} %"]])
+                 [f"median relative error, filled samples ({m.fill_method})",
+                  f"{100 * m.error['median_rel_error_filled']:.2f} %"],
+                 [f"95th percentile, filled samples ({m.fill_method})",
+                  f"{100 * m.error['p95_rel_error_filled']:.1f} %"],
+                 [f"median relative error, filled samples ({compared}, the paper's rule)",
+                  f"{100 * m.compared_fill['error']['median_rel_error_filled']:.1f} %"]])
         s.detail("Measurement summary", m.summary)
         s.detail("Provenance of the ground-truth material", provenance_text(m.truth_attrs))
     return r.write(folder)
+
+
+def _pct(x: float) -> str:
+    return "-" if not np.isfinite(x) else f"{100 * x:.0f} %"
 
 
 def run_demo(
@@ -468,8 +534,8 @@ def run_demo(
         ``progress(stage, done, total)`` callback.
     """
     from . import materials as mats
-    from .render import set_variant
     from .fsutil import check_output_folder, output_folder
+    from .render import set_variant
 
     cfg = config or CONFIGS["quick" if quick else "full"]
     from .errors import OptionError
@@ -496,7 +562,8 @@ def run_demo(
         (folder / "results.json").write_text(json.dumps({
             "config": cfg.name,
             "seconds": seconds,
-            "materials": [{"name": m.name, "error": m.error, "per_stand": m.per_stand,
+            "materials": [{"name": m.name, "fill_method": m.fill_method, "error": m.error,
+                           "per_stand": m.per_stand, "compared_fill": m.compared_fill,
                            "seconds": m.seconds, "figures": m.figures} for m in results],
         }, indent=2) + "\n")
         _write_report(folder, cfg, results, seconds)

@@ -10,6 +10,13 @@ Five axes, in the storage order of the conventions (``docs/conventions.md``):
 - ``theta_l``, ``theta_v``: elevation from the normal in degrees, strictly
   increasing, in [0, 90).
 
+A grid has a symmetry (:data:`cdbrdf.schema.SYMMETRIES`): ``"anisotropic"``
+(the default) takes the five axes as they are; ``"isotropic"`` describes a
+table whose value depends on the two elevations and the azimuth difference
+only: ``phi_l`` is the single azimuth 0 and ``phi_v`` is the axis of the
+azimuth difference ``phi_v - phi_l`` (every lookup rotates the query, see
+:mod:`cdbrdf.interp`).
+
 Neighbouring samples of every axis are at least :data:`MIN_AXIS_STEP` apart.
 Axes must be real numbers (integer or float dtypes; bool, complex,
 ``datetime64``/``timedelta64``, object and string dtypes are refused). The
@@ -27,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import limits
 from .errors import TableError
-from .schema import AXES
+from .schema import AXES, SYMMETRIES, check_symmetry
 
 __all__ = [
     "Grid",
@@ -36,6 +43,7 @@ __all__ = [
     "PAPER_PHI",
     "MAX_ABS_KAPPA",
     "MIN_AXIS_STEP",
+    "SYMMETRIES",
     "read_array",
 ]
 
@@ -141,13 +149,18 @@ class Grid:
     theta_l, theta_v
         Light and view elevations in degrees, strictly increasing in [0, 90).
     phi_l, phi_v
-        Light and view azimuths in degrees, evenly spaced in [0, 360).
+        Light and view azimuths in degrees, evenly spaced in [0, 360). In an
+        isotropic grid ``phi_l`` is ``[0]`` and ``phi_v`` the azimuth
+        difference ``phi_v - phi_l``.
+    symmetry
+        ``"anisotropic"`` (default) or ``"isotropic"`` (:data:`SYMMETRIES`).
 
     Raises
     ------
     TableError
         For an axis that is not 1-D real numbers, not finite, not strictly
-        increasing by at least :data:`MIN_AXIS_STEP`, or out of its range.
+        increasing by at least :data:`MIN_AXIS_STEP`, or out of its range; an
+        unknown symmetry, or an isotropic grid whose ``phi_l`` is not ``[0]``.
     LimitError
         When the grid has more samples than the ``table_samples`` limit.
     """
@@ -157,10 +170,17 @@ class Grid:
     phi_l: NDArray[np.float64]
     theta_v: NDArray[np.float64]
     phi_v: NDArray[np.float64]
+    symmetry: str = "anisotropic"
 
     def __post_init__(self) -> None:
+        check_symmetry(self.symmetry)
         for name in ("kappa", "theta_l", "phi_l", "theta_v", "phi_v"):
             object.__setattr__(self, name, _axis(name, getattr(self, name)))
+        if self.symmetry == "isotropic" and not (self.phi_l.size == 1 and self.phi_l[0] == 0.0):
+            raise TableError(
+                f"phi_l: an isotropic grid has the single light azimuth [0] (its phi_v axis is the "
+                f"azimuth difference phi_v - phi_l), got {self.phi_l.tolist()}"
+            )
         _check_theta("theta_l", self.theta_l)
         _check_theta("theta_v", self.theta_v)
         _check_phi("phi_l", self.phi_l)
@@ -171,14 +191,19 @@ class Grid:
         )
 
     @classmethod
-    def paper(cls, *, kappa: ArrayLike | None = None) -> Grid:
-        """The paper's grid: theta 0..75 step 15, phi 0..330 step 30, 5 curvatures."""
+    def paper(cls, *, kappa: ArrayLike | None = None, symmetry: str = "anisotropic") -> Grid:
+        """The paper's grid: theta 0..75 step 15, phi 0..330 step 30, 5 curvatures.
+
+        With ``symmetry="isotropic"`` the light azimuth is the single 0 and
+        ``phi_v`` (the azimuth difference) steps by 30 degrees.
+        """
         return cls(
             kappa=PAPER_KAPPA if kappa is None else kappa,
             theta_l=PAPER_THETA,
-            phi_l=PAPER_PHI,
+            phi_l=np.zeros(1) if check_symmetry(symmetry) == "isotropic" else PAPER_PHI,
             theta_v=PAPER_THETA,
             phi_v=PAPER_PHI,
+            symmetry=symmetry,
         )
 
     @classmethod
@@ -189,8 +214,16 @@ class Grid:
         phi_step_deg: float,
         theta_max_deg: float = 75.0,
         kappa: ArrayLike = PAPER_KAPPA,
+        symmetry: str = "anisotropic",
     ) -> Grid:
-        """A grid with the same regular direction sampling for light and view."""
+        """A grid with the same regular direction sampling for light and view.
+
+        Elevations ``0, step, ..., <= theta_max_deg``; azimuths ``0, step, ...``
+        below 360. With ``symmetry="isotropic"`` the light azimuth is the single
+        0 and ``phi_v`` is the azimuth difference, so the grid has
+        ``360 / phi_step_deg`` times fewer samples.
+        """
+        iso = check_symmetry(symmetry) == "isotropic"
         for name, x in (("theta_step_deg", theta_step_deg), ("phi_step_deg", phi_step_deg),
                         ("theta_max_deg", theta_max_deg)):
             if not isinstance(x, (int, float, np.integer, np.floating)) or isinstance(x, (bool, np.bool_)):
@@ -206,14 +239,21 @@ class Grid:
             raise TableError(f"phi_step_deg: {phi_step_deg} does not divide 360")
         n_theta = math.floor((theta_max_deg + 1e-9) / theta_step_deg) + 1.0
         n_kappa = float(np.size(kappa))
-        counts = " x ".join(f"{c:.0f}" if c < 1e12 else f"{c:.3g}" for c in (n_kappa, n_phi, n_theta, n_phi, n_theta))
+        n_phi_l = 1.0 if iso else n_phi
+        counts = " x ".join(f"{c:.0f}" if c < 1e12 else f"{c:.3g}" for c in (n_kappa, n_phi_l, n_theta, n_phi, n_theta))
         limits.check(  # before any axis is built (products of floats: inf, never an exception)
-            "table_samples", n_kappa * n_phi * n_phi * n_theta * n_theta,
+            "table_samples", n_kappa * n_phi_l * n_phi * n_theta * n_theta,
             what=f"regular grid of {counts} samples",
         )
         theta = np.arange(0.0, theta_max_deg + 1e-9, theta_step_deg)
         phi = np.arange(round(n_phi)) * phi_step_deg
-        return cls(kappa=kappa, theta_l=theta, phi_l=phi, theta_v=theta, phi_v=phi)
+        return cls(kappa=kappa, theta_l=theta, phi_l=np.zeros(1) if iso else phi,  # type: ignore[arg-type]
+                   theta_v=theta, phi_v=phi, symmetry=symmetry)
+
+    @property
+    def isotropic(self) -> bool:
+        """Whether the grid is isotropic (``phi_v`` is the azimuth difference)."""
+        return self.symmetry == "isotropic"
 
     @property
     def shape(self) -> tuple[int, int, int, int, int]:
@@ -226,8 +266,9 @@ class Grid:
             self.theta_v.size,
         )
 
-    def axes(self) -> dict[str, NDArray[np.float64]]:
-        """The axes by name, in storage order."""
+    def axes(self) -> dict[str, Any]:
+        """The axes by name, in storage order (float64 arrays; typed Any so that ``CDBRDF(v, **g.axes())``
+        type-checks beside the table's other keywords)."""
         return {name: getattr(self, name) for name in AXES[:-1]}
 
     def mesh(self) -> dict[str, NDArray[np.float64]]:
@@ -238,7 +279,7 @@ class Grid:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Grid):
             return NotImplemented
-        return all(
+        return self.symmetry == other.symmetry and all(
             np.array_equal(getattr(self, n), getattr(other, n)) for n in AXES[:-1]
         )
 
@@ -248,7 +289,8 @@ class Grid:
                 return "[" + ", ".join(f"{x:g}" for x in a) + "]"
             return f"[{a[0]:g}..{a[-1]:g}] ({a.size})"
 
+        sym = ", symmetry='isotropic'" if self.isotropic else ""
         return (
             f"Grid(kappa={r(self.kappa)}, theta_l={r(self.theta_l)}, phi_l={r(self.phi_l)}, "
-            f"theta_v={r(self.theta_v)}, phi_v={r(self.phi_v)})"
+            f"theta_v={r(self.theta_v)}, phi_v={r(self.phi_v)}{sym})"
         )

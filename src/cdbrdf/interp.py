@@ -29,7 +29,19 @@ The rule, fixed by the project's conventions:
   itself (elevation node 0, weight 0 after snapping) the azimuth weight is 0.
   The result is continuous, independent of the azimuth at theta = 0 (bit for
   bit), and exactly equal to the table at every sample with both elevations
-  above 0.
+  above 0;
+- **isotropic tables** (``symmetry = "isotropic"``: ``phi_l`` is ``[0]`` and
+  ``phi_v`` the azimuth difference): every query is first rotated about the
+  normal so that its light azimuth is 0, i.e. it is looked up at the azimuth
+  difference ``wrap(wrap(phi_v) - wrap(phi_l))`` (``wrap`` =
+  :func:`wrap_azimuth`; the difference is reduced again when it leaves
+  (-360, 360)). The stored azimuth then depends on *both* directions, so the
+  pole rule holds for both elevation axes on that one azimuth axis: the light
+  pole node (theta_l = 0) holds, for each view elevation, the mean of the
+  stored difference ring, exactly as the view pole node (theta_v = 0) does
+  for each light elevation; at either pole (elevation weight 0 on node 0) the
+  weight of the azimuth difference is 0. A query with the light or the view
+  along the normal is then independent of both azimuths, bit for bit.
 
 Non-finite query components give a NaN output row; an elevation outside
 [0, 90] degrees raises :class:`~cdbrdf.errors.QueryError` naming the argument
@@ -169,6 +181,10 @@ class LookupGrid(NamedTuple):
         the interior nodes ``1 .. n - 2`` at their places, +inf elsewhere (a
         scan counts those at or below the query); the inverse spacings padded
         with 0.
+    isotropic
+        True for an isotropic table: queries are rotated to light azimuth 0
+        (the view azimuth axis holds ``phi_v - phi_l``) and the light pole
+        node holds the mean over that axis (see the module docstring).
     """
 
     values: NDArray[np.floating]
@@ -192,10 +208,11 @@ class LookupGrid(NamedTuple):
     kappa_node: tuple[float, ...]
     kappa_scan: tuple[float, ...]
     kappa_slot_inv_d: tuple[float, ...]
+    isotropic: bool
 
     def __repr__(self) -> str:
         return (f"LookupGrid(shape={self.shape}, dtype={self.values.dtype}, stride={self.stride}, "
-                f"rgb_kernel={self.rgb_kernel})")
+                f"rgb_kernel={self.rgb_kernel}, isotropic={self.isotropic})")
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -299,7 +316,9 @@ def prepare(table: _Table) -> LookupGrid:
         The prepared grid (read-only arrays).
     """
     g = table.grid
-    v, thl = _pole(np.asarray(table.values), np.asarray(g.theta_l, dtype=np.float64), 2, 1)
+    iso = bool(getattr(g, "isotropic", False))
+    # light pole: the mean over the light azimuth ring, or (isotropic) over the azimuth difference
+    v, thl = _pole(np.asarray(table.values), np.asarray(g.theta_l, dtype=np.float64), 2, 3 if iso else 1)
     v, thv = _pole(v, np.asarray(g.theta_v, dtype=np.float64), 4, 3)
     values = _frozen(v, v.dtype, copy=False)  # _pole made a new array
     nc = values.shape[-1]
@@ -336,6 +355,7 @@ def prepare(table: _Table) -> LookupGrid:
         kappa_node=k_node,
         kappa_scan=k_scan,
         kappa_slot_inv_d=k_inv,
+        isotropic=iso,
     )
 
 
@@ -525,6 +545,10 @@ def evaluate_reference(
     ):
         return np.full(lg.n_channels, np.nan)
     _, n_pl, _, n_pv, _, _ = lg.shape
+    if lg.isotropic:
+        # rotate the query about the normal to light azimuth 0: look up the azimuth difference
+        pv = wrap_azimuth(wrap_azimuth(pv) - wrap_azimuth(pl))
+        pl = 0.0
     k_nodes = _linear(lg.kappa, k, tol)
     tl_nodes = _linear(lg.theta_l, tl, tol)
     tv_nodes = _linear(lg.theta_v, tv, tol)
@@ -533,6 +557,8 @@ def evaluate_reference(
     # pole rule: at theta = 0 the ring holds one value; the azimuth must not matter
     if _at_pole(tl_nodes):
         pl_nodes = [(pl_nodes[0][0], 1.0)]
+        if lg.isotropic:  # the stored azimuth is the difference: it depends on the light too
+            pv_nodes = [(pv_nodes[0][0], 1.0)]
     if _at_pole(tv_nodes):
         pv_nodes = [(pv_nodes[0][0], 1.0)]
     res = np.zeros(lg.n_channels)

@@ -62,7 +62,12 @@ from .schema import (
     CONVENTIONS,
     DATA_VARIABLES,
     DIGEST_ATTR,
+    FILL_METHOD,
+    FILL_SLOT,
     FILL_SOURCE,
+    FILL_SOURCES,
+    FILL_STD,
+    FILL_WEIGHTS,
     FORMAT_NAME,
     FORMAT_VERSION,
     MEASURED,
@@ -100,9 +105,14 @@ _LIBVER = ("v110", "v110")
 LEGACY_READ_TIMEOUT_S = 30.0
 
 #: dtypes the file stores variables in when not the array's own (docs/format.md).
-_FILE_DTYPES = {MEASURED: "u1", FILL_SOURCE: "i8"}
+_FILE_DTYPES = {MEASURED: "u1", FILL_SOURCE: "i8", FILL_METHOD: "u1", FILL_SOURCES: "i8", FILL_WEIGHTS: "f8"}
 #: dtype kinds the reader accepts for each data variable.
-_FILE_KINDS = {REFLECTANCE: "f", MEASURED: "uib", FILL_SOURCE: "iu", REFLECTANCE_STD: "f"}
+_FILE_KINDS = {
+    REFLECTANCE: "f", MEASURED: "uib", FILL_SOURCE: "iu", REFLECTANCE_STD: "f",
+    FILL_METHOD: "ui", FILL_SOURCES: "iu", FILL_WEIGHTS: "f", FILL_STD: "f",
+}
+#: Most source slots per filled sample a file may declare (one per curvature is the most cdbrdf writes).
+MAX_FILL_SLOTS = 4096
 
 
 def _jsonable(name: str, value: Any) -> str:
@@ -174,10 +184,17 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
     comp: dict[str, Any] = {"track_times": False, "fletcher32": True}
     if compression:
         comp.update(compression="gzip", compression_opts=4, shuffle=True)
-    chunks = (1, 1, *shape[2:])  # one (kappa, phi_l) pair at a time
+    dims_sizes = dict(zip(AXES, shape, strict=True))
+    for name in (FILL_SOURCES, FILL_WEIGHTS):
+        if name in variables:
+            n_slot = int(np.shape(variables[name])[-1])
+            if dims_sizes.setdefault(FILL_SLOT, n_slot) != n_slot:
+                raise TableError(
+                    f"{name}: {n_slot} source slots, but the other fill variable has {dims_sizes[FILL_SLOT]}"
+                )
     with atomic_path(path) as tmp:
         with h5netcdf.File(str(tmp), "w", libver=_LIBVER) as f:
-            f.dimensions = dict(zip(AXES, shape, strict=True))
+            f.dimensions = dims_sizes
             for name in SAMPLE_AXES:
                 axis = np.asarray(parts.axes[name])
                 var = f.create_variable(
@@ -192,11 +209,17 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
                 track_times=False,
             )
             _set_attrs(ch, variable_attrs(CHANNEL, quantity))
+            if FILL_SLOT in dims_sizes:
+                slots = np.arange(dims_sizes[FILL_SLOT], dtype=np.int32)
+                var = f.create_variable(FILL_SLOT, (FILL_SLOT,), "i4", data=slots, chunks=(slots.size,),
+                                        fletcher32=True, track_times=False)
+                _set_attrs(var, variable_attrs(FILL_SLOT, quantity))
             for name, data in variables.items():
                 dims = DATA_VARIABLES[name]
                 data = np.asarray(data, dtype=_FILE_DTYPES.get(name))
+                chunks = (1, 1, *data.shape[2:])  # one (kappa, phi_l) pair at a time
                 var = f.create_variable(
-                    name, dims, _FILE_DTYPES.get(name, data.dtype), data=data, chunks=chunks[: len(dims)], **comp
+                    name, dims, _FILE_DTYPES.get(name, data.dtype), data=data, chunks=chunks, **comp
                 )
                 _set_attrs(var, variable_attrs(name, quantity))
             f.attrs["format"] = FORMAT_NAME
@@ -376,6 +399,37 @@ def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
             raise fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
 
 
+def _slot_shape(path: Path, ds: Any, name: str, grid_shape: tuple[int, ...]) -> tuple[int, ...]:
+    """The shape a fill variable with source slots may have: the sample axes and 1 to MAX_FILL_SLOTS slots."""
+    n_slot = ds.shape[-1] if ds.ndim == len(grid_shape) + 1 else 0
+    if not 1 <= n_slot <= MAX_FILL_SLOTS:
+        raise fail(path, f"{name!r} has shape {ds.shape}: expected the sample axes and 1 to "
+                         f"{MAX_FILL_SLOTS} source slots")
+    limits.check("table_samples", math.prod(grid_shape) * n_slot, what=f"{path}: {name!r}")
+    return (*grid_shape, n_slot)
+
+
+def _check_format(path: Path, f: Any) -> None:
+    """The file says it is a CDBRDF file of a major version this reader reads."""
+    fmt = _attr_str(path, f.attrs, "format") if "format" in f.attrs else None
+    if fmt != FORMAT_NAME:
+        raise fail(
+            path, f"not a CDBRDF file (global attribute 'format' is {fmt!r}, expected {FORMAT_NAME!r})"
+        )
+    version = _attr_str(path, f.attrs, "format_version")
+    m = re.fullmatch(r"(\d{1,6})\.(\d{1,6})", version)
+    if m is None:
+        raise fail(path, f"unreadable format_version {version!r} (expected MAJOR.MINOR)")
+    major = int(m[1])
+    own_major = int(FORMAT_VERSION.split(".")[0])
+    if major > own_major:
+        raise fail(
+            path, f"format version {version} is newer than this cdbrdf reads ({own_major}.x); upgrade cdbrdf"
+        )
+    if major < 1:
+        raise fail(path, f"unsupported format version {version}")
+
+
 def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
     """Read and check everything of a CDBRDF file, as the parts of a table.
 
@@ -389,23 +443,7 @@ def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
         raise fail(path, f"cannot be opened as HDF5 ({one_line(exc)})") from None
     with f:
         file_size = path.stat().st_size
-        fmt = _attr_str(path, f.attrs, "format") if "format" in f.attrs else None
-        if fmt != FORMAT_NAME:
-            raise fail(
-                path, f"not a CDBRDF file (global attribute 'format' is {fmt!r}, expected {FORMAT_NAME!r})"
-            )
-        version = _attr_str(path, f.attrs, "format_version")
-        m = re.fullmatch(r"(\d{1,6})\.(\d{1,6})", version)
-        if m is None:
-            raise fail(path, f"unreadable format_version {version!r} (expected MAJOR.MINOR)")
-        major = int(m[1])
-        own_major = int(FORMAT_VERSION.split(".")[0])
-        if major > own_major:
-            raise fail(
-                path, f"format version {version} is newer than this cdbrdf reads ({own_major}.x); upgrade cdbrdf"
-            )
-        if major < 1:
-            raise fail(path, f"unsupported format version {version}")
+        _check_format(path, f)
         gattrs = {name: _attr_str(path, f.attrs, name) for name in REQUIRED_ATTRS}
 
         # -- declared shapes, dims and dtypes of every variable, before reading any data
@@ -427,6 +465,8 @@ def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
             ds = _dataset(path, f, name, required=name in REQUIRED_VARIABLES)
             if ds is None:
                 continue
+            if dims not in shapes:  # the fill variables with their source slots (since 1.2)
+                shapes[dims] = _slot_shape(path, ds, name, grid_shape)
             if name == REFLECTANCE and ds.ndim != len(AXES):
                 raise fail(path, f"{name!r} has {ds.ndim} dimensions, expected {len(AXES)} {AXES}")
             _expect(path, ds, name, shapes[dims], dims, _FILE_KINDS[name])
@@ -482,7 +522,27 @@ def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
         std = None
         if REFLECTANCE_STD in datasets:
             std = _read_ds(path, datasets[REFLECTANCE_STD], REFLECTANCE_STD)
-    return TableParts(values=values, axes=axes, measured=mvals.astype(bool), fill_source=fill, std=std, attrs=attrs)
+        fill_parts = _read_fill_parts(path, datasets)
+    return TableParts(values=values, axes=axes, measured=mvals.astype(bool), fill_source=fill, std=std, attrs=attrs,
+                      **fill_parts)
+
+
+def _read_fill_parts(path: Path, datasets: dict[str, Any]) -> dict[str, np.ndarray | None]:
+    """The per-sample fill provenance of a 1.2 file (None for each variable a file lacks)."""
+    out: dict[str, np.ndarray | None] = {}
+    for name, key in ((FILL_METHOD, "fill_method"), (FILL_SOURCES, "fill_sources"),
+                      (FILL_WEIGHTS, "fill_weights"), (FILL_STD, "fill_std")):
+        a = None
+        if name in datasets:
+            a = _read_ds(path, datasets[name], name)
+            if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
+                raise fail(path, f"{name!r} holds NaN or infinite value(s)")
+            if name == FILL_SOURCES:
+                if a.size and (a.min() < -1 or a.max() >= a[..., 0].size):
+                    raise fail(path, f"{FILL_SOURCES!r} holds indices outside [-1, {a[..., 0].size})")
+                a = a.astype(np.int64)
+        out[key] = a
+    return out
 
 
 def _read_guarded(path: Path, heaps: Heaps | None = None) -> TableParts:

@@ -10,7 +10,10 @@ defined here:
   same names (units :data:`AXIS_UNITS`) and ``channel`` the channel names
   (default :func:`default_channels`);
 - data variables :data:`DATA_VARIABLES` (``reflectance``, ``measured``,
-  ``fill_source``, ``reflectance_std``) with their dimensions;
+  ``fill_source``, ``reflectance_std`` and, since 1.2, the per-sample fill
+  provenance ``fill_method``, ``fill_sources``, ``fill_weights``,
+  ``fill_std``) with their dimensions; the fill methods a file can name
+  (:data:`FILL_METHOD_CODES`);
 - their CF attributes (``units``, ``long_name``, flags) from
   :func:`variable_attrs`, the units of the reflectance depending on the
   table's quantity (:data:`QUANTITIES`, :func:`reflectance_units`);
@@ -46,6 +49,13 @@ __all__ = [
     "MEASURED",
     "FILL_SOURCE",
     "REFLECTANCE_STD",
+    "FILL_METHOD",
+    "FILL_SOURCES",
+    "FILL_WEIGHTS",
+    "FILL_STD",
+    "FILL_SLOT",
+    "FILL_METHOD_CODES",
+    "fill_method_code",
     "DATA_VARIABLES",
     "REQUIRED_VARIABLES",
     "CHANNELS_ATTR",
@@ -55,7 +65,10 @@ __all__ = [
     "DIGEST_ATTR",
     "WRITER_ATTRS",
     "CONVENTIONS",
+    "SYMMETRY_ATTR",
+    "SYMMETRIES",
     "check_quantity",
+    "check_symmetry",
     "reflectance_units",
     "variable_attrs",
     "default_channels",
@@ -69,7 +82,7 @@ __all__ = [
 #: Value of the global attribute ``format``.
 FORMAT_NAME = "cdbrdf"
 #: ``MAJOR.MINOR`` of the layout: readers accept any minor version of their major version.
-FORMAT_VERSION = "1.1"
+FORMAT_VERSION = "1.2"
 
 # -- dimensions -------------------------------------------------------------------------
 #: Dimension names of the reflectance, in storage order (``docs/conventions.md``).
@@ -96,6 +109,15 @@ _REFLECTANCE_LONG_NAMES: Mapping[str, str] = MappingProxyType({
     "relative": "relative reflectance (BRDF up to an unknown scale)",
 })
 
+# -- symmetry ---------------------------------------------------------------------------
+#: Table attribute (and global attribute of the file, since 1.2) naming the table's symmetry.
+SYMMETRY_ATTR = "symmetry"
+#: Valid values of :data:`SYMMETRY_ATTR`. ``"anisotropic"`` (also when the attribute is
+#: absent): the five axes as they are. ``"isotropic"``: the value depends on the light and
+#: view elevations and the azimuth difference only; ``phi_l`` is the single azimuth 0 and
+#: ``phi_v`` holds ``phi_v - phi_l`` (``docs/format.md``).
+SYMMETRIES: tuple[str, ...] = ("anisotropic", "isotropic")
+
 # -- data variables ---------------------------------------------------------------------
 #: The samples, :data:`AXES`.
 REFLECTANCE = "reflectance"
@@ -105,12 +127,40 @@ MEASURED = "measured"
 FILL_SOURCE = "fill_source"
 #: Optional per-sample standard deviation, :data:`AXES`.
 REFLECTANCE_STD = "reflectance_std"
+#: How each sample was filled (since 1.2): a code of :data:`FILL_METHOD_CODES`, :data:`SAMPLE_AXES`.
+FILL_METHOD = "fill_method"
+#: Every source of each filled sample (since 1.2): flat indices, -1 unused, :data:`SAMPLE_AXES` + slot.
+FILL_SOURCES = "fill_sources"
+#: The weight of each source in the filled value (since 1.2), like :data:`FILL_SOURCES`.
+FILL_WEIGHTS = "fill_weights"
+#: Estimated standard deviation of each filled value's error (since 1.2), :data:`AXES`.
+FILL_STD = "fill_std"
+#: Dimension of the source slots of :data:`FILL_SOURCES` and :data:`FILL_WEIGHTS`.
+FILL_SLOT = "fill_slot"
+#: Per-sample fill methods and their codes in :data:`FILL_METHOD` (CF flag values).
+#: ``measured``: not filled; ``unknown``: filled, how is not recorded (files
+#: before 1.2 whose fill source is unknown); ``nearest``: copied from the
+#: nearest measured direction at the same curvature (the paper's rule);
+#: ``nearest_stand``: copied from the same direction on the nearest stand that
+#: measured it; ``kappa_fit``: a line fitted along the curvature to the same
+#: direction on the stands that measured it (``docs/capture.md``).
+FILL_METHOD_CODES: Mapping[str, int] = MappingProxyType({
+    "measured": 0,
+    "unknown": 1,
+    "nearest": 2,
+    "nearest_stand": 3,
+    "kappa_fit": 4,
+})
 #: Data variables and their dimensions, in the order they are written.
 DATA_VARIABLES: Mapping[str, tuple[str, ...]] = MappingProxyType({
     REFLECTANCE: AXES,
     MEASURED: SAMPLE_AXES,
     FILL_SOURCE: SAMPLE_AXES,
     REFLECTANCE_STD: AXES,
+    FILL_METHOD: SAMPLE_AXES,
+    FILL_SOURCES: (*SAMPLE_AXES, FILL_SLOT),
+    FILL_WEIGHTS: (*SAMPLE_AXES, FILL_SLOT),
+    FILL_STD: AXES,
 })
 #: Data variables a file must hold (the others are optional on read).
 REQUIRED_VARIABLES: tuple[str, ...] = (REFLECTANCE, MEASURED)
@@ -124,9 +174,21 @@ _LONG_NAMES: Mapping[str, str] = MappingProxyType({
     CHANNEL: "colour channel",
     FILL_SOURCE: (
         "C-order flat index over (kappa, phi_l, theta_l, phi_v, theta_v) of the "
-        "sample a filled value was copied from; -1 measured, -2 source unknown"
+        "sample a filled value was copied from (of its first source when it was "
+        "computed from several); -1 measured, -2 source unknown"
     ),
     REFLECTANCE_STD: "per-sample standard deviation of the reflectance",
+    FILL_METHOD: "how the sample was filled",
+    FILL_SOURCES: (
+        "C-order flat indices over (kappa, phi_l, theta_l, phi_v, theta_v) of every "
+        "sample a filled value was computed from, first source first; -1 unused slot"
+    ),
+    FILL_WEIGHTS: (
+        "weight of each source of a filled value: the value is the weighted sum of "
+        "the sources (of their logarithms for kappa_fit); 0 in unused slots"
+    ),
+    FILL_STD: "estimated standard deviation of the error of a filled value; 0 where measured",
+    FILL_SLOT: "source slot of a filled sample (0: its first source)",
 })
 
 # -- attributes -------------------------------------------------------------------------
@@ -150,6 +212,19 @@ WRITER_ATTRS: frozenset[str] = frozenset(
 CONVENTIONS = "CF-1.10"
 
 
+def fill_method_code(name: str) -> int:
+    """The :data:`FILL_METHOD` code of the per-sample fill method ``name``.
+
+    Raises
+    ------
+    TableError
+        For a name that is not one of :data:`FILL_METHOD_CODES` (the message lists them).
+    """
+    if not isinstance(name, str) or name not in FILL_METHOD_CODES:
+        raise TableError(f"fill method {name!r}: not one of {', '.join(FILL_METHOD_CODES)}")
+    return FILL_METHOD_CODES[name]
+
+
 def check_quantity(quantity: Any) -> str:
     """``quantity`` when it is one of :data:`QUANTITIES`.
 
@@ -161,6 +236,19 @@ def check_quantity(quantity: Any) -> str:
     if not isinstance(quantity, str) or quantity not in QUANTITIES:
         raise TableError(f"attrs['quantity']: {quantity!r} is not one of {', '.join(QUANTITIES)}")
     return quantity
+
+
+def check_symmetry(symmetry: Any) -> str:
+    """``symmetry`` when it is one of :data:`SYMMETRIES`.
+
+    Raises
+    ------
+    TableError
+        Otherwise; the message lists the valid symmetries.
+    """
+    if not isinstance(symmetry, str) or symmetry not in SYMMETRIES:
+        raise TableError(f"symmetry: {symmetry!r} is not one of {', '.join(SYMMETRIES)}")
+    return symmetry
 
 
 def reflectance_units(quantity: str) -> str:
@@ -190,7 +278,7 @@ def variable_attrs(name: str, quantity: str) -> dict[str, Any]:
     Parameters
     ----------
     name
-        A dimension of :data:`AXES` or a variable of :data:`DATA_VARIABLES`.
+        A dimension of :data:`AXES`, :data:`FILL_SLOT` or a variable of :data:`DATA_VARIABLES`.
     quantity
         The table's quantity, one of :data:`QUANTITIES`.
 
@@ -198,8 +286,9 @@ def variable_attrs(name: str, quantity: str) -> dict[str, Any]:
     -------
     dict
         ``units`` and ``long_name`` (axes, reflectance, its standard
-        deviation), ``long_name`` (channel, fill_source), or ``flag_values``
-        (uint8 ``[0, 1]``) and ``flag_meanings`` (measured).
+        deviation, the fill's standard deviation and weights), ``long_name``
+        (channel, fill_source, fill_sources), or ``long_name``,
+        ``flag_values`` (uint8) and ``flag_meanings`` (measured, fill_method).
 
     Raises
     ------
@@ -211,13 +300,21 @@ def variable_attrs(name: str, quantity: str) -> dict[str, Any]:
         return {"units": AXIS_UNITS[name], "long_name": _LONG_NAMES[name]}
     if name == REFLECTANCE:
         return {"units": units, "long_name": _REFLECTANCE_LONG_NAMES[quantity]}
-    if name == REFLECTANCE_STD:
+    if name in (REFLECTANCE_STD, FILL_STD):
         return {"units": units, "long_name": _LONG_NAMES[name]}
     if name == MEASURED:
         return {"flag_values": np.array([0, 1], dtype=np.uint8), "flag_meanings": "filled measured"}
-    if name in (CHANNEL, FILL_SOURCE):
+    if name == FILL_METHOD:
+        return {
+            "long_name": _LONG_NAMES[name],
+            "flag_values": np.array(list(FILL_METHOD_CODES.values()), dtype=np.uint8),
+            "flag_meanings": " ".join(FILL_METHOD_CODES),
+        }
+    if name == FILL_WEIGHTS:
+        return {"units": "1", "long_name": _LONG_NAMES[name]}
+    if name in (CHANNEL, FILL_SOURCE, FILL_SOURCES, FILL_SLOT):
         return {"long_name": _LONG_NAMES[name]}
-    raise TableError(f"variable {name!r}: not one of {', '.join((*AXES, *DATA_VARIABLES))}")
+    raise TableError(f"variable {name!r}: not one of {', '.join((*AXES, FILL_SLOT, *DATA_VARIABLES))}")
 
 
 # -- channels ---------------------------------------------------------------------------
@@ -289,6 +386,10 @@ class TableParts:
         Per-sample standard deviation like ``values``, or None.
     attrs
         The table's attributes.
+    fill_method, fill_sources, fill_weights, fill_std
+        The per-sample fill provenance (since 1.2; :data:`FILL_METHOD`,
+        :data:`FILL_SOURCES`, :data:`FILL_WEIGHTS`, :data:`FILL_STD`), or
+        None when not recorded.
     """
 
     values: np.ndarray
@@ -297,9 +398,13 @@ class TableParts:
     fill_source: np.ndarray | None
     std: np.ndarray | None
     attrs: Mapping[str, Any]
+    fill_method: np.ndarray | None = None
+    fill_sources: np.ndarray | None = None
+    fill_weights: np.ndarray | None = None
+    fill_std: np.ndarray | None = None
 
     @classmethod
-    def of(cls, table: Any) -> "TableParts":
+    def of(cls, table: Any) -> TableParts:
         """The parts of a table: anything with the attributes of :class:`cdbrdf.CDBRDF` (no copies)."""
         return cls(
             values=table.values,
@@ -308,6 +413,10 @@ class TableParts:
             fill_source=table.fill_source,
             std=table.std,
             attrs=table.attrs,
+            fill_method=getattr(table, "fill_method", None),
+            fill_sources=getattr(table, "fill_sources", None),
+            fill_weights=getattr(table, "fill_weights", None),
+            fill_std=getattr(table, "fill_std", None),
         )
 
     @property
@@ -327,11 +436,17 @@ class TableParts:
             MEASURED: self.measured,
             FILL_SOURCE: self.fill_source,
             REFLECTANCE_STD: self.std,
+            FILL_METHOD: self.fill_method,
+            FILL_SOURCES: self.fill_sources,
+            FILL_WEIGHTS: self.fill_weights,
+            FILL_STD: self.fill_std,
         }
         return {name: a for name, a in arrays.items() if a is not None}
 
     def table_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :class:`cdbrdf.CDBRDF` besides ``values``."""
         return dict(
-            **self.axes, measured=self.measured, fill_source=self.fill_source, std=self.std, attrs=self.attrs
+            **self.axes, measured=self.measured, fill_source=self.fill_source, std=self.std, attrs=self.attrs,
+            fill_method=self.fill_method, fill_sources=self.fill_sources, fill_weights=self.fill_weights,
+            fill_std=self.fill_std,
         )

@@ -43,14 +43,22 @@ from .schema import (
     AXES,
     CHANNEL,
     DATA_VARIABLES,
+    FILL_METHOD,
+    FILL_METHOD_CODES,
+    FILL_SLOT,
     FILL_SOURCE,
+    FILL_SOURCES,
+    FILL_STD,
+    FILL_WEIGHTS,
     MEASURED,
     QUANTITIES,
     REFLECTANCE,
     REFLECTANCE_STD,
     SAMPLE_AXES,
+    SYMMETRY_ATTR,
     TableParts,
     channel_names,
+    check_symmetry,
     variable_attrs,
     with_channel_names,
 )
@@ -99,7 +107,34 @@ class CDBRDF:
         Optional per-sample standard deviation, same shape as ``values``.
     attrs
         Metadata: ``quantity`` ("brdf" or "relative"), ``colour_space``,
-        ``material``, ``provenance`` (any JSON-serialisable value), ``channels``.
+        ``material``, ``provenance`` (any JSON-serialisable value), ``channels``,
+        ``symmetry``.
+    symmetry
+        ``"anisotropic"`` or ``"isotropic"`` (:data:`cdbrdf.schema.SYMMETRIES`);
+        default: ``attrs["symmetry"]``, else anisotropic. An isotropic table
+        has ``phi_l = [0]`` and its ``phi_v`` axis is the azimuth difference
+        ``phi_v - phi_l``; its attributes then hold ``symmetry = "isotropic"``.
+    fill_method
+        Integer codes of :data:`cdbrdf.schema.FILL_METHOD_CODES`, shape
+        ``values.shape[:-1]``: how each sample was filled; 0 (``measured``)
+        for, and only for, measured samples. Default: ``nearest`` where a
+        fill source is known, ``unknown`` where not (what files before 1.2
+        hold).
+    fill_sources
+        Integer array ``values.shape[:-1] + (n_slot,)``: every measured
+        sample each filled value was computed from (flat indices, used slots
+        first, -1 unused; all -1 for measured samples and unknown sources).
+        Its first slot is ``fill_source`` (-1 there where that is -2); either
+        one is derived from the other when only one is given. Default: the
+        one slot ``fill_source``.
+    fill_weights
+        Float array like ``fill_sources``: the weight of each source (a
+        filled value is the weighted sum of its sources, of their logarithms
+        for ``kappa_fit``); 0 in unused slots. Needed when a sample has
+        several sources; default 1 for the one source of a copy.
+    fill_std
+        Optional estimated standard deviation of the error of each filled
+        value, same shape as ``values``; 0 where measured.
 
     Raises
     ------
@@ -118,7 +153,8 @@ class CDBRDF:
     array([0.2, 0.2, 0.2])
     """
 
-    __slots__ = ("_grid", "_values", "_measured", "_fill_source", "_std", "_attrs", "_lookup")
+    __slots__ = ("_grid", "_values", "_measured", "_fill_source", "_std", "_attrs", "_lookup",
+                 "_fill_method", "_fill_sources", "_fill_weights", "_fill_std")
 
     def __init__(
         self,
@@ -133,25 +169,52 @@ class CDBRDF:
         fill_source: ArrayLike | None = None,
         std: ArrayLike | None = None,
         attrs: Mapping[str, Any] | None = None,
+        symmetry: str | None = None,
+        fill_method: ArrayLike | None = None,
+        fill_sources: ArrayLike | None = None,
+        fill_weights: ArrayLike | None = None,
+        fill_std: ArrayLike | None = None,
     ) -> None:
-        grid = Grid(kappa=kappa, theta_l=theta_l, phi_l=phi_l, theta_v=theta_v, phi_v=phi_v)
+        sym = self._check_symmetry(symmetry, attrs)
+        grid = Grid(kappa=kappa, theta_l=theta_l, phi_l=phi_l, theta_v=theta_v, phi_v=phi_v, symmetry=sym)
         self._grid = grid
         self._values = self._check_values("values", values, grid)
-        if std is None:
-            self._std = None
-        else:
-            s = self._check_values("std", std, grid)
-            if s.shape != self._values.shape:
-                raise TableError(f"std: shape {s.shape} differs from values {self._values.shape}")
-            if np.any(s < 0):
-                raise TableError("std: standard deviations must be non-negative")
-            self._std = s
+        self._std = self._check_std("std", std, grid, self._values.shape)
         self._measured = self._check_mask(measured, grid.shape)
+        sources = None if fill_sources is None else self._read_sources(fill_sources, self._measured)
+        if fill_source is None and sources is not None:
+            first = sources[..., 0]
+            fill_source = np.where(self._measured, -1, np.where(first >= 0, first, -2))
         self._fill_source = self._check_fill(fill_source, self._measured)
+        self._fill_sources, self._fill_weights = self._check_sources(
+            sources, fill_weights, self._fill_source, self._measured
+        )
+        self._fill_method = self._check_method(fill_method, self._fill_source, self._measured)
+        self._fill_std = self._check_std("fill_std", fill_std, grid, self._values.shape)
+        if self._fill_std is not None and np.any(self._fill_std[self._measured] != 0):
+            raise TableError("fill_std: must be 0 wherever the sample is measured")
         self._attrs = self._check_attrs(attrs)
+        if sym == "isotropic":
+            self._attrs[SYMMETRY_ATTR] = sym
         self._lookup: LookupGrid | None = None  # filled by lookup_grid()
 
     # -- validation -------------------------------------------------------------
+    @staticmethod
+    def _check_symmetry(symmetry: str | None, attrs: Mapping[str, Any] | None) -> str:
+        """The table's symmetry: the argument, else ``attrs["symmetry"]``, else anisotropic; both must agree."""
+        stored = attrs.get(SYMMETRY_ATTR) if isinstance(attrs, Mapping) else None
+        if stored is not None:
+            try:
+                check_symmetry(stored)
+            except TableError as exc:
+                raise TableError(f"attrs[{SYMMETRY_ATTR!r}]: {str(exc).partition(': ')[2]}") from None
+        if symmetry is None:
+            return "anisotropic" if stored is None else str(stored)
+        check_symmetry(symmetry)
+        if stored is not None and stored != symmetry:
+            raise TableError(f"symmetry: {symmetry!r} disagrees with attrs[{SYMMETRY_ATTR!r}] = {stored!r}")
+        return symmetry
+
     @staticmethod
     def _check_values(name: str, values: ArrayLike, grid: Grid) -> NDArray[np.floating]:
         v = read_array(name, values)
@@ -176,6 +239,96 @@ class CDBRDF:
         v = np.array(v, order="C", copy=True)
         v.setflags(write=False)
         return v
+
+    @classmethod
+    def _check_std(
+        cls, name: str, std: ArrayLike | None, grid: Grid, shape: tuple[int, ...]
+    ) -> NDArray[np.floating] | None:
+        if std is None:
+            return None
+        s = cls._check_values(name, std, grid)
+        if s.shape != shape:
+            raise TableError(f"{name}: shape {s.shape} differs from values {shape}")
+        if np.any(s < 0):
+            raise TableError(f"{name}: standard deviations must be non-negative")
+        return s
+
+    @staticmethod
+    def _read_sources(sources: ArrayLike, measured: NDArray[np.bool_]) -> NDArray[np.int64]:
+        """``fill_sources`` as int64 of shape ``grid + (n_slot,)`` with valid indices (checked further later)."""
+        f = read_array("fill_sources", sources, kinds="iu", what="integers")
+        if f.ndim != measured.ndim + 1 or f.shape[:-1] != measured.shape or f.shape[-1] < 1:
+            raise TableError(
+                f"fill_sources: shape {f.shape} is not the sample grid {measured.shape} plus one slot axis"
+            )
+        if f.size and (f.min() < -1 or f.max() >= measured.size):
+            raise TableError(f"fill_sources: indices must be in [0, {measured.size}) (or -1 = unused slot)")
+        return f.astype(np.int64)
+
+    @staticmethod
+    def _check_sources(
+        sources: NDArray[np.int64] | None,
+        weights: ArrayLike | None,
+        fill: NDArray[np.int64],
+        measured: NDArray[np.bool_],
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """All sources and their weights; slot 0 is ``fill_source`` (-1 there for -2)."""
+        if sources is None:
+            if weights is not None:
+                raise TableError("fill_weights: given without fill_sources")
+            sources = np.where(fill >= 0, fill, -1)[..., None].astype(np.int64)
+        else:
+            used = sources >= 0
+            if np.any(used[measured]):
+                raise TableError("fill_sources: must be -1 (unused) wherever the sample is measured")
+            if np.any(~used[..., :-1] & used[..., 1:]):
+                raise TableError("fill_sources: used slots must come first (-1 only after the last source)")
+            first = sources[..., 0]
+            if np.any((first != np.where(fill >= 0, fill, -1))[~measured]):
+                raise TableError("fill_sources: the first slot must be fill_source (-1 where that is -2)")
+            known = sources[used]
+            if known.size and not measured.reshape(-1)[known].all():
+                raise TableError("fill_sources: a filled sample points at a sample that is not measured")
+        used = sources >= 0
+        if weights is None:
+            if np.any(used[..., 1:]):
+                raise TableError("fill_weights: needed when a filled sample has more than one source")
+            w = used.astype(np.float64)
+        else:
+            w = read_array("fill_weights", weights, kinds="iuf", what="numbers").astype(np.float64)
+            if w.shape != sources.shape:
+                raise TableError(f"fill_weights: shape {w.shape} differs from fill_sources {sources.shape}")
+            if not np.all(np.isfinite(w)):
+                raise TableError("fill_weights: must be finite")
+            if np.any(w[~used] != 0):
+                raise TableError("fill_weights: must be 0 in unused slots")
+            w = w.copy()
+        sources = sources.copy()
+        sources.setflags(write=False)
+        w.setflags(write=False)
+        return sources, w
+
+    @staticmethod
+    def _check_method(
+        method: ArrayLike | None, fill: NDArray[np.int64], measured: NDArray[np.bool_]
+    ) -> NDArray[np.uint8]:
+        """Per-sample fill method codes: 0 exactly where measured."""
+        codes = FILL_METHOD_CODES
+        if method is None:
+            m = np.where(fill >= 0, codes["nearest"], codes["unknown"]).astype(np.uint8)
+            m[measured] = codes["measured"]
+        else:
+            a = read_array("fill_method", method, kinds="iu", what="integers")
+            if a.shape != measured.shape:
+                raise TableError(f"fill_method: shape {a.shape} differs from the sample grid {measured.shape}")
+            if not np.isin(a, list(codes.values())).all():
+                valid = ", ".join(f"{v} ({k})" for k, v in codes.items())
+                raise TableError(f"fill_method: codes must be one of {valid}")
+            m = a.astype(np.uint8)
+            if np.any((m == codes["measured"]) != measured):
+                raise TableError("fill_method: must be 0 (measured) exactly where the sample is measured")
+        m.setflags(write=False)
+        return m
 
     @staticmethod
     def _check_mask(measured: ArrayLike | None, shape: tuple[int, ...]) -> NDArray[np.bool_]:
@@ -269,6 +422,33 @@ class CDBRDF:
         return self._std
 
     @property
+    def fill_method(self) -> NDArray[np.uint8]:
+        """How each sample was filled: codes of :data:`cdbrdf.schema.FILL_METHOD_CODES` (0 measured)."""
+        return self._fill_method
+
+    @property
+    def fill_sources(self) -> NDArray[np.int64]:
+        """Every source of each filled sample, ``(..., n_slot)`` flat indices, -1 unused."""
+        return self._fill_sources
+
+    @property
+    def fill_weights(self) -> NDArray[np.float64]:
+        """The weight of each source in :attr:`fill_sources` (0 in unused slots)."""
+        return self._fill_weights
+
+    @property
+    def fill_std(self) -> NDArray[np.floating] | None:
+        """Estimated standard deviation of each filled value's error (0 measured), or None."""
+        return self._fill_std
+
+    def fill_method_names(self) -> NDArray[np.str_]:
+        """:attr:`fill_method` as names (``"measured"``, ``"nearest"``, ``"kappa_fit"``, ...)."""
+        names = np.array(list(FILL_METHOD_CODES), dtype=object)
+        lut = np.empty(max(FILL_METHOD_CODES.values()) + 1, dtype=object)
+        lut[list(FILL_METHOD_CODES.values())] = names
+        return lut[self._fill_method].astype(str)
+
+    @property
     def attrs(self) -> dict[str, Any]:
         """Metadata (a dict; changes to it are kept)."""
         return self._attrs
@@ -298,6 +478,16 @@ class CDBRDF:
     def quantity(self) -> str:
         """``"brdf"`` (sr^-1) or ``"relative"`` (unknown scale)."""
         return str(self._attrs["quantity"])
+
+    @property
+    def symmetry(self) -> str:
+        """``"anisotropic"`` or ``"isotropic"`` (``phi_v`` is the azimuth difference)."""
+        return self._grid.symmetry
+
+    @property
+    def isotropic(self) -> bool:
+        """Whether the table is isotropic (see :attr:`symmetry`)."""
+        return self._grid.isotropic
 
     # -- operations ---------------------------------------------------------------
     def evaluate(
@@ -338,7 +528,7 @@ class CDBRDF:
 
         return evaluate(self, theta_v, phi_v, theta_l, phi_l, kappa)
 
-    def lookup_grid(self) -> "LookupGrid":
+    def lookup_grid(self) -> LookupGrid:
         """The table prepared for lookup (:class:`cdbrdf.interp.LookupGrid`).
 
         Built by :func:`cdbrdf.interp.prepare` on first use and kept by the
@@ -351,14 +541,17 @@ class CDBRDF:
             self._lookup = prepare(self)
         return self._lookup
 
-    def brdf(self, kappa: float = 0.0) -> "CDBRDF":
+    def brdf(self, kappa: float = 0.0) -> CDBRDF:
         """The plain BRDF: the table at one curvature as a one-kappa table.
 
         With the default ``kappa = 0`` and a table that samples 0 this is the
-        flat stand's slice, copied exactly (mask and fill sources included);
-        outside the table's curvature range the end slice is copied (clamped,
-        as in the lookup); between samples the slice is interpolated linearly
-        in kappa and a sample counts as measured only if both neighbours were.
+        flat stand's slice, copied exactly (mask, fill sources and methods
+        included; sources on other curvatures, which the one-curvature table
+        does not hold, are dropped, so ``fill_source`` is -2 there); outside
+        the table's curvature range the end slice is copied (clamped, as in
+        the lookup); between samples the slice is interpolated linearly in
+        kappa and a sample counts as measured only if both neighbours were
+        (the others' fill method is ``unknown``).
         """
         if isinstance(kappa, (bool, np.bool_)) or not isinstance(kappa, (int, float, np.integer, np.floating)):
             raise TableError(f"kappa: expected a number (1/mm), got {type(kappa).__name__} {kappa!r}")
@@ -372,10 +565,19 @@ class CDBRDF:
             i = int(hit[0]) if hit.size else (0 if k <= ks[0] else ks.size - 1)
             vals = self._values[i : i + 1]
             meas = self._measured[i : i + 1]
-            fill = self._fill_source[i : i + 1].copy()
             per = int(np.prod(self.grid.shape[1:]))
-            fill = np.where(fill >= 0, fill - i * per, fill)
             std = None if self._std is None else self._std[i : i + 1]
+            method = self._fill_method[i : i + 1]
+            # sources on other curvatures are not in the one-curvature table: dropped
+            src: NDArray[np.int64] | None = self._fill_sources[i : i + 1]
+            assert src is not None
+            inside = (src >= i * per) & (src < (i + 1) * per)
+            wts: NDArray[np.float64] | None = np.where(inside, self._fill_weights[i : i + 1], 0.0)
+            order = np.argsort(~inside, axis=-1, kind="stable")  # kept sources first
+            src = np.take_along_axis(np.where(inside, src - i * per, -1), order, axis=-1)
+            wts = np.take_along_axis(np.asarray(wts), order, axis=-1)
+            fill = np.where(meas, -1, np.where(src[..., 0] >= 0, src[..., 0], -2))
+            fstd = None if self._fill_std is None else self._fill_std[i : i + 1]
         else:
             j = int(np.searchsorted(ks, k, side="right") - 1)
             w = (k - ks[j]) / (ks[j + 1] - ks[j])
@@ -383,6 +585,9 @@ class CDBRDF:
             meas = (self._measured[j] & self._measured[j + 1])[None]
             fill = np.where(meas, -1, -2)
             std = None
+            method = np.where(meas, FILL_METHOD_CODES["measured"], FILL_METHOD_CODES["unknown"])
+            src = wts = None
+            fstd = None
         attrs = copy.deepcopy(self._attrs)
         attrs["plain_brdf_of_kappa"] = k
         return CDBRDF(
@@ -396,6 +601,49 @@ class CDBRDF:
             fill_source=fill,
             std=std,
             attrs=attrs,
+            fill_method=method,
+            fill_sources=src,
+            fill_weights=wts,
+            fill_std=fstd,
+        )
+
+    def expanded(self, *, max_azimuths: int | None = None) -> CDBRDF:
+        """The anisotropic table holding an isotropic table's values for every light azimuth.
+
+        Both azimuth axes of the result are (a subset of) the isotropic table's
+        azimuth-difference nodes, so every value is an exact copy: light azimuths
+        ``0, s, 2 s, ...`` and view azimuths ``phi_v[0] + (0, s, 2 s, ...)``, with
+        ``s`` the difference step times the smallest divisor ``k`` of ``n_phi_v``
+        for which at most ``max_azimuths`` azimuths remain (default: all). Value
+        ``(phi_l = i s, phi_v = phi_v[0] + j s)`` is the isotropic table's
+        sample at the difference ``(j - i) s``. An anisotropic table is returned
+        as it is.
+        """
+        if not self.isotropic:
+            return self
+        n = self.phi_v.size
+        if max_azimuths is not None and (isinstance(max_azimuths, bool) or not isinstance(max_azimuths, int)
+                                         or max_azimuths < 1):
+            raise TableError(f"max_azimuths: expected a positive integer, got {max_azimuths!r}")
+        k = 1
+        if max_azimuths is not None:
+            k = next(d for d in range(1, n + 1) if n % d == 0 and n // d <= max_azimuths)
+        m = n // k
+        step = 360.0 / m
+        idx = (k * (np.arange(m)[None, :] - np.arange(m)[:, None])) % n  # [i_l, j_v] -> difference node
+
+        def expand(a: NDArray[Any]) -> NDArray[Any]:
+            # (kappa, 1, theta_l, dphi, theta_v, ...) -> (kappa, phi_l, theta_l, phi_v, theta_v, ...)
+            return np.moveaxis(a[:, 0][:, :, idx], 2, 1)
+
+        attrs = copy.deepcopy(self._attrs)
+        attrs.pop(SYMMETRY_ATTR, None)
+        attrs["expanded_from"] = "isotropic"
+        meas = expand(self._measured)
+        return CDBRDF(
+            expand(self._values), kappa=self.kappa, theta_l=self.theta_l, phi_l=np.arange(m) * step,
+            theta_v=self.theta_v, phi_v=self.phi_v[0] + np.arange(m) * step, measured=meas,
+            fill_source=np.where(meas, -1, -2), std=None if self._std is None else expand(self._std), attrs=attrs,
         )
 
     def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
@@ -420,7 +668,9 @@ class CDBRDF:
 
         The layout of the file (:mod:`cdbrdf.schema`): variables
         ``reflectance`` (kappa, phi_l, theta_l, phi_v, theta_v, channel),
-        ``measured``, ``fill_source`` and, when present, ``reflectance_std``;
+        ``measured``, ``fill_source``, ``fill_method``, ``fill_sources`` and
+        ``fill_weights`` (dimensions ... ``fill_slot``) and, when present,
+        ``reflectance_std`` and ``fill_std``;
         coordinates; ``units``, ``long_name`` and flag attributes as in the
         file; ``attrs`` copied (non-scalar values as they are). Needs xarray.
         """
@@ -430,11 +680,13 @@ class CDBRDF:
         q = parts.quantity
         coords = {name: (name, axis, variable_attrs(name, q)) for name, axis in parts.axes.items()}
         coords[CHANNEL] = (CHANNEL, np.array(parts.channels), variable_attrs(CHANNEL, q))
+        coords[FILL_SLOT] = (FILL_SLOT, np.arange(self._fill_sources.shape[-1], dtype=np.int32),
+                             variable_attrs(FILL_SLOT, q))
         data = {name: (DATA_VARIABLES[name], a, variable_attrs(name, q)) for name, a in parts.variables().items()}
         return xr.Dataset(data, coords=coords, attrs=copy.deepcopy(self._attrs))
 
     @classmethod
-    def from_xarray(cls, ds: Any) -> "CDBRDF":
+    def from_xarray(cls, ds: Any) -> CDBRDF:
         """A table from a :class:`xarray.Dataset` laid out as :meth:`to_xarray` makes.
 
         Dimensions are transposed into the table's order when needed; values
@@ -455,11 +707,15 @@ class CDBRDF:
             fill_source=arrays.get(FILL_SOURCE),
             std=arrays.get(REFLECTANCE_STD),
             attrs=attrs,
+            fill_method=arrays.get(FILL_METHOD),
+            fill_sources=arrays.get(FILL_SOURCES),
+            fill_weights=arrays.get(FILL_WEIGHTS),
+            fill_std=arrays.get(FILL_STD),
         )
         return cls(parts.values, **parts.table_kwargs())
 
-    def with_attrs(self, **attrs: Any) -> "CDBRDF":
-        """A copy with ``attrs`` updated."""
+    def with_attrs(self, **attrs: Any) -> CDBRDF:
+        """A copy with ``attrs`` updated (the symmetry cannot change this way)."""
         a = copy.deepcopy(self._attrs)
         a.update(attrs)
         return CDBRDF(
@@ -469,6 +725,11 @@ class CDBRDF:
             fill_source=self._fill_source,
             std=self._std,
             attrs=a,
+            symmetry=self.symmetry,
+            fill_method=self._fill_method,
+            fill_sources=self._fill_sources,
+            fill_weights=self._fill_weights,
+            fill_std=self._fill_std,
         )
 
     def __eq__(self, other: object) -> bool:
@@ -480,14 +741,11 @@ class CDBRDF:
             and np.array_equal(self._values, other._values)
             and np.array_equal(self._measured, other._measured)
             and np.array_equal(self._fill_source, other._fill_source)
-            and (
-                (self._std is None and other._std is None)
-                or (
-                    self._std is not None
-                    and other._std is not None
-                    and np.array_equal(self._std, other._std)
-                )
-            )
+            and _same_optional(self._std, other._std)
+            and np.array_equal(self._fill_method, other._fill_method)
+            and np.array_equal(self._fill_sources, other._fill_sources)
+            and np.array_equal(self._fill_weights, other._fill_weights)
+            and _same_optional(self._fill_std, other._fill_std)
             and self._attrs == other._attrs
         )
 
@@ -499,6 +757,13 @@ class CDBRDF:
             f"CDBRDF(material={self._attrs.get('material', '?')!r}, quantity={self.quantity!r}, "
             f"shape={self.shape}, measured={meas:.1f}%, {self._grid!r})"
         )
+
+
+def _same_optional(a: NDArray | None, b: NDArray | None) -> bool:
+    """Both None, or equal arrays."""
+    if a is None or b is None:
+        return a is None and b is None
+    return bool(np.array_equal(a, b))
 
 
 def load(path: str | PathLike[str]) -> CDBRDF:

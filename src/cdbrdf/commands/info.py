@@ -47,6 +47,7 @@ def describe(table: CDBRDF) -> dict[str, Any]:
     return {
         "material": table.attrs.get("material"),
         "quantity": table.quantity,
+        "symmetry": table.symmetry,
         "colour_space": table.attrs.get("colour_space"),
         "shape": list(table.shape),
         "axes": {name: axis.tolist() for name, axis in table.grid.axes().items()},
@@ -73,6 +74,8 @@ def run(args: argparse.Namespace) -> int:
         f"quantity      {table.quantity}"
         + ("  (BRDF, sr^-1)" if table.quantity == "brdf" else "  (BRDF up to an unknown scale)"),
         f"colour space  {info['colour_space']}",
+        f"symmetry      {table.symmetry}"
+        + ("  (phi_l = 0; phi_v holds the azimuth difference phi_v - phi_l)" if table.isotropic else ""),
         f"values        {table.shape} {table.values.dtype}"
         f"  (kappa, phi_l, theta_l, phi_v, theta_v, channel)",
         f"kappa       {_axis(g.kappa, '1/mm')}",

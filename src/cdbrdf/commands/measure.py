@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._args import finite_float, int_range
+from ..measure.fill import DEFAULT_FILL, FILL_METHODS
+from ._args import finite_float, int_range, keyword
 
 __all__ = ["register", "run"]
 
@@ -17,9 +18,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="For every sample, the mean of the N x N patch at the stand's centre, "
         "decoded to linear, saturated pixels excluded, brackets merged, dark frame subtracted, "
         "divided by cos(theta_l), scaled by the white reference (quantity brdf; else relative). "
-        "Invalid samples (hidden by the stand, missing, unreadable, saturated) are filled from "
-        "the nearest measured direction at the same curvature. An interrupted run resumes "
-        "from FILE.ckpt. See docs/capture.md.",
+        "Invalid samples (hidden by the stand, missing, unreadable, saturated) are filled by "
+        "--fill: by default from the same direction on the other stands, fitted along the "
+        "curvature; --fill nearest is the paper's rule. Every filled sample records its method, "
+        "sources and an uncertainty. An interrupted run resumes from FILE.ckpt. See docs/capture.md.",
     )
     p.add_argument("capture", metavar="CAPTURE_DIR", help="capture folder with capture.csv")
     p.add_argument("-o", "--output", required=True, metavar="FILE", help="CDBRDF file to write (.h5)")
@@ -35,6 +37,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--white-albedo", type=finite_float(0, 1, lo_open=True), default=None,
                    help="albedo of the white reference (default: stands.json's, else 1)")
     p.add_argument("--material", default=None, help="material name written to the file")
+    p.add_argument("--fill", type=keyword(FILL_METHODS), default=DEFAULT_FILL, metavar="METHOD",
+                   help="how invalid samples are filled: "
+                   + "; ".join(f"{name}: {text}" for name, text in FILL_METHODS.items())
+                   + f" (default {DEFAULT_FILL})")
     p.add_argument("--workers", type=int_range(1, 1024), default=None, help="local threads/processes, 1 to 1024")
     p.add_argument("--force", action="store_true",
                    help="overwrite an existing output file (never one of the capture's own files)")
@@ -52,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
                 args.capture, out, patch=args.patch, linear=args.linear, skip_bad=args.skip_bad,
                 scheduler=args.scheduler, white_albedo=args.white_albedo, material=args.material,
                 num_workers=args.workers, progress=bars.callback("measure"), overwrite=args.force,
+                fill=args.fill,
             )
     except KeyboardInterrupt:
         import sys

@@ -10,7 +10,8 @@ Modules, one per stage:
 - :mod:`~cdbrdf.measure.preflight`: checks of photographs and outputs before any work;
 - :mod:`~cdbrdf.measure.checkpoint`: results kept between runs (resume);
 - :mod:`~cdbrdf.measure.calibrate`: dark frames, brackets, white reference, fill: the table;
-- :mod:`~cdbrdf.measure.fill`: filling invalid samples from the nearest measured one;
+- :mod:`~cdbrdf.measure.fill`: filling invalid samples (the fill method registry:
+  ``kappa-fit`` along the curvature, ``nearest-stand``, the paper's ``nearest``);
 - :mod:`~cdbrdf.measure.pipeline`: the Dask pipeline (:func:`measure`).
 
 The main entry point is :func:`measure`.

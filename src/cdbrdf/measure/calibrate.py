@@ -5,8 +5,9 @@ every sample it merges the brackets of its photographs
 (:func:`cdbrdf.measure.patch.merge_exposures`, dark frames of the same or
 the nearest exposure subtracted), divides by ``cos(theta_l)``, scales by the
 nearest white reference (``quantity = "brdf"``) and fills the invalid
-samples (:func:`cdbrdf.measure.fill.fill_nearest`); it also counts what
-happened in a :class:`MeasureReport`. ``docs/capture.md`` states the rules.
+samples by a method of :data:`cdbrdf.measure.fill.FILL_METHODS`
+(:func:`cdbrdf.measure.fill.fill`); it also counts what happened in a
+:class:`MeasureReport`. ``docs/capture.md`` states the rules.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from ..errors import CaptureError, TableError
 from ..frames import direction_from_angles
 from ..table import CDBRDF
 from .capture import Capture
-from .fill import angle_between_deg, fill_nearest
+from .fill import DEFAULT_FILL, angle_between_deg, check_fill_method, fill, fill_provenance
 from .patch import merge_exposures, patch_statistics
 from .stands import KAPPA_TOL_PER_MM
 
@@ -48,6 +49,8 @@ class MeasureReport:
     n_white: int = 0
     n_dark: int = 0
     quantity: str = "relative"
+    fill_method: str = DEFAULT_FILL
+    n_filled_by: dict[str, int] = field(default_factory=dict)
     skipped_files: list[tuple[str, str]] = field(default_factory=list)
 
     def summary(self) -> str:
@@ -59,6 +62,14 @@ class MeasureReport:
             f"({self.n_hidden} hidden by the stand, {self.n_saturated} saturated, "
             f"{self.n_skipped_samples} unreadable, {self.n_not_photographed} not photographed)",
         ]
+        if self.n_filled:
+            by = self.n_filled_by
+            along = by.get("kappa_fit", 0) + by.get("nearest_stand", 0)
+            lines.append(
+                f"filled by {self.fill_method}: {along} from the same direction on other stands "
+                f"({by.get('kappa_fit', 0)} fitted along the curvature, {by.get('nearest_stand', 0)} copied), "
+                f"{by.get('nearest', 0)} from the nearest measured direction at the same curvature"
+            )
         if self.skipped_files:
             lines.append(f"{len(self.skipped_files)} file(s) skipped:")
             lines += [f"  {f}: {why}" for f, why in self.skipped_files[:20]]
@@ -110,7 +121,7 @@ def merged(cap: Capture, idx: list[int], results: dict, darks: dict[float, NDArr
 
 
 def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: bool,
-             material: str | None) -> tuple[CDBRDF, MeasureReport]:
+             material: str | None, fill_method: str = DEFAULT_FILL) -> tuple[CDBRDF, MeasureReport]:
     """The table and the report of a measurement from the patches of its photographs.
 
     Parameters
@@ -128,6 +139,10 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
         Whether integer images were taken as linear (for the provenance).
     material
         Material name (default: ``stands.json``'s, else the folder's name).
+    fill_method
+        How invalid samples are filled: a method of
+        :data:`cdbrdf.measure.fill.FILL_METHODS` (``"nearest"`` is the
+        paper's rule).
 
     Returns
     -------
@@ -138,8 +153,11 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
     ------
     CaptureError
         Photographs of different channel counts, a black white reference, no
-        white reference for a curvature, or a curvature with nothing measured.
+        white reference for a curvature, or nothing to fill a sample from.
+    ValueError
+        For an unknown fill method (the message lists them).
     """
+    fill_method = check_fill_method(fill_method)
     grid = cap.grid
     rep = MeasureReport()
     rows = cap.rows
@@ -226,9 +244,11 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
     rep.n_not_photographed = int((~photographed).sum())
     rep.n_images = n_used + rep.n_white + rep.n_dark
     try:
-        filled, fill_src, filled_std = fill_nearest(values, valid, grid, std=std)
+        result = fill(values, valid, grid, method=fill_method, std=std)
     except TableError as exc:
         raise CaptureError(f"{cap.folder}: {exc}") from None
+    rep.fill_method = fill_method
+    rep.n_filled_by = {k: v for k, v in result.summary["samples"].items() if k != "measured"}
 
     provenance: dict[str, Any] = {
         "method": "measured",
@@ -242,8 +262,6 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
         "white_albedo": albedo if whites else None,
         "dark_frames": rep.n_dark,
         "stand_geometry": [s.to_dict() for s in cap.stands.values()] if cap.stands else None,
-        "fill": "nearest measured direction at the same curvature "
-                "(angle(view) + angle(light); ties: lowest flat index)",
         "n_hidden": rep.n_hidden,
         "n_saturated": rep.n_saturated,
         "skipped_files": [f for f, _ in rep.skipped_files[:100]],
@@ -255,9 +273,7 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
             prov_cols[col] = uniq if len(uniq) <= 20 else f"{len(uniq)} distinct values"
         provenance["extra_columns"] = prov_cols
     mat = material or cap.settings.get("material") or cap.folder.resolve().name
-    table = CDBRDF(
-        filled, **grid.axes(), measured=valid, fill_source=fill_src, std=filled_std,
-        attrs={"quantity": rep.quantity, "material": str(mat), "provenance": provenance,
-               "channels": ["R", "G", "B"] if nc == 3 else ["Y"]},
-    )
+    attrs = {"quantity": rep.quantity, "material": str(mat), "provenance": provenance,
+             "channels": ["R", "G", "B"] if nc == 3 else ["Y"]}
+    table = CDBRDF(result.values, **grid.axes(), attrs=fill_provenance(attrs, result), **result.table_kwargs())
     return table, rep

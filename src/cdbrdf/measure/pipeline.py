@@ -40,11 +40,12 @@ from numpy.typing import NDArray
 
 from ..errors import OptionError
 from ..fsutil import check_output_file
+from ..images import ImageError
 from ..table import CDBRDF
 from .calibrate import MeasureReport, assemble
 from .capture import CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
-from ..images import ImageError
+from .fill import DEFAULT_FILL, check_fill_method
 from .patch import read_patch
 from .preflight import (
     bad_list_path,
@@ -231,6 +232,7 @@ def measure(
     num_workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
     overwrite: bool = True,
+    fill: str = DEFAULT_FILL,
     _interrupt_after: int | None = None,
 ) -> tuple[CDBRDF, MeasureReport]:
     """Measure a capture folder into a CDBRDF.
@@ -275,6 +277,13 @@ def measure(
         An output, its checkpoint folder or its list of unusable photographs
         that is one of the run's inputs (``capture.csv``, ``stands.json``, a
         photograph, found also through links) is always refused.
+    fill
+        How invalid samples are filled, one of
+        :data:`cdbrdf.measure.fill.FILL_METHODS`: ``"kappa-fit"`` (default:
+        the same direction on the other stands, fitted along the curvature),
+        ``"nearest-stand"``, or ``"nearest"`` (the paper's rule: the nearest
+        measured direction at the same curvature). It does not change what
+        is read, so a checkpoint serves every method.
 
     Returns
     -------
@@ -313,6 +322,7 @@ def measure(
                    white_albedo=white_albedo, material=material, progress=progress)
     patch = int(patch)
     out_path = None if output is None else check_output_file(output)  # a folder, a device: refused now
+    fill = check_fill_method(fill)
     if out_path is not None:
         check_output_file(bad_list_path(out_path))
         if not overwrite and (out_path.exists() or out_path.is_symlink()):
@@ -374,8 +384,8 @@ def measure(
     if failed and not skip_bad:
         refuse_bad(cap, failed, paths, out_path, during=True)
 
-    table, report = assemble(cap, results, albedo=albedo, patch=patch, linear=bool(linear),
-                             material=material)
+    table, report = assemble(cap, results, albedo=albedo, patch=int(patch), linear=bool(linear),
+                             material=material, fill_method=fill)
     report.n_images_resumed = resumed
     if out_path is not None:
         table.save(out_path)

@@ -6,8 +6,10 @@ columns view directions, both grouped by azimuth (groups in azimuth order) with
 the elevation increasing inside a group (Matsufuji & Kawai, Fig. 7). With the
 paper's grid (12 azimuths x 6 elevations) each image is 72 x 72.
 
-:func:`mosaic_arrays` returns the images, the filled masks and the differences
-against kappa = 0 as arrays (:class:`Mosaic`); :func:`plot_mosaic` draws them.
+:func:`mosaic_arrays` returns the images, the filled masks (and how each
+sample was filled) and the differences against kappa = 0 as arrays
+(:class:`Mosaic`); :func:`plot_mosaic` draws them, marking samples filled from
+the nearest direction and samples filled along the curvature differently.
 
 Colours
 -------
@@ -38,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..colour import EXPOSURE_PERCENTILE, resolve_exposure, srgb_encode
 from ..errors import QueryError
+from ..schema import FILL_METHOD_CODES
 from ..table import CDBRDF
 from ._common import channel_index, kappa_label, luminance, new_figure
 
@@ -46,7 +49,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
     from matplotlib.path import Path
 
-__all__ = ["Mosaic", "mosaic_arrays", "plot_mosaic", "KAPPA_ATOL", "DIFF_PERCENTILE"]
+__all__ = ["Mosaic", "mosaic_arrays", "plot_mosaic", "KAPPA_ATOL", "DIFF_PERCENTILE", "FILL_MARKS"]
 
 #: Percentile of |difference| that sets the default difference colour range.
 DIFF_PERCENTILE = 99.5
@@ -55,7 +58,17 @@ DIFF_PERCENTILE = 99.5
 KAPPA_ATOL = 1e-6
 
 _FILLED_COLOUR = "#ff2bd6"  # magenta: stands out on fabrics and on the diff map
+_CURVATURE_COLOUR = "#ffa31a"  # orange: filled along the curvature
 _DIFF_FILLED_COLOUR = "#4d4d4d"
+
+#: How filled samples are marked, by the per-sample fill method
+#: (:data:`cdbrdf.schema.FILL_METHOD_CODES`): ``(methods, colour, hatch, legend label)``.
+FILL_MARKS: tuple[tuple[tuple[str, ...], str, str, str], ...] = (
+    (("kappa_fit", "nearest_stand"), _CURVATURE_COLOUR, "\\\\\\",
+     "filled along the curvature (same direction, other stands)"),
+    (("nearest",), _FILLED_COLOUR, "//////", "filled from the nearest direction (same curvature)"),
+    (("unknown",), _FILLED_COLOUR, "//////", "filled (not measured)"),
+)
 _DIFF_CMAP = "RdBu_r"
 
 #: A matplotlib colour: a name or an RGBA tuple.
@@ -109,6 +122,9 @@ class Mosaic:
         ``(n, R, C, channel)`` linear values (the table's, copied).
     filled
         ``(n, R, C)`` True where the sample was filled, not measured.
+    fill_method
+        ``(n, R, C)`` how each sample was filled: codes of
+        :data:`cdbrdf.schema.FILL_METHOD_CODES` (0 measured).
     reference_kappa
         Curvature the differences are taken against, mm^-1: 0, or the
         nearest axis end when 0 lies outside the table's range.
@@ -142,6 +158,7 @@ class Mosaic:
     kappa_index: NDArray[np.intp]
     images: NDArray[np.floating]
     filled: NDArray[np.bool_]
+    fill_method: NDArray[np.uint8]
     reference_kappa: float
     reference: NDArray[np.float64]
     reference_filled: NDArray[np.bool_]
@@ -233,22 +250,27 @@ def mosaic_arrays(table: CDBRDF, *, kappa: float | ArrayLike | None = None) -> M
     """
     if not isinstance(table, CDBRDF):
         raise TypeError(f"table: expected a CDBRDF, got {type(table).__name__}")
+    iso = table.isotropic
+    if iso:  # shown expanded: each light azimuth's rows are the stored difference axis, turned by one group
+        table = table.expanded(max_azimuths=12)
     idx = _select_kappa(table, kappa)
     _, npl, ntl, npv, ntv, nc = table.shape
     rows, cols = npl * ntl, npv * ntv
     images = np.array(table.fig7()[idx])
     filled = ~table.measured.reshape(-1, rows, cols)[idx]
+    fill_method = table.fill_method.reshape(-1, rows, cols)[idx]
     k_ref, ref, ref_filled, sampled = _reference(table)
     ref = ref.reshape(rows, cols, nc)
     ref_filled = ref_filled.reshape(rows, cols)
     diff = images.astype(np.float64) - ref[None]
-    for a in (images, filled, ref, ref_filled, diff):
+    for a in (images, filled, fill_method, ref, ref_filled, diff):
         a.setflags(write=False)
     return Mosaic(
         kappa=np.array(table.kappa[idx]),
         kappa_index=idx,
         images=images,
         filled=filled,
+        fill_method=fill_method,
         reference_kappa=k_ref,
         reference=ref,
         reference_filled=ref_filled,
@@ -264,7 +286,7 @@ def mosaic_arrays(table: CDBRDF, *, kappa: float | ArrayLike | None = None) -> M
         theta_v=np.array(table.theta_v),
         channels=tuple(table.channels),
         quantity=table.quantity,
-        material=str(table.attrs.get("material", "") or ""),
+        material=str(table.attrs.get("material", "") or "") + (" [isotropic]" if iso else ""),
     )
 
 
@@ -290,7 +312,7 @@ def _filled_path(mask: NDArray[np.bool_]) -> Path | None:
     for r in np.flatnonzero(mask.any(axis=1)).tolist():
         row = np.concatenate([[False], mask[r], [False]]).astype(np.int8)
         d = np.diff(row)
-        for a, b in zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist()):
+        for a, b in zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist(), strict=True):
             verts += [[a, r], [b, r], [b, r + 1], [a, r + 1], [a, r]]
             codes += [int(c) for c in (Path.MOVETO, Path.LINETO, Path.LINETO, Path.LINETO, Path.CLOSEPOLY)]
     if not verts:
@@ -312,7 +334,7 @@ def _outline_segments(mask: NDArray[np.bool_]) -> NDArray[np.float64]:
     return np.concatenate(segs).astype(float)
 
 
-def _mark_filled(ax: Axes, mask: NDArray[np.bool_], colour: str, lw: float) -> bool:
+def _mark_filled(ax: Axes, mask: NDArray[np.bool_], colour: str, lw: float, hatch: str = "//////") -> bool:
     """Hatch and outline the filled pixels of a panel; False when there are none."""
     from matplotlib.collections import LineCollection
     from matplotlib.patches import PathPatch
@@ -324,11 +346,21 @@ def _mark_filled(ax: Axes, mask: NDArray[np.bool_], colour: str, lw: float) -> b
         style = {"edgecolor": "none", "hatchcolor": colour, "hatch_linewidth": lw * 0.6}
     else:  # older: the hatch takes the edge colour (the edge itself has width 0)
         style = {"edgecolor": colour}
-    ax.add_patch(PathPatch(path, facecolor="none", hatch="//////", linewidth=0, zorder=3, **style))
+    ax.add_patch(PathPatch(path, facecolor="none", hatch=hatch, linewidth=0, zorder=3, **style))
     ax.add_collection(
         LineCollection(list(_outline_segments(mask)), colors=colour, linewidths=lw, zorder=4, capstyle="projecting")
     )
     return True
+
+
+def _mark_fill_methods(ax: Axes, m: Mosaic, j: int) -> list[int]:
+    """Mark the filled samples of panel ``j`` by method; the indices of :data:`FILL_MARKS` drawn."""
+    used = []
+    for r, (methods, colour, hatch, _label) in enumerate(FILL_MARKS):
+        sel = np.isin(m.fill_method[j], [FILL_METHOD_CODES[x] for x in methods]) & m.filled[j]
+        if _mark_filled(ax, sel, colour, 0.6, hatch):
+            used.append(r)
+    return used
 
 
 def _group_axes(
@@ -406,7 +438,10 @@ def plot_mosaic(
     image (rows light direction, columns view direction, grouped by azimuth;
     tick labels give the azimuth of each group, thin lines separate groups),
     ``srgb_encode(exposure * values)``. Filled (unmeasured) samples are hatched
-    and outlined in magenta. Bottom row (``diff=True``): signed luminance
+    and outlined: in magenta (``//``) those filled from the nearest direction at
+    the same curvature (or of unknown method), in orange (``\\``) those filled
+    along the curvature from the same direction on other stands
+    (:data:`FILL_MARKS`). Bottom row (``diff=True``): signed luminance
     difference against kappa = 0 (see :func:`mosaic_arrays`) with a diverging
     colour map and a colour bar in the table's unit; the reference's own panel,
     being zero, holds the legend instead.
@@ -489,15 +524,17 @@ def plot_mosaic(
         fig = new_figure(None, (w, h), dpi)
     axes = fig.subplots(nrows, n, squeeze=False)
 
-    any_filled = any_diff_marked = False
+    any_diff_marked = False
+    marks_used: list[int] = []
     for j in range(n):
         ax = axes[0, j]
         rgb = _display_rgb(m.images[j], expo, channel, m.channels)
         ax.imshow(rgb, extent=(0, cols, rows, 0), interpolation="nearest", origin="upper", aspect="equal")
         _setup_panel(ax, m, ylabels=j == 0, xlabels=not show_diff, sep_colour=(1, 1, 1, 0.55))
         ax.set_title(kappa_label(m.kappa[j]), fontsize=8.5)
-        if mark_filled and _mark_filled(ax, m.filled[j], _FILLED_COLOUR, 0.6):
-            any_filled = True
+        if mark_filled:
+            marks_used += [r for r in _mark_fill_methods(ax, m, j) if r not in marks_used]
+    any_filled = bool(marks_used)
 
     unit = "sr$^{-1}$" if m.quantity == "brdf" else "relative units"
     ylab = "Y" if channel is None and len(m.channels) == 3 else (
@@ -548,10 +585,9 @@ def plot_mosaic(
 
     # legend / notes
     handles = []
-    if any_filled:
-        handles.append(
-            Patch(facecolor="none", edgecolor=_FILLED_COLOUR, hatch="////", label="filled (not measured)")
-        )
+    for r in sorted(marks_used):
+        _methods, colour, hatch, label = FILL_MARKS[r]
+        handles.append(Patch(facecolor="none", edgecolor=colour, hatch=hatch[:4], label=label))
     if any_diff_marked:
         handles.append(
             Patch(facecolor="none", edgecolor=_DIFF_FILLED_COLOUR, hatch="////", label="difference of a filled sample")
@@ -577,13 +613,18 @@ def plot_mosaic(
             "",
             "bottom row: " + ref_note,
         ]
-        lax.text(0.5, 0.98, "\n".join(lines), ha="center", va="top", fontsize=6.5, transform=lax.transAxes, linespacing=1.35)
+        lax.text(0.5, 0.98, "\n".join(lines), ha="center", va="top", fontsize=6.5, transform=lax.transAxes,
+                 linespacing=1.35)
         if handles:
-            lax.legend(handles=handles, loc="lower center", fontsize=6.5, frameon=False, handlelength=2.2, handleheight=1.4)
+            lax.legend(handles=handles, loc="lower center", fontsize=6.5, frameon=False, handlelength=2.2,
+                       handleheight=1.4)
     else:
         notes = expo_note + ("; difference " + ref_note if show_diff else "")
-        if handles:
-            notes = "hatched: filled (not measured) samples; " + notes
+        if marks_used:
+            notes = "hatched: " + ", ".join(
+                f"{FILL_MARKS[r][3]} ({'orange' if FILL_MARKS[r][1] == _CURVATURE_COLOUR else 'magenta'})"
+                for r in sorted(marks_used)
+            ) + "; " + notes
         if any_diff_marked and not any_filled:
             notes = "hatched: differences of filled samples; " + notes
         width_chars = max(40, int(fig.get_figwidth() * 19))

@@ -61,7 +61,9 @@ SAMPLINGS: tuple[str, ...] = ("table", "cosine")
 CURVATURE_MODES: Mapping[str, str] = MappingProxyType(dict(ATTRIBUTES))
 
 #: Valid values of ``storage``: how the table is held on the device (``auto``:
-#: ``packed`` RGB fixed point, ``float`` when a gradient is requested or in spectral variants).
+#: ``packed`` RGB fixed point; ``float`` when a gradient is requested, in spectral variants, or
+#: when the table's dynamic range is too large for the fixed point, see
+#: :func:`cdbrdf.render._lookup_jit.packing_is_fine`).
 STORAGES: tuple[str, ...] = ("auto", "packed", "float")
 
 #: Mitsuba variants the plug-in supports (those of the installed Mitsuba are
@@ -337,9 +339,11 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                                      "rgb and mono variants (spectral upsampling is not differentiable)")
                 if self._maps is None:
                     g = self._eval_table.grid
-                    self._maps = lj.packet_maps(values.shape, g.theta_l, g.theta_v, self.record)
+                    self._maps = lj.packet_maps(values.shape, g.theta_l, g.theta_v, self.record,
+                                                isotropic=self.grid.isotropic)
                 self.packed = lj.linear_upload(mi, self.values.array, self._maps, self.record)
-            elif st.storage == "float" or self.record == "spectral":
+            elif (st.storage == "float" or self.record == "spectral"
+                  or (st.storage == "auto" and self.record == "rgb" and not lj.packing_is_fine(self.grid.values))):
                 self.packed = lj.float_table(mi, self.grid, self.record)
             else:
                 self.packed = lj.pack_table(mi, self.grid, self.record)

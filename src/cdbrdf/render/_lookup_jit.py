@@ -11,7 +11,9 @@ spacings, azimuth origins and inverse steps) with interp's constants:
 curvature and elevations linear and clamped at both ends, azimuths linear and
 periodic, every weight snapped to exactly 0 or 1 within
 ``interp.snap_tolerance`` of the variant's precision (1e-6 in float32), and
-the pole rule (at elevation node 0 with weight 0 the azimuth weight is 0).
+the pole rule (at elevation node 0 with weight 0 the azimuth weight is 0)
+and, on isotropic tables, the rotation of the query (the view azimuth axis
+holds ``phi_v - phi_l``).
 It differs from the float64 lookup in two documented ways only:
 
 - arithmetic in the variant's precision (float32 in ``llvm_ad_rgb``) and RGB
@@ -42,6 +44,7 @@ __all__ = [
     "LAYOUTS",
     "MAX_ABS_VALUE",
     "PACK_BITS",
+    "PACK_MAX_RELATIVE_STEP",
     "RECORDS",
     "TableUpload",
     "check_range",
@@ -50,6 +53,7 @@ __all__ = [
     "lookup_jit",
     "pack_table",
     "packet_index",
+    "packing_is_fine",
     "packet_maps",
     "apply_maps",
     "records",
@@ -178,6 +182,25 @@ def check_range(values: NDArray[np.floating]) -> tuple[float, float]:
     return lo, hi
 
 
+#: Largest fixed-point step of the packed layout, relative to the table's median absolute value,
+#: that ``storage="auto"`` accepts (beyond it, the float layout is used).
+PACK_MAX_RELATIVE_STEP = 1e-4
+
+
+def packing_is_fine(values: NDArray[np.floating]) -> bool:
+    """Whether the 21-bit step of :func:`pack_table` is at most :data:`PACK_MAX_RELATIVE_STEP` of the median |value|.
+
+    A table with a huge dynamic range (a grazing peak 10^5 times its median)
+    would keep only a few fixed-point levels at its median values.
+    """
+    v = np.asarray(values, dtype=np.float64)
+    if v.shape[-1] != 3:
+        return True  # one-channel tables are float32 in both layouts
+    step = (float(v.max()) - float(v.min())) / _PACK_MAX
+    med = float(np.median(np.abs(v)))
+    return step <= PACK_MAX_RELATIVE_STEP * med if med > 0 else step == 0.0
+
+
 def pack_table(mi: Any, grid: LookupGrid, record: str | None = None) -> TableUpload:
     """Upload a prepared table in the ``"packed"`` layout.
 
@@ -260,11 +283,16 @@ def float_table(mi: Any, grid: LookupGrid, record: str) -> TableUpload:
 
 
 # -- the differentiable upload: raw table values -> packets, one sparse linear map -------------------
-def _pole_pass(theta: NDArray[np.float64], n_phi: int, light: bool) -> NDArray[np.float64]:
-    """``(n_phi, n_theta_out, n_phi * n_theta)``: interp's pole rule on one (phi, theta) pair, as a matrix.
+def _pole_pass(theta: NDArray[np.float64], n_phi: int, light: bool, isotropic: bool = False) -> NDArray[np.float64]:
+    """interp's pole rule on one (theta, phi) pair of axes, as a dense matrix.
 
-    Obtained by running :func:`cdbrdf.interp.prepare` on the identity, so it
-    is the owner's rule by construction.
+    Anisotropic light pass: ``(n_phi_l, n_theta_out, n_phi_l * n_theta)`` on
+    the (phi_l, theta_l) axes; isotropic light pass: ``(n_theta_out, n_phi_v,
+    n_theta * n_phi_v)`` on the (theta_l, phi_v) axes (its light pole averages
+    the azimuth difference); view pass: ``(n_phi_v, n_theta_out, n_phi_v *
+    n_theta)`` on (phi_v, theta_v). Obtained by running
+    :func:`cdbrdf.interp.prepare` on the identity, so it is the owner's rule
+    by construction.
     """
     from types import SimpleNamespace
 
@@ -272,16 +300,21 @@ def _pole_pass(theta: NDArray[np.float64], n_phi: int, light: bool) -> NDArray[n
 
     n_theta = theta.size
     m = n_phi * n_theta
+    other = np.array([45.0])  # the other elevation axis: one node above 0, untouched by this pass
+    if light and isotropic:
+        values = np.eye(m).reshape(n_theta, n_phi, m)[None, None, :, :, None, :]
+        grid = SimpleNamespace(kappa=np.array([0.0]), theta_l=theta, phi_l=np.zeros(1), theta_v=other,
+                               phi_v=np.zeros(n_phi), isotropic=True)
+        return np.asarray(prepare(SimpleNamespace(values=values, grid=grid)).values)[0, 0, :, :, -1, :]
     eye = np.eye(m).reshape(n_phi, n_theta, m)
-    other = np.array([45.0])
     if light:
         values = eye[None, :, :, None, None, :]
         grid = SimpleNamespace(kappa=np.array([0.0]), theta_l=theta, phi_l=np.zeros(n_phi), theta_v=other,
-                               phi_v=np.zeros(1))
+                               phi_v=np.zeros(1), isotropic=False)
         return np.asarray(prepare(SimpleNamespace(values=values, grid=grid)).values)[0, :, :, 0, -1, :]
     values = eye[None, None, None, :, :, :]
     grid = SimpleNamespace(kappa=np.array([0.0]), theta_l=other, phi_l=np.zeros(1), theta_v=theta,
-                           phi_v=np.zeros(n_phi))
+                           phi_v=np.zeros(n_phi), isotropic=isotropic)
     return np.asarray(prepare(SimpleNamespace(values=values, grid=grid)).values)[0, 0, -1, :, :, :]
 
 
@@ -297,7 +330,7 @@ def _factor(dense: NDArray[np.float64]) -> tuple[Any, Any]:
 
 
 def packet_maps(raw_shape: tuple[int, ...], theta_l: NDArray[np.float64], theta_v: NDArray[np.float64],
-                record: str) -> tuple[Any, ...]:
+                record: str, *, isotropic: bool = False) -> tuple[Any, ...]:
     """Sparse matrices (scipy CSR) whose product maps the raw values (C order) to the ``"float"`` layout.
 
     Applied in the order given (``packets = M[-1] @ ... @ M[0] @ raw``), they
@@ -311,10 +344,16 @@ def packet_maps(raw_shape: tuple[int, ...], theta_l: NDArray[np.float64], theta_
     import scipy.sparse as sp
 
     nk, npl, ntl, npv, ntv, nc = raw_shape
-    lp = _pole_pass(np.asarray(theta_l, dtype=np.float64), npl, light=True)
-    vp = _pole_pass(np.asarray(theta_v, dtype=np.float64), npv, light=False)
-    ntl_o, ntv_o = lp.shape[1], vp.shape[1]
-    l_sel, l_uni = _factor(lp.reshape(npl * ntl_o, npl * ntl))
+    if isotropic:  # the light pole averages the azimuth difference (the phi_v axis)
+        lp = _pole_pass(np.asarray(theta_l, dtype=np.float64), npv, light=True, isotropic=True)
+        ntl_o = lp.shape[0]
+        l_sel, l_uni = _factor(lp.reshape(ntl_o * npv, ntl * npv))
+    else:
+        lp = _pole_pass(np.asarray(theta_l, dtype=np.float64), npl, light=True)
+        ntl_o = lp.shape[1]
+        l_sel, l_uni = _factor(lp.reshape(npl * ntl_o, npl * ntl))
+    vp = _pole_pass(np.asarray(theta_v, dtype=np.float64), npv, light=False, isotropic=isotropic)
+    ntv_o = vp.shape[1]
     v_sel, v_uni = _factor(vp.reshape(npv * ntv_o, npv * ntv))
 
     def eye(n: int) -> Any:
@@ -337,8 +376,10 @@ def packet_maps(raw_shape: tuple[int, ...], theta_l: NDArray[np.float64], theta_
     idx = packet_index((nk, npl, ntl_o, npv, ntv_o), stride)
     gather = sp.csr_matrix((np.ones(idx.size), (np.arange(idx.size), idx)), shape=(idx.size, n_samples * stride))
     rec = sp.kron(eye(n_samples), sp.csr_matrix(per), format="csr")
-    first = on(nk, l_uni, npv * ntv * nc)
-    second = on(nk * npl * ntl_o, v_uni, nc) @ on(nk, l_sel, npv * ntv * nc)
+    # the light pass acts on (phi_l, theta_l), or (theta_l, phi_v) when isotropic; the view pass on (phi_v, theta_v)
+    before, after = (nk * npl, ntv * nc) if isotropic else (nk, npv * ntv * nc)
+    first = on(before, l_uni, after)
+    second = on(nk * npl * ntl_o, v_uni, nc) @ on(before, l_sel, after)
     third = gather @ rec @ on(nk * npl * ntl_o, v_sel, nc)
     return first.tocsr(), second.tocsr(), third.tocsr()
 
@@ -432,14 +473,20 @@ def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_
     Float, UInt = mi.Float, mi.UInt32
     tol = _tolerance(dr, Float)
     nk, npl, ntl, npv, ntv, nc = grid.values.shape
+    if grid.isotropic:  # the view azimuth axis holds phi_v - phi_l (interp's rotation)
+        phi_v = phi_v - phi_l
     ik, wk = _locate(dr, Float, UInt, grid.kappa, grid.kappa_inv_d, kappa, tol)
     itl, wtl = _locate(dr, Float, UInt, grid.theta_l, grid.theta_l_inv_d, theta_l, tol)
     itv, wtv = _locate(dr, Float, UInt, grid.theta_v, grid.theta_v_inv_d, theta_v, tol)
     ipl, wpl = _locate_periodic(dr, Float, UInt, grid.phi_l0, grid.phi_l_inv_step, npl, phi_l, tol)
     ipv, wpv = _locate_periodic(dr, Float, UInt, grid.phi_v0, grid.phi_v_inv_step, npv, phi_v, tol)
     # Pole: node 0 of an elevation axis is theta = 0 (one value for every azimuth).
-    wpl = dr.select((itl == 0) & (wtl == 0.0), 0.0, wpl)
-    wpv = dr.select((itv == 0) & (wtv == 0.0), 0.0, wpv)
+    light_pole = (itl == 0) & (wtl == 0.0)
+    wpl = dr.select(light_pole, 0.0, wpl)
+    view_pole = (itv == 0) & (wtv == 0.0)
+    if grid.isotropic:  # the stored azimuth difference depends on the light azimuth too
+        view_pole = view_pole | light_pole
+    wpv = dr.select(view_pole, 0.0, wpv)
     ipl1 = dr.select(ipl + 1 < npl, ipl + 1, 0)
     k_nodes = [(ik, 1.0 - wk), (ik + 1, wk)] if nk > 1 else [(ik, Float(1.0))]
     pl_nodes = [(ipl, 1.0 - wpl), (ipl1, wpl)] if npl > 1 else [(ipl, Float(1.0))]

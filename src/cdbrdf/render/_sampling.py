@@ -52,9 +52,13 @@ cosine with probability ``c``, else slice ``s`` with probability
 density reported for a direction is always ``p(u)`` recomputed from the
 direction, so ``sample`` and ``pdf`` agree exactly.
 
-An isotropic table layout (one light azimuth, the query rotated by it) plugs
-in by building the slices over (kappa, theta_v) only, with u1 the azimuth
-relative to the view, and rotating the sampled direction by phi_v.
+Isotropic tables (one light azimuth; the view azimuth axis holds the
+difference ``phi_v - phi_l``, the lookup rotates every query) have slices
+over (kappa, theta_v) only, and u1 is that difference: ``u1 = (phi_v - phi_l
+- phi_v[0]) / 360 (mod 1)``, so the sampled light azimuth is ``phi_v - (phi_v[0]
++ 360 u1)`` (a shift: same density). The cell means come from the same
+lookup rule along the difference axis, and the conditioning is the lookup's
+weights in kappa and theta_v.
 """
 
 from __future__ import annotations
@@ -102,12 +106,15 @@ class SamplerTables:
     nx, ny
         Cells along u1 (light azimuth) and u2 (sin^2 of the light elevation).
     phi0_deg
-        Light azimuth at u1 = 0 (the table's first light azimuth), degrees.
+        Light azimuth at u1 = 0 (the table's first light azimuth), degrees;
+        for an isotropic table the azimuth difference at u1 = 0 (the first
+        ``phi_v``).
     kappa, theta_v
         The slice nodes: the prepared grid's curvature (mm^-1) and view
         elevation axes (degrees, node 0 the pole).
     phi_v0_deg, n_phi_v
-        First view azimuth (degrees) and number of view azimuths (evenly spaced).
+        First view azimuth (degrees) and number of view azimuths (evenly
+        spaced) the slices are conditioned on (1 for an isotropic table).
     mass
         ``(n_slices,)`` float64 mean cell value of each slice (sr^-1); slice
         ``s = (i_kappa * n_theta_v + i_theta_v) * n_phi_v + i_phi_v``.
@@ -117,6 +124,8 @@ class SamplerTables:
         ``(n_slices, ny)`` float32 inclusive cumulative row masses (last = 1).
     conditional_cdf
         ``(n_slices, ny, nx)`` float32 inclusive cumulative cell masses per row (last = 1).
+    isotropic
+        The table's layout is isotropic (u1 is the azimuth difference).
     """
 
     nx: int
@@ -132,6 +141,7 @@ class SamplerTables:
     density: NDArray[np.float32]
     marginal_cdf: NDArray[np.float32]
     conditional_cdf: NDArray[np.float32]
+    isotropic: bool = False
 
     @property
     def n_slices(self) -> int:
@@ -161,9 +171,11 @@ def default_resolution(grid: LookupGrid) -> tuple[int, int]:
     :data:`MAX_CELLS` cells.
     """
     nk, npl, ntl, npv, ntv = grid.values.shape[:5]
-    nx = 1 if npl == 1 else int(np.clip(2 * npl, 8, 256))
+    iso = bool(getattr(grid, "isotropic", False))
+    n_az = npv if iso else npl  # the azimuth u1 runs along
+    nx = 1 if n_az == 1 else int(np.clip(2 * n_az, 8, 256))
     ny = int(np.clip(4 * (ntl - 1), 8, 256))
-    slices = nk * ntv * npv
+    slices = nk * ntv * (1 if iso else npv)
     while slices * nx * ny > MAX_CELLS and (nx > 1 or ny > 4):
         nx = max(1, nx // 2) if nx > 1 else 1
         ny = max(4, ny // 2)
@@ -206,12 +218,15 @@ def _mean_weights(i: NDArray[np.int64], w: NDArray[np.float64], n_nodes: int, n_
 
 
 def _cell_weights(grid: LookupGrid, nx: int, ny: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``A_phi (nx, n_phi_l)`` and ``A_theta (ny, n_theta_l)``: mean interpolation weights per cell."""
-    npl = grid.values.shape[1]
+    """``A_phi (nx, n_az)`` and ``A_theta (ny, n_theta_l)``: mean interpolation weights per cell.
+
+    ``n_az`` is the light azimuth axis, or (isotropic) the azimuth difference axis.
+    """
+    n_az, phi0 = (grid.values.shape[3], grid.phi_v0) if grid.isotropic else (grid.values.shape[1], grid.phi_l0)
     sub = (np.arange(_SUBSAMPLES) + 0.5) / _SUBSAMPLES
     u1 = (np.arange(nx)[:, None] + sub[None, :]) / nx
-    phi = grid.phi_l0 + PERIOD_DEG * u1
-    a_phi = _mean_weights(*_periodic_weights(grid.phi_l0, npl, phi), npl, nx, periodic=True)
+    phi = phi0 + PERIOD_DEG * u1
+    a_phi = _mean_weights(*_periodic_weights(phi0, n_az, phi), n_az, nx, periodic=True)
     u2 = (np.arange(ny)[:, None] + sub[None, :]) / ny
     theta = np.degrees(np.arcsin(np.sqrt(u2)))
     a_theta = _mean_weights(*_clamped_weights(np.asarray(grid.theta_l), theta), grid.theta_l.size, ny,
@@ -230,9 +245,14 @@ def _sampling_values(grid: LookupGrid) -> NDArray[np.float64]:
 
 
 def cell_means(grid: LookupGrid, nx: int, ny: int) -> NDArray[np.float64]:
-    """``(n_kappa, n_theta_v, n_phi_v, ny, nx)``: mean luminance of the table over every cell of every slice."""
+    """``(n_kappa, n_theta_v, n_phi_v, ny, nx)``: mean luminance of the table over every cell of every slice.
+
+    Isotropic: ``(n_kappa, n_theta_v, 1, ny, nx)``, u1 along the azimuth difference.
+    """
     a_phi, a_theta = _cell_weights(grid, nx, ny)
     y = _sampling_values(grid)  # (k, pl, tl, pv, tv)
+    if grid.isotropic:
+        return np.einsum("ktdw,yt,xd->kwyx", y[:, 0], a_theta, a_phi, optimize=True)[:, :, None]
     return np.einsum("kptvw,yt,xp->kwvyx", y, a_theta, a_phi, optimize=True)
 
 
@@ -273,12 +293,13 @@ def build_sampler(grid: LookupGrid, *, resolution: tuple[int, int] | None = None
     kappa = np.asarray(grid.kappa, dtype=np.float64)
     theta_v = np.asarray(grid.theta_v, dtype=np.float64)
     return SamplerTables(
-        nx=int(nx), ny=int(ny), phi0_deg=float(grid.phi_l0),
+        nx=int(nx), ny=int(ny), phi0_deg=float(grid.phi_v0 if grid.isotropic else grid.phi_l0),
         kappa=kappa, kappa_inv_d=np.asarray(grid.kappa_inv_d, dtype=np.float64),
         theta_v=theta_v, theta_v_inv_d=np.asarray(grid.theta_v_inv_d, dtype=np.float64),
         phi_v0_deg=float(grid.phi_v0), n_phi_v=int(npv),
         mass=mass, density=density.astype(np.float32),
         marginal_cdf=marginal.astype(np.float32), conditional_cdf=cond.astype(np.float32),
+        isotropic=bool(grid.isotropic),
     )
 
 
@@ -313,18 +334,27 @@ def slice_weights(tables: SamplerTables, theta_v: ArrayLike, phi_v: ArrayLike,
     return np.stack(idx, axis=-1).reshape(-1, 8), np.stack(wts, axis=-1).reshape(-1, 8)
 
 
-def square_to_direction(tables: SamplerTables, u: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Directions ``(n, 3)`` (front hemisphere) of points ``u (n, 2)`` of the unit square."""
-    phi = np.radians(tables.phi0_deg + PERIOD_DEG * u[:, 0])
+def _azimuth(tables: SamplerTables, u1: NDArray[np.float64], phi_v: ArrayLike) -> NDArray[np.float64]:
+    """The light azimuth (degrees) at ``u1``: ``phi0 + 360 u1``, or ``phi_v`` minus it (isotropic)."""
+    a = tables.phi0_deg + PERIOD_DEG * u1
+    return np.asarray(phi_v, dtype=np.float64) - a if tables.isotropic else a
+
+
+def square_to_direction(tables: SamplerTables, u: NDArray[np.float64],
+                        phi_v: ArrayLike = 0.0) -> NDArray[np.float64]:
+    """Directions ``(n, 3)`` (front hemisphere) of points ``u (n, 2)`` of the unit square (view azimuth ``phi_v``)."""
+    phi = np.radians(_azimuth(tables, u[:, 0], phi_v))
     s = np.sqrt(np.clip(u[:, 1], 0.0, 1.0))
     c = np.sqrt(np.clip(1.0 - u[:, 1], 0.0, 1.0))
     return np.stack([s * np.cos(phi), s * np.sin(phi), c], axis=-1)
 
 
-def direction_to_square(tables: SamplerTables, d: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Points ``(n, 2)`` of the unit square of directions ``d (n, 3)``."""
+def direction_to_square(tables: SamplerTables, d: NDArray[np.float64], phi_v: ArrayLike = 0.0) -> NDArray[np.float64]:
+    """Points ``(n, 2)`` of the unit square of directions ``d (n, 3)`` (view azimuth ``phi_v``)."""
     u2 = np.clip(d[:, 0] ** 2 + d[:, 1] ** 2, 0.0, 1.0)
     phi = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
+    if tables.isotropic:
+        phi = np.asarray(phi_v, dtype=np.float64) - phi
     u1 = np.mod((phi - tables.phi0_deg) / PERIOD_DEG, 1.0)
     return np.stack([np.where(u1 >= 1.0, 0.0, u1), u2], axis=-1)
 
@@ -346,7 +376,7 @@ def pdf(tables: SamplerTables, theta_v: ArrayLike, phi_v: ArrayLike, kappa: Arra
     idx, w = np.broadcast_to(idx, (d.shape[0], 8)), np.broadcast_to(w, (d.shape[0], 8))
     q = w * tables.mass[idx]
     total = q.sum(axis=1)
-    u = direction_to_square(tables, d)
+    u = direction_to_square(tables, d, phi_v)
     col, row = _cells(tables, u)
     dens = tables.density[idx, row[:, None], col[:, None]].astype(np.float64)
     safe = np.where(total > 0.0, total, 1.0)
@@ -392,8 +422,9 @@ def sample(tables: SamplerTables, theta_v: ArrayLike, phi_v: ArrayLike, kappa: A
     row, ty = _invert_cdf(tables.marginal_cdf[s], s2[:, 1])
     col, tx = _invert_cdf(tables.conditional_cdf[s, row], s2[:, 0])
     u = np.stack([(col + tx) / tables.nx, (row + ty) / tables.ny], axis=-1)
-    d = square_to_direction(tables, u)
+    pv = np.broadcast_to(np.asarray(phi_v, dtype=np.float64), (n,))
+    d = square_to_direction(tables, u, pv)
     # cosine branch: the same map with the uniform density
-    dc = square_to_direction(tables, s2)
+    dc = square_to_direction(tables, s2, pv)
     d = np.where(cosine[:, None], dc, d)
     return d, pdf(tables, theta_v, phi_v, kappa, d, cosine_weight=cosine_weight)

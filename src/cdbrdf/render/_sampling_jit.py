@@ -39,10 +39,11 @@ class SamplerUpload(NamedTuple):
 
 
 class Conditioning(NamedTuple):
-    """Neighbouring slices of a query: ``(slice index, probability mass)`` pairs and their sum."""
+    """Neighbouring slices of a query: ``(slice index, probability mass)`` pairs, their sum, the view azimuth."""
 
     corners: list[tuple[Any, Any]]
     total: Any
+    phi_v: Any
 
 
 def upload(mi: Any, tables: SamplerTables) -> SamplerUpload:
@@ -82,7 +83,7 @@ def conditioning(mi: Any, up: SamplerUpload, theta_v: Any, phi_v: Any, kappa: An
                 q = fk * ft * fp * dr.gather(Float, up.mass, s, active)
                 corners.append((s, q))
                 total += q
-    return Conditioning(corners, total)
+    return Conditioning(corners, total, phi_v)
 
 
 def _cells(mi: Any, t: SamplerTables, u1: Any, u2: Any) -> tuple[Any, Any]:
@@ -102,7 +103,8 @@ def pdf(mi: Any, up: SamplerUpload, cond: Conditioning, wl: Any, phi_l_deg: Any,
     t = up.tables
     Float = mi.Float
     u2 = dr.clip(dr.fma(wl.x, wl.x, wl.y * wl.y), 0.0, 1.0)
-    u1 = (phi_l_deg - t.phi0_deg) * (1.0 / 360.0)
+    az = cond.phi_v - phi_l_deg if t.isotropic else phi_l_deg  # isotropic: the azimuth difference
+    u1 = (az - t.phi0_deg) * (1.0 / 360.0)
     u1 = u1 - dr.floor(u1)
     col, row = _cells(mi, t, u1, u2)
     cell = row * t.nx + col
@@ -166,7 +168,8 @@ def sample(mi: Any, up: SamplerUpload, cond: Conditioning, sample1: Any, sample2
     col, tx = _invert(mi, up.conditional, (s_pick * t.ny + row) * t.nx, t.nx, sample2.x, table)
     u1 = dr.select(cosine, sample2.x, (Float(col) + tx) * (1.0 / t.nx))
     u2 = dr.select(cosine, sample2.y, (Float(row) + ty) * (1.0 / t.ny))
-    sp, cp = dr.sincos((t.phi0_deg + 360.0 * u1) * _DEG2RAD)
+    az = t.phi0_deg + 360.0 * u1
+    sp, cp = dr.sincos((cond.phi_v - az if t.isotropic else az) * _DEG2RAD)
     st = dr.sqrt(dr.clip(u2, 0.0, 1.0))
     ct = dr.sqrt(dr.clip(1.0 - u2, 0.0, 1.0))
     return mi.Vector3f(st * cp, st * sp, ct)

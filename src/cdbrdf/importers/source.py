@@ -1,0 +1,147 @@
+"""A plain BRDF read from a file: what every reader of :mod:`cdbrdf.importers` returns.
+
+A :class:`Source` holds what the resampler (:mod:`cdbrdf.importers.resample`)
+needs of a measured material: a vectorised evaluator of the BRDF in the
+project's conventions (``docs/conventions.md``: directions pointing away from
+the surface, elevations and azimuths in degrees, the BRDF in sr^-1 *without*
+the cosine, linear Rec. 709 RGB), the share of each value that the source says
+was measured, and the metadata that goes into the imported table's attributes
+and provenance.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from os import PathLike
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from ..table import CDBRDF
+
+__all__ = ["Evaluator", "Source", "file_sha256", "read_bytes", "table_on", "mitsuba"]
+
+#: ``evaluate(theta_v, phi_v, theta_l, phi_l)`` (degrees, 1-D float64 arrays of one length n) ->
+#: ``(values (n, 3) sr^-1 or relative, measured (n,) in [0, 1] or None = all measured)``.
+Evaluator = Callable[
+    [NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
+    tuple[NDArray[np.float64], NDArray[np.float64] | None],
+]
+
+
+@dataclass(frozen=True, eq=False)
+class Source:
+    """A plain (one-curvature) BRDF read from a file, ready to be resampled onto a grid.
+
+    Attributes
+    ----------
+    path
+        The file it was read from.
+    format
+        The reader's name (a key of :data:`cdbrdf.importers.FORMATS`).
+    symmetry
+        ``"isotropic"`` when the data depend on the azimuth difference only
+        (MERL, isotropic RGL files), else ``"anisotropic"``.
+    quantity
+        ``"brdf"`` (sr^-1) or ``"relative"`` (unknown scale), as in a table.
+    colour_space
+        The colour space of :attr:`evaluate`'s values (always linear Rec. 709 here).
+    material
+        Material name (the file's own description when it has one, else its name).
+    description
+        The file's own description text ("" when it has none).
+    details
+        Format-specific facts for the provenance (JSON-ready): resolution,
+        scales, encodings, conversions applied.
+    evaluate
+        The vectorised evaluator (:data:`Evaluator`).
+    sha256
+        SHA-256 of the file's bytes (hex).
+    table
+        When the source is itself a table on a grid (UTIA, CDBRDF files): that
+        table (one curvature). The resampler copies it exactly when the target
+        grid is its own.
+    """
+
+    path: Path
+    format: str
+    symmetry: str
+    quantity: str
+    colour_space: str
+    material: str
+    description: str
+    details: Mapping[str, Any]
+    evaluate: Evaluator
+    sha256: str
+    table: CDBRDF | None = field(default=None)
+
+    @property
+    def isotropic(self) -> bool:
+        """Whether the source is isotropic."""
+        return self.symmetry == "isotropic"
+
+    def provenance(self) -> dict[str, Any]:
+        """Where the data came from, for a table's ``provenance`` (JSON-ready)."""
+        return {
+            "file": str(self.path),
+            "file_name": self.path.name,
+            "sha256": self.sha256,
+            "format": self.format,
+            "description": self.description,
+            "symmetry": self.symmetry,
+            "quantity": self.quantity,
+            "details": dict(self.details),
+        }
+
+
+def table_on(grid: Any, values: Any, **kw: Any) -> CDBRDF:
+    """A :class:`~cdbrdf.table.CDBRDF` on ``grid`` (its axes and symmetry) with ``values`` and keywords ``kw``."""
+    from ..table import CDBRDF
+
+    return CDBRDF(values, kappa=grid.kappa, theta_l=grid.theta_l, phi_l=grid.phi_l, theta_v=grid.theta_v,
+                  phi_v=grid.phi_v, symmetry=grid.symmetry, **kw)
+
+
+def mitsuba() -> tuple[Any, Any]:
+    """``(mitsuba, drjit)``, imported on demand, typed as Any (their stubs do not follow variants)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    return mi, dr
+
+
+def file_sha256(data: bytes) -> str:
+    """SHA-256 of ``data`` as hex."""
+    return hashlib.sha256(data).hexdigest()
+
+
+def read_bytes(path: str | PathLike[str], *, what: str) -> tuple[Path, bytes]:
+    """The bytes of a source file, with one-line errors naming it.
+
+    Raises
+    ------
+    FileNotFoundError
+        When ``path`` does not exist.
+    FormatError
+        When it is a folder or cannot be read.
+    LimitError
+        When it is larger than 8 bytes per value of the ``table_samples`` limit.
+    """
+    from .. import limits
+    from ..errors import FormatError
+
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(f"{p}: no such file")
+    if p.is_dir():
+        raise FormatError(f"{p}: is a folder, not {what}")
+    try:
+        limits.check("table_samples", p.stat().st_size / 8.0, what=f"{p}: a file of {p.stat().st_size} bytes")
+        return p, p.read_bytes()
+    except OSError as exc:
+        raise FormatError(f"{p}: cannot be read ({exc.strerror or exc})") from None
