@@ -184,7 +184,7 @@ def check_range(values: NDArray[np.floating]) -> tuple[float, float]:
 
 #: Largest fixed-point step of the packed layout, relative to the table's median absolute value,
 #: that ``storage="auto"`` accepts (beyond it, the float layout is used).
-PACK_MAX_RELATIVE_STEP = 1e-4
+PACK_MAX_RELATIVE_STEP = 1e-3
 
 
 def packing_is_fine(values: NDArray[np.floating]) -> bool:
