@@ -8,6 +8,9 @@ Implementations, each forced explicitly:
   ``LookupGrid.rgb_kernel`` holds);
 - ``drjit``: the renderer's :func:`cdbrdf.render._lookup_jit.lookup_jit` in
   ``llvm_ad_rgb`` (float32 arithmetic, 21-bit packed RGB);
+- ``drjit_float`` / ``drjit_linear``: the same lookup on the float32 packet
+  layout, uploaded from the prepared grid / computed in Dr.Jit from the raw
+  values by the differentiable sparse maps (``packet_maps``);
 - ``scalar_rgb``: the plug-in's ``eval`` in Mitsuba's ``scalar_rgb`` variant,
   from directions (only where directions are well defined).
 
@@ -136,17 +139,30 @@ def _run_numba(kernel: str) -> Callable[[CDBRDF, np.ndarray], np.ndarray]:
     return run
 
 
-def _run_drjit(t: CDBRDF, q: np.ndarray) -> np.ndarray:
-    import mitsuba as mi
+def _drjit(layout: str) -> Callable[[CDBRDF, np.ndarray], np.ndarray]:
+    """The renderer's lookup in ``llvm_ad_rgb`` with the table uploaded in one of its layouts."""
 
-    import cdbrdf.render as cr
-    from cdbrdf.render._lookup_jit import lookup_jit, pack_table
+    def run(t: CDBRDF, q: np.ndarray) -> np.ndarray:
+        import mitsuba as mi
 
-    cr.set_variant("llvm_ad_rgb")
-    lg = t.lookup_grid()
-    args = [mi.Float(np.ascontiguousarray(x, dtype=np.float32)) for x in q]
-    got = np.array(lookup_jit(mi, lg, pack_table(mi, lg), *args), dtype=np.float64).T
-    return got[:, : t.n_channels]
+        import cdbrdf.render as cr
+        from cdbrdf.render import _lookup_jit as lj
+
+        cr.set_variant("llvm_ad_rgb")
+        lg = t.lookup_grid()
+        record = "rgb" if t.n_channels == 3 else "one"
+        if layout == "packed":
+            up = lj.pack_table(mi, lg)
+        elif layout == "float":
+            up = lj.float_table(mi, lg, record)
+        else:  # the differentiable upload: raw values through the sparse maps
+            maps = lj.packet_maps(t.values.shape, t.grid.theta_l, t.grid.theta_v, record, isotropic=lg.isotropic)
+            up = lj.linear_upload(mi, mi.Float(np.asarray(t.values, dtype=np.float32).reshape(-1)), maps, record)
+        args = [mi.Float(np.ascontiguousarray(x, dtype=np.float32)) for x in q]
+        got = np.array(lj.lookup_jit(mi, lg, up, *args), dtype=np.float64).T
+        return got[:, : t.n_channels]
+
+    return run
 
 
 def _run_scalar(t: CDBRDF, q: np.ndarray) -> np.ndarray:
@@ -165,7 +181,7 @@ def _run_scalar(t: CDBRDF, q: np.ndarray) -> np.ndarray:
             k = float(q[4, i])
             b = bsdfs.get(k)
             if b is None:
-                b = bsdfs[k] = cr.make_bsdf(t, curvature=k)
+                b = bsdfs[k] = cr.make_bsdf(t, curvature=k, sampling="cosine")  # eval only: no sampler
             si = mi.SurfaceInteraction3f()
             si.wi = mi.Vector3f(*map(float, wi[i]))
             f = np.array(b.eval(mi.BSDFContext(), si, mi.Vector3f(*map(float, wo[i]))), dtype=np.float64)
@@ -193,12 +209,24 @@ class Impl:
     #: the only cases it runs (None: all)
     cases: tuple[str, ...] | None = None
 
+    #: the only tables it runs on, by name (None: all it applies to)
+    only_tables: tuple[str, ...] | None = None
+
     def applies(self, t: CDBRDF) -> bool:
         if self.name == "numba_rgb":
             return t.lookup_grid().rgb_kernel
+        if self.only_tables is not None and not any(tables()[n] is t for n in self.only_tables):
+            return False
         if self.needs_mitsuba:
             return t.n_channels in (1, 3)
         return True
+
+
+#: The tables the renderer's other layouts run on: every axis kind (pole at 0 and virtual, single
+#: azimuth and elevation, uneven elevations, > 8 curvatures, one channel, float32, isotropic). Not
+#: the 720-azimuth tables: their index math is the packed layout's, and their packets are huge.
+LAYOUT_TABLES = ("rgb", "one_channel", "many_kappa", "uneven_float32", "virtual_pole", "single_azimuth",
+                 "single_elevation", "kappa_1", "iso_rgb", "iso_uneven")
 
 
 IMPLS = {
@@ -207,7 +235,11 @@ IMPLS = {
         Impl("reference", run_reference, "float64", 0.0, True, True),
         Impl("numba_rgb", _run_numba("rgb"), "float64", 1e-12, True, True),
         Impl("numba_generic", _run_numba("generic"), "float64", 1e-12, True, True),
-        Impl("drjit", _run_drjit, "float32", 3e-5, False, False, needs_mitsuba=True),
+        Impl("drjit", _drjit("packed"), "float32", 3e-5, False, False, needs_mitsuba=True),
+        Impl("drjit_float", _drjit("float"), "float32", 3e-5, False, False, needs_mitsuba=True,
+             only_tables=LAYOUT_TABLES),
+        Impl("drjit_linear", _drjit("linear"), "float32", 3e-5, False, False, needs_mitsuba=True,
+             only_tables=LAYOUT_TABLES),
         Impl("scalar_rgb", _run_scalar, "float32", 3e-5, False, True, needs_mitsuba=True,
              cases=("pole", "directions")),
     )

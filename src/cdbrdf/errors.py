@@ -15,6 +15,7 @@ __all__ = [
     "QueryError",
     "ImageError",
     "MeshError",
+    "SceneError",
     "CaptureError",
     "LimitError",
     "OptionError",
@@ -43,6 +44,10 @@ class ImageError(CDBRDFError, ValueError):
 
 class MeshError(CDBRDFError, ValueError):
     """A mesh cannot be used (degenerate, inconsistent, bad arrays); names the mesh."""
+
+
+class SceneError(CDBRDFError, ValueError):
+    """A Mitsuba scene cannot be rendered with the plug-in as given; names the shape or file."""
 
 
 class CaptureError(CDBRDFError, ValueError):

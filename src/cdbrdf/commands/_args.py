@@ -360,3 +360,16 @@ def keyword(words: Iterable[str], otherwise: _Type | None = None) -> _Type:
         raise argparse.ArgumentTypeError(f"expected one of {', '.join(allowed)}, got {text!r}")
 
     return _named(parse, "value")
+
+
+def key_value(*, pattern: str = r"[A-Za-z_][A-Za-z0-9_]*") -> _Type:
+    """``KEY=VALUE`` (Mitsuba's ``-D``): returns ``(key, value)``; the key matches ``pattern``."""
+
+    def parse(text: str) -> tuple[str, str]:
+        key, sep, value = str(text).partition("=")
+        key = key.strip()
+        if not sep or not re.fullmatch(pattern, key):
+            raise argparse.ArgumentTypeError(f"expected NAME=VALUE with a name like spp, got {text!r}")
+        return key, value
+
+    return _named(parse, "NAME=VALUE")

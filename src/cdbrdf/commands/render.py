@@ -1,4 +1,14 @@
-"""``cdbrdf render FILE (--scene sine | --mesh MESH) -o OUT.png|OUT.exr``: render with Mitsuba 3.
+"""``cdbrdf render FILE (--scene sine | --mesh MESH) -o OUT`` or ``cdbrdf render SCENE.xml -o OUT``.
+
+Render with Mitsuba 3.
+
+A Mitsuba XML scene (``SCENE.xml``, using ``<bsdf type="cdbrdf">``) is
+loaded by :func:`cdbrdf.render.load_file` (the plug-in registered, files
+found next to the scene, curvature units and the scene checks) with the
+``mitsuba`` command's options: ``-D name=value`` for the scene's parameters,
+``--spp`` (the sensor's count unless given), the variant, ``--seed``; the
+scene defines camera, film, lights and integrator. ``--units`` is the
+scene's unit there (mm per scene unit).
 
 PNG output is tone-mapped by an exposure and sRGB-encoded:
 ``png = srgb(clip(radiance * 2**exposure, 0, 1))`` with ``--exposure`` in EV,
@@ -38,11 +48,28 @@ MAX_SPP = 65536
 
 _SEED_MAX = 2**32 - 1 - MAX_SPP
 
+#: Options of the built-in scenes that a scene file defines itself (refused with SCENE.xml when changed).
+_SCENE_FILE_IGNORES = ("light", "irradiance", "no_light", "envmap", "amplitude", "wavelength", "sheet_size",
+                       "max_depth", "view", "size", "brdf", "compare", "lighting", "curvature", "up",
+                       "neighbourhood", "frame")
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     from ..curvature import CURVATURE_MODES
+    from ..render import VARIANTS
     from ..render.meshio import MESH_FORMATS
     from ..render.scenes import LIGHTINGS, UP_AXES
-    from ._args import existing_file, finite_float, float_list, int_range, keyword, output_file, seed, size_wxh
+    from ._args import (
+        existing_file,
+        finite_float,
+        float_list,
+        int_range,
+        key_value,
+        keyword,
+        output_file,
+        seed,
+        size_wxh,
+    )
     from .curvature import mesh_options
 
     p = sub.add_parser(
@@ -53,8 +80,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "unless the file has it). PNG is sRGB-encoded after the exposure (radiance x 2^EV, clipped; "
         "default: chosen from the render); EXR is linear.",
     )
-    p.add_argument("file", help="a CDBRDF file (.h5)")
-    what = p.add_mutually_exclusive_group(required=True)
+    p.add_argument("file", help="a CDBRDF file (.h5), or a Mitsuba scene (.xml) using <bsdf type=\"cdbrdf\">")
+    what = p.add_mutually_exclusive_group()
     what.add_argument("--scene", choices=["sine"], help="built-in scene: the paper's sine sheet")
     what.add_argument("--mesh", metavar="MESH", type=existing_file(*MESH_FORMATS),
                       help=f"a mesh ({', '.join(MESH_FORMATS)}), lengths in --units")
@@ -65,8 +92,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, metavar="OUT",
                    type=output_file(),
                    help="output .png or .exr (--compare: .png, .pdf or .svg)")
-    p.add_argument("--spp", type=int_range(1, MAX_SPP), default=64,
-                   help=f"samples per pixel, 1 to {MAX_SPP} (default: 64)")
+    p.add_argument("--spp", type=int_range(1, MAX_SPP), default=None,
+                   help=f"samples per pixel, 1 to {MAX_SPP} (default: 64; a scene file: its sensor's)")
+    p.add_argument("-D", dest="define", action="append", default=[], type=key_value(), metavar="NAME=VALUE",
+                   help="a scene file's parameter $NAME (as Mitsuba's -D; repeatable)")
     p.add_argument("--size", type=size_wxh(), default="512x384", metavar="WxH",
                    help="image size (default: 512x384; at most CDBRDF_MAX_RENDER_PIXELS pixels)")
     p.add_argument("--lighting", choices=LIGHTINGS, default=None,
@@ -106,9 +135,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "for the sheet, 20,-65 for a mesh)")
     p.add_argument("--seed", type=seed(_SEED_MAX), default=0,
                    help=f"random seed, 0 to {_SEED_MAX} (default: 0)")
-    p.add_argument("--variant", choices=["llvm_ad_rgb", "scalar_rgb"], default="llvm_ad_rgb",
-                   help="Mitsuba variant (scalar_rgb: one Python call per ray, debugging only)")
-    p.set_defaults(func=run)
+    p.add_argument("--variant", choices=VARIANTS, default="llvm_ad_rgb",
+                   help="Mitsuba variant (default: llvm_ad_rgb; spectral and mono variants too; "
+                   "scalar_*: one Python call per ray, debugging only)")
+    # the defaults (and the types that parse them), to tell the options a scene file does not use
+    defaults = {a.dest: (a.default, a.type) for a in p._actions if a.dest in _SCENE_FILE_IGNORES}
+    p.set_defaults(func=run, defaults_=defaults)
 
 
 def _check_sheet(sheet) -> None:  # noqa: ANN001 - a SineSheet
@@ -143,6 +175,13 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
     from ._progress import ProgressBars
     from .curvature import LARGE_MESH_FACES, print_mesh_report
 
+    if Path(args.file).suffix.lower() == ".xml":
+        return _run_scene_file(args)
+    if args.scene is None and args.mesh is None:
+        raise OptionError("give --scene sine or --mesh MESH for a CDBRDF file (or render a scene file SCENE.xml)")
+    if args.define:
+        raise OptionError("-D: only for a scene file (SCENE.xml)")
+    args.spp = 64 if args.spp is None else args.spp
     out = Path(args.output)
     ext = out.suffix.lower()
     if args.compare:
@@ -227,4 +266,58 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
     if not args.quiet:
         expo = f", exposure {ev:+.2f} EV ({how})" if ext != ".exr" or args.compare else ""
         print(f"{out}: written ({width}x{height}, {args.spp} spp{expo})", file=sys.stderr)
+    return 0
+
+
+def _run_scene_file(args: argparse.Namespace) -> int:
+    """``cdbrdf render SCENE.xml``: load with :func:`cdbrdf.render.load_file`, check, render, write."""
+    import numpy as np
+
+    from .. import render as cr
+    from ..curvature import parse_units
+    from ..errors import SceneError
+    from ..render.output import IMAGE_FORMATS, write_render
+    from ..render.scenes import exposure_from_render, render_scene
+    from ._progress import ProgressBars
+
+    if args.scene is not None or args.mesh is not None:
+        raise OptionError(f"{args.file}: a scene file brings its own shapes; --scene and --mesh are not used")
+    changed = []
+    for k, (default, kind) in getattr(args, "defaults_", {}).items():
+        if isinstance(default, str) and callable(kind):
+            try:
+                default = kind(default)
+            except (argparse.ArgumentTypeError, ValueError):
+                continue  # its default cannot be parsed here (e.g. a limit variable): not comparable
+        if getattr(args, k) != default:
+            changed.append(k)
+    if changed:
+        raise OptionError(f"--{changed[0].replace('_', '-')}: not used with a scene file (the scene defines "
+                          "camera, film, lights and integrator; use -D for its parameters)")
+    out = Path(args.output)
+    if out.suffix.lower() not in IMAGE_FORMATS:
+        raise OptionError(f"{out}: unknown image type {out.suffix.lower()!r}; use {' or '.join(IMAGE_FORMATS)}")
+    unit_mm = 1.0 if args.units is None else parse_units(args.units).mm_per_unit
+    cr.set_variant(args.variant)
+    import mitsuba as mi
+
+    scene = cr.load_file(args.file, variables=dict(args.define), unit_mm=float(unit_mm))
+    if not isinstance(scene, mi.Scene):
+        raise SceneError(f"{args.file}: holds a {type(scene).__name__}, not a scene")
+    if not scene.sensors():
+        raise SceneError(f"{args.file}: the scene has no sensor to render from")
+    with ProgressBars(quiet=args.quiet, unit="spp", leave=True) as bars:
+        image = render_scene(scene, spp=args.spp, seed=args.seed, progress=bars.callback("rendering"))
+    if out.suffix.lower() == ".exr":
+        write_render(out, image)  # grey (one channel) in mono variants
+        expo = ""
+    else:
+        rgb = np.repeat(image, 3, axis=-1) if image.shape[-1] == 1 else image[..., :3]
+        ev = exposure_from_render(rgb) if args.exposure == "auto" else float(args.exposure)
+        write_render(out, rgb, exposure_ev=ev)
+        expo = f", exposure {ev:+.2f} EV ({'auto' if args.exposure == 'auto' else 'given'})"
+    if not args.quiet:
+        h, w = image.shape[:2]
+        print(f"{out}: written ({w}x{h}, {args.spp or scene.sensors()[0].sampler().sample_count()} spp, "
+              f"{args.variant}{expo})", file=sys.stderr)
     return 0

@@ -1,25 +1,50 @@
-"""The ``cdbrdf`` BSDF plug-in for Mitsuba 3 (see :mod:`cdbrdf.render`).
+"""The ``cdbrdf`` BSDF plug-in for Mitsuba 3 (see :mod:`cdbrdf.render` and ``docs/rendering.md``).
 
-The Python class is traced by Dr.Jit once per render in the ``llvm_ad_rgb``
-variant: the 5-D lookup (:func:`cdbrdf.render._lookup_jit.lookup_jit`)
-becomes straight-line vector code (compares, selects and 32 gathers of an RGB
-triple from the flattened table), never a Python call per ray. In
-``scalar_rgb`` (debugging only) each call evaluates one query with
-:func:`cdbrdf.interp.evaluate`.
+The Python class is traced by Dr.Jit once per render in the vectorised
+variants (``llvm_ad_*``, ``cuda_ad_*``): the 5-D lookup
+(:func:`cdbrdf.render._lookup_jit.lookup_jit`) and the importance sampler
+(:mod:`cdbrdf.render._sampling_jit`) become straight-line vector code, never
+a Python call per ray. In the scalar variants (debugging only) each call
+evaluates one query in NumPy with the same rules (:func:`cdbrdf.interp.evaluate`,
+:func:`cdbrdf.interp.evaluate_reference`, :mod:`cdbrdf.render._sampling`).
+
+Colour: RGB variants use the table's linear RGB; spectral variants blend the
+spectra of the table samples upsampled with Mitsuba's sRGB model
+(:mod:`cdbrdf.render._spectral`); mono variants use the Rec. 709 luminance.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 import os
-from typing import Any
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType, SimpleNamespace
+from typing import Any, cast
 
 import numpy as np
 
-from ..interp import LookupGrid
-from ._lookup_jit import lookup_jit, pack_table
+from ..curvature import ATTRIBUTES
+from ..errors import OptionError, TableError
+from ..interp import LookupGrid, prepare
+from . import _lookup_jit as lj
+from . import _sampling
 
-__all__ = ["MODES", "PLUGIN_NAME", "bsdf_class", "load_table"]
+__all__ = [
+    "CURVATURE_MODES",
+    "MODES",
+    "PLUGIN_NAME",
+    "SAMPLINGS",
+    "STORAGES",
+    "SUPPORTED_VARIANTS",
+    "Settings",
+    "bsdf_class",
+    "check_variant",
+    "load_table",
+]
+
+_LOG = logging.getLogger(__name__)
 
 #: Name under which the plug-in is registered with Mitsuba.
 PLUGIN_NAME = "cdbrdf"
@@ -27,13 +52,35 @@ PLUGIN_NAME = "cdbrdf"
 #: Valid values of the ``mode`` parameter.
 MODES: tuple[str, ...] = ("cdbrdf", "brdf")
 
+#: Valid values of the ``sampling`` parameter.
+SAMPLINGS: tuple[str, ...] = ("table", "cosine")
+
+#: ``curvature_mode`` -> the mesh attribute it reads (mm^-1, written by ``cdbrdf curvature``):
+#: ``max`` the principal curvature of larger magnitude, signed; ``directional`` the normal
+#: curvature along the material's x axis (owned by :data:`cdbrdf.curvature.ATTRIBUTES`).
+CURVATURE_MODES: Mapping[str, str] = MappingProxyType(dict(ATTRIBUTES))
+
+#: Valid values of ``storage``: how the table is held on the device (``auto``:
+#: ``packed`` RGB fixed point; ``float`` when a gradient is requested, in spectral variants, or
+#: when the table's dynamic range is too large for the fixed point, see
+#: :func:`cdbrdf.render._lookup_jit.packing_is_fine`).
+STORAGES: tuple[str, ...] = ("auto", "packed", "float")
+
+#: Mitsuba variants the plug-in supports (those of the installed Mitsuba are
+#: listed by :func:`cdbrdf.render.available_variants`); polarised variants are not.
+SUPPORTED_VARIANTS: tuple[str, ...] = (
+    "llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono",
+    "cuda_ad_rgb", "cuda_ad_spectral", "cuda_ad_mono",
+    "scalar_rgb", "scalar_spectral", "scalar_mono",
+)
+
 #: Default name of the per-vertex curvature attribute (mm^-1).
-DEFAULT_CURVATURE_ATTRIBUTE = "vertex_curvature"
+DEFAULT_CURVATURE_ATTRIBUTE = CURVATURE_MODES["max"]
 
 _RAD2DEG = 180.0 / math.pi
 
 
-def load_table(source: Any):
+def load_table(source: Any) -> Any:
     """A :class:`~cdbrdf.table.CDBRDF` from a table object or a file path."""
     from ..table import CDBRDF
 
@@ -48,32 +95,108 @@ def load_table(source: Any):
     )
 
 
-def _mode_grid(table, mode: str) -> LookupGrid:
-    if mode not in MODES:
-        raise ValueError(f"cdbrdf BSDF: mode {mode!r} is not one of {', '.join(MODES)}")
-    if mode == "brdf":
-        table = table.brdf()
-    return table.lookup_grid()
+def _choice(name: str, value: Any, choices: tuple[str, ...] | Mapping[str, str]) -> str:
+    v = str(value)
+    if v not in choices:
+        raise OptionError(f"cdbrdf BSDF: {name} {v!r} is not one of {', '.join(choices)}")
+    return v
 
 
-# -- the plug-in class (one per Mitsuba variant) ------------------------------------
-_CLASSES: dict[str, type] = {}
+@dataclass(frozen=True)
+class Settings:
+    """The plug-in's parameters other than the table and ``scale``, validated.
+
+    Attributes
+    ----------
+    mode
+        One of :data:`MODES`.
+    curvature_attribute
+        Mesh attribute holding the curvature, or None for a constant.
+    kappa_const
+        The constant curvature (mm^-1) when ``curvature_attribute`` is None.
+    curvature_scale
+        Factor applied to the attribute's values (a shape's ``to_world`` scale
+        and the scene unit, set by :func:`cdbrdf.render.load_file`).
+    sampling
+        One of :data:`SAMPLINGS`.
+    cosine_weight
+        Share of cosine sampling in the table sampler's mixture, in (0, 1].
+    storage
+        One of :data:`STORAGES`.
+    """
+
+    mode: str = "cdbrdf"
+    curvature_attribute: str | None = DEFAULT_CURVATURE_ATTRIBUTE
+    kappa_const: float = 0.0
+    curvature_scale: float = 1.0
+    sampling: str = "table"
+    cosine_weight: float = _sampling.DEFAULT_COSINE_WEIGHT
+    storage: str = "auto"
+
+    @classmethod
+    def parse(cls, *, mode: Any = "cdbrdf", curvature: Any = None, curvature_mode: Any = None,
+              curvature_scale: Any = 1.0, sampling: Any = "table", cosine_weight: Any = None,
+              storage: Any = "auto") -> Settings:
+        """Validate parameters as Mitsuba or a dict gives them (strings, floats)."""
+        mode = _choice("mode", mode, MODES)
+        sampling = _choice("sampling", sampling, SAMPLINGS)
+        storage = _choice("storage", storage, STORAGES)
+        if curvature is not None and curvature_mode is not None:
+            raise OptionError("cdbrdf BSDF: give either 'curvature' (an attribute name or a constant) or "
+                             "'curvature_mode', not both")
+        attr: str | None
+        k = 0.0
+        if curvature is None:
+            attr = CURVATURE_MODES[_choice("curvature_mode", curvature_mode or "max", CURVATURE_MODES)]
+        elif isinstance(curvature, str):
+            name = curvature.strip()
+            if not name:
+                raise OptionError("cdbrdf BSDF: curvature attribute name is empty")
+            try:
+                k = float(name)
+                attr = None
+            except ValueError:
+                attr = name
+        else:
+            k = float(curvature)
+            attr = None
+        if attr is None and not math.isfinite(k):
+            raise OptionError(f"cdbrdf BSDF: constant curvature must be finite, got {curvature}")
+        cs = float(curvature_scale)
+        if not (math.isfinite(cs) and cs > 0.0):
+            raise OptionError(f"cdbrdf BSDF: curvature_scale must be finite and > 0, got {curvature_scale}")
+        cw = _sampling.DEFAULT_COSINE_WEIGHT if cosine_weight is None else float(cosine_weight)
+        if not (0.0 < cw <= 1.0):
+            raise OptionError(f"cdbrdf BSDF: cosine_weight must lie in (0, 1], got {cosine_weight}")
+        if mode == "brdf":
+            # The plain BRDF does not depend on curvature: never read the attribute.
+            attr, k = None, 0.0
+        return cls(mode, attr, k, cs, sampling, cw, storage)
 
 
-def bsdf_class():
-    """The plug-in class for the current Mitsuba variant (created on first use)."""
-    import mitsuba as mi
-
-    variant = mi.variant()
+# -- variants ---------------------------------------------------------------------------------
+def check_variant(variant: str | None) -> str:
+    """The variant's colour kind (``"rgb"``, ``"spectral"``, ``"mono"``), or a ValueError."""
     if variant is None:
         raise RuntimeError(
             "cdbrdf BSDF: no Mitsuba variant is set; call cdbrdf.render.set_variant() first"
         )
-    if "_rgb" not in variant:
-        raise ValueError(
-            f"cdbrdf BSDF: Mitsuba variant {variant!r} is not supported; the table is RGB, "
-            "use llvm_ad_rgb (or scalar_rgb for debugging)"
+    if variant not in SUPPORTED_VARIANTS:
+        raise OptionError(
+            f"cdbrdf BSDF: Mitsuba variant {variant!r} is not supported; use one of "
+            f"{', '.join(SUPPORTED_VARIANTS)} (polarised variants are not supported)"
         )
+    return variant.split("_")[-1]
+
+
+_CLASSES: dict[str, type] = {}
+
+
+def bsdf_class() -> type:
+    """The plug-in class for the current Mitsuba variant (created on first use)."""
+    import mitsuba as mi
+
+    variant = str(check_variant(mi.variant()) and mi.variant())
     cls = _CLASSES.get(variant)
     if cls is None:
         cls = _make_class(mi)
@@ -81,63 +204,96 @@ def bsdf_class():
     return cls
 
 
-def _make_class(mi):  # noqa: C901 - the plug-in is one class
+# -- the table as the renderer holds it ---------------------------------------------------------------
+class _Prepared:
+    """A table's axes and current values, prepared for lookup (what :func:`cdbrdf.interp.evaluate` needs)."""
+
+    def __init__(self, grid: Any, values: np.ndarray) -> None:
+        self.grid = grid
+        self.values = values
+        self._lookup = prepare(SimpleNamespace(grid=grid, values=values))
+
+    def lookup_grid(self) -> LookupGrid:
+        return self._lookup
+
+
+class _LazySpectra:
+    """Spectra of the prepared samples at fixed wavelengths, computed for the samples read (scalar variants)."""
+
+    def __init__(self, records: np.ndarray, wavelengths: np.ndarray) -> None:
+        self.records = records
+        self.wavelengths = wavelengths
+        self.shape = records.shape[:-1] + (wavelengths.size,)
+
+    def __getitem__(self, idx: tuple[int, ...]) -> np.ndarray:
+        r = self.records[idx].astype(np.float64)
+        x = (r[0] * self.wavelengths + r[1]) * self.wavelengths + r[2]
+        return r[3] * np.maximum(0.0, 0.5 * x / np.sqrt(x * x + 1.0) + 0.5)
+
+
+def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
     import drjit as dr
 
-    scalar = mi.variant().startswith("scalar")
+    variant = mi.variant()
+    colour = check_variant(variant)
+    scalar = variant.startswith("scalar")
+    ad = "_ad_" in variant
 
     class CDBRDFBSDF(mi.BSDF):
         """Mitsuba BSDF of a curvature-dependent BRDF table (see :mod:`cdbrdf.render`)."""
 
-        def __init__(self, props, *, table=None):
+        def __init__(self, props: Any, *, table: Any = None) -> None:
             mi.BSDF.__init__(self, props)
             if table is None:
-                if not ("filename" in props):
-                    raise ValueError(
+                if "filename" not in props:
+                    raise OptionError(
                         "cdbrdf BSDF: give 'filename' (a CDBRDF file), or build the "
                         "BSDF from a table with cdbrdf.render.make_bsdf(table)"
                     )
-                table = load_table(str(props["filename"]))
+                name = str(props["filename"])
+                path = mi.file_resolver().resolve(name)
+                if not os.path.isfile(str(path)):
+                    raise FileNotFoundError(
+                        f"cdbrdf BSDF: table file {name!r} not found (looked next to the scene file and in "
+                        "the folders of Mitsuba's file resolver)")
+                table = load_table(str(path))
+                self.filename: str | None = str(path)
             else:
                 table = load_table(table)
-            mode = str(props["mode"]) if ("mode" in props) else "cdbrdf"
-            curv = props["curvature"] if ("curvature" in props) else DEFAULT_CURVATURE_ATTRIBUTE
-            scale = float(props["scale"]) if ("scale" in props) else 1.0
-            if not (math.isfinite(scale) and scale >= 0):
-                raise ValueError(f"cdbrdf BSDF: scale must be finite and >= 0, got {scale}")
+                self.filename = None
+
+            def get(key: str, default: Any = None) -> Any:
+                return props[key] if key in props else default
+
+            self.settings = Settings.parse(
+                mode=get("mode", "cdbrdf"), curvature=get("curvature"), curvature_mode=get("curvature_mode"),
+                curvature_scale=get("curvature_scale", 1.0), sampling=get("sampling", "table"),
+                cosine_weight=get("cosine_weight"), storage=get("storage", "auto"))
             if table.n_channels not in (1, 3):
-                raise ValueError(
-                    f"cdbrdf BSDF: the table has {table.n_channels} channels; "
-                    "the RGB renderer needs 1 or 3"
+                raise TableError(
+                    f"cdbrdf BSDF: the table has {table.n_channels} channels; the renderer needs 1 or 3"
                 )
             self.table = table
-            self.mode = mode
-            self.grid = _mode_grid(table, mode)
-            self._eval_table = table.brdf() if mode == "brdf" else table
-            self.scale = scale
-            k = None
-            if isinstance(curv, str):
-                name = curv.strip()
-                if not name:
-                    raise ValueError("cdbrdf BSDF: curvature attribute name is empty")
-                try:
-                    k = float(name)
-                except ValueError:
-                    self.kappa_const = None
-                    self.curvature_attribute = name
-            else:
-                k = float(curv)
-            if k is not None:
-                if not math.isfinite(k):
-                    raise ValueError(f"cdbrdf BSDF: constant curvature must be finite, got {curv}")
-                self.kappa_const = k
-                self.curvature_attribute = None
-            if mode == "brdf":
-                # The plain BRDF does not depend on curvature: never read the attribute.
-                self.curvature_attribute = None
-                self.kappa_const = 0.0
-            if not scalar:
-                self.packed = pack_table(mi, self.grid)
+            self._eval_table = table.brdf() if self.settings.mode == "brdf" else table
+            lj.check_range(self._eval_table.values)
+            self.scale_texture = None
+            self.scale = mi.Float(1.0)
+            if "scale" in props:
+                if props.type("scale") in (mi.Properties.Type.Float, mi.Properties.Type.Integer):
+                    s = float(props["scale"])
+                    if not (math.isfinite(s) and s >= 0):
+                        raise OptionError(f"cdbrdf BSDF: scale must be finite and >= 0, got {s}")
+                    self.scale = mi.Float(s)
+                else:
+                    self.scale_texture = props.get_texture("scale")
+            self.record = ("one" if colour == "mono" or table.n_channels == 1
+                           else "spectral" if colour == "spectral" else "rgb")
+            if self.settings.storage == "packed" and self.record == "spectral":
+                raise OptionError("cdbrdf BSDF: storage 'packed' holds RGB or grey values; spectral variants "
+                                 "use 'float' (or 'auto')")
+            self.values = mi.TensorXf(np.ascontiguousarray(self._eval_table.values, dtype=np.float32))
+            self._maps: Any = None
+            self._upload(np.asarray(self._eval_table.values, dtype=np.float64), differentiable=False)
             flags = (
                 mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
                 | mi.BSDFFlags.BackSide | mi.BSDFFlags.Anisotropic
@@ -145,112 +301,249 @@ def _make_class(mi):  # noqa: C901 - the plug-in is one class
             self.m_components = [flags]
             self.m_flags = flags
 
-        # -- helpers -------------------------------------------------------------
-        def _kappa(self, si, active):
-            if self.curvature_attribute is None:
-                return mi.Float(self.kappa_const)
-            return si.shape.eval_attribute_1(self.curvature_attribute, si, active)
+        # -- settings as attributes (read by check_scene and the tests) -----------------------
+        @property
+        def mode(self) -> str:
+            return self.settings.mode
 
-        def _local(self, si, wo, active):
-            """Directions in the front frame (flipped about x on the back side) and kappa."""
-            back = mi.Frame3f.cos_theta(si.wi) < 0.0
-            sign = dr.select(back, -1.0, 1.0)
-            wi = mi.Vector3f(si.wi.x, sign * si.wi.y, sign * si.wi.z)
-            wl = mi.Vector3f(wo.x, sign * wo.y, sign * wo.z)
-            kappa = sign * self._kappa(si, active)
-            valid = active & (wi.z > 0.0) & (wl.z > 0.0)
-            return wi, wl, kappa, valid, sign
+        @property
+        def curvature_attribute(self) -> str | None:
+            return self.settings.curvature_attribute
 
-        def _f(self, wi, wl, kappa, valid, ctx=None):
-            """The table at view ``wi`` and light ``wl`` (front frame), times scale.
+        @property
+        def kappa_const(self) -> float:
+            return self.settings.kappa_const
 
-            In importance transport (``ctx.mode`` Importance) Mitsuba's ``wi``
-            points to the light and ``wo`` to the camera: the roles swap.
-            """
-            if ctx is not None and ctx.mode == mi.TransportMode.Importance:
-                wi, wl = wl, wi
-            tv = dr.acos(dr.clip(wi.z, -1.0, 1.0)) * _RAD2DEG
-            pv = dr.atan2(wi.y, wi.x) * _RAD2DEG
-            tl = dr.acos(dr.clip(wl.z, -1.0, 1.0)) * _RAD2DEG
-            pl = dr.atan2(wl.y, wl.x) * _RAD2DEG
+        @property
+        def sampling(self) -> str:
+            return self.settings.sampling
+
+        # -- the table on the device ------------------------------------------------------------
+        def _upload(self, values: np.ndarray, *, differentiable: bool) -> None:
+            """(Re)build the prepared table, its device copy and the sampler from raw ``values``."""
+            if not np.all(np.isfinite(values)):
+                raise TableError("cdbrdf BSDF: the table values are not all finite")
+            lj.check_range(values)
+            self.prepared = _Prepared(self._eval_table.grid, values)
+            self.grid = self.prepared.lookup_grid()
+            st = self.settings
+            self.sampler_tables: _sampling.SamplerTables | None = (
+                _sampling.build_sampler(self.grid) if st.sampling == "table" else None)
             if scalar:
-                if not valid:
-                    return mi.Color3f(0.0)
-                from ..interp import evaluate
+                if self.record == "spectral":
+                    self._records = lj.records(self.grid.values, "spectral")
+                return
+            if differentiable:
+                if self.record == "spectral":
+                    raise OptionError("cdbrdf BSDF: gradients with respect to the table are available in the "
+                                     "rgb and mono variants (spectral upsampling is not differentiable)")
+                if self._maps is None:
+                    g = self._eval_table.grid
+                    self._maps = lj.packet_maps(values.shape, g.theta_l, g.theta_v, self.record,
+                                                isotropic=self.grid.isotropic)
+                self.packed = lj.linear_upload(mi, self.values.array, self._maps, self.record)
+            elif (st.storage == "float" or self.record == "spectral"
+                  or (st.storage == "auto" and self.record == "rgb" and not lj.packing_is_fine(self.grid.values))):
+                self.packed = lj.float_table(mi, self.grid, self.record)
+            else:
+                self.packed = lj.pack_table(mi, self.grid, self.record)
+            if self.sampler_tables is not None:
+                from . import _sampling_jit
 
-                v = evaluate(self._eval_table, float(tv), float(pv), float(tl), float(pl), float(kappa),
-                             on_invalid="nan")
-                v = np.broadcast_to(v, (3,)) if v.size == 1 else v
-                return mi.Color3f(*(float(x) * self.scale for x in v))
-            f = lookup_jit(mi, self.grid, self.packed, tv, pv, tl, pl, kappa, valid)
-            return dr.select(valid, f * self.scale, 0.0)
+                self.sampler = _sampling_jit.upload(mi, self.sampler_tables)
 
-        # -- the BSDF interface ---------------------------------------------------
-        def eval(self, ctx, si, wo, active=True):
-            wi, wl, kappa, valid, _ = self._local(si, wo, active)
-            f = self._f(wi, wl, kappa, valid, ctx)
-            return dr.select(valid, f * wl.z, 0.0)
+        def traverse(self, callback: Any) -> None:
+            callback.put("values", self.values, mi.ParamFlags.Differentiable)
+            if self.scale_texture is not None:
+                callback.put("scale", self.scale_texture, mi.ParamFlags.Differentiable)
+            else:
+                callback.put("scale", self.scale, mi.ParamFlags.Differentiable)
 
-        def pdf(self, ctx, si, wo, active=True):
-            wi, wl, kappa, valid, _ = self._local(si, wo, active)
-            return dr.select(valid, mi.warp.square_to_cosine_hemisphere_pdf(wl), 0.0)
+        def parameters_changed(self, keys: Any = None) -> None:
+            if keys and "values" not in keys:
+                return
+            shape = tuple(self._eval_table.values.shape)
+            if tuple(self.values.shape) != shape:
+                raise TableError(f"cdbrdf BSDF: 'values' must keep the table's shape {shape}, "
+                                 f"got {tuple(self.values.shape)}")
+            grad = ad and bool(dr.grad_enabled(self.values))
+            host = np.asarray(dr.detach(self.values), dtype=np.float64).reshape(shape)
+            self._upload(host, differentiable=grad)
 
-        def eval_pdf(self, ctx, si, wo, active=True):
-            wi, wl, kappa, valid, _ = self._local(si, wo, active)
-            f = self._f(wi, wl, kappa, valid, ctx)
-            return (
-                dr.select(valid, f * wl.z, 0.0),
-                dr.select(valid, mi.warp.square_to_cosine_hemisphere_pdf(wl), 0.0),
-            )
+        # -- helpers ----------------------------------------------------------------------------
+        def _kappa(self, si: Any, active: Any) -> Any:
+            st = self.settings
+            if st.curvature_attribute is None:
+                return mi.Float(st.kappa_const)
+            k = si.shape.eval_attribute_1(st.curvature_attribute, si, active)
+            return k * st.curvature_scale if st.curvature_scale != 1.0 else k
 
-        def sample(self, ctx, si, sample1, sample2, active=True):
+        def _front(self, si: Any, active: Any) -> tuple[Any, Any, Any]:
+            """The view direction in the front frame (turned about x on the back side), the side's sign, kappa."""
             back = mi.Frame3f.cos_theta(si.wi) < 0.0
             sign = dr.select(back, -1.0, 1.0)
-            kappa = sign * self._kappa(si, active)
-            return self._sample(ctx, si, sample2, sign, kappa, active)
-
-        def eval_pdf_sample(self, ctx, si, wo, sample1, sample2, active=True):
-            # One curvature read for the light direction and the sampled one.
-            wi, wl, kappa, valid, sign = self._local(si, wo, active)
-            f = self._f(wi, wl, kappa, valid, ctx)
-            bs, value = self._sample(ctx, si, sample2, sign, kappa, active)
-            return (
-                dr.select(valid, f * wl.z, 0.0),
-                dr.select(valid, mi.warp.square_to_cosine_hemisphere_pdf(wl), 0.0),
-                bs,
-                value,
-            )
-
-        def _sample(self, ctx, si, sample2, sign, kappa, active):
-            wl = mi.warp.square_to_cosine_hemisphere(sample2)
-            pdf = mi.warp.square_to_cosine_hemisphere_pdf(wl)
             wi = mi.Vector3f(si.wi.x, sign * si.wi.y, sign * si.wi.z)
-            valid = active & (wi.z > 0.0) & (pdf > 0.0)
+            return wi, sign, sign * self._kappa(si, active)
+
+        def _scale(self, si: Any, active: Any) -> Any:
+            if self.scale_texture is not None:
+                return self.scale_texture.eval(si, active)
+            return self.scale
+
+        def _f(self, si: Any, tv: Any, pv: Any, tl: Any, pl: Any, kappa: Any, valid: Any) -> Any:
+            """The table at view (tv, pv) and light (tl, pl) (front frame, degrees), as a spectrum."""
+            if scalar:
+                return self._f_scalar(si, tv, pv, tl, pl, kappa, valid)
+            f = lj.lookup_jit(mi, self.grid, self.packed, tv, pv, tl, pl, kappa, valid, si.wavelengths)
+            if self.record == "one":
+                f = mi.UnpolarizedSpectrum(f)
+            return f * self._scale(si, valid)
+
+        def _f_scalar(self, si: Any, tv: Any, pv: Any, tl: Any, pl: Any, kappa: Any, valid: Any) -> Any:
+            from ..interp import evaluate, evaluate_reference
+
+            if not valid:
+                return dr.zeros(mi.UnpolarizedSpectrum)
+            q = (float(tv), float(pv), float(tl), float(pl), float(kappa))
+            if self.record == "spectral":
+                lam = np.array(si.wavelengths, dtype=np.float64).reshape(-1)
+                spectra: Any = _LazySpectra(self._records, lam)
+                lazy = SimpleNamespace(lookup_grid=lambda: self.grid._replace(values=spectra))
+                v = evaluate_reference(lazy, *q)
+                f = mi.UnpolarizedSpectrum(*map(float, v))
+            else:
+                v = evaluate(self.prepared, *q, on_invalid="nan")
+                if self.record == "one":
+                    y = float(v[0]) if v.size == 1 else float(v @ np.array([0.2126, 0.7152, 0.0722]))
+                    f = mi.UnpolarizedSpectrum(y)
+                else:
+                    f = mi.UnpolarizedSpectrum(*map(float, v))
+            return f * self._scale(si, valid)
+
+        def _angles(self, d: Any) -> tuple[Any, Any]:
+            return (dr.acos(dr.clip(d.z, -1.0, 1.0)) * _RAD2DEG, dr.atan2(d.y, d.x) * _RAD2DEG)
+
+        def _query(self, ctx: Any, si: Any, wo: Any, active: Any) -> SimpleNamespace:
+            wi, sign, kappa = self._front(si, active)
+            wl = mi.Vector3f(wo.x, sign * wo.y, sign * wo.z)
+            valid = active & (wi.z > 0.0) & (wl.z > 0.0)
+            tv, pv = self._angles(wi)
+            tl, pl = self._angles(wl)
+            return SimpleNamespace(wi=wi, wl=wl, sign=sign, kappa=kappa, valid=valid, tv=tv, pv=pv, tl=tl, pl=pl,
+                                   importance=self._importance(ctx))
+
+        def _importance(self, ctx: Any) -> bool:
+            return ctx is not None and ctx.mode == mi.TransportMode.Importance
+
+        def _value(self, si: Any, q: SimpleNamespace) -> Any:
+            """eval: f * cos(theta_l), with view and light swapped in importance transport."""
+            if q.importance:
+                f = self._f(si, q.tl, q.pl, q.tv, q.pv, q.kappa, q.valid)
+            else:
+                f = self._f(si, q.tv, q.pv, q.tl, q.pl, q.kappa, q.valid)
+            return dr.select(q.valid, f * q.wl.z, 0.0)
+
+        def _table_sampling(self, q: SimpleNamespace) -> bool:
+            return self.sampler_tables is not None and not q.importance
+
+        def _pdf(self, q: SimpleNamespace, cond: Any) -> Any:
+            if not self._table_sampling(q):
+                return dr.select(q.valid, mi.warp.square_to_cosine_hemisphere_pdf(q.wl), 0.0)
+            if scalar:
+                if not q.valid:
+                    return 0.0
+                tables = cast(_sampling.SamplerTables, self.sampler_tables)
+                p = _sampling.pdf(tables, float(q.tv), float(q.pv), float(q.kappa),
+                                  np.array([[float(q.wl.x), float(q.wl.y), float(q.wl.z)]]),
+                                  cosine_weight=self.settings.cosine_weight)
+                return float(p[0])
+            from . import _sampling_jit
+
+            return _sampling_jit.pdf(mi, self.sampler, cond, q.wl, q.pl, self.settings.cosine_weight, q.valid)
+
+        def _conditioning(self, q: SimpleNamespace, active: Any) -> Any:
+            if scalar or not self._table_sampling(q):
+                return None
+            from . import _sampling_jit
+
+            return _sampling_jit.conditioning(mi, self.sampler, q.tv, q.pv, q.kappa, active)
+
+        # -- the BSDF interface -------------------------------------------------------------------
+        def eval(self, ctx: Any, si: Any, wo: Any, active: Any = True) -> Any:
+            return self._value(si, self._query(ctx, si, wo, active))
+
+        def pdf(self, ctx: Any, si: Any, wo: Any, active: Any = True) -> Any:
+            q = self._query(ctx, si, wo, active)
+            return self._pdf(q, self._conditioning(q, q.valid))
+
+        def eval_pdf(self, ctx: Any, si: Any, wo: Any, active: Any = True) -> tuple[Any, Any]:
+            q = self._query(ctx, si, wo, active)
+            return self._value(si, q), self._pdf(q, self._conditioning(q, q.valid))
+
+        def sample(self, ctx: Any, si: Any, sample1: Any, sample2: Any, active: Any = True) -> tuple[Any, Any]:
+            wi, sign, kappa = self._front(si, active)
+            tv, pv = self._angles(wi)
+            return self._sample(ctx, si, wi, sign, kappa, tv, pv, sample1, sample2, active, None)
+
+        def eval_pdf_sample(self, ctx: Any, si: Any, wo: Any, sample1: Any, sample2: Any,
+                            active: Any = True) -> tuple[Any, Any, Any, Any]:
+            # One curvature read and one conditioning for the light direction and the sampled one.
+            q = self._query(ctx, si, wo, active)
+            ok = active & (q.wi.z > 0.0)
+            cond = self._conditioning(q, ok)
+            bs, value = self._sample(ctx, si, q.wi, q.sign, q.kappa, q.tv, q.pv, sample1, sample2, active, cond)
+            return self._value(si, q), self._pdf(q, cond), bs, value
+
+        def _sample(self, ctx: Any, si: Any, wi: Any, sign: Any, kappa: Any, tv: Any, pv: Any, sample1: Any,
+                    sample2: Any, active: Any, cond: Any) -> tuple[Any, Any]:
+            importance = self._importance(ctx)
+            q = SimpleNamespace(wi=wi, sign=sign, kappa=kappa, tv=tv, pv=pv, importance=importance)
+            ok = active & (wi.z > 0.0)
+            if not self._table_sampling(q):
+                wl = mi.warp.square_to_cosine_hemisphere(sample2)
+            elif scalar:
+                tables = cast(_sampling.SamplerTables, self.sampler_tables)
+                d, _ = _sampling.sample(tables, float(tv), float(pv), float(kappa), float(sample1),
+                                        np.array([[float(sample2.x), float(sample2.y)]]),
+                                        cosine_weight=self.settings.cosine_weight)
+                wl = mi.Vector3f(*map(float, d[0]))
+            else:
+                from . import _sampling_jit
+
+                if cond is None:
+                    cond = _sampling_jit.conditioning(mi, self.sampler, tv, pv, kappa, ok)
+                wl = _sampling_jit.sample(mi, self.sampler, cond, sample1, sample2, self.settings.cosine_weight, ok)
+            q.wl = wl
+            q.valid = ok & (wl.z > 0.0)
+            q.tl, q.pl = self._angles(wl)
+            pdf = self._pdf(q, cond)
+            q.valid = q.valid & (pdf > 0.0)
+            value = self._value(si, q)
             bs = dr.zeros(mi.BSDFSample3f)
             bs.wo = mi.Vector3f(wl.x, sign * wl.y, sign * wl.z)
-            bs.pdf = dr.select(valid, pdf, 0.0)
+            bs.pdf = dr.select(q.valid, pdf, 0.0)
             bs.eta = 1.0
             bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
             bs.sampled_component = mi.UInt32(0)
-            f = self._f(wi, wl, kappa, valid, ctx)
-            # value = f * cos / pdf = f * pi for cosine-weighted sampling.
-            value = dr.select(valid, f * math.pi, 0.0)
-            return (bs, value)
+            return bs, dr.select(q.valid, value / dr.select(q.valid, pdf, 1.0), 0.0)
 
-        def eval_diffuse_reflectance(self, si, active=True):
+        def eval_diffuse_reflectance(self, si: Any, active: Any = True) -> Any:
             # Albedo-like estimate for AOVs: the table at normal incidence times pi.
             back = mi.Frame3f.cos_theta(si.wi) < 0.0
             kappa = dr.select(back, -1.0, 1.0) * self._kappa(si, active)
-            z = mi.Vector3f(0.0, 0.0, 1.0)
-            return self._f(z, z, kappa, active) * math.pi
+            zero = mi.Float(0.0)
+            return self._f(si, zero, zero, zero, zero, kappa, active) * math.pi
 
-        def to_string(self):
-            k = (f"attribute {self.curvature_attribute!r}" if self.curvature_attribute
-                 else f"constant {self.kappa_const:g} mm^-1")
+        def to_string(self) -> str:
+            st = self.settings
+            k = (f"attribute {st.curvature_attribute!r} x {st.curvature_scale:g}" if st.curvature_attribute
+                 else f"constant {st.kappa_const:g} mm^-1")
+            scale = ("texture" if self.scale_texture is not None
+                     else f"{float(np.asarray(self.scale, dtype=np.float64).reshape(-1)[0]):g}")
             return (
                 f"CDBRDFBSDF[material={self.table.attrs.get('material', '?')!r}, "
-                f"mode={self.mode!r}, curvature={k}, scale={self.scale:g}, "
-                f"shape={self.table.shape}]"
+                f"mode={st.mode!r}, curvature={k}, scale={scale}, sampling={st.sampling!r}, "
+                f"storage={getattr(self, 'packed', None) and self.packed.layout!r}, shape={self.table.shape}]"
             )
 
     CDBRDFBSDF.__name__ = "CDBRDFBSDF"

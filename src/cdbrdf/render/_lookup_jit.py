@@ -31,14 +31,33 @@ directions (the plug-in returns 0 for them).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
+from ..colour import LUMINANCE_WEIGHTS
 from ..errors import TableError
 from ..interp import LookupGrid, snap_tolerance
 
-__all__ = ["PACK_BITS", "MAX_ABS_VALUE", "lookup_jit", "pack_table"]
+__all__ = [
+    "LAYOUTS",
+    "MAX_ABS_VALUE",
+    "PACK_BITS",
+    "PACK_MAX_RELATIVE_STEP",
+    "RECORDS",
+    "TableUpload",
+    "check_range",
+    "float_table",
+    "linear_upload",
+    "lookup_jit",
+    "pack_table",
+    "packet_index",
+    "packing_is_fine",
+    "packet_maps",
+    "apply_maps",
+    "records",
+]
 
 #: Largest table value (in magnitude) the renderer accepts: its arithmetic is
 #: float32 (largest 3.4e38), with headroom for the weighted sums and ``scale``.
@@ -107,15 +126,89 @@ def _locate_periodic(dr: Any, Float: Any, UInt: Any, phi0: float, inv_step: floa
     return UInt(dr.clip(i, 0.0, n - 1.0)), w
 
 
-def pack_table(mi: Any, grid: LookupGrid) -> tuple[Any, float, float]:
-    """Upload a prepared table: ``(buffer, offset, step)``.
+# -- uploads ---------------------------------------------------------------------------------------
+class TableUpload(NamedTuple):
+    """A prepared table on the device, in one of two layouts.
+
+    Attributes
+    ----------
+    layout
+        ``"packed"``: one record per table sample (RGB as three
+        :data:`PACK_BITS`-bit fixed-point channels in a 64-bit word, one
+        channel as float32); ``"float"``: float32 *packets*, one per sample
+        ``(k, pl, tl, pv, tv)`` holding the records of ``(pv, tv)``,
+        ``(pv, tv + 1)``, ``(pv + 1, tv)`` and ``(pv + 1, tv + 1)`` (``pv``
+        periodic, ``tv + 1`` clamped), so one gather fetches four samples.
+    record
+        What a record holds (:data:`RECORDS`): ``"rgb"`` (R, G, B, 0),
+        ``"one"`` (one value: a one-channel table, or luminance in mono
+        variants) or ``"spectral"`` (Mitsuba's sRGB model coefficients and a
+        scale, :func:`cdbrdf.render._spectral.spectral_records`).
+    buffer
+        The Dr.Jit array.
+    offset, step
+        The fixed-point code of packed RGB (``value = offset + step * q``);
+        0 and 1 otherwise.
+    """
+
+    layout: str
+    record: str
+    buffer: Any
+    offset: float = 0.0
+    step: float = 1.0
+
+    @property
+    def stride(self) -> int:
+        """Floats per record in the ``"float"`` layout."""
+        return 1 if self.record == "one" else 4
+
+
+#: Layouts of an upload (``"auto"`` lets the plug-in choose).
+LAYOUTS: tuple[str, ...] = ("packed", "float")
+
+#: Kinds of record.
+RECORDS: tuple[str, ...] = ("rgb", "one", "spectral")
+
+
+def check_range(values: NDArray[np.floating]) -> tuple[float, float]:
+    """The smallest and largest value; refuse values beyond :data:`MAX_ABS_VALUE`."""
+    v = np.asarray(values)
+    lo, hi = float(v.min()), float(v.max())
+    if max(abs(lo), abs(hi)) > MAX_ABS_VALUE:
+        raise TableError(
+            f"table values span {lo:g}..{hi:g}: the renderer computes in float32 and needs values "
+            f"within +-{MAX_ABS_VALUE:g} (rescale the table, e.g. with the plug-in's 'scale')"
+        )
+    return lo, hi
+
+
+#: Largest fixed-point step of the packed layout, relative to the table's median absolute value,
+#: that ``storage="auto"`` accepts (beyond it, the float layout is used).
+PACK_MAX_RELATIVE_STEP = 1e-3
+
+
+def packing_is_fine(values: NDArray[np.floating]) -> bool:
+    """Whether the 21-bit step of :func:`pack_table` is at most :data:`PACK_MAX_RELATIVE_STEP` of the median |value|.
+
+    A table with a huge dynamic range (a grazing peak 10^5 times its median)
+    would keep only a few fixed-point levels at its median values.
+    """
+    v = np.asarray(values, dtype=np.float64)
+    if v.shape[-1] != 3:
+        return True  # one-channel tables are float32 in both layouts
+    step = (float(v.max()) - float(v.min())) / _PACK_MAX
+    med = float(np.median(np.abs(v)))
+    return step <= PACK_MAX_RELATIVE_STEP * med if med > 0 else step == 0.0
+
+
+def pack_table(mi: Any, grid: LookupGrid, record: str | None = None) -> TableUpload:
+    """Upload a prepared table in the ``"packed"`` layout.
 
     RGB tables are packed as three :data:`PACK_BITS`-bit fixed-point channels
     per 64-bit word (``value = offset + step * q``; ``step`` = range /
     (2^21 - 1), i.e. about 5e-7 of the table's range), so one gather fetches
-    a whole sample: the lookup is gather-bound and this makes it about 1.5x
-    faster than three float gathers. One-channel tables stay float32
-    (``offset = 0, step = 1``).
+    a whole sample. ``"one"`` records (a one-channel table, or the luminance
+    of an RGB one) are float32.
 
     Parameters
     ----------
@@ -123,33 +216,233 @@ def pack_table(mi: Any, grid: LookupGrid) -> tuple[Any, float, float]:
         The ``mitsuba`` module, with a variant set.
     grid
         The table's prepared grid (``table.lookup_grid()``).
+    record
+        ``"rgb"`` or ``"one"`` (default: ``"rgb"`` for 3 channels, else ``"one"``).
 
     Returns
     -------
-    tuple
-        The Dr.Jit buffer, the offset and the step of the fixed-point code.
+    TableUpload
     """
     v = np.asarray(grid.values, dtype=np.float64)
-    lo, hi = float(v.min()), float(v.max())
-    if max(abs(lo), abs(hi)) > MAX_ABS_VALUE:
-        raise TableError(
-            f"table values span {lo:g}..{hi:g}: the renderer computes in float32 and needs values "
-            f"within +-{MAX_ABS_VALUE:g} (rescale the table, e.g. with the plug-in's 'scale')"
-        )
-    if v.shape[-1] == 1:
-        return mi.Float(v.astype(np.float32).reshape(-1)), 0.0, 1.0
+    lo, hi = check_range(v)
+    record = record or ("rgb" if v.shape[-1] == 3 else "one")
+    if record not in ("rgb", "one"):
+        raise ValueError(f"record: the packed layout holds 'rgb' or 'one' records, not {record!r}")
+    if record == "one":
+        return TableUpload("packed", "one", mi.Float(records(v, "one").reshape(-1)))
     step = (hi - lo) / _PACK_MAX if hi > lo else 1.0
     q = np.rint((v - lo) / step).astype(np.uint64)
     word = q[..., 0] | (q[..., 1] << np.uint64(PACK_BITS)) | (q[..., 2] << np.uint64(2 * PACK_BITS))
     import drjit as dr
 
     UInt64: Any = dr.uint64_array_t(mi.Float)
-    return UInt64(word.reshape(-1)), lo, step
+    return TableUpload("packed", "rgb", UInt64(word.reshape(-1)), lo, step)
 
 
-def lookup_jit(mi: Any, grid: LookupGrid, packed: tuple[Any, float, float], theta_v: Any, phi_v: Any,
-               theta_l: Any, phi_l: Any, kappa: Any, active: Any = True) -> Any:
-    """Interpolate a prepared table in Dr.Jit -> ``mi.Color3f`` (see the module docstring).
+def packet_index(shape5: tuple[int, ...], stride: int) -> NDArray[np.int64]:
+    """For every float of the ``"float"`` layout, the index of the record float it copies.
+
+    ``shape5`` is the prepared grid's ``(n_kappa, n_phi_l, n_theta_l,
+    n_phi_v, n_theta_v)``; records are stored ``stride`` floats each in that
+    C order.
+    """
+    nk, npl, ntl, npv, ntv = shape5
+    s = np.arange(nk * npl * ntl * npv * ntv).reshape(shape5)
+    pv1 = np.roll(s, -1, axis=3)
+    tv1 = np.concatenate([s[..., 1:], s[..., -1:]], axis=4)
+    pvtv1 = np.concatenate([pv1[..., 1:], pv1[..., -1:]], axis=4)
+    samples = np.stack([s, tv1, pv1, pvtv1], axis=-1)  # (..., 4)
+    return (samples[..., None] * stride + np.arange(stride)).reshape(-1)
+
+
+def records(values: NDArray[np.floating], record: str) -> NDArray[np.float32]:
+    """Records ``(..., stride)`` of prepared values ``(..., channels)``."""
+    v = np.asarray(values, dtype=np.float64)
+    if record == "one":
+        return (v if v.shape[-1] == 1 else (v @ LUMINANCE_WEIGHTS)[..., None]).astype(np.float32)
+    if record == "spectral":
+        from ._spectral import spectral_records
+
+        if v.shape[-1] == 1:
+            raise ValueError("a one-channel table has 'one' records (a flat spectrum)")
+        return spectral_records(v)
+    out = np.zeros(v.shape[:-1] + (4,), dtype=np.float32)
+    out[..., :3] = v
+    return out
+
+
+def float_table(mi: Any, grid: LookupGrid, record: str) -> TableUpload:
+    """Upload a prepared table in the ``"float"`` (packet) layout with records of kind ``record``."""
+    if record not in RECORDS:
+        raise ValueError(f"record: {record!r} is not one of {', '.join(RECORDS)}")
+    check_range(grid.values)
+    rec = records(grid.values, record)
+    stride = rec.shape[-1]
+    flat = rec.reshape(-1)[packet_index(grid.values.shape[:5], stride)]
+    return TableUpload("float", record, mi.Float(np.ascontiguousarray(flat)))
+
+
+# -- the differentiable upload: raw table values -> packets, one sparse linear map -------------------
+def _pole_pass(theta: NDArray[np.float64], n_phi: int, light: bool, isotropic: bool = False) -> NDArray[np.float64]:
+    """interp's pole rule on one (theta, phi) pair of axes, as a dense matrix.
+
+    Anisotropic light pass: ``(n_phi_l, n_theta_out, n_phi_l * n_theta)`` on
+    the (phi_l, theta_l) axes; isotropic light pass: ``(n_theta_out, n_phi_v,
+    n_theta * n_phi_v)`` on the (theta_l, phi_v) axes (its light pole averages
+    the azimuth difference); view pass: ``(n_phi_v, n_theta_out, n_phi_v *
+    n_theta)`` on (phi_v, theta_v). Obtained by running
+    :func:`cdbrdf.interp.prepare` on the identity, so it is the owner's rule
+    by construction.
+    """
+    from types import SimpleNamespace
+
+    from ..interp import prepare
+
+    n_theta = theta.size
+    m = n_phi * n_theta
+    other = np.array([45.0])  # the other elevation axis: one node above 0, untouched by this pass
+    if light and isotropic:
+        values = np.eye(m).reshape(n_theta, n_phi, m)[None, None, :, :, None, :]
+        grid = SimpleNamespace(kappa=np.array([0.0]), theta_l=theta, phi_l=np.zeros(1), theta_v=other,
+                               phi_v=np.zeros(n_phi), isotropic=True)
+        return np.asarray(prepare(SimpleNamespace(values=values, grid=grid)).values)[0, 0, :, :, -1, :]
+    eye = np.eye(m).reshape(n_phi, n_theta, m)
+    if light:
+        values = eye[None, :, :, None, None, :]
+        grid = SimpleNamespace(kappa=np.array([0.0]), theta_l=theta, phi_l=np.zeros(n_phi), theta_v=other,
+                               phi_v=np.zeros(1), isotropic=False)
+        return np.asarray(prepare(SimpleNamespace(values=values, grid=grid)).values)[0, :, :, 0, -1, :]
+    values = eye[None, None, None, :, :, :]
+    grid = SimpleNamespace(kappa=np.array([0.0]), theta_l=other, phi_l=np.zeros(1), theta_v=theta,
+                           phi_v=np.zeros(n_phi), isotropic=isotropic)
+    return np.asarray(prepare(SimpleNamespace(values=values, grid=grid)).values)[0, 0, -1, :, :, :]
+
+
+def _factor(dense: NDArray[np.float64]) -> tuple[Any, Any]:
+    """``dense = select @ unique``: its distinct rows (sparse) and the selection of each row."""
+    import scipy.sparse as sp
+
+    unique, inverse = np.unique(dense, axis=0, return_inverse=True)
+    inverse = np.asarray(inverse).reshape(-1)
+    select = sp.csr_matrix((np.ones(inverse.size), (np.arange(inverse.size), inverse)),
+                           shape=(inverse.size, unique.shape[0]))
+    return select, sp.csr_matrix(unique)
+
+
+def packet_maps(raw_shape: tuple[int, ...], theta_l: NDArray[np.float64], theta_v: NDArray[np.float64],
+                record: str, *, isotropic: bool = False) -> tuple[Any, ...]:
+    """Sparse matrices (scipy CSR) whose product maps the raw values (C order) to the ``"float"`` layout.
+
+    Applied in the order given (``packets = M[-1] @ ... @ M[0] @ raw``), they
+    are the light and view pole rules of :func:`cdbrdf.interp.prepare`
+    (:func:`_pole_pass`, each split into its distinct rows and a selection,
+    so that the ring means are summed once, not once per azimuth), the record
+    map (RGB padded to 4, or the luminance for a ``"one"`` record of an RGB
+    table) and :func:`packet_index`. Linear in the values, so the renderer
+    can differentiate through them.
+    """
+    import scipy.sparse as sp
+
+    nk, npl, ntl, npv, ntv, nc = raw_shape
+    if isotropic:  # the light pole averages the azimuth difference (the phi_v axis)
+        lp = _pole_pass(np.asarray(theta_l, dtype=np.float64), npv, light=True, isotropic=True)
+        ntl_o = lp.shape[0]
+        l_sel, l_uni = _factor(lp.reshape(ntl_o * npv, ntl * npv))
+    else:
+        lp = _pole_pass(np.asarray(theta_l, dtype=np.float64), npl, light=True)
+        ntl_o = lp.shape[1]
+        l_sel, l_uni = _factor(lp.reshape(npl * ntl_o, npl * ntl))
+    vp = _pole_pass(np.asarray(theta_v, dtype=np.float64), npv, light=False, isotropic=isotropic)
+    ntv_o = vp.shape[1]
+    v_sel, v_uni = _factor(vp.reshape(npv * ntv_o, npv * ntv))
+
+    def eye(n: int) -> Any:
+        return sp.identity(n, format="csr")
+
+    def on(a: int, m: Any, b: int) -> Any:
+        return sp.kron(sp.kron(eye(a), m), eye(b), format="csr")
+
+    n_samples = nk * npl * ntl_o * npv * ntv_o
+    if record == "rgb":
+        if nc != 3:
+            raise ValueError("'rgb' records need a 3-channel table")
+        per, stride = np.eye(4, 3), 4
+    elif record == "one":
+        if nc not in (1, 3):
+            raise ValueError("'one' records need a 1- or 3-channel table")
+        per, stride = (np.atleast_2d(LUMINANCE_WEIGHTS) if nc == 3 else np.ones((1, 1))), 1
+    else:
+        raise ValueError(f"record {record!r}: only 'rgb' and 'one' records are linear in the table")
+    idx = packet_index((nk, npl, ntl_o, npv, ntv_o), stride)
+    gather = sp.csr_matrix((np.ones(idx.size), (np.arange(idx.size), idx)), shape=(idx.size, n_samples * stride))
+    rec = sp.kron(eye(n_samples), sp.csr_matrix(per), format="csr")
+    # the light pass acts on (phi_l, theta_l), or (theta_l, phi_v) when isotropic; the view pass on (phi_v, theta_v)
+    before, after = (nk * npl, ntv * nc) if isotropic else (nk, npv * ntv * nc)
+    first = on(before, l_uni, after)
+    second = on(nk * npl * ntl_o, v_uni, nc) @ on(before, l_sel, after)
+    third = gather @ rec @ on(nk * npl * ntl_o, v_sel, nc)
+    return first.tocsr(), second.tocsr(), third.tocsr()
+
+
+def apply_maps(maps: tuple[Any, ...], values: NDArray[np.floating]) -> NDArray[np.float64]:
+    """``maps`` applied to flat values in NumPy (the reference of :func:`linear_upload`)."""
+    x = np.asarray(values, dtype=np.float64).reshape(-1)
+    for m in maps:
+        x = m @ x
+    return x
+
+
+def _apply_jit(mi: Any, x: Any, m: Any) -> Any:
+    """``m @ x`` in Dr.Jit with gathers only: rows grouped by their number of terms, summed in a fixed order.
+
+    Deterministic (a scatter-add would sum in thread order), so rows with the
+    same terms (the pole ring means) are equal bit for bit; differentiable.
+    """
+    import drjit as dr
+
+    UInt = mi.UInt32
+    csr = m.tocsr()
+    csr.sort_indices()
+    counts = np.diff(csr.indptr)
+    out = dr.zeros(mi.Float, csr.shape[0])
+    for c in np.unique(counts):
+        if c == 0:
+            continue
+        rows = np.flatnonzero(counts == c)
+        pos = csr.indptr[rows][:, None] + np.arange(c)[None, :]
+        cols, vals = csr.indices[pos], csr.data[pos]
+        acc = dr.gather(mi.Float, x, UInt(cols[:, 0].astype(np.uint32))) * mi.Float(vals[:, 0].astype(np.float32))
+        for r in range(1, int(c)):
+            acc = dr.fma(dr.gather(mi.Float, x, UInt(cols[:, r].astype(np.uint32))),
+                         mi.Float(vals[:, r].astype(np.float32)), acc)
+        dr.scatter(out, acc, UInt(rows.astype(np.uint32)))
+    return out
+
+
+def linear_upload(mi: Any, values: Any, maps: tuple[Any, ...], record: str) -> TableUpload:
+    """The ``"float"`` layout as the product of :func:`packet_maps` with ``values``, in Dr.Jit.
+
+    ``values`` is a flat ``mi.Float`` of the raw table (C order), e.g. the
+    array of the tensor that ``mi.traverse`` exposes; the result is
+    differentiable in it (gathers; their adjoints are scatter-adds).
+    """
+    x = values
+    for m in maps:
+        x = _apply_jit(mi, x, m)
+    return TableUpload("float", record, x)
+
+
+# -- the lookup ----------------------------------------------------------------------------------
+def _array_x(mi: Any) -> Any:
+    """The dynamic-size float array type of the variant's backend (packet gathers)."""
+    import importlib
+
+    return importlib.import_module(mi.Float.__module__).ArrayXf
+
+
+def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_v: Any,
+               theta_l: Any, phi_l: Any, kappa: Any, active: Any = True, wavelengths: Any = None) -> Any:
+    """Interpolate a prepared table in Dr.Jit (see the module docstring).
 
     Parameters
     ----------
@@ -157,23 +450,26 @@ def lookup_jit(mi: Any, grid: LookupGrid, packed: tuple[Any, float, float], thet
         The ``mitsuba`` module, with a variant set.
     grid
         The table's prepared grid (``table.lookup_grid()``), 1 or 3 channels.
-    packed
-        :func:`pack_table` of ``grid``.
+    table
+        :func:`pack_table`, :func:`float_table` or :func:`linear_upload` of ``grid``.
     theta_v, phi_v, theta_l, phi_l
         View and light elevation and azimuth, degrees (``mi.Float``).
     kappa
         Curvature, mm^-1 (``mi.Float``).
     active
         Lanes to gather for (the others read nothing and give 0 * weight).
+    wavelengths
+        For ``"spectral"`` records: the lanes' wavelengths (nm, ``mi.Spectrum``).
 
     Returns
     -------
-    mi.Color3f
-        The interpolated value (a one-channel table in all three channels).
+    mi.Color3f, mi.Float or mi.Spectrum
+        ``"rgb"`` records: the RGB value; ``"one"``: the value in all three
+        channels (``mi.Color3f``) or, with ``wavelengths`` given, as
+        ``mi.Float``; ``"spectral"``: the spectrum at ``wavelengths``.
     """
     import drjit as dr
 
-    buf, offset, step = packed
     Float, UInt = mi.Float, mi.UInt32
     tol = _tolerance(dr, Float)
     nk, npl, ntl, npv, ntv, nc = grid.values.shape
@@ -192,35 +488,71 @@ def lookup_jit(mi: Any, grid: LookupGrid, packed: tuple[Any, float, float], thet
         view_pole = view_pole | light_pole
     wpv = dr.select(view_pole, 0.0, wpv)
     ipl1 = dr.select(ipl + 1 < npl, ipl + 1, 0)
-    ipv1 = dr.select(ipv + 1 < npv, ipv + 1, 0)
     k_nodes = [(ik, 1.0 - wk), (ik + 1, wk)] if nk > 1 else [(ik, Float(1.0))]
     pl_nodes = [(ipl, 1.0 - wpl), (ipl1, wpl)] if npl > 1 else [(ipl, Float(1.0))]
     tl_nodes = [(itl, 1.0 - wtl), (itl + 1, wtl)] if ntl > 1 else [(itl, Float(1.0))]
-    pv_nodes = [(ipv, 1.0 - wpv), (ipv1, wpv)] if npv > 1 else [(ipv, Float(1.0))]
-    tv_nodes = [(itv, 1.0 - wtv), (itv + 1, wtv)] if ntv > 1 else [(itv, Float(1.0))]
-    Int32 = dr.int32_array_t(Float)
-    rgb = nc == 3
-    acc = [Float(0.0) for _ in range(3 if rgb else 1)]
+    outer = []
     for ka, wa in k_nodes:
         for pb, wb in pl_nodes:
             wab = wa * wb
             base_b = (ka * npl + pb) * ntl
             for td, wd in tl_nodes:
-                wabd = wab * wd
-                base_d = (base_b + td) * npv
-                for pe, we in pv_nodes:
-                    wabde = wabd * we
-                    base_e = (base_d + pe) * ntv
-                    for tf, wf in tv_nodes:
-                        w = wabde * wf
-                        idx = base_e + tf
-                        if rgb:
-                            word = dr.gather(type(buf), buf, idx, active)
-                            acc[0] += w * Float(Int32(word & _PACK_MAX))
-                            acc[1] += w * Float(Int32((word >> PACK_BITS) & _PACK_MAX))
-                            acc[2] += w * Float(Int32(word >> (2 * PACK_BITS)))
-                        else:
-                            acc[0] += w * dr.gather(Float, buf, idx, active)
+                outer.append((base_b + td, wab * wd))
+    if table.layout == "float":
+        return _lookup_packets(mi, table, outer, ipv, wpv, itv, wtv, npv, ntv, active, wavelengths)
+    ipv1 = dr.select(ipv + 1 < npv, ipv + 1, 0)
+    pv_nodes = [(ipv, 1.0 - wpv), (ipv1, wpv)] if npv > 1 else [(ipv, Float(1.0))]
+    tv_nodes = [(itv, 1.0 - wtv), (itv + 1, wtv)] if ntv > 1 else [(itv, Float(1.0))]
+    Int32 = dr.int32_array_t(Float)
+    rgb = table.record == "rgb"
+    buf = table.buffer
+    acc = [Float(0.0) for _ in range(3 if rgb else 1)]
+    for base_d, wabd in outer:
+        base_d = base_d * npv
+        for pe, we in pv_nodes:
+            wabde = wabd * we
+            base_e = (base_d + pe) * ntv
+            for tf, wf in tv_nodes:
+                w = wabde * wf
+                idx = base_e + tf
+                if rgb:
+                    word = dr.gather(type(buf), buf, idx, active)
+                    acc[0] += w * Float(Int32(word & _PACK_MAX))
+                    acc[1] += w * Float(Int32((word >> PACK_BITS) & _PACK_MAX))
+                    acc[2] += w * Float(Int32(word >> (2 * PACK_BITS)))
+                else:
+                    acc[0] += w * dr.gather(Float, buf, idx, active)
     if rgb:
-        return mi.Color3f(acc[0], acc[1], acc[2]) * step + offset
-    return mi.Color3f(acc[0])
+        return mi.Color3f(acc[0], acc[1], acc[2]) * table.step + table.offset
+    return acc[0] if wavelengths is not None else mi.Color3f(acc[0])
+
+
+def _lookup_packets(mi: Any, table: TableUpload, outer: list[tuple[Any, Any]], ipv: Any, wpv: Any, itv: Any,
+                    wtv: Any, npv: int, ntv: int, active: Any, wavelengths: Any) -> Any:
+    """The ``"float"`` layout: one packet gather per (kappa, phi_l, theta_l) corner."""
+    import drjit as dr
+
+    Float = mi.Float
+    ArrayXf = _array_x(mi)
+    stride = table.stride
+    size = 4 * stride
+    inner = [(1.0 - wpv) * (1.0 - wtv), (1.0 - wpv) * wtv, wpv * (1.0 - wtv), wpv * wtv]
+    if table.record == "spectral":
+        spec = dr.zeros(mi.Spectrum)
+        for base, w in outer:
+            pk = dr.gather(ArrayXf, table.buffer, (base * npv + ipv) * ntv + itv, active, shape=(size, 1))
+            for j in range(4):
+                c = mi.Vector3f(pk[4 * j], pk[4 * j + 1], pk[4 * j + 2])
+                spec += (w * inner[j] * pk[4 * j + 3]) * mi.srgb_model_eval(c, wavelengths)
+        return spec
+    acc = [Float(0.0) for _ in range(size)]
+    for base, w in outer:
+        pk = dr.gather(ArrayXf, table.buffer, (base * npv + ipv) * ntv + itv, active, shape=(size, 1))
+        for j in range(size):
+            acc[j] = dr.fma(w, pk[j], acc[j])
+    if table.record == "one":
+        v = acc[0] * inner[0] + acc[1] * inner[1] + acc[2] * inner[2] + acc[3] * inner[3]
+        return v if wavelengths is not None else mi.Color3f(v)
+    out = [acc[c] * inner[0] + acc[4 + c] * inner[1] + acc[8 + c] * inner[2] + acc[12 + c] * inner[3]
+           for c in range(3)]
+    return mi.Color3f(*out)

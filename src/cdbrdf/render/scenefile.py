@@ -1,0 +1,261 @@
+"""Mitsuba XML scenes with the ``cdbrdf`` plug-in: loading, curvature units, the scene checks.
+
+:func:`load_file` is :func:`mitsuba.load_file` for scenes that use
+``<bsdf type="cdbrdf">``: it registers the plug-in, parses the file with
+Mitsuba's own parser (``mitsuba.parser``: ``$name`` parameters, ``<default>``,
+``<include>``, references), puts the scene file's folder first on Mitsuba's
+file resolver (so relative file names, the table's ``filename`` included,
+are found next to the scene, as Mitsuba does for meshes), and then, before
+Mitsuba instantiates the objects:
+
+- **curvature units**: a mesh's curvature attribute (``vertex_curvature`` or
+  ``vertex_curvature_dir``, mm^-1 of the mesh in its file) is multiplied by
+  ``m_file / (s * unit_mm)``, with ``s`` the uniform scale of the shape's
+  ``to_world``, ``unit_mm`` the scene's unit (mm per scene unit, default 1)
+  and ``m_file`` the mesh file's unit (mm per file unit) when its PLY header
+  records one (``comment cdbrdf units cm``, as :func:`cdbrdf.render.meshio.write_ply`
+  writes it), else 1 (the project's convention: lengths in mm unless a unit
+  is given). The factor is given to the
+  shape's BSDF as ``curvature_scale`` (times any ``curvature_scale`` the
+  scene sets); shapes with different factors get their own copy of the BSDF.
+  A non-uniform ``to_world`` scale would change the curvature differently in
+  each direction: it is refused (bake the transform into the mesh and run
+  ``cdbrdf curvature`` on the result);
+- **two-sided**: a ``twosided`` wrapper around the plug-in is removed, with a
+  warning (the plug-in is two-sided by itself and turns kappa's sign on the
+  back, which the wrapper would not).
+
+After instantiation :func:`cdbrdf.render.check_scene` runs (meshes need UVs
+and the curvature attribute the BSDF reads).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import re
+from dataclasses import dataclass, field
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import SceneError
+from ._bsdf import PLUGIN_NAME
+
+__all__ = ["LoadReport", "load_file", "ply_unit_mm", "uniform_scale"]
+
+_LOG = logging.getLogger(__name__)
+
+#: The PLY header comment that records a mesh file's unit (``comment cdbrdf units cm``, ``... units 2.5``).
+_UNIT_COMMENT = re.compile(r"^comment\s+cdbrdf\s+units\s+(.+)$")
+
+#: Relative tolerance on the singular values of a "uniform" scale.
+_UNIFORM_RTOL = 1e-5
+
+
+@dataclass
+class LoadReport:
+    """What :func:`load_file` changed in the scene (also logged).
+
+    Attributes
+    ----------
+    curvature_scales
+        ``(shape, factor)`` for shapes whose curvature attribute is rescaled.
+    unwrapped
+        Shapes whose ``twosided`` wrapper around the plug-in was removed.
+    """
+
+    curvature_scales: list[tuple[str, float]] = field(default_factory=list)
+    unwrapped: list[str] = field(default_factory=list)
+
+
+def uniform_scale(matrix: Any, *, what: str = "to_world") -> float:
+    """The uniform scale of an affine 4x4 (or 3x3) matrix; a :class:`SceneError` for a non-uniform one."""
+    m = np.asarray(matrix, dtype=np.float64)
+    m3 = m[:3, :3]
+    sv = np.linalg.svd(m3, compute_uv=False)
+    if not np.all(np.isfinite(sv)) or sv[-1] <= 0.0:
+        raise SceneError(f"{what}: the transform is singular or not finite")
+    if sv[0] - sv[-1] > _UNIFORM_RTOL * sv[0]:
+        raise SceneError(
+            f"{what}: non-uniform scale (factors {', '.join(f'{x:.6g}' for x in sv)}) changes the "
+            "curvature differently along each direction; bake the transform into the mesh and compute "
+            "its curvature with `cdbrdf curvature`"
+        )
+    return float(np.prod(sv) ** (1.0 / 3.0))
+
+
+def ply_unit_mm(path: str | PathLike[str]) -> float | None:
+    """The unit (mm per file unit) a PLY header records (``comment cdbrdf units ...``), or None.
+
+    Reads the header only; a unit :func:`cdbrdf.curvature.parse_units` does
+    not accept counts as none recorded.
+    """
+    from ..curvature import parse_units
+    from ..errors import MeshError
+
+    try:
+        with open(path, "rb") as fh:
+            for _ in range(256):
+                line = fh.readline()
+                if not line:
+                    break
+                text = line.decode("ascii", "replace").strip()
+                if text == "end_header":
+                    break
+                m = _UNIT_COMMENT.match(text)
+                if m:
+                    return float(parse_units(m.group(1).strip()).mm_per_unit)
+    except (OSError, MeshError):
+        return None
+    return None
+
+
+def _references(props: Any, mi: Any) -> list[tuple[str, int]]:
+    return [(k, int(props[k].index())) for k in props.keys()
+            if props.type(k) == mi.Properties.Type.ResolvedReference]
+
+
+def _is_cdbrdf(node: Any, mi: Any) -> bool:
+    return node.type == mi.ObjectType.BSDF and node.props.plugin_name() == PLUGIN_NAME
+
+
+def _prepare(state: Any, *, unit_mm: float, mi: Any) -> LoadReport:
+    """The pass described in the module docstring, on a parsed, resolved scene."""
+    import mitsuba.parser as mp
+
+    report = LoadReport()
+    nodes = state.nodes
+    clones: dict[tuple[int, float], int] = {}
+    n0 = len(nodes)
+    for i in range(n0):
+        node = nodes[i]
+        if node.type != mi.ObjectType.Shape:
+            continue
+        props = node.props
+        name = props.id() or f"{props.plugin_name()} #{i}"
+        where = mp.file_location(state, node)
+        for key, j in _references(props, mi):
+            target = nodes[j]
+            if target.type != mi.ObjectType.BSDF:
+                continue
+            if target.props.plugin_name() == "twosided":
+                inner = [k2 for _, k2 in _references(target.props, mi) if _is_cdbrdf(nodes[k2], mi)]
+                if inner:
+                    props[key] = mi.Properties.ResolvedReference(inner[0])
+                    j, target = inner[0], nodes[inner[0]]
+                    report.unwrapped.append(name)
+                    _LOG.warning("%s: shape %r: removed the twosided wrapper around the cdbrdf BSDF (the plug-in "
+                                 "is two-sided by itself and changes the sign of kappa on the back)", where, name)
+            if not _is_cdbrdf(target, mi):
+                continue
+            s = 1.0
+            if "to_world" in props:
+                s = uniform_scale(np.array(props["to_world"].matrix), what=f"{where}: shape {name!r} to_world")
+            m_file = None
+            if props.plugin_name() == "ply" and "filename" in props:
+                m_file = ply_unit_mm(str(mi.file_resolver().resolve(str(props["filename"]))))
+            factor = (m_file if m_file is not None else 1.0) / (s * unit_mm)
+            if abs(factor - 1.0) <= 1e-12:
+                continue
+            k = (j, round(factor, 12))
+            if k not in clones:
+                c = mp.SceneNode(target)
+                base = float(c.props["curvature_scale"]) if "curvature_scale" in c.props else 1.0
+                c.props["curvature_scale"] = base * factor
+                nodes.append(c)
+                clones[k] = len(nodes) - 1
+            props[key] = mi.Properties.ResolvedReference(clones[k])
+            report.curvature_scales.append((name, factor))
+            _LOG.info("%s: shape %r: curvature attribute x %.6g (to_world scale %.6g, file unit %s mm, scene "
+                      "unit %.6g mm)", where, name, factor, s, "1 (assumed)" if m_file is None else f"{m_file:g}",
+                      unit_mm)
+    return report
+
+
+def _message(exc: Exception) -> str:
+    """Mitsuba's message on one line, without its source-file prefixes (``[parser.cpp:111]``)."""
+    text = re.sub(r"\[[A-Za-z0-9_]+\.(?:cpp|h):\d+\]\s*", "", str(exc))
+    if "Traceback (most recent call last)" in text:
+        # a Python plug-in's exception as Mitsuba reports it: keep where, and the exception's own line
+        head, _, tail = text.partition("Traceback (most recent call last)")
+        last = [ln.strip() for ln in tail.splitlines() if ln.strip()][-1:]
+        text = head.rstrip(" :\n") + ": " + " ".join(last)
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    return " ".join(lines) if lines else type(exc).__name__
+
+
+def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = None, unit_mm: float = 1.0,
+              check: bool = True, optimize: bool = True, report: LoadReport | None = None) -> Any:
+    """Load a Mitsuba XML file (a scene or one object) with the ``cdbrdf`` plug-in.
+
+    Parameters
+    ----------
+    path
+        The XML file.
+    variables
+        Values of the file's ``$name`` parameters (Mitsuba's ``-D name=value``).
+    unit_mm
+        Millimetres per scene unit (see the module docstring).
+    check
+        Run :func:`cdbrdf.render.check_scene` on a loaded scene.
+    optimize
+        Let Mitsuba merge equivalent objects and meshes (as ``mitsuba.load_file``).
+    report
+        Filled with what was changed (curvature scales, removed wrappers).
+
+    Returns
+    -------
+    mitsuba.Scene or mitsuba.Object
+
+    Raises
+    ------
+    SceneError
+        For a missing or invalid file, an unused or undefined parameter, a
+        non-uniform ``to_world`` on a shape with the plug-in, or a failed check.
+    """
+    import mitsuba
+    import mitsuba.parser as mp
+
+    from . import check_scene, register
+
+    mi: Any = mitsuba
+    p = Path(path)
+    if not p.is_file():
+        raise SceneError(f"{p}: no such scene file")
+    if not (math.isfinite(unit_mm) and unit_mm > 0):
+        raise SceneError(f"unit_mm: must be a positive number of millimetres per scene unit, got {unit_mm}")
+    register()
+    params = {str(k): str(v) for k, v in (variables or {}).items()}
+    config = mp.ParserConfig(str(mi.variant()))
+    config.merge_equivalent = optimize
+    config.merge_meshes = optimize
+    backup = mi.file_resolver()
+    fs = mi.FileResolver(backup)
+    fs.prepend(str(p.parent.resolve()))
+    mi.set_file_resolver(fs)
+    try:
+        try:
+            state = mp.parse_file(config, str(p), **params)
+            mp.transform_upgrade(config, state)
+            mp.transform_resolve(config, state)
+        except RuntimeError as exc:
+            raise SceneError(f"{p}: {_message(exc)}") from None
+        rep = _prepare(state, unit_mm=float(unit_mm), mi=mi)
+        try:
+            if optimize:
+                mp.transform_merge_equivalent(config, state)
+                mp.transform_merge_meshes(config, state)
+            obj = mp.instantiate(config, state)
+        except RuntimeError as exc:
+            raise SceneError(f"{p}: {_message(exc)}") from None
+    finally:
+        mi.set_file_resolver(backup)
+    if report is not None:
+        report.curvature_scales.extend(rep.curvature_scales)
+        report.unwrapped.extend(rep.unwrapped)
+    if check and isinstance(obj, mi.Scene):
+        check_scene(obj)
+    return obj

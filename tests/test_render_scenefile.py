@@ -1,0 +1,231 @@
+"""Mitsuba XML scenes with ``<bsdf type="cdbrdf">``: cdbrdf.render.load_file, the checks, ``cdbrdf render SCENE.xml``.
+
+A kappa-readable table (value 0.5 + kappa in every direction) on a half
+cylinder of curvature 0.13 mm^-1 seen from above under a light from above:
+the apex's radiance is pi (0.5 + kappa), so the curvature the plug-in used
+can be read from the image (to_world scales, scene and file units).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+
+import cdbrdf
+from cdbrdf.errors import SceneError
+
+from .render_helpers import constant_table, local_si, mi, needs_llvm, vec
+
+pytestmark = needs_llvm
+
+KAPPA = 0.13
+
+
+@pytest.fixture
+def cr():
+    import cdbrdf.render as cr
+
+    cr.set_variant("llvm_ad_rgb")
+    return cr
+
+
+def kappa_table():
+    g = cdbrdf.Grid.paper()
+    return cdbrdf.CDBRDF(0.5 + np.broadcast_to(g.kappa[:, None, None, None, None, None], g.shape + (3,)), **g.axes())
+
+
+def cylinder(radius=1 / KAPPA, n=40, *, uv=True, directional=None):
+    """Half cylinder (axis y) with u across the axis, its curvature stored (and a directional one if given)."""
+    from cdbrdf.render.meshio import Mesh
+
+    a = np.linspace(-np.pi / 2, np.pi / 2, n)
+    y = np.linspace(-radius, radius, n // 2)
+    A, Y = np.meshgrid(a, y, indexing="ij")
+    v = np.c_[radius * np.sin(A.ravel()), Y.ravel(), radius * np.cos(A.ravel())]
+    tex = np.c_[(A.ravel() + np.pi / 2) / np.pi, (Y.ravel() + radius) / (2 * radius)] if uv else None
+    ny = y.size
+    i, j = np.meshgrid(np.arange(n - 1), np.arange(ny - 1), indexing="ij")
+    p = (i * ny + j).ravel()
+    f = np.concatenate([np.c_[p, p + ny, p + ny + 1], np.c_[p, p + ny + 1, p + 1]])
+    attrs = {"curvature": np.full(len(v), 1 / radius)}
+    if directional is not None:
+        attrs["curvature_dir"] = np.full(len(v), directional)
+    return Mesh(v, f.astype(np.int64), None, tex, attrs)
+
+
+def write_scene(folder, *, shape_extra="", bsdf_extra="", unit_comment=None, wrap=False, mesh=None, name="s.xml"):
+    from cdbrdf.render.meshio import write_ply
+
+    folder.mkdir(parents=True, exist_ok=True)
+    kappa_table().save(folder / "kappa.h5")
+    write_ply(folder / "cyl.ply", mesh or cylinder())
+    if unit_comment is not None:  # the unit as cdbrdf curvature records it: comment cdbrdf units 2
+        raw = (folder / "cyl.ply").read_bytes()
+        raw = raw.replace(b"end_header", f"comment cdbrdf units {unit_comment:g}\nend_header".encode(), 1)
+        (folder / "cyl.ply").write_bytes(raw)
+    bsdf = f'<bsdf type="cdbrdf"><string name="filename" value="kappa.h5"/>{bsdf_extra}</bsdf>'
+    if wrap:
+        bsdf = f'<bsdf type="twosided">{bsdf}</bsdf>'
+    xml = f"""<scene version="3.0.0">
+  <default name="spp" value="4"/>
+  <integrator type="path"><integer name="max_depth" value="2"/></integrator>
+  <sensor type="orthographic">
+    <transform name="to_world"><scale value="3"/><lookat origin="0, 0, 100" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="9"/><integer name="height" value="9"/>
+      <rfilter type="box"/></film>
+    <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+  </sensor>
+  <shape type="ply" id="cyl"><string name="filename" value="cyl.ply"/>{shape_extra}{bsdf}</shape>
+  <emitter type="directional"><vector name="direction" value="0, 0, -1"/>
+    <rgb name="irradiance" value="3.14159265"/></emitter>
+</scene>
+"""
+    (folder / name).write_text(xml)
+    return folder / name
+
+
+def apex(img):
+    return float(img[4, 4].mean())
+
+
+def test_relative_files_resolve_next_to_the_scene(cr, tmp_path, monkeypatch):
+    path = write_scene(tmp_path / "scenes")
+    monkeypatch.chdir(tmp_path)  # the scene's folder is not the working folder
+    scene = cr.load_file(path, variables={"spp": 8})
+    img = np.array(mi.render(scene))
+    assert apex(img) == pytest.approx(np.pi * (0.5 + KAPPA), rel=0.01)
+    assert scene.sensors()[0].sampler().sample_count() == 8
+    # plain Mitsuba resolves the table the same way (its resolver holds the scene's folder while loading)
+    plain = mi.load_file(str(path))
+    cr.check_scene(plain)
+
+
+def test_to_world_scale_and_units_change_the_curvature(cr, tmp_path):
+    cases = [  # (to_world, unit_mm, comment in the PLY, expected kappa)
+        ('<transform name="to_world"><scale value="2"/></transform>', 1.0, None, KAPPA / 2),
+        ("", 2.0, None, KAPPA / 2),  # scene in units of 2 mm, file assumed in mm
+        ("", 2.0, 2.0, KAPPA),  # the file says it is in units of 2 mm too
+        ('<transform name="to_world"><scale value="0.5"/></transform>', 1.0, 0.5, KAPPA),  # a unit change
+    ]
+    for k, (tw, unit, comment, want) in enumerate(cases):
+        path = write_scene(tmp_path / f"c{k}", shape_extra=tw, unit_comment=comment)
+        scene = cr.load_file(path, unit_mm=unit)
+        # keep the apex in the 9 x 9 view: the camera sees [-3, 3] mm
+        img = np.array(mi.render(scene, spp=4))
+        assert apex(img) == pytest.approx(np.pi * (0.5 + want), rel=0.01), (k, apex(img))
+
+
+def test_non_uniform_scale_is_refused(cr, tmp_path):
+    path = write_scene(tmp_path, shape_extra='<transform name="to_world"><scale x="2" y="1" z="1"/></transform>')
+    with pytest.raises(SceneError, match=r"non-uniform scale .*cdbrdf curvature"):
+        cr.load_file(path)
+
+
+def test_twosided_wrapper_is_removed_or_refused(cr, tmp_path, caplog):
+    path = write_scene(tmp_path, wrap=True)
+    with caplog.at_level(logging.WARNING, logger="cdbrdf.render.scenefile"):
+        scene = cr.load_file(path)
+    assert "removed the twosided wrapper" in caplog.text
+    assert [w for _, _, w in cr.cdbrdf_shapes(scene)] == [None]
+    with pytest.raises(SceneError, match="wrapped in TwoSided.*remove the wrapper"):
+        cr.check_scene(mi.load_file(str(path)))
+
+
+def test_what_twosided_does_to_the_back(cr):
+    """Documented: wrapped, the back is the front mirrored in z with the same kappa (the plug-in flips y and kappa)."""
+    g = cdbrdf.Grid.paper()
+    m = g.mesh()
+    v = 0.1 + 0.05 * np.sin(np.radians(m["phi_l"])) + 0.3 * np.clip(m["kappa"], 0, None)
+    t = cdbrdf.CDBRDF(np.repeat(v[..., None], 3, -1), **g.axes())
+    inner = cr.make_bsdf(t, curvature=0.13)
+    wrapped = mi.load_dict({"type": "twosided", "bsdf": inner})
+    rng = np.random.default_rng(0)
+    wi, wo = rng.normal(size=(2, 400, 3))
+    wi[:, 2], wo[:, 2] = -np.abs(wi[:, 2]), -np.abs(wo[:, 2])  # the back side
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    ctx = mi.BSDFContext()
+    got = np.array(wrapped.eval(ctx, local_si(wi), vec(wo))).T
+    mirror = np.array([1.0, 1.0, -1.0])
+    want = np.array(inner.eval(ctx, local_si(wi * mirror), vec(wo * mirror))).T
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-7)
+    own = np.array(inner.eval(ctx, local_si(wi), vec(wo))).T  # the plug-in's own back side
+    assert np.abs(own - got).max() > 0.01
+
+
+def test_curvature_mode_selects_the_attribute(cr, tmp_path):
+    path = write_scene(tmp_path / "d", mesh=cylinder(directional=-0.1),
+                       bsdf_extra='<string name="curvature_mode" value="directional"/>')
+    img = np.array(mi.render(cr.load_file(path), spp=4))
+    assert apex(img) == pytest.approx(np.pi * (0.5 - 0.1), rel=0.01)
+    path = write_scene(tmp_path / "m", bsdf_extra='<string name="curvature_mode" value="directional"/>')
+    with pytest.raises(SceneError, match="'vertex_curvature_dir', which the shape does not have"):
+        cr.load_file(path)
+    with pytest.raises(ValueError, match="curvature_mode 'min' is not one of max, directional"):
+        cr.make_bsdf(kappa_table(), curvature_mode="min")
+    with pytest.raises(ValueError, match="not both"):
+        cr.make_bsdf(kappa_table(), curvature_mode="max", curvature=0.1)
+
+
+def test_scene_checks_run_on_load(cr, tmp_path):
+    path = write_scene(tmp_path / "nouv", mesh=cylinder(uv=False))
+    with pytest.raises(SceneError, match="UV coordinates"):
+        cr.load_file(path)
+    mesh = cylinder()
+    mesh.attributes.clear()
+    path = write_scene(tmp_path / "noattr", mesh=mesh)
+    with pytest.raises(SceneError, match="'vertex_curvature', which the shape does not have.*read as 0"):
+        cr.load_file(path)
+    cr.load_file(path, check=False)  # loads; the user asked for no checks
+    with pytest.raises(SceneError, match="no such scene file"):
+        cr.load_file(tmp_path / "missing.xml")
+    with pytest.raises(SceneError, match=r"unused parameters.*\$bogus"):
+        cr.load_file(path, variables={"bogus": 1})
+    (tmp_path / "noattr" / "kappa.h5").unlink()
+    with pytest.raises(SceneError, match=r"line \d+.*table file 'kappa.h5' not found") as exc:
+        cr.load_file(path)
+    assert "Traceback" not in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_scale_texture_multiplies_the_reflectance(cr):
+    t = constant_table([0.2, 0.2, 0.2])
+    b = cr.make_bsdf(t, curvature=0.0, sampling="cosine",
+                     scale={"type": "checkerboard", "color0": {"type": "rgb", "value": [1.0, 0.5, 0.25]},
+                            "color1": {"type": "rgb", "value": [0.1, 0.1, 0.1]}})
+    si = local_si(np.tile([0.0, 0.0, 1.0], (2, 1)))
+    si.uv = mi.Point2f([0.25, 0.75], [0.25, 0.25])  # one square of each colour
+    f = np.array(b.eval(mi.BSDFContext(), si, vec(np.tile([0.0, 0.0, 1.0], (2, 1))))).T
+    np.testing.assert_allclose(f, 0.2 * np.array([[1.0, 0.5, 0.25], [0.1, 0.1, 0.1]]), rtol=1e-5)
+    params = mi.traverse(b)
+    assert any(k.startswith("scale.") for k in params.keys())
+
+
+def test_render_command_with_a_scene_file(cr, tmp_path):
+    from cdbrdf.cli import main
+
+    path = write_scene(tmp_path)
+    exr = tmp_path / "out.exr"
+    assert main(["-q", "render", str(path), "-o", str(exr), "-D", "spp=8", "--variant", "llvm_ad_rgb"]) == 0
+    img = np.array(mi.Bitmap(str(exr)))[..., :3]
+    assert apex(img) == pytest.approx(np.pi * (0.5 + KAPPA), rel=0.01)
+    png = tmp_path / "out.png"
+    assert main(["-q", "render", str(path), "-o", str(png), "--spp", "2", "--units", "cm",
+                 "--variant", "llvm_ad_spectral"]) == 0
+    assert png.stat().st_size > 0
+    grey = tmp_path / "grey.png"  # mono: one channel, written as grey
+    assert main(["-q", "render", str(path), "-o", str(grey), "--spp", "2", "--variant", "llvm_ad_mono"]) == 0
+    assert grey.stat().st_size > 0
+    def status(argv):
+        try:
+            return main(argv)
+        except SystemExit as exc:  # argparse's own errors
+            return exc.code
+
+    for bad in (["--light", "30,0"], ["--compare"], ["--scene", "sine"], ["-D", "bogus=1"], ["-D", "no-equals"]):
+        out = tmp_path / "bad.png"
+        assert status(["-q", "render", str(path), "-o", str(out), *bad]) == 2, bad
+        assert not out.exists()
+    assert main(["-q", "render", str(tmp_path / "kappa.h5"), "-o", str(tmp_path / "x.png"), "-D", "spp=1",
+                 "--scene", "sine"]) == 2
