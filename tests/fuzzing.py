@@ -174,7 +174,7 @@ def fuzz(
         child_end.close()
         last, last_t, done = -1, time.perf_counter(), start
 
-        def drain(timeout):
+        def drain(timeout, results=results):
             nonlocal done
             try:
                 while results.poll(timeout):

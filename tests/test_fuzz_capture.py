@@ -53,7 +53,7 @@ def _capture(folder: Path) -> None:
     write_image(folder / "dark.png", np.full((9, 9, 3), 0.01), "png16")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def seeds(name: str) -> list[bytes]:
     """Seed inputs for ``capture.csv`` or ``stands.json``."""
     import tempfile

@@ -41,7 +41,7 @@ logging.getLogger("tifffile").setLevel(logging.CRITICAL)  # its warnings about e
 _WINDOW = (1, 2, 3, 4)  # x0, y0, nx, ny
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _seeds(fmt: str) -> tuple[tuple[np.ndarray, bytes], ...]:
     """``(image, file bytes)`` of the seed files of a format; shapes differ between seeds."""
     rng = np.random.default_rng(7)
@@ -161,7 +161,7 @@ def _run(fmt: str, n: int, seed: int):
 
 def test_seeds_read_back():
     for fmt in ("png", "tiff", "exr"):
-        for a, data in _seeds(fmt):
+        for _, data in _seeds(fmt):
             with tempfile.TemporaryDirectory() as tmp:
                 assert _target(fmt, data, Path(tmp)) == "ok"
 

@@ -38,7 +38,7 @@ _SPECIALS = np.array([np.nan, np.inf, -np.inf, 0.0, -0.0, 5e-324, -5e-324, 1e-30
                       1.7976931348623157e308, 2.0**53, 2.0**63])
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _tables():
     from .lookup_cases import kernel_tables
 

@@ -95,7 +95,6 @@ def test_dark_frame_subtracted(tmp_path):
 
 
 def test_brackets_and_saturation(tmp_path):
-    g = Grid(kappa=[0.0], theta_l=[0.0], phi_l=[0.0], theta_v=[0.0, 30.0], phi_v=[0.0])
     rows = []
     # sample 0: exposure 4 saturates (0.3 * 4 > 1), exposure 1 does not -> 0.3
     # sample 1: only one exposure, saturated -> invalid, filled from sample 0

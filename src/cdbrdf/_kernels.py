@@ -413,7 +413,8 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
                      b + d_k, b + d_k + d_tl, b + d_k + d_pl, b + d_k + d_pl + d_tl)
             wl = (fbuf[0, j], fbuf[1, j], fbuf[2, j], fbuf[3, j], fbuf[4, j], fbuf[5, j], fbuf[6, j], fbuf[7, j])
             wv = (fbuf[8, j], fbuf[9, j], fbuf[10, j], fbuf[11, j])
-            r, gg, bl = _blend_rgb(flat, bases, wl, ibuf[2, j], ibuf[3, j], wv)
+            # _blend_rgb is a numba intrinsic: numba passes its typing context, mypy cannot see that
+            r, gg, bl = _blend_rgb(flat, bases, wl, ibuf[2, j], ibuf[3, j], wv)  # type: ignore[call-arg,var-annotated]
             out[row, 0] = r
             out[row, 1] = gg
             out[row, 2] = bl

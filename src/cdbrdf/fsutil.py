@@ -58,7 +58,9 @@ OWNER_MARK = ".cdbrdf-owned"
 _OUTPUT_KIND = "output"
 _OUTPUT_MARKER = ".cdbrdf-output"
 
-_TEMP_RE = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<host>[0-9a-f]{8})\.[0-9a-f]{8}\.(?P<kind>[a-z]+)(?:\.[A-Za-z0-9]+)?$")
+_TEMP_RE = re.compile(
+    r"^\.(?P<name>.+)\.(?P<pid>\d+)\.(?P<host>[0-9a-f]{8})\.[0-9a-f]{8}\.(?P<kind>[a-z]+)(?:\.[A-Za-z0-9]+)?$"
+)
 
 
 def _host_tag() -> str:

@@ -137,7 +137,7 @@ def _check_phi(name: str, a: NDArray[np.float64]) -> None:
             )
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class Grid:
     """The five sample axes of a table.
 
@@ -172,10 +172,21 @@ class Grid:
     phi_v: NDArray[np.float64]
     symmetry: str = "anisotropic"
 
-    def __post_init__(self) -> None:
-        check_symmetry(self.symmetry)
-        for name in ("kappa", "theta_l", "phi_l", "theta_v", "phi_v"):
-            object.__setattr__(self, name, _axis(name, getattr(self, name)))
+    def __init__(
+        self,
+        kappa: ArrayLike,
+        theta_l: ArrayLike,
+        phi_l: ArrayLike,
+        theta_v: ArrayLike,
+        phi_v: ArrayLike,
+        symmetry: str = "anisotropic",
+    ) -> None:
+        # the fields are the checked arrays (frozen: set once, here)
+        check_symmetry(symmetry)
+        object.__setattr__(self, "symmetry", symmetry)
+        for name, value in (("kappa", kappa), ("theta_l", theta_l), ("phi_l", phi_l),
+                            ("theta_v", theta_v), ("phi_v", phi_v)):
+            object.__setattr__(self, name, _axis(name, value))
         if self.symmetry == "isotropic" and not (self.phi_l.size == 1 and self.phi_l[0] == 0.0):
             raise TableError(
                 f"phi_l: an isotropic grid has the single light azimuth [0] (its phi_v axis is the "
@@ -247,7 +258,7 @@ class Grid:
         )
         theta = np.arange(0.0, theta_max_deg + 1e-9, theta_step_deg)
         phi = np.arange(round(n_phi)) * phi_step_deg
-        return cls(kappa=kappa, theta_l=theta, phi_l=np.zeros(1) if iso else phi,  # type: ignore[arg-type]
+        return cls(kappa=kappa, theta_l=theta, phi_l=np.zeros(1) if iso else phi,
                    theta_v=theta, phi_v=phi, symmetry=symmetry)
 
     @property

@@ -311,7 +311,8 @@ def _png_decode(data: bytes) -> NDArray:
     """
     import imagecodecs
 
-    _PNG_WARNINGS.local.seen = seen = []
+    seen: list[str] = []
+    _PNG_WARNINGS.local.seen = seen
     try:
         out = imagecodecs.png_decode(data)
     except imagecodecs.PngError:

@@ -40,8 +40,8 @@ from numpy.typing import NDArray
 from .. import limits
 from ..errors import CaptureError, OptionError, TableError
 from ..fsutil import atomic_path, check_output_file
-from ..table import Grid
 from ..images import FORMATS
+from ..table import Grid
 from .stands import (
     KAPPA_TOL_PER_MM,
     Stand,
@@ -537,7 +537,8 @@ def _table_grid(csv_path: Path, rows: list[CaptureRow], given_grid: dict[str, ND
         where = f"{csv_path}: the sample rows"
     limits.check("table_samples", math.prod(len(v) for v in axes.values()), what=f"{where}: a grid of")
     try:
-        return Grid(**axes)
+        return Grid(kappa=axes["kappa"], theta_l=axes["theta_l"], phi_l=axes["phi_l"],
+                    theta_v=axes["theta_v"], phi_v=axes["phi_v"])
     except TableError as exc:
         raise CaptureError(f"{where} do not form a table grid: {exc}") from None
 

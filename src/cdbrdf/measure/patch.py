@@ -165,7 +165,8 @@ def merge_exposures(
         if not e > 0:
             raise ValueError(f"exposure: must be positive, got {e!r}")
         ok = ~s
-        x = v if dark is None or dark[i] is None else v - dark[i]
+        d = None if dark is None else dark[i]
+        x = v if d is None else v - d
         num += np.where(ok[..., None], x, 0.0)
         den += np.where(ok, float(e), 0.0)
     valid = den > 0

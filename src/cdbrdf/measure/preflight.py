@@ -28,8 +28,8 @@ from typing import Any
 
 from ..errors import CaptureError
 from ..fsutil import atomic_path, same_file
-from .capture import CAPTURE_FILE, STAND_FILE, Capture
 from ..images import ImageError, ImageInfo, image_format, read_window
+from .capture import CAPTURE_FILE, STAND_FILE, Capture
 from .patch import patch_window
 
 __all__ = [

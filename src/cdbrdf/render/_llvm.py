@@ -72,7 +72,10 @@ try:
             regular = [f for f in files if not os.path.islink(f)]
             chosen = (regular or files or [None])[-1]
             if chosen is None:
-                out["error"] = "no libLLVM found (libLLVM.so is not on the library search path and /usr/lib/<arch>/libLLVM*.so.* matches nothing)"
+                out["error"] = (
+                    "no libLLVM found (libLLVM.so is not on the library search path and "
+                    "/usr/lib/<arch>/libLLVM*.so.* matches nothing)"
+                )
             else:
                 handle = ctypes.CDLL(chosen)
                 out["path"] = chosen
@@ -153,7 +156,7 @@ def find_llvm(*, timeout_s: float = 60.0) -> LLVMInfo:
         return LLVMInfo(None, None, "search", f"the libLLVM probe failed ({exc})")
     source = "DRJIT_LIBLLVM_PATH" if data.get("env") else "search"
     version = tuple(data["version"]) if data.get("version") is not None else None
-    return LLVMInfo(data.get("path"), version, source, data.get("error"))  # type: ignore[arg-type]
+    return LLVMInfo(data.get("path"), version, source, data.get("error"))
 
 
 def llvm_message(info: LLVMInfo) -> str:
@@ -216,10 +219,7 @@ def _loaded_llvm_version() -> tuple[int, int, int] | None:
     mi = sys.modules.get("mitsuba")
     if mi is None:
         return None
-    try:
-        variant = mi.variant()
-    except Exception:  # pragma: no cover - very old mitsuba
-        return None
+    variant = mi.variant()
     if not variant or not str(variant).startswith("llvm"):
         return None
     import drjit as dr

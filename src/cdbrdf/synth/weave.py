@@ -218,7 +218,8 @@ class Heightfield:
     @property
     def shape(self) -> tuple[int, int]:
         """``(ny, nx)``."""
-        return self.height.shape  # type: ignore[return-value]
+        ny, nx = self.height.shape
+        return ny, nx
 
     def coverage(self) -> dict[str, float]:
         """Fraction of the repeat's area (seen from above) covered by each kind."""
