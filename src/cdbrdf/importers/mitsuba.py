@@ -18,11 +18,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .source import Source, file_sha256, mitsuba
+from .source import Source, file_sha256, mitsuba, mitsuba_brdf
 
 __all__ = ["source"]
 
-_DEG = float(np.pi / 180.0)
 
 
 def source(bsdf: Mapping[str, Any], *, isotropic: bool = True, material: str | None = None,
@@ -36,7 +35,7 @@ def source(bsdf: Mapping[str, Any], *, isotropic: bool = True, material: str | N
     """
     from .rgl import _ensure_variant
 
-    mi, dr = mitsuba()
+    mi, _ = mitsuba()
 
     _ensure_variant()
     try:
@@ -47,15 +46,7 @@ def source(bsdf: Mapping[str, Any], *, isotropic: bool = True, material: str | N
 
     def evaluate(theta_v: NDArray[np.float64], phi_v: NDArray[np.float64], theta_l: NDArray[np.float64],
                  phi_l: NDArray[np.float64]) -> tuple[NDArray[np.float64], None]:
-        def direction(t: NDArray[np.float64], p: NDArray[np.float64]) -> Any:
-            st, ct = dr.sincos(mi.Float(np.asarray(t, dtype=np.float32)) * _DEG)
-            sp, cp = dr.sincos(mi.Float(np.asarray(p, dtype=np.float32)) * _DEG)
-            return mi.Vector3f(st * cp, st * sp, ct)
-
-        wi, wo = direction(theta_v, phi_v), direction(theta_l, phi_l)
-        si = dr.zeros(mi.SurfaceInteraction3f, dr.width(wi))
-        si.wi = wi
-        f = obj.eval(mi.BSDFContext(), si, wo) / dr.maximum(wo.z, 1e-6)
+        f, _, _ = mitsuba_brdf(obj, theta_v, phi_v, theta_l, phi_l)
         return np.array(f, dtype=np.float64).T, None
 
     return Source(

@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import FormatError
-from .source import Source, file_sha256, mitsuba, read_bytes
+from .source import Source, file_sha256, mitsuba, mitsuba_brdf, read_bytes
 
 __all__ = ["MAGIC", "DTYPES", "read_tensor_file", "write_tensor_file", "spectral_to_rgb_weights", "read"]
 
@@ -60,7 +60,6 @@ DTYPES: Mapping[int, str] = {1: "u1", 2: "i1", 3: "<u2", 4: "<i2", 5: "<u4", 6: 
                              9: "<f2", 10: "<f4", 11: "<f8"}
 _CODES = {np.dtype(v).str.lstrip("<|"): k for k, v in DTYPES.items()}
 _MAX_FIELDS = 4096
-_DEG = float(np.pi / 180.0)
 #: Largest magnitude a field may hold (float32 sums of the plug-in stay finite).
 _MAX_ABS = 1e30
 _MAX_NDIM = 16
@@ -374,16 +373,8 @@ class _Evaluator:
 
     def __call__(self, theta_v: NDArray[np.float64], phi_v: NDArray[np.float64], theta_l: NDArray[np.float64],
                  phi_l: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
-        mi, dr = mitsuba()
-        def direction(t: NDArray[np.float64], p: NDArray[np.float64]) -> Any:
-            st, ct = dr.sincos(mi.Float(np.asarray(t, dtype=np.float32)) * _DEG)
-            sp, cp = dr.sincos(mi.Float(np.asarray(p, dtype=np.float32)) * _DEG)
-            return mi.Vector3f(st * cp, st * sp, ct)
-
-        wi, wo = direction(theta_v, phi_v), direction(theta_l, phi_l)
-        si = dr.zeros(mi.SurfaceInteraction3f, dr.width(wi))
-        si.wi = wi
-        f = self.bsdf.eval(mi.BSDFContext(), si, wo) / dr.maximum(wo.z, 1e-6)  # f cos(theta_l) -> f
+        _, dr = mitsuba()
+        f, wi, wo = mitsuba_brdf(self.bsdf, theta_v, phi_v, theta_l, phi_l)
         if self.valid is None:
             out = np.array(f, dtype=np.float64).T
             self._check(out, None)

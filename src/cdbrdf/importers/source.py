@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 if TYPE_CHECKING:
     from ..table import CDBRDF
 
-__all__ = ["Evaluator", "Source", "file_sha256", "read_bytes", "table_on", "mitsuba"]
+__all__ = ["Evaluator", "Source", "file_sha256", "read_bytes", "table_on", "mitsuba", "mitsuba_brdf"]
 
 #: ``evaluate(theta_v, phi_v, theta_l, phi_l)`` (degrees, 1-D float64 arrays of one length n) ->
 #: ``(values (n, 3) sr^-1 or relative, measured (n,) in [0, 1] or None = all measured)``.
@@ -113,6 +113,29 @@ def mitsuba() -> tuple[Any, Any]:
     import mitsuba as mi
 
     return mi, dr
+
+
+def mitsuba_brdf(bsdf: Any, theta_v: NDArray[np.float64], phi_v: NDArray[np.float64],
+                 theta_l: NDArray[np.float64], phi_l: NDArray[np.float64]) -> tuple[Any, Any, Any]:
+    """A loaded Mitsuba BSDF's BRDF (sr^-1, no cosine) at directions given in degrees, in its local frame.
+
+    ``si.wi`` is the view and ``wo`` the light, both pointing away from the surface;
+    ``eval`` (which includes the light's cosine) is divided by ``cos(theta_l)``.
+    Returns the Dr.Jit values with ``wi`` and ``wo`` (for callers that need more at
+    the same directions). Call it in the variant the BSDF was loaded in.
+    """
+    mi, dr = mitsuba()
+    deg = float(np.pi / 180.0)
+
+    def direction(t: NDArray[np.float64], p: NDArray[np.float64]) -> Any:
+        st, ct = dr.sincos(mi.Float(np.asarray(t, dtype=np.float32)) * deg)
+        sp, cp = dr.sincos(mi.Float(np.asarray(p, dtype=np.float32)) * deg)
+        return mi.Vector3f(st * cp, st * sp, ct)
+
+    wi, wo = direction(theta_v, phi_v), direction(theta_l, phi_l)
+    si = dr.zeros(mi.SurfaceInteraction3f, dr.width(wi))
+    si.wi = wi
+    return bsdf.eval(mi.BSDFContext(), si, wo) / dr.maximum(wo.z, 1e-6), wi, wo
 
 
 def file_sha256(data: bytes) -> str:
