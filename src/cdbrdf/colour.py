@@ -34,6 +34,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .errors import OptionError
+
 __all__ = [
     "LUMINANCE_WEIGHTS",
     "luminance",
@@ -110,7 +112,7 @@ def luminance(rgb: ArrayLike) -> NDArray[np.float64]:
     """
     v = np.asarray(rgb, dtype=np.float64)
     if v.ndim == 0 or v.shape[-1] != 3:
-        raise ValueError(f"rgb: expected linear RGB values (..., 3), got shape {v.shape}")
+        raise OptionError(f"rgb: expected linear RGB values (..., 3), got shape {v.shape}")
     return v @ LUMINANCE_WEIGHTS
 
 
@@ -248,11 +250,11 @@ def resolve_exposure(exposure: float | str | None, lum: ArrayLike, quantity: str
         return auto_exposure(lum), f"auto: {EXPOSURE_PERCENTILE:g}th percentile → 1"
     if isinstance(exposure, str):
         if exposure != "white":
-            raise ValueError(
+            raise OptionError(
                 f"exposure: {exposure!r} is not a number nor one of {', '.join(EXPOSURE_MODES)}"
             )
         if quantity != "brdf":
-            raise ValueError(
+            raise OptionError(
                 "exposure: 'white' needs an absolute table (quantity 'brdf'); "
                 "this one is 'relative': give a number or 'auto'"
             )
@@ -260,11 +262,11 @@ def resolve_exposure(exposure: float | str | None, lum: ArrayLike, quantity: str
     try:
         x = float(exposure)
     except (TypeError, ValueError):
-        raise ValueError(
+        raise OptionError(
             f"exposure: expected a positive number or one of {', '.join(EXPOSURE_MODES)}, got {exposure!r}"
         ) from None
     if not (np.isfinite(x) and x > 0):
-        raise ValueError(f"exposure: must be a positive number, got {exposure!r}")
+        raise OptionError(f"exposure: must be a positive number, got {exposure!r}")
     return x, "given"
 
 

@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..colour import srgb_to_linear
+from ..errors import OptionError
 from ..images import ImageInfo, read_window
 
 __all__ = [
@@ -67,7 +68,7 @@ def patch_window(
     else:
         width, height = info
     if int(n) != n or n < 1:
-        raise ValueError(f"patch size: expected a positive integer, got {n!r}")
+        raise OptionError(f"patch size: expected a positive integer, got {n!r}")
     n = int(n)
     cx = width // 2 if cx is None else int(cx)
     cy = height // 2 if cy is None else int(cy)
@@ -158,12 +159,12 @@ def merge_exposures(
         ``(n, n)``: True where at least one exposure is unsaturated.
     """
     if not (len(values) == len(saturated) == len(exposures)) or not values:
-        raise ValueError("merge_exposures: need the same (non-zero) number of patches, masks and exposures")
+        raise OptionError("merge_exposures: need the same (non-zero) number of patches, masks and exposures")
     num = np.zeros_like(values[0], dtype=np.float64)
     den = np.zeros(values[0].shape[:2], dtype=np.float64)
     for i, (v, s, e) in enumerate(zip(values, saturated, exposures)):
         if not e > 0:
-            raise ValueError(f"exposure: must be positive, got {e!r}")
+            raise OptionError(f"exposure: must be positive, got {e!r}")
         ok = ~s
         d = None if dark is None else dark[i]
         x = v if d is None else v - d

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import colour
+from ..errors import OptionError
 from ..table import CDBRDF
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -77,7 +78,7 @@ def luminance(
         return colour.luminance(v)
     if nc == 1:
         return v[..., 0]
-    raise ValueError(
+    raise OptionError(
         f"channel: the table has {nc} channels; pick one with channel= "
         f"(an index 0..{nc - 1} or a name)"
     )
@@ -94,12 +95,12 @@ def channel_index(channel: int | str, nc: int, channels: Sequence[str] | None) -
     names = list(channels) if channels is not None else [f"c{i}" for i in range(nc)]
     if isinstance(channel, str):
         if channel not in names:
-            raise ValueError(f"channel: {channel!r} is not one of {', '.join(names)}")
+            raise OptionError(f"channel: {channel!r} is not one of {', '.join(names)}")
         return names.index(channel)
     if isinstance(channel, (bool, np.bool_)) or not isinstance(channel, (int, np.integer)):
-        raise ValueError(f"channel: expected an index or a name, got {channel!r}")
+        raise OptionError(f"channel: expected an index or a name, got {channel!r}")
     if not -nc <= int(channel) < nc:
-        raise ValueError(f"channel: index {channel} is out of range for {nc} channel(s)")
+        raise OptionError(f"channel: index {channel} is out of range for {nc} channel(s)")
     return int(channel) % nc
 
 
@@ -146,9 +147,9 @@ def continuous_kappa(table: CDBRDF, kappa: float | ArrayLike | None) -> NDArray[
     try:
         ks = np.array(kappa, dtype=np.float64, ndmin=1)
     except (TypeError, ValueError):
-        raise ValueError(f"kappa: cannot be read as numbers: {kappa!r}") from None
+        raise OptionError(f"kappa: cannot be read as numbers: {kappa!r}") from None
     if ks.ndim != 1 or ks.size == 0 or not np.all(np.isfinite(ks)):
-        raise ValueError(f"kappa: give one or more finite curvatures (mm^-1), got {kappa!r}")
+        raise OptionError(f"kappa: give one or more finite curvatures (mm^-1), got {kappa!r}")
     return ks
 
 
@@ -163,9 +164,9 @@ def check_angle(name: str, value: float, lo: float, hi: float) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected a number of degrees, got {value!r}") from None
+        raise OptionError(f"{name}: expected a number of degrees, got {value!r}") from None
     if not (np.isfinite(v) and lo <= v <= hi):
-        raise ValueError(f"{name}: must lie in [{lo:g}, {hi:g}] degrees, got {value!r}")
+        raise OptionError(f"{name}: must lie in [{lo:g}, {hi:g}] degrees, got {value!r}")
     return v
 
 
@@ -208,7 +209,7 @@ def save_figure(fig: Figure, path: str | PathLike[str], *, dpi: float = 150.0) -
     fmt = FIGURE_FORMATS.get(out.suffix.lower())
     if fmt is None:
         got = f"{out.suffix!r}" if out.suffix else "no suffix"
-        raise ValueError(
+        raise OptionError(
             f"{out}: cannot tell the figure format from {got}; use one of {', '.join(FIGURE_FORMATS)}"
         )
     with atomic_path(out, suffix=out.suffix) as tmp:

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..errors import OptionError
 from ..table import Grid
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -53,7 +54,7 @@ def plot_hidden(grid: Grid, hidden: ArrayLike, *, fig: Figure | None = None, dpi
 
     h = np.asarray(hidden)
     if h.shape != tuple(grid.shape):
-        raise ValueError(f"hidden: expected the grid's shape {tuple(grid.shape)}, got {h.shape}")
+        raise OptionError(f"hidden: expected the grid's shape {tuple(grid.shape)}, got {h.shape}")
     k, pl, tl, pv, tv = h.shape
     mos = h.reshape(k, pl * tl, pv * tv)
     if fig is None:

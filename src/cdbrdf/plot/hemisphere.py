@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..colour import resolve_exposure, srgb_encode
+from ..errors import OptionError
 from ..table import CDBRDF
 from ._common import check_angle, continuous_kappa, kappa_label, luminance, new_figure, unit_label
 
@@ -72,13 +73,13 @@ def plot_hemisphere(
     from matplotlib.patheffects import withStroke
 
     if colour not in ("luminance", "rgb"):
-        raise ValueError(f"colour: {colour!r} is not one of luminance, rgb")
+        raise OptionError(f"colour: {colour!r} is not one of luminance, rgb")
     if colour == "rgb" and table.n_channels != 3:
-        raise ValueError(f"colour: 'rgb' needs 3 channels, the table has {table.n_channels}")
+        raise OptionError(f"colour: 'rgb' needs 3 channels, the table has {table.n_channels}")
     tl = check_angle("theta_l_deg", theta_l_deg, 0.0, 90.0)
     pl = check_angle("phi_l_deg", phi_l_deg, -720.0, 720.0)
     if int(n_theta) < 2 or int(n_phi) < 3:
-        raise ValueError("n_theta, n_phi: need at least 2 and 3 samples")
+        raise OptionError("n_theta, n_phi: need at least 2 and 3 samples")
     ks = continuous_kappa(table, kappa)
     tmax = float(table.theta_v[-1])
     te = np.linspace(0.0, tmax, int(n_theta) + 1)

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..colour import EXPOSURE_PERCENTILE, resolve_exposure, srgb_encode
-from ..errors import QueryError
+from ..errors import OptionError, QueryError
 from ..schema import FILL_METHOD_CODES
 from ..table import CDBRDF
 from ._common import channel_index, kappa_label, luminance, new_figure
@@ -87,9 +87,9 @@ def _select_kappa(table: CDBRDF, kappa: float | ArrayLike | None) -> NDArray[np.
     try:
         req = np.array(kappa, dtype=np.float64, ndmin=1)
     except (TypeError, ValueError):
-        raise ValueError(f"kappa: cannot be read as numbers: {kappa!r}") from None
+        raise OptionError(f"kappa: cannot be read as numbers: {kappa!r}") from None
     if req.ndim != 1 or req.size == 0:
-        raise ValueError("kappa: give one or more curvatures (mm^-1)")
+        raise OptionError("kappa: give one or more curvatures (mm^-1)")
     idx = []
     for k in req:
         hit = np.flatnonzero(np.abs(axis - k) <= KAPPA_ATOL)
@@ -498,12 +498,12 @@ def plot_mosaic(
 
     if isinstance(table, Mosaic):
         if kappa is not None:
-            raise ValueError("kappa: select curvatures in mosaic_arrays() when passing a Mosaic")
+            raise OptionError("kappa: select curvatures in mosaic_arrays() when passing a Mosaic")
         m = table
     else:
         m = mosaic_arrays(table, kappa=kappa)
     if diff_limit is not None and not (np.isfinite(diff_limit) and diff_limit > 0):
-        raise ValueError(f"diff_limit: must be a positive number, got {diff_limit!r}")
+        raise OptionError(f"diff_limit: must be a positive number, got {diff_limit!r}")
 
     n = m.kappa.size
     lum = m.luminance(channel=channel)

@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..colour import tonemap_srgb8
+from ..errors import OptionError
 from ._common import new_figure
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -48,7 +49,7 @@ def plot_render_comparison(
     a = np.asarray(brdf_image, dtype=np.float64)[..., :3]
     b = np.asarray(cdbrdf_image, dtype=np.float64)[..., :3]
     if a.shape != b.shape or a.ndim != 3:
-        raise ValueError(
+        raise OptionError(
             f"brdf_image, cdbrdf_image: expected two (H, W, 3) images of one shape, got {a.shape} and {b.shape}"
         )
     diff = np.linalg.norm(np.nan_to_num(b - a), axis=-1)
@@ -100,7 +101,7 @@ def plot_curvature_map(
     from matplotlib.colors import Normalize
 
     if not surfaces:
-        raise ValueError("surfaces: give at least one surface")
+        raise OptionError("surfaces: give at least one surface")
     ks = [np.asarray(k, dtype=np.float64) for _, _, _, k in surfaces]
     lim = float(limit) if limit is not None else float(np.percentile(np.abs(np.concatenate(ks)), 99)) or 1e-3
     norm = Normalize(-lim, lim)

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import OptionError
 from ..table import CDBRDF
 from ._common import (
     channel_index,
@@ -84,11 +85,11 @@ def plot_slice(
         The figure holding the axes.
     """
     if plane not in SLICE_PLANES:
-        raise ValueError(f"plane: {plane!r} is not one of {', '.join(SLICE_PLANES)}")
+        raise OptionError(f"plane: {plane!r} is not one of {', '.join(SLICE_PLANES)}")
     tl = check_angle("theta_l_deg", theta_l_deg, 0.0, 90.0)
     pl = check_angle("phi_l_deg", phi_l_deg, -720.0, 720.0)
     if int(n_points) < 2:
-        raise ValueError(f"n_points: need at least 2, got {n_points!r}")
+        raise OptionError(f"n_points: need at least 2, got {n_points!r}")
     ks = continuous_kappa(table, kappa)
     tmax = float(table.theta_v[-1])
     s = np.linspace(-tmax, tmax, int(n_points))

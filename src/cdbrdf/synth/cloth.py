@@ -61,7 +61,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..errors import QueryError
+from ..errors import OptionError, QueryError
 from ..frames import direction_from_angles
 from ..table import CDBRDF, Grid
 from . import _trace
@@ -180,17 +180,17 @@ class ClothParams:
         else:
             weave_matrix(w)
         if self.warp_along not in ("x", "y"):
-            raise ValueError(f"warp_along: expected 'x' or 'y', got {self.warp_along!r}")
+            raise OptionError(f"warp_along: expected 'x' or 'y', got {self.warp_along!r}")
         if not isinstance(self.name, str) or not self.name:
-            raise ValueError("name: must be a non-empty string")
+            raise OptionError("name: must be a non-empty string")
         for f in ("warp_rgb", "weft_rgb", "backing_rgb"):
             v = getattr(self, f)
             try:
                 a = np.asarray(v, dtype=np.float64)
             except (TypeError, ValueError):
-                raise ValueError(f"{f}: expected three numbers, got {v!r}") from None
+                raise OptionError(f"{f}: expected three numbers, got {v!r}") from None
             if a.shape != (3,) or not np.all(np.isfinite(a)) or np.any(a < 0) or np.any(a > 1):
-                raise ValueError(f"{f}: expected three albedos in [0, 1], got {v!r}")
+                raise OptionError(f"{f}: expected three albedos in [0, 1], got {v!r}")
             object.__setattr__(self, f, tuple(float(x) for x in a))
         positive = (
             "warp_pitch_mm", "weft_pitch_mm", "warp_width_mm", "weft_width_mm",
@@ -200,36 +200,36 @@ class ClothParams:
         for f in positive:
             v = getattr(self, f)
             if not _is_real(v) or not v > 0:
-                raise ValueError(f"{f}: must be a positive number, got {v!r}")
+                raise OptionError(f"{f}: must be a positive number, got {v!r}")
             object.__setattr__(self, f, float(v))
         for f in ("crimp_share_warp", "warp_isotropic", "weft_isotropic"):
             v = getattr(self, f)
             if not _is_real(v) or not 0 <= v <= 1:
-                raise ValueError(f"{f}: must lie in [0, 1], got {v!r}")
+                raise OptionError(f"{f}: must lie in [0, 1], got {v!r}")
             object.__setattr__(self, f, float(v))
         v = self.crimp_transition
         if not _is_real(v) or not 0.05 <= v <= 1:
-            raise ValueError(f"crimp_transition: must lie in [0.05, 1], got {v!r}")
+            raise OptionError(f"crimp_transition: must lie in [0.05, 1], got {v!r}")
         object.__setattr__(self, "crimp_transition", float(v))
         for f in ("footprint_mm", "warp_specular", "weft_specular"):
             v = getattr(self, f)
             if not _is_real(v) or not v >= 0:
-                raise ValueError(f"{f}: must be a non-negative number, got {v!r}")
+                raise OptionError(f"{f}: must be a non-negative number, got {v!r}")
             object.__setattr__(self, f, float(v))
         for f in ("warp_twist_deg", "weft_twist_deg"):
             v = getattr(self, f)
             if not _is_real(v) or not -60 <= v <= 60:
-                raise ValueError(f"{f}: must lie in [-60, 60] degrees, got {v!r}")
+                raise OptionError(f"{f}: must lie in [-60, 60] degrees, got {v!r}")
             object.__setattr__(self, f, float(v))
         if self.ior < 1.0:
-            raise ValueError(f"ior: must be >= 1, got {self.ior!r}")
+            raise OptionError(f"ior: must be >= 1, got {self.ior!r}")
         for f in ("warp_gloss_deg", "weft_gloss_deg", "warp_sheen_deg", "weft_sheen_deg"):
             if getattr(self, f) > 90:
-                raise ValueError(f"{f}: must be at most 90 degrees, got {getattr(self, f)!r}")
+                raise OptionError(f"{f}: must be at most 90 degrees, got {getattr(self, f)!r}")
         for f, lo in (("texels", 8), ("rays", 16), ("tilt_samples", 1)):
             v = getattr(self, f)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
-                raise ValueError(f"{f}: must be an integer >= {lo}, got {v!r}")
+                raise OptionError(f"{f}: must be an integer >= {lo}, got {v!r}")
             object.__setattr__(self, f, int(v))
 
     @classmethod
@@ -248,7 +248,7 @@ class ClothParams:
         """
         unknown = sorted(set(changes) - set(self.names()))
         if unknown:
-            raise ValueError(
+            raise OptionError(
                 f"unknown cloth parameter(s) {', '.join(map(repr, unknown))}; "
                 f"valid names: {', '.join(self.names())}"
             )
@@ -277,7 +277,7 @@ class ClothParams:
             For an unknown name (listing the valid ones) or unreadable text.
         """
         if name not in cls.names():
-            raise ValueError(
+            raise OptionError(
                 f"unknown cloth parameter {name!r}; valid names: {', '.join(cls.names())}"
             )
         default = next(f.default for f in fields(cls) if f.name == name)
@@ -298,7 +298,7 @@ class ClothParams:
                 return float(t)
             return t
         except ValueError:
-            raise ValueError(f"{name}: cannot read {text!r} as a value of this parameter") from None
+            raise OptionError(f"{name}: cannot read {text!r} as a value of this parameter") from None
 
     @property
     def weave_matrix(self) -> NDArray[np.int8]:

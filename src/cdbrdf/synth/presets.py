@@ -21,6 +21,7 @@ from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
+from ..errors import OptionError
 from .cloth import ClothModel, ClothParams
 
 __all__ = ["PRESETS", "names", "params", "model"]
@@ -106,7 +107,7 @@ def params(name: str, **overrides: Any) -> ClothParams:
         an invalid value.
     """
     if name not in PRESETS:
-        raise ValueError(f"unknown preset {name!r}; valid presets: {', '.join(names())}")
+        raise OptionError(f"unknown preset {name!r}; valid presets: {', '.join(names())}")
     return ClothParams().replace(**dict(PRESETS[name])).replace(**overrides)
 
 

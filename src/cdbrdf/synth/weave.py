@@ -40,6 +40,8 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import OptionError
+
 __all__ = [
     "WEAVES",
     "weave_matrix",
@@ -106,26 +108,26 @@ def weave_matrix(weave: str | ArrayLike) -> NDArray[np.int8]:
     """
     if isinstance(weave, str):
         if weave not in WEAVES:
-            raise ValueError(
+            raise OptionError(
                 f"weave: unknown pattern {weave!r}; valid names: {', '.join(weave_names())}"
             )
         return np.array(WEAVES[weave], dtype=np.int8)
     try:
         m = np.asarray(weave)
     except (TypeError, ValueError) as exc:  # ragged lists
-        raise ValueError(f"weave: cannot be read as a matrix ({exc})") from None
+        raise OptionError(f"weave: cannot be read as a matrix ({exc})") from None
     if m.ndim != 2:
-        raise ValueError(f"weave: expected a 2-D 0/1 matrix (weft x warp), got shape {m.shape}")
+        raise OptionError(f"weave: expected a 2-D 0/1 matrix (weft x warp), got shape {m.shape}")
     if m.shape[0] < 2 or m.shape[1] < 2:
-        raise ValueError(f"weave: a repeat needs at least 2 x 2 crossings, got shape {m.shape}")
+        raise OptionError(f"weave: a repeat needs at least 2 x 2 crossings, got shape {m.shape}")
     if not (np.issubdtype(m.dtype, np.number) or m.dtype == bool) or not np.isin(m, (0, 1)).all():
-        raise ValueError("weave: entries must be 0 (weft on top) or 1 (warp on top)")
+        raise OptionError("weave: entries must be 0 (weft on top) or 1 (warp on top)")
     m = m.astype(np.int8)
     for axis, what in ((1, "weft (row)"), (0, "warp (column)")):
         s = m.sum(axis=axis)
         bad = np.flatnonzero((s == 0) | (s == m.shape[axis]))
         if bad.size:
-            raise ValueError(
+            raise OptionError(
                 f"weave: {what} {int(bad[0])} never changes sides, so it does not interlace; "
                 "every row and column needs both a 0 and a 1"
             )
@@ -143,9 +145,9 @@ def face_stretch(kappa_per_mm: float, thickness_mm: float) -> float:
     """
     k = float(kappa_per_mm)
     if not np.isfinite(k):
-        raise ValueError(f"kappa: must be finite, got {kappa_per_mm!r}")
+        raise OptionError(f"kappa: must be finite, got {kappa_per_mm!r}")
     if abs(k) * thickness_mm >= 1.0:
-        raise ValueError(
+        raise OptionError(
             f"kappa: |kappa| = {abs(k):g} /mm bends a cloth of thickness {thickness_mm:g} mm "
             f"tighter than its own thickness; need |kappa| < {1.0 / thickness_mm:g} /mm"
         )
@@ -303,7 +305,7 @@ def build_heightfield(
         over_a = (1 - weave).astype(bool).T  # weft (A) on top, indexed [warp, weft]
         kind_a, kind_b = WEFT, WARP
     else:
-        raise ValueError(f"warp_along: expected 'x' or 'y', got {warp_along!r}")
+        raise OptionError(f"warp_along: expected 'x' or 'y', got {warp_along!r}")
     n_b, n_a = over_a.shape
     p_a = a_geom.pitch_mm * stretch_x  # A centres spaced along x, stretched
     p_b = b_geom.pitch_mm  # B centres spaced along y
