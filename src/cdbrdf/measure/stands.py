@@ -52,7 +52,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import limits
-from ..errors import CaptureError
+from ..errors import CaptureError, OptionError
 from ..frames import direction_from_angles
 from ..fsutil import atomic_path, read_regular
 from ..table import Grid
@@ -110,17 +110,17 @@ class Stand:
             try:
                 v = float(v)
             except (TypeError, ValueError):
-                raise ValueError(f"stand {name}: expected a number, got {v!r}") from None
+                raise OptionError(f"stand {name}: expected a number, got {v!r}") from None
             if not math.isfinite(v):
-                raise ValueError(f"stand {name}: must be finite, got {v!r}")
+                raise OptionError(f"stand {name}: must be finite, got {v!r}")
             object.__setattr__(self, name, v)
         if self.face_width_mm <= 0 or self.length_mm <= 0 or self.wall_height_mm < 0:
-            raise ValueError(
+            raise OptionError(
                 f"stand kappa={self.kappa:g}: face_width_mm and length_mm must be positive "
                 "and wall_height_mm non-negative"
             )
         if self.kappa < 0 and self.half_angle_rad >= math.pi / 2:
-            raise ValueError(
+            raise OptionError(
                 f"stand kappa={self.kappa:g}: a face {self.face_width_mm:g} mm wide spans "
                 f"{math.degrees(2 * self.half_angle_rad):.1f} degrees of the trough; it must "
                 f"stay below 180 (face_width_mm < {math.pi * self.radius_mm:.3g})"
@@ -199,7 +199,7 @@ def stand_for(stands: Mapping[float, Stand] | Sequence[Stand], kappa: float) -> 
     for s in items:
         if abs(s.kappa - kappa) <= KAPPA_TOL_PER_MM:
             return s
-    raise ValueError(f"no stand is described for kappa = {kappa:g} 1/mm")
+    raise OptionError(f"no stand is described for kappa = {kappa:g} 1/mm")
 
 
 def footprint_mm(theta_v_deg: ArrayLike, *, pixel_mm: float, patch_px: int) -> NDArray[np.float64]:
@@ -309,7 +309,7 @@ def read_input(path: str | PathLike[str], limit_name: str, *, what: str) -> byte
 
 
 def _reject_constant(name: str) -> float:
-    raise ValueError(f"{name} is not a number JSON allows")
+    raise OptionError(f"{name} is not a number JSON allows")
 
 
 def _number(where: str | PathLike[str], key: str, v: object) -> float:

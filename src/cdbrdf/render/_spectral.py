@@ -34,6 +34,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import FormatError
+
 __all__ = ["SRGBModel", "srgb_model", "srgb_coefficients", "spectral_records", "model_path"]
 
 #: The coefficient c2 of saturated greys (black: -c2, white: +c2), as in Mitsuba.
@@ -57,11 +59,11 @@ class SRGBModel:
     def __init__(self, path: str | Path) -> None:
         raw = Path(path).read_bytes()
         if raw[:4] != b"SPEC":
-            raise ValueError(f"{path}: not an RGB-to-spectrum coefficient table (no 'SPEC' header)")
+            raise FormatError(f"{path}: not an RGB-to-spectrum coefficient table (no 'SPEC' header)")
         res = int(np.frombuffer(raw, dtype="<u4", count=1, offset=4)[0])
         n = res**3 * 9
         if res < 2 or len(raw) < 8 + 4 * (res + n):
-            raise ValueError(f"{path}: truncated RGB-to-spectrum coefficient table")
+            raise FormatError(f"{path}: truncated RGB-to-spectrum coefficient table")
         self.res = res
         self.scale = np.frombuffer(raw, dtype="<f4", count=res, offset=8).astype(np.float64)
         self.data = np.frombuffer(raw, dtype="<f4", count=n, offset=8 + 4 * res).reshape(3, res, res, res, 3)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import OptionError
 from .meshio import Mesh
 
 __all__ = ["DrapedCloth", "draped_cloth_height", "draped_cloth_mesh", "Skirt", "skirt_mesh"]
@@ -58,11 +59,11 @@ class DrapedCloth:
         for name in ("size_mm", "height_mm", "sigma_mm", "fold_amplitude_mm"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name}: must be a positive length in mm, got {v!r}")
+                raise OptionError(f"{name}: must be a positive length in mm, got {v!r}")
         if int(self.folds) != self.folds or self.folds < 1:
-            raise ValueError(f"folds: must be a positive integer, got {self.folds!r}")
+            raise OptionError(f"folds: must be a positive integer, got {self.folds!r}")
         if int(self.resolution) != self.resolution or self.resolution < 8:
-            raise ValueError(f"resolution: must be an integer >= 8, got {self.resolution!r}")
+            raise OptionError(f"resolution: must be an integer >= 8, got {self.resolution!r}")
 
 
 def draped_cloth_height(x_mm: ArrayLike, y_mm: ArrayLike, cloth: DrapedCloth = DrapedCloth()) -> NDArray[np.float64]:
@@ -139,15 +140,15 @@ class Skirt:
         for name in ("length_mm", "waist_radius_mm", "hem_radius_mm"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name}: must be a positive length in mm, got {v!r}")
+                raise OptionError(f"{name}: must be a positive length in mm, got {v!r}")
         if not (np.isfinite(self.fold_amplitude_mm) and 0 <= self.fold_amplitude_mm < self.waist_radius_mm):
-            raise ValueError(f"fold_amplitude_mm: must be in [0, waist_radius_mm), got {self.fold_amplitude_mm!r}")
+            raise OptionError(f"fold_amplitude_mm: must be in [0, waist_radius_mm), got {self.fold_amplitude_mm!r}")
         if int(self.folds) != self.folds or self.folds < 0:
-            raise ValueError(f"folds: must be an integer >= 0, got {self.folds!r}")
+            raise OptionError(f"folds: must be an integer >= 0, got {self.folds!r}")
         for name in ("around", "down"):
             v = getattr(self, name)
             if int(v) != v or v < 4:
-                raise ValueError(f"{name}: must be an integer >= 4, got {v!r}")
+                raise OptionError(f"{name}: must be an integer >= 4, got {v!r}")
 
 
 def _skirt_radius(theta: NDArray[np.float64], y: NDArray[np.float64], sk: Skirt) -> NDArray[np.float64]:

@@ -21,6 +21,7 @@ from types import MappingProxyType
 from numpy.typing import ArrayLike
 
 from ..colour import tonemap_srgb8
+from ..errors import OptionError
 
 __all__ = ["IMAGE_FORMATS", "write_render"]
 
@@ -59,5 +60,5 @@ def write_render(path: str | PathLike[str], image: ArrayLike, *, exposure_ev: fl
     elif fmt == "png":
         write_png(out, tonemap_srgb8(image, exposure_ev=exposure_ev))
     else:
-        raise ValueError(f"{out}: unknown image type {out.suffix.lower()!r}; use {' or '.join(IMAGE_FORMATS)}")
+        raise OptionError(f"{out}: unknown image type {out.suffix.lower()!r}; use {' or '.join(IMAGE_FORMATS)}")
     return out

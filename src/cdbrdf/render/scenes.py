@@ -163,9 +163,9 @@ class SineSheet:
         for name in ("amplitude_mm", "wavelength_mm", "width_mm", "depth_mm"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"{name}: must be a positive length in mm, got {v}")
+                raise OptionError(f"{name}: must be a positive length in mm, got {v}")
         if self.vertices_per_wavelength < 8:
-            raise ValueError("vertices_per_wavelength: at least 8 are needed")
+            raise OptionError("vertices_per_wavelength: at least 8 are needed")
 
     @property
     def crest_curvature_mm(self) -> float:
@@ -402,7 +402,7 @@ def frame_camera(
     passes). Returns origin, target and the distance.
     """
     if not 0.0 < fill <= 1.0:
-        raise ValueError(f"fill: expected (0, 1], got {fill}")
+        raise OptionError(f"fill: expected (0, 1], got {fill}")
     d = direction_from_angles(90.0 - elevation_deg, azimuth_deg)
     up0 = np.array([0.0, 0.0, 1.0]) if abs(d[2]) < 0.999 else np.array([0.0, 1.0, 0.0])
     right = np.cross(up0, d)
@@ -497,7 +497,7 @@ def _bsdf_entry(table: Any, mode: str, scale: float, curvature_mode: str = "max"
     from ..curvature import ATTRIBUTES, CURVATURE_MODES
 
     if curvature_mode not in ATTRIBUTES:
-        raise ValueError(f"curvature mode: {curvature_mode!r} is not one of {', '.join(CURVATURE_MODES)}")
+        raise OptionError(f"curvature mode: {curvature_mode!r} is not one of {', '.join(CURVATURE_MODES)}")
     return {"type": "cdbrdf", "table": table, "mode": mode, "curvature": ATTRIBUTES[curvature_mode], "scale": scale}
 
 
@@ -520,7 +520,7 @@ def _build(mesh: Mesh, table: Any, *, mode: str, scale: float, size: tuple[int, 
     if bsdf is None:
         bsdf = _bsdf_entry(table, mode, scale, curvature_mode)
     if not lights and envmap is None:
-        raise ValueError("the scene needs a light: give a directional light or an environment map")
+        raise OptionError("the scene needs a light: give a directional light or an environment map")
     with tempfile.TemporaryDirectory(prefix="cdbrdf-") as tmp:
         ply = Path(tmp) / "object.ply"
         write_ply(ply, mesh)
@@ -650,13 +650,13 @@ def mesh_scene(
         Share of the frame's limiting side the object fills.
     """
     if lighting not in LIGHTINGS:
-        raise ValueError(f"lighting: {lighting!r} is not one of {', '.join(LIGHTINGS)}")
+        raise OptionError(f"lighting: {lighting!r} is not one of {', '.join(LIGHTINGS)}")
     if up not in UP_AXES:
-        raise ValueError(f"up: {up!r} is not one of {', '.join(UP_AXES)}")
+        raise OptionError(f"up: {up!r} is not one of {', '.join(UP_AXES)}")
     from ..curvature import MESH_ATTRIBUTES
 
     if curvature_mode not in MESH_ATTRIBUTES:
-        raise ValueError(f"curvature mode: {curvature_mode!r} is not one of {', '.join(MESH_ATTRIBUTES)}")
+        raise OptionError(f"curvature mode: {curvature_mode!r} is not one of {', '.join(MESH_ATTRIBUTES)}")
     if not isinstance(mesh, Mesh) or MESH_ATTRIBUTES[curvature_mode] not in mesh.attributes:
         mesh = prepare_mesh(mesh, units=units, table=table if not isinstance(table, (str, PathLike)) else None)
     if mesh.uv is None:
@@ -676,7 +676,7 @@ def mesh_scene(
             lights.append(directional_light(STUDIO_KEY[0], azimuth_deg + STUDIO_KEY[1], DEFAULT_IRRADIANCE))
     elif light is not None:
         if isinstance(light, str):
-            raise ValueError(f"light: expected (theta, phi, irradiance), 'auto' or None, got {light!r}")
+            raise OptionError(f"light: expected (theta, phi, irradiance), 'auto' or None, got {light!r}")
         lights.append(directional_light(*light))
     env: Any = envmap
     hide = False
@@ -717,7 +717,7 @@ def render_scene(
     sensor = scene.sensors()[0]
     total = int(spp if spp is not None else sensor.sampler().sample_count())
     if total < 1:
-        raise ValueError(f"spp: must be >= 1, got {total}")
+        raise OptionError(f"spp: must be >= 1, got {total}")
     n = passes if passes is not None else max(1, math.ceil(total / 16))
     n = min(n, total)
     chunks = [total // n + (1 if i < total % n else 0) for i in range(n)]
@@ -749,7 +749,7 @@ def exposure_from_render(image: NDArray[np.floating], *, irradiance: float = DEF
     from ..colour import auto_exposure_ev
 
     if not (math.isfinite(irradiance) and irradiance > 0):
-        raise ValueError(f"irradiance: must be positive, got {irradiance}")
+        raise OptionError(f"irradiance: must be positive, got {irradiance}")
     top = MAX_AUTO_EV + math.log2(DEFAULT_IRRADIANCE / irradiance)
     img = np.asarray(image, dtype=np.float64)
     if img.shape[-1] >= 4:

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..colour import linear_to_srgb
+from ..errors import OptionError
 from ..images import write_exr, write_png, write_tiff
 
 __all__ = ["IMAGE_KINDS", "NoiseModel", "encode", "extension", "write_photograph"]
@@ -65,7 +66,7 @@ class NoiseModel:
             and vals[0] > 0
         )
         if not ok:
-            raise ValueError(
+            raise OptionError(
                 f"noise: expected 'none' or FULL_WELL[,READ] electrons (full well in (0, {_MAX_ELECTRONS:g}], "
                 f"read noise in [0, {_MAX_ELECTRONS:g}]), got {text!r}"
             )

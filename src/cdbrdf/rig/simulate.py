@@ -68,7 +68,7 @@ def load_material(material: CDBRDF | str | PathLike[str]) -> CDBRDF:
     try:
         from .. import materials
     except ImportError as exc:  # pragma: no cover - the presets module is part of the package
-        raise ValueError(f"material {material!r}: not a file, and presets are unavailable ({exc})") from None
+        raise OptionError(f"material {material!r}: not a file, and presets are unavailable ({exc})") from None
     return materials.load(str(material))
 
 
