@@ -424,3 +424,25 @@ def test_valid_ascii_ply_reads_equal_to_the_binary_path(tmp_path, layout):
     assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
     assert np.array_equal(a.uv, b.uv) and np.array_equal(a.attributes["curvature"], b.attributes["curvature"])
     assert a.metadata["units"] == b.metadata["units"] == "cm"
+
+
+def test_ascii_ply_values_are_the_correctly_rounded_doubles(tmp_path):
+    """Every token reads bit for bit as Python's ``float`` reads it (the numba fast path and its fallback)."""
+    from cdbrdf.render._ply import parse_ply
+
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=4000) * 10.0 ** rng.integers(-30, 30, 4000)
+    tokens = [f"{v:.9g}" for v in x.astype(np.float32)] + [repr(float(v)) for v in x]
+    tokens += [f"{v:.17g}" for v in x[:500]] + [f"{v:.{int(d)}e}" for v, d in zip(x, rng.integers(0, 16, 4000))]
+    tokens += [str(i) for i in rng.integers(-10**12, 10**12, 500)]
+    tokens += ["-0", "+0.0", "007.50", ".5", "5.", "1E+05", "-1e-22", "1e22", "1e23", "9007199254740993",
+               "123456789012345678901234567890", "0.30000000000000004", "1e-400", "1e400", "nan", "-inf",
+               "Infinity", "4.9406564584124654e-324", "2.2250738585072014e-308", "1.7976931348623157e308"]
+    tokens += [""] * (-len(tokens) % 3)
+    tokens = [t or "1" for t in tokens]
+    rows = [" ".join(tokens[i:i + 3]) for i in range(0, len(tokens), 3)]
+    text = "\n".join(ply_text(vertex_count=len(rows), body="").splitlines() + rows + ["3 0 1 2"]) + "\n"
+    d = parse_ply(text.encode("ascii"), "t.ply")
+    got = np.stack([d.vertex[k] for k in "xyz"], axis=1).reshape(-1)
+    want = np.array([float(t) for t in tokens])
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))

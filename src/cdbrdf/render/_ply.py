@@ -16,8 +16,10 @@ reader:
   with one numba pass that finds each record's offset;
 - reads ASCII data line by line, as PLY defines it (one record a line): one
   numba pass over the bytes finds every non-blank line and its values (and
-  the first byte that cannot be part of a number), numpy converts the
-  values, and each element's records are checked to be one line each with
+  the first byte that cannot be part of a number), a second converts the
+  values (exactly, through Clinger's fast path, for up to 15 significant
+  digits and decimal exponents within +-22; Python's ``float`` for the
+  rest), and each element's records are checked to be one line each with
   exactly the values their properties need (a list: its count, then that
   many items). A record merged onto another's line, split over two lines,
   short of a value or with one too many is an error naming the line (from
@@ -34,7 +36,6 @@ from __future__ import annotations
 
 import math
 import re
-import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -229,6 +230,107 @@ def _ascii_lines(buf, start, n_lines, ok):  # noqa: ANN001, ANN202 - numba
     return line_no[:k], first[:k], ntok[:k], -1
 
 
+#: The powers of ten a double holds exactly (10^0 .. 10^22): the exact fast path of :func:`_ascii_values`.
+_POW10 = np.array([10.0**k for k in range(23)])
+
+
+@njit(cache=True)
+def _push(a, n, v):  # noqa: ANN001, ANN202 - numba
+    """``a`` with ``v`` stored at ``n`` (grown by doubling when full)."""
+    if n == a.shape[0]:
+        b = np.empty(2 * a.shape[0], a.dtype)
+        b[:n] = a
+        a = b
+    a[n] = v
+    return a
+
+
+@njit(cache=True)
+def _ascii_values(buf, start, n_tok, pow10):  # noqa: ANN001, ANN202 - numba
+    """The ``n_tok`` tokens of an ASCII PLY body as numbers, where an exact fast path applies.
+
+    A token ``[+-]digits[.digits][(e|E)[+-]digits]`` whose digits make an
+    integer ``m < 2^53`` and whose decimal exponent ``k`` has ``|k| <= 22`` is
+    ``m * 10^k`` or ``m / 10^-k``: one correctly rounded operation on two
+    exact doubles, so the value is the correctly rounded one (Clinger's fast
+    path), as a C library's ``strtod`` gives. Every other token (more
+    digits, larger exponents, ``nan``, ``inf``, anything malformed) is left
+    to the caller: its index, first and last byte are returned.
+    """
+    out = np.empty(n_tok, np.float64)
+    fb_tok = np.empty(16, np.int64)
+    fb_a = np.empty(16, np.int64)
+    fb_b = np.empty(16, np.int64)
+    n_fb = 0
+    limit = 9007199254740992  # 2^53
+    k = 0
+    i = start
+    n = buf.shape[0]
+    while k < n_tok:
+        while i < n and (buf[i] == 32 or buf[i] == 9 or buf[i] == 13 or buf[i] == 10):
+            i += 1
+        a = i
+        while i < n and not (buf[i] == 32 or buf[i] == 9 or buf[i] == 13 or buf[i] == 10):
+            i += 1
+        b = i
+        j = a
+        neg = False
+        if j < b and (buf[j] == 43 or buf[j] == 45):
+            neg = buf[j] == 45
+            j += 1
+        m = 0
+        ex = 0
+        digits = 0
+        ok = True
+        while j < b and 48 <= buf[j] <= 57:
+            m = m * 10 + (buf[j] - 48)
+            digits += 1
+            j += 1
+            if m >= limit:
+                ok = False
+                break
+        if ok and j < b and buf[j] == 46:
+            j += 1
+            while j < b and 48 <= buf[j] <= 57:
+                m = m * 10 + (buf[j] - 48)
+                digits += 1
+                ex -= 1
+                j += 1
+                if m >= limit:
+                    ok = False
+                    break
+        if ok and digits > 0 and j < b and (buf[j] == 101 or buf[j] == 69):
+            j += 1
+            eneg = False
+            if j < b and (buf[j] == 43 or buf[j] == 45):
+                eneg = buf[j] == 45
+                j += 1
+            e = 0
+            ed = 0
+            while j < b and 48 <= buf[j] <= 57 and e < 100000:
+                e = e * 10 + (buf[j] - 48)
+                ed += 1
+                j += 1
+            if ed == 0:
+                ok = False
+            ex += -e if eneg else e
+        if ok and digits > 0 and j == b and -22 <= ex <= 22:
+            v = float(m)
+            if ex > 0:
+                v = v * pow10[ex]
+            elif ex < 0:
+                v = v / pow10[-ex]
+            out[k] = -v if neg else v
+        else:
+            out[k] = np.nan
+            fb_tok = _push(fb_tok, n_fb, k)
+            fb_a = _push(fb_a, n_fb, a)
+            fb_b = _push(fb_b, n_fb, b)
+            n_fb += 1
+        k += 1
+    return out, fb_tok[:n_fb], fb_a[:n_fb], fb_b[:n_fb]
+
+
 @njit(cache=True)
 def _ascii_list_records(tok, first, ntok, lo, count, is_list):  # noqa: ANN001, ANN202 - numba
     """Token offsets and list lengths of ``count`` one-line records from non-blank line ``lo``.
@@ -292,29 +394,15 @@ def _ascii_body(data: bytes, start: int, name: str) -> _AsciiBody:
         raise MeshError(f"{name}: line {lineno}: {data[bad:bad + 1].decode('ascii', 'replace')!r} is not part "
                         f"of a number ({text!r:.60})")
     n_tok = int(first[-1] + ntok[-1]) if first.size else 0
-    values = np.zeros(0)
-    if n_tok:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")
-            try:
-                values = np.fromstring(data[start:], dtype=np.float64, sep=" ")
-            except (ValueError, DeprecationWarning):
-                pass
-    if values.size != n_tok:
-        _raise_bad_number(data, start, header_lines, name)
+    values, fb_tok, fb_a, fb_b = _ascii_values(buf, start, n_tok, _POW10)
+    for t, a, b in zip(fb_tok.tolist(), fb_a.tolist(), fb_b.tolist(), strict=True):
+        try:
+            values[t] = float(data[a:b])
+        except ValueError:
+            k = int(np.searchsorted(first, t, side="right")) - 1
+            raise MeshError(f"{name}: line {header_lines + int(line_no[k]) + 1}: "
+                            f"{data[a:b].decode('ascii', 'replace')!r:.40} is not a number") from None
     return _AsciiBody(values, line_no, first, ntok, header_lines, name)
-
-
-def _raise_bad_number(data: bytes, start: int, header_lines: int, name: str) -> None:
-    """The line and token of the first value of an ASCII body that is not a number (error path only)."""
-    for i, line in enumerate(data[start:].split(b"\n")):
-        for t in line.split():
-            try:
-                float(t)
-            except ValueError:
-                raise MeshError(f"{name}: line {header_lines + i + 1}: {t.decode('ascii', 'replace')!r:.40} is "
-                                f"not a number") from None
-    raise MeshError(f"{name}: the ASCII PLY data holds something that is not a number")
 
 
 def _read_ascii_element(el: _Element, body: _AsciiBody, lo: int) -> tuple[dict[str, Any], int]:
