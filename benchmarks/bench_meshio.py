@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import re
 import sys
 import tempfile
@@ -161,6 +162,7 @@ def main(argv=None) -> int:
     from cdbrdf.render._ply import parse_ply
     from cdbrdf.render.meshio import read_ply, write_ply
 
+    print(f"cores: {os.cpu_count()}, load average: {os.getloadavg()[0]:.1f}")
     mesh = _mesh(args.vertices)
     print(f"mesh: {mesh.n_vertices:,} vertices, {mesh.faces.shape[0]:,} triangles, 10 vertex properties")
     with tempfile.TemporaryDirectory() as tmp:
@@ -196,6 +198,7 @@ def main(argv=None) -> int:
             t_tri = _best(lambda p=p: load(p), args.repeat)
             print(f"  {label:6s}: cdbrdf {t_ours:6.2f} s, trimesh {t_tri:6.2f} s  (trimesh / cdbrdf: "
                   f"{t_tri / t_ours:.2f})")
+    print(f"load average at the end: {os.getloadavg()[0]:.1f}")
     return 0 if ratio <= TARGET_RATIO else 1
 
 

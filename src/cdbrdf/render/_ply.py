@@ -446,6 +446,18 @@ def _read_ascii_element(el: _Element, body: _AsciiBody, lo: int) -> tuple[dict[s
                           if p.count_dtype is not None)
         raise MeshError(f"{at}: expected {exp} values ({items}), found {found}")
     _check_complete(el, body, lo, avail)
+    if el.count and all(p.count_dtype is None or np.all(lens[:, i] == lens[0, i]) for i, p in enumerate(el.props)):
+        # every record has the same layout (the usual all-triangle faces): one reshape
+        s = int(body.first[lo])
+        rel = offs[0] - s
+        block = body.values[s:s + el.count * int(body.ntok[lo])].reshape(el.count, -1)
+        for i, p in enumerate(el.props):
+            if p.count_dtype is None:
+                out[p.name] = block[:, rel[i]]
+            else:
+                c = int(lens[0, i])
+                out[p.name] = (block[:, rel[i] + 1:rel[i] + 1 + c].reshape(-1), lens[:, i])
+        return out, lo + el.count
     for i, p in enumerate(el.props):
         if p.count_dtype is None:
             out[p.name] = body.values[offs[:, i]]
@@ -556,6 +568,8 @@ def _fixed_layout(buf: NDArray[np.uint8], pos: int, el: _Element, sizes: NDArray
 
 def _fan(values: NDArray[np.int64], lens: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Triangles of polygons (fans) and for each its three positions in ``values``."""
+    if lens.size and np.all(lens == 3):
+        return values.reshape(-1, 3), np.arange(values.size).reshape(-1, 3)
     starts = np.r_[0, np.cumsum(lens)[:-1]]
     ntri = np.maximum(lens - 2, 0)
     rec = np.repeat(np.arange(lens.size), ntri)
