@@ -1,9 +1,11 @@
 """The PLY reader and writer of :mod:`cdbrdf.render.meshio` (private).
 
-cdbrdf reads PLY itself rather than through trimesh, whose reader cannot read
-binary files with polygons of mixed sizes, triangle strips or the header's
-comments (where cdbrdf records the unit of a mesh and of its curvature). The
-reader:
+cdbrdf reads PLY itself rather than through trimesh, whose reader keeps extra
+vertex properties (the curvature ``curvature_x``, tangents) only in its
+private metadata, drops the header's comments (where cdbrdf records the unit
+of a mesh and of its curvature) and cannot read binary files with polygons of
+mixed sizes or triangle strips; plyfile would read them but is GPL-3.0
+(``docs/rendering.md``, "Files"). The reader:
 
 - parses the header (``ascii``, ``binary_little_endian``,
   ``binary_big_endian``; every scalar type; ``comment`` and ``obj_info``
