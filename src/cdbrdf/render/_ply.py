@@ -195,7 +195,8 @@ def _ascii_lines(buf, start, n_lines, ok):  # noqa: ANN001, ANN202 - numba
     """The non-blank lines of an ASCII PLY body: body line index, first token, token count; bad byte or -1.
 
     Tokens are runs of bytes other than space, tab, CR and LF; a line ends at LF
-    (a CR before it is whitespace) or at the end of the data.
+    (a CR before it is whitespace) or at the end of the data. At most
+    ``n_lines`` lines are found (the scan stops there).
     """
     line_no = np.empty(n_lines, np.int64)
     first = np.empty(n_lines, np.int64)
@@ -213,6 +214,8 @@ def _ascii_lines(buf, start, n_lines, ok):  # noqa: ANN001, ANN202 - numba
                 first[k] = tokens - cnt
                 ntok[k] = cnt
                 k += 1
+                if k == n_lines:
+                    return line_no, first, ntok, -1
             line += 1
             cnt = 0
             in_tok = False
@@ -382,11 +385,18 @@ class _AsciiBody:
         return self.header_lines + int(self.line_no[k]) + 1
 
 
-def _ascii_body(data: bytes, start: int, name: str) -> _AsciiBody:
-    """Split an ASCII PLY body into values and lines; a :class:`MeshError` with the line of anything not a number."""
+def _ascii_body(data: bytes, start: int, name: str, max_records: int) -> _AsciiBody:
+    """Split an ASCII PLY body into values and lines; a :class:`MeshError` with the line of anything not a number.
+
+    Only the first ``max_records + 1`` non-blank lines are read (the records
+    the header declares and one to tell that more follow), so memory follows
+    the declared counts and the file's size, whichever is smaller.
+    """
     buf = np.frombuffer(data, dtype=np.uint8)
     header_lines = data.count(b"\n", 0, start)
-    line_no, first, ntok, bad = _ascii_lines(buf, start, data.count(b"\n", start) + 1, _ASCII_OK)
+    # the lines the records need, and one more to tell data after the last record
+    cap = min(data.count(b"\n", start) + 1, max_records + 1)
+    line_no, first, ntok, bad = _ascii_lines(buf, start, cap, _ASCII_OK)
     if bad >= 0:
         lineno = header_lines + data.count(b"\n", start, bad) + 1
         ls = data.rfind(b"\n", 0, bad) + 1
@@ -444,9 +454,9 @@ def _read_ascii_element(el: _Element, body: _AsciiBody, lo: int) -> tuple[dict[s
             raise MeshError(f"{at}: the count of list {el.props[exp].name!r} is {c:g}, not a whole number >= 0")
         if kind == 2:
             raise MeshError(f"{at}: expected at least {exp} values, found {found}")
-        items = ", ".join(f"{p.name}: {int(lens[r, i])} items" for i, p in enumerate(el.props)
+        lists = ", ".join(f"{p.name}: {int(lens[r, i])} items" for i, p in enumerate(el.props)
                           if p.count_dtype is not None)
-        raise MeshError(f"{at}: expected {exp} values ({items}), found {found}")
+        raise MeshError(f"{at}: expected {exp} values ({lists}), found {found}")
     _check_complete(el, body, lo, avail)
     if el.count and all(p.count_dtype is None or np.all(lens[:, i] == lens[0, i]) for i, p in enumerate(el.props)):
         # every record has the same layout (the usual all-triangle faces): one reshape
@@ -618,7 +628,7 @@ def parse_ply(data: bytes, name: str) -> PlyData:
             check("mesh_faces", el.count, what=f"{name}: PLY element {el.name!r}")
     ascii_body: _AsciiBody | None = None
     if fmt == "ascii":
-        ascii_body = _ascii_body(data, start, name)
+        ascii_body = _ascii_body(data, start, name, sum(el.count for el in elements if el.props))
     else:
         avail = len(data) - start
         total_min = 0
