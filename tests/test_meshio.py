@@ -301,3 +301,148 @@ def test_real_meshes_read():
     assert spot.n_vertices == 3225 and spot.faces.shape == (5856, 3) and spot.uv is not None
     fan = read_mesh(shared_mesh("fandisk.obj"))
     assert fan.uv is None and fan.faces.shape == (12946, 3)
+
+
+# -- ASCII PLY: one record a line --------------------------------------------------------------
+def _ascii_header(n_vertex, n_face, *, texcoord=False):
+    head = ["ply", "format ascii 1.0", "comment cdbrdf units mm", f"element vertex {n_vertex}",
+            "property float x", "property float y", "property float z", "property float curvature_x",
+            f"element face {n_face}", "property list uchar int vertex_indices"]
+    if texcoord:
+        head.append("property list uchar float texcoord")
+    return head + ["end_header"]
+
+
+#: A square of 4 vertices (x y z curvature_x) and 2 triangles: header lines 1-11, vertices 12-15, faces 16-17.
+SQUARE_LINES = _ascii_header(4, 2) + ["0 0 0 0.5", "1 0 0 0.25", "1 1 0 0.125", "0 1 0 1",
+                                      "3 0 1 2", "3 0 2 3"]
+
+
+def _square(lines, *, end="\n"):
+    return end.join(lines) + end
+
+
+def _expect_line_error(tmp_path, text, match):
+    p = tmp_path / "bad.ply"
+    p.write_bytes(text.encode("ascii"))
+    with pytest.raises(MeshError) as info:
+        read_ply(p)
+    msg = str(info.value)
+    assert "\n" not in msg and msg.startswith(f"{p}: ")
+    assert msg == f"{p}: {match}"
+
+
+@pytest.mark.parametrize("case, lines, message", [
+    ("merged vertex lines", SQUARE_LINES[:11] + ["0 0 0 0.5 1 0 0 0.25", "1 1 0 0.125", "0 1 0 1",
+                                                   "3 0 1 2", "3 0 2 3", "3 0 1 2"],
+     "line 12: element 'vertex' record 0: expected 4 values, found 8"),
+    ("a vertex split over two lines", SQUARE_LINES[:12] + ["1 0", "0 0.25"] + SQUARE_LINES[14:],
+     "line 13: element 'vertex' record 1: expected 4 values, found 2"),
+    ("a missing vertex value", SQUARE_LINES[:13] + ["1 1 0"] + SQUARE_LINES[14:],
+     "line 14: element 'vertex' record 2: expected 4 values, found 3"),
+    ("an extra vertex value", SQUARE_LINES[:14] + ["0 1 0 1 7"] + SQUARE_LINES[15:],
+     "line 15: element 'vertex' record 3: expected 4 values, found 5"),
+    # token by token, "3 0 1" would take the next line's "3" as its third index
+    ("a face missing a value", SQUARE_LINES[:15] + ["3 0 1", "3 0 2 3"],
+     "line 16: element 'face' record 0: expected 4 values (vertex_indices: 3 items), found 3"),
+    ("a face with an extra value", SQUARE_LINES[:16] + ["3 0 2 3 1"],
+     "line 17: element 'face' record 1: expected 4 values (vertex_indices: 3 items), found 5"),
+    ("merged face lines", SQUARE_LINES[:15] + ["3 0 1 2 3 0 2 3"],
+     "line 16: element 'face' record 0: expected 4 values (vertex_indices: 3 items), found 8"),
+    ("a list count above its items", SQUARE_LINES[:15] + ["4 0 1 2", "3 0 2 3"],
+     "line 16: element 'face' record 0: expected 5 values (vertex_indices: 4 items), found 4"),
+    ("a list count below its items", SQUARE_LINES[:16] + ["2 0 2 3"],
+     "line 17: element 'face' record 1: expected 3 values (vertex_indices: 2 items), found 4"),
+    ("a fractional list count", SQUARE_LINES[:16] + ["2.5 0 2 3"],
+     "line 17: element 'face' record 1: the count of list 'vertex_indices' is 2.5, not a whole number >= 0"),
+    ("a record too few", SQUARE_LINES[:-1],
+     "element 'face' declares 2 records, the data ends after 1 of them (line 16)"),
+    ("a record too many", SQUARE_LINES + ["3 1 2 3"],
+     "line 18: data after the last record the header declares (4 'vertex', 2 'face')"),
+    ("a comment in the data", SQUARE_LINES[:13] + ["comment not here"] + SQUARE_LINES[13:],
+     "line 14: a comment in the data (PLY comments belong in the header)"),
+    ("a malformed number", SQUARE_LINES[:13] + ["1 1-0 0 0.125"] + SQUARE_LINES[14:],
+     "line 14: '1-0' is not a number"),
+])
+def test_ascii_ply_record_not_one_line_is_an_error_naming_the_line(tmp_path, case, lines, message):
+    _expect_line_error(tmp_path, _square(lines), message)
+
+
+def test_ascii_ply_line_numbers_count_crlf_headers_and_blank_lines(tmp_path):
+    lines = SQUARE_LINES[:11] + ["", "0 0 0 0.5", "   ", "1 0 0 0.25", "1 1 0 0.125", "0 1 0", "3 0 1 2", "3 0 2 3"]
+    _expect_line_error(tmp_path, _square(lines, end="\r\n"),
+                       "line 17: element 'vertex' record 3: expected 4 values, found 3")
+
+
+def test_ascii_ply_list_counts_of_two_lists_are_checked(tmp_path):
+    # header lines 1-12, vertices 13-15, the face 16
+    head = _ascii_header(3, 1, texcoord=True)
+    good = head + ["0 0 0 1", "1 0 0 1", "0 1 0 1", "3 0 1 2 6 0 0 1 0 0 1"]
+    (tmp_path / "ok.ply").write_text(_square(good))
+    m = read_ply(tmp_path / "ok.ply")
+    assert m.uv is not None and np.allclose(m.uv[m.faces[0]], [[0, 0], [1, 0], [0, 1]])
+    _expect_line_error(tmp_path, _square(head + good[len(head):-1] + ["3 0 1 2 6 0 0 1 0 0"]),
+                       "line 16: element 'face' record 0: expected 11 values (vertex_indices: 3 items, "
+                       "texcoord: 6 items), found 10")
+    _expect_line_error(tmp_path, _square(head + good[len(head):-1] + ["3 0 1 2"]),
+                       "line 16: element 'face' record 0: expected at least 5 values, found 4")
+
+
+def _twin_files(tmp_path):
+    """The same irregular mesh as binary PLY (cdbrdf's writer) and as ASCII (float32 values in full), and quads."""
+    v, f, uv, _ = cylinder_patch(R_CYL, n=9, seed=5)
+    k = np.linspace(-0.3, 0.2, len(v))
+    mesh = Mesh(v, f, None, uv, {"curvature": k}, metadata={"units": "cm"})
+    write_ply(tmp_path / "b.ply", mesh)
+    cols = [np.asarray(a, dtype=np.float32).astype(np.float64) for a in (*v.T, *uv.T, k)]
+    head = ["ply", "format ascii 1.0", "comment cdbrdf units cm", f"element vertex {len(v)}",
+            *[f"property float {c}" for c in ("x", "y", "z", "u", "v", "curvature_x")],
+            f"element face {len(f)}", "property list uchar int vertex_indices", "end_header"]
+    rows = [" ".join(repr(float(c[i])) for c in cols) for i in range(len(v))]
+    rows += [" ".join(map(str, [3, *t])) for t in f]
+    return tmp_path / "b.ply", head, rows
+
+
+@pytest.mark.parametrize("layout", ["plain", "crlf", "blank lines", "trailing whitespace", "no final newline",
+                                    "tabs"])
+def test_valid_ascii_ply_reads_equal_to_the_binary_path(tmp_path, layout):
+    bin_path, head, rows = _twin_files(tmp_path)
+    if layout == "plain":
+        text = "\n".join(head + rows) + "\n"
+    elif layout == "crlf":
+        text = "\r\n".join(head + rows) + "\r\n"
+    elif layout == "blank lines":
+        text = "\n".join(head + ["", *[r + ("\n\n \t\n" if i % 7 == 0 else "") for i, r in enumerate(rows)], ""])
+    elif layout == "trailing whitespace":
+        text = "\n".join(head + [" " + r + " \t " for r in rows]) + "\n"
+    elif layout == "no final newline":
+        text = "\n".join(head + rows)
+    else:
+        text = "\n".join(head + [r.replace(" ", "\t") for r in rows]) + "\n"
+    (tmp_path / "a.ply").write_bytes(text.encode("ascii"))
+    a, b = read_ply(tmp_path / "a.ply"), read_ply(bin_path)
+    assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+    assert np.array_equal(a.uv, b.uv) and np.array_equal(a.attributes["curvature"], b.attributes["curvature"])
+    assert a.metadata["units"] == b.metadata["units"] == "cm"
+
+
+def test_ascii_ply_values_are_the_correctly_rounded_doubles(tmp_path):
+    """Every token reads bit for bit as Python's ``float`` reads it (the numba fast path and its fallback)."""
+    from cdbrdf.render._ply import parse_ply
+
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=4000) * 10.0 ** rng.integers(-30, 30, 4000)
+    tokens = [f"{v:.9g}" for v in x.astype(np.float32)] + [repr(float(v)) for v in x]
+    tokens += [f"{v:.17g}" for v in x[:500]] + [f"{v:.{int(d)}e}" for v, d in zip(x, rng.integers(0, 16, 4000))]
+    tokens += [str(i) for i in rng.integers(-10**12, 10**12, 500)]
+    tokens += ["-0", "+0.0", "007.50", ".5", "5.", "1E+05", "-1e-22", "1e22", "1e23", "9007199254740993",
+               "123456789012345678901234567890", "0.30000000000000004", "1e-400", "1e400", "nan", "-inf",
+               "Infinity", "4.9406564584124654e-324", "2.2250738585072014e-308", "1.7976931348623157e308"]
+    tokens += [""] * (-len(tokens) % 3)
+    tokens = [t or "1" for t in tokens]
+    rows = [" ".join(tokens[i:i + 3]) for i in range(0, len(tokens), 3)]
+    text = "\n".join(ply_text(vertex_count=len(rows), body="").splitlines() + rows + ["3 0 1 2"]) + "\n"
+    d = parse_ply(text.encode("ascii"), "t.ply")
+    got = np.stack([d.vertex[k] for k in "xyz"], axis=1).reshape(-1)
+    want = np.array([float(t) for t in tokens])
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))
