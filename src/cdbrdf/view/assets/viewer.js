@@ -24,6 +24,12 @@
     return out.buffer;
   }
 
+  function base64(bytes) {
+    let s = '';
+    for (let i = 0; i < bytes.length; i += 0x8000) s += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+    return btoa(s);
+  }
+
   function block(asset, name) {
     const b = asset.header.blocks[name];
     const T = { float32: Float32Array, float16: Uint16Array, uint8: Uint8Array, int32: Int32Array,
@@ -795,12 +801,15 @@ void main() {
     mosaicReadout: (table, k, row, col) => readout(tables[table || 0], k, row, col),
     surfaces: () => Object.keys(surfaces),
     // per-pixel curvature the lookup used (kappa_query, kappa_surface, front, n.l) for the whole canvas
-    curvatureImage: () => Promise.resolve(Array.from(pickPass(0, 0, canvas.width, canvas.height)[1])),
+    // (float32 RGBA rows from the bottom, base64)
+    curvatureImage: () => Promise.resolve({ width: canvas.width, height: canvas.height,
+      data: base64(new Uint8Array(pickPass(0, 0, canvas.width, canvas.height)[1].buffer)) }),
+    // the canvas as 8-bit RGBA rows from the bottom, base64
     pixels: () => {
       const out = new Uint8Array(canvas.width * canvas.height * 4);
       gl.bindFramebuffer(gl.FRAMEBUFFER, null);
       gl.readPixels(0, 0, canvas.width, canvas.height, gl.RGBA, gl.UNSIGNED_BYTE, out);
-      return { width: canvas.width, height: canvas.height, data: Array.from(out) };
+      return { width: canvas.width, height: canvas.height, data: base64(out) };
     },
     // mean time of n frames (ms), each finished on the GPU (a reference: a flat-shaded draw when flat is true)
     frameTime: (n, flat) => {

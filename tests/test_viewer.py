@@ -1,0 +1,444 @@
+"""The interactive viewer: assets, export, server, command line, and the page in headless Chromium.
+
+The browser tests share one Chromium per module (software WebGL2: SwiftShader)
+and one exported page holding two tables: the bundled denim (anisotropic,
+the paper's grid) and a random isotropic table with a first elevation above
+0 (a virtual pole node), uneven curvatures and filled samples.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cdbrdf
+from cdbrdf import materials
+from cdbrdf.cli import main
+from cdbrdf.errors import LimitError, OptionError
+from cdbrdf.view.asset import WEBGL2_MIN_LIMITS, check_texture, parse_grid, resample, table_asset
+from cdbrdf.view.export import export_viewer, viewer_files, write_viewer
+from cdbrdf.view.server import ViewerServer
+
+from .conftest import make_table
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+needs_chromium = pytest.mark.skipif(
+    CHROMIUM is None and not os.environ.get("CI"),
+    reason="Debian's chromium is not installed (scripts/setup.sh --test installs it; required in CI)")
+
+#: Software WebGL2 in headless Chromium (no GPU on the test machines).
+CHROMIUM_ARGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--no-first-run"]
+
+
+def iso_table() -> cdbrdf.CDBRDF:
+    """Isotropic, theta from 10 (virtual pole node), uneven kappa, a few filled samples with sources."""
+    g = cdbrdf.Grid(kappa=[-0.2, -0.05, 0.0, 0.25], theta_l=[10.0, 35.0, 60.0, 80.0], phi_l=[0.0],
+                    theta_v=[10.0, 30.0, 55.0, 70.0, 85.0], phi_v=np.arange(0.0, 360.0, 45.0),
+                    symmetry="isotropic")
+    t = make_table(g, seed=3, dtype=np.float32)
+    measured = np.ones(g.shape, bool)
+    measured[0, 0, 3, :, 4] = False  # a concave stand hides grazing directions
+    src = np.full(g.shape, -1, np.int64)
+    flat = np.arange(measured.size).reshape(g.shape)
+    src[~measured] = flat[2][None][~measured[0:1]]  # from the flat stand, same direction
+    return cdbrdf.CDBRDF(t.values, **g.axes(), measured=measured, fill_source=src, symmetry="isotropic",
+                         attrs={"material": "random-iso", "quantity": "relative"})
+
+
+def rel_close(gpu: np.ndarray, ref: np.ndarray, rtol: float) -> np.ndarray:
+    return np.abs(gpu - ref) <= rtol * np.abs(ref) + 1e-7
+
+
+# -- assets and resampling (no browser) -----------------------------------------------
+def test_table_asset_holds_the_lookup_grid():
+    t = materials.load("denim")
+    a = table_asset(t, name="denim.h5")
+    h = a.header
+    lg = t.lookup_grid()
+    b = h["blocks"]["lookup"]
+    tex = np.frombuffer(a.blob, "<f4", b["bytes"] // 4, b["offset"]).reshape(b["shape"])
+    np.testing.assert_array_equal(tex[..., :3], lg.values)  # the pole rule of interp, not a new one
+    assert h["lookup"]["texture"] == {"width": 72, "height": 72, "layers": 5, "format": "RGBA", "type": "float32"}
+    assert h["axes"]["kappa"] == t.kappa.tolist() and h["units"]["kappa"] == "1/mm"
+    assert h["symmetry"] == "anisotropic" and h["material"] == "denim" and h["quantity"] == "brdf"
+    s = h["blocks"]["samples"]
+    np.testing.assert_array_equal(np.frombuffer(a.blob, "<f4", s["bytes"] // 4, s["offset"]).reshape(t.shape), t.values)
+    json.loads(a.header_json())
+
+
+def test_isotropic_asset_keeps_its_layout_and_pole_node():
+    t = iso_table()
+    h = table_asset(t, name="iso").header
+    assert h["symmetry"] == "isotropic" and h["lookup"]["isotropic"]
+    assert h["lookup"]["theta_l"][0] == 0.0 and h["lookup"]["shape"] == [4, 1, 5, 8, 6]  # virtual pole nodes
+    f = h["blocks"]["fill_source"]
+    assert f["dtype"] == "int32" and f["shape"] == list(t.grid.shape)
+
+
+def test_float16_asset():
+    t = materials.load("denim")
+    a = table_asset(t, precision="float16")
+    b = a.header["blocks"]["lookup"]
+    tex = np.frombuffer(a.blob, "<f2", b["bytes"] // 2, b["offset"]).reshape(b["shape"])
+    np.testing.assert_allclose(tex[..., :3], t.lookup_grid().values, rtol=1e-3)
+    with pytest.raises(OptionError, match="precision: 'half' is not one of auto, float32, float16"):
+        table_asset(t, precision="half")
+
+
+def wide_table() -> cdbrdf.CDBRDF:
+    g = cdbrdf.Grid(kappa=[0.0], theta_l=[0.0, 45.0], phi_l=[0.0], theta_v=np.arange(0.0, 76.0, 15.0),
+                    phi_v=np.arange(360) * 1.0)
+    return make_table(g, dtype=np.float32)
+
+
+def test_texture_limit_names_the_limit_and_grid():
+    t = wide_table()
+    with pytest.raises(LimitError, match=r"wide: too large .*2160 view directions \(texture width\) > "
+                       r"MAX_TEXTURE_SIZE 2048.*--grid THETA_STEP,PHI_STEP"):
+        check_texture(t, name="wide")
+    check_texture(t, limits={**WEBGL2_MIN_LIMITS, "MAX_TEXTURE_SIZE": 4096})
+    small = resample(t, **dict(zip(("theta_step_deg", "phi_step_deg", "n_kappa"), parse_grid("15,30"))))
+    assert small.shape == (1, 1, 6, 12, 6, 3) or small.grid.phi_v.size == 12
+    check_texture(small)
+    m = small.grid.mesh()
+    np.testing.assert_allclose(small.values, t.evaluate(m["theta_v"], m["phi_v"], m["theta_l"], m["phi_l"], m["kappa"]),
+                               rtol=1e-6)
+    assert small.attrs["resampled_from"] == "1x1x2x360x6"
+
+
+def test_resample_keeps_isotropy_and_evaluates():
+    t = iso_table()
+    r = resample(t, theta_step_deg=20, phi_step_deg=90, n_kappa=3)
+    assert r.isotropic and r.kappa.tolist() == pytest.approx([-0.2, 0.025, 0.25])
+    m = r.grid.mesh()
+    np.testing.assert_allclose(r.values, t.evaluate(m["theta_v"], m["phi_v"], m["theta_l"], m["phi_l"], m["kappa"]),
+                               rtol=1e-6)
+
+
+@pytest.mark.parametrize("text, msg", [("15", "THETA_STEP,PHI_STEP"), ("a,30", "THETA_STEP"),
+                                       ("0,30", "must lie in"), ("15,25", "does not divide 360"),
+                                       ("15,30,0", "N_KAPPA")])
+def test_parse_grid_refusals(text, msg):
+    with pytest.raises(OptionError, match=msg):
+        parse_grid(text)
+
+
+# -- export and server ------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def files():
+    return viewer_files([("denim.h5", materials.load("denim")), ("iso.h5", iso_table())])
+
+
+def test_export_is_self_contained(files, tmp_path):
+    index = export_viewer(tmp_path / "v", files)
+    page = index.read_text()
+    assert '<script src="data.js">' in page and '<script src="viewer.js">' in page
+    for f in ("index.html", "viewer.js", "data.js", "assets/table-0.bin", "assets/table-0.json",
+              "assets/mesh-drape.bin"):
+        assert (tmp_path / "v" / f).is_file(), f
+    text = page + (tmp_path / "v" / "viewer.js").read_text()
+    assert "http://" not in text and "https://" not in text and "fetch(" not in text  # works offline, from file://
+    header = json.loads((tmp_path / "v" / "assets" / "table-1.json").read_text())
+    assert header["symmetry"] == "isotropic" and header["name"] == "iso.h5"
+    assert (tmp_path / "v" / "assets" / "table-1.bin").stat().st_size == sum(
+        (b["bytes"] + 3) // 4 * 4 for b in header["blocks"].values())
+
+
+def test_export_is_atomic_and_refuses_a_users_folder(files, tmp_path, monkeypatch):
+    dest = tmp_path / "v"
+    export_viewer(dest, files)
+    export_viewer(dest, files)  # an earlier export is replaced whole
+    (dest / "notes.txt").write_text("mine")
+    with pytest.raises(FileExistsError, match="cdbrdf did not write"):
+        export_viewer(dest, files)
+    assert (dest / "notes.txt").read_text() == "mine"
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "a.txt").write_text("keep")
+    with pytest.raises(FileExistsError, match="not written by cdbrdf"):
+        export_viewer(mine, files)
+    assert sorted(p.name for p in mine.iterdir()) == ["a.txt"]
+
+    def broken(folder, fs):
+        write_viewer(folder, {"index.html": b"half"})
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr("cdbrdf.view.export.write_viewer", broken)
+    with pytest.raises(OSError, match="No space"):
+        export_viewer(tmp_path / "new", files)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine", "v"]  # no half-written folder
+
+
+def test_server_serves_the_files_and_refuses_a_busy_port(files):
+    import urllib.error
+    import urllib.request
+
+    with ViewerServer(files).start() as srv:
+        assert srv.url.startswith("http://127.0.0.1:")
+        with urllib.request.urlopen(srv.url) as r:
+            assert r.headers["Content-Type"].startswith("text/html") and r.read() == files["index.html"]
+        with urllib.request.urlopen(srv.url + "assets/table-0.bin") as r:
+            assert r.read() == files["assets/table-0.bin"]
+        with pytest.raises(urllib.error.HTTPError, match="404"):
+            urllib.request.urlopen(srv.url + "../../etc/passwd")
+        with pytest.raises(OptionError, match=f"port {srv.port}: already in use on 127.0.0.1"):
+            ViewerServer(files, port=srv.port)
+
+
+# -- command line ------------------------------------------------------------------------
+def test_cli_errors_are_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.h5"
+    bad.write_bytes(b"not a table at all")
+    assert main(["view", str(bad), "--export", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("cdbrdf view: error: ") and str(bad) in err and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()
+    wide = tmp_path / "wide.h5"
+    wide_table().save(wide)
+    assert main(["view", str(wide), "--export", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "MAX_TEXTURE_SIZE 2048" in err and "--grid" in err and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()
+    d = materials.path("denim")
+    assert main(["view", str(d), str(d), str(d), "--export", str(tmp_path / "o")]) == 2
+    assert "at most 2 tables" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:
+        main(["view", str(d), "--grid", "15,25"])
+    assert e.value.code == 2 and "does not divide 360" in capsys.readouterr().err
+
+
+def test_cli_export_with_grid(tmp_path, capsys):
+    wide = tmp_path / "wide.h5"
+    wide_table().save(wide)
+    assert main(["view", str(wide), "--grid", "15,30", "--export", str(tmp_path / "o")]) == 0
+    assert "wrote" in capsys.readouterr().out
+    h = json.loads((tmp_path / "o" / "assets" / "table-0.json").read_text())
+    assert h["lookup"]["texture"]["width"] == 72 and h["resampled_from"] == "1x1x2x360x6"
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_cli_serves_until_interrupted_and_refuses_a_busy_port(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(Path(cdbrdf.__file__).parents[1])}
+    env.pop("DISPLAY", None)
+    env.pop("WAYLAND_DISPLAY", None)
+    cmd = [sys.executable, "-m", "cdbrdf.cli", "view", str(materials.path("denim"))]
+    p = subprocess.Popen(cmd + ["--port", str(_free_port())], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, env=env)
+    try:
+        line = p.stdout.readline()
+        assert "serving denim.h5 at http://127.0.0.1:" in line, line + p.stderr.read()
+        port = int(line.split("127.0.0.1:")[1].split("/")[0])
+        busy = subprocess.run(cmd + ["--port", str(port), "--no-browser"], capture_output=True, text=True, env=env,
+                              timeout=60)
+        assert busy.returncode == 2
+        assert busy.stderr == (f"cdbrdf view: error: port {port}: already in use on 127.0.0.1; choose another "
+                               "--port or leave it out for a free one\n")
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=30)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 0 and "Traceback" not in err and "stopped" in err
+
+
+# -- the page in headless Chromium -------------------------------------------------------
+@pytest.fixture(scope="module")
+def browser():
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
+        try:
+            yield b
+        finally:
+            b.close()
+
+
+def open_page(browser, url, *, width=320, height=200):
+    page = browser.new_page(viewport={"width": 1200, "height": 900})
+    page.set_default_timeout(60_000)
+    messages = []
+    page.on("console", lambda m: messages.append(f"{m.type}: {m.text}"))
+    page.on("pageerror", lambda e: messages.append(f"pageerror: {e}"))
+    page.on("requestfailed", lambda r: messages.append(f"requestfailed: {r.url}"))
+    page.goto(url, wait_until="load")
+    page.evaluate("window.cdbrdfViewer.ready")
+    page.evaluate(f"cdbrdfViewer.setSize({width}, {height})")
+    return page, messages
+
+
+@pytest.fixture(scope="module")
+def exported(files, tmp_path_factory):
+    return export_viewer(tmp_path_factory.mktemp("viewer") / "v", files)
+
+
+@pytest.fixture(scope="module")
+def page(browser, exported):
+    page, messages = open_page(browser, exported.resolve().as_uri())
+    page.messages = messages
+    yield page
+    page.close()
+
+
+@needs_chromium
+def test_page_opens_from_disk_without_console_messages(page):
+    assert page.messages == []
+    st = page.evaluate("cdbrdfViewer.state()")
+    assert st["tables"] == ["denim.h5", "iso.h5"] and st["surfaces"] == ["sheet", "stand", "drape"]
+
+
+@needs_chromium
+def test_page_served_without_console_messages(browser, files):
+    with ViewerServer(files).start() as srv:
+        page, messages = open_page(browser, srv.url)
+        page.close()
+    assert messages == []
+
+
+def random_queries(rng, n):
+    tv, tl = rng.uniform(0, 90, n), rng.uniform(0, 90, n)
+    pv, pl = rng.uniform(-720, 1080, n), rng.uniform(-360, 720, n)
+    k = rng.uniform(-0.4, 0.4, n)  # beyond the axis ends: clamped
+    m = n // 10
+    tv[:m] = 0.0  # the view pole
+    tl[m:2 * m] = 0.0  # the light pole
+    pv[2 * m:3 * m] = rng.choice([0.0, 360.0, -360.0, 359.9999, 1e-4, 720.0], m)  # azimuth wrap
+    pl[3 * m:4 * m] = rng.choice([0.0, 330.0, 345.0, -15.0, 360.0], m)
+    tv[4 * m:5 * m] = rng.choice([0.0, 15.0, 45.0, 75.0, 90.0], m)  # samples and beyond the last
+    k[5 * m:6 * m] = rng.choice([-0.22, 0.0, 0.13, 0.5, -1.0], m)
+    return np.stack([tv, pv, tl, pl, k], axis=1)
+
+
+@needs_chromium
+@pytest.mark.parametrize("index, name", [(0, "denim"), (1, "iso")])
+def test_gpu_lookup_matches_evaluate(page, index, name):
+    table = materials.load("denim") if name == "denim" else iso_table()
+    q = random_queries(np.random.default_rng(index), 1000)
+    gpu = np.array(page.evaluate("([q, t]) => cdbrdfViewer.evaluateMany(q, {table: t})", [q.tolist(), index]))
+    ref = table.evaluate(*q.T)
+    ok = rel_close(gpu, ref, 1e-3)
+    assert ok.all(), (q[~ok.all(1)][:5], gpu[~ok.all(1)][:5], ref[~ok.all(1)][:5])
+    one = page.evaluate("cdbrdfViewer.evaluate(30, 45, 10, 200, 0.05, {table: %d})" % index)
+    assert rel_close(np.array(one), table.evaluate(30, 45, 10, 200, 0.05), 1e-3).all()
+
+
+@needs_chromium
+def test_gpu_lookup_float16(browser, tmp_path):
+    t = materials.load("denim")
+    index = export_viewer(tmp_path / "v", viewer_files([("denim.h5", t)], meshes={}, precision="float16"))
+    page, messages = open_page(browser, index.resolve().as_uri())
+    q = random_queries(np.random.default_rng(7), 1000)
+    gpu = np.array(page.evaluate("(q) => cdbrdfViewer.evaluateMany(q)", q.tolist()))
+    page.close()
+    assert messages == []
+    assert rel_close(gpu, t.evaluate(*q.T), 5e-3).all()
+
+
+def pixels(page):
+    import base64
+
+    p = page.evaluate("cdbrdfViewer.pixels()")
+    a = np.frombuffer(base64.b64decode(p["data"]), np.uint8).reshape(p["height"], p["width"], 4)
+    return a[::-1, :, :3].astype(np.int16)
+
+
+def curvature(page):
+    """Per pixel: the kappa looked up, the surface's kappa, front-facing, n.l."""
+    import base64
+
+    p = page.evaluate("cdbrdfViewer.curvatureImage()")
+    return np.frombuffer(base64.b64decode(p["data"]), "<f4").reshape(p["height"], p["width"], 4)[::-1]
+
+
+@needs_chromium
+def test_brdf_toggle_changes_the_crests_not_the_flat_parts(page):
+    page.evaluate("cdbrdfViewer.setSideBySide(false)")
+    page.evaluate("cdbrdfViewer.setSurface('sheet')")
+    page.evaluate("cdbrdfViewer.setCamera(90, -90, 110)")
+    page.evaluate("cdbrdfViewer.setLight(40, 20)")
+    page.evaluate("cdbrdfViewer.setBend(3)")
+    cd = pixels(page)
+    k = curvature(page)
+    page.evaluate("cdbrdfViewer.setMode('brdf')")
+    br = pixels(page)
+    kb = curvature(page)
+    page.evaluate("cdbrdfViewer.setMode('cdbrdf')")
+    assert (kb[..., 0][kb[..., 2] > 0.5] == 0).all()  # the plain BRDF looks up kappa = 0
+    front = k[..., 2] > 0.5
+    crest = front & (k[..., 1] > 0.2)
+    flat = front & (np.abs(k[..., 1]) < 0.004)
+    assert crest.sum() > 200 and flat.sum() > 50
+    diff = np.abs(cd - br).max(axis=-1)
+    assert diff[flat].max() <= 1  # rounding of one 8-bit level at most
+    assert np.mean(diff[crest] >= 3) > 0.5, np.percentile(diff[crest], [10, 50, 90])
+
+
+@needs_chromium
+def test_bend_slider_changes_the_crest_curvature_shown(page):
+    page.evaluate("cdbrdfViewer.setSurface('sheet')")
+    page.locator("#wave").fill("20")
+    page.locator("#bend").fill("4")
+    assert page.locator("#crest").text_content() == "0.395 mm^-1 (radius 2.53 mm)"
+    page.locator("#bend").fill("1")
+    assert page.locator("#crest").text_content() == "0.099 mm^-1 (radius 10.13 mm)"
+    assert page.evaluate("cdbrdfViewer.state()")["amplitude"] == 1
+
+
+def not_blank(png: bytes) -> None:
+    import io
+
+    from PIL import Image
+
+    a = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=np.float64)
+    assert a.std() > 8 and len(np.unique(a.reshape(-1, 3) // 16, axis=0)) > 10
+
+
+@needs_chromium
+def test_views_are_not_blank_and_linked(page):
+    page.evaluate("cdbrdfViewer.setSize(480, 300)")
+    page.evaluate("cdbrdfViewer.setCamera(50, -90, 150)")
+    for surface in ("sheet", "stand", "drape"):
+        page.evaluate(f"cdbrdfViewer.setSurface('{surface}')")
+        not_blank(page.locator("#view").screenshot())
+    page.evaluate("cdbrdfViewer.setSurface('sheet')")
+    page.evaluate("cdbrdfViewer.setOverlay(true)")
+    not_blank(page.locator("#view").screenshot())
+    page.evaluate("cdbrdfViewer.setOverlay(false)")
+    not_blank(page.locator("#mosaic").screenshot())
+    not_blank(page.locator("#polar").screenshot())
+    # a click on the surface reads its query and highlights the mosaic cell it reads
+    page.evaluate("cdbrdfViewer.setSideBySide(true)")
+    page.locator("#view").click(position={"x": 120, "y": 150})  # the middle of the left table's view
+    text = page.locator("#pickout").text_content()
+    assert "theta_v" in text and "kappa" in text and "mm^-1" in text, text
+    st = page.evaluate("cdbrdfViewer.state()")
+    assert st["pick"] is not None and st["pickCell"] is not None
+    assert 0 <= st["pick"]["theta_v"] <= 90 and -0.3 < st["pick"]["kappa"] < 0.3
+    # hover read-out of the mosaic: a filled sample of the isotropic table names its source
+    page.select_option("#mosaicTable", "1")
+    page.select_option("#mosaicK", "0")
+    readout = page.evaluate("cdbrdfViewer.mosaicReadout(1, 0, 3, 4)")  # theta_l 80, dphi 0, theta_v 85
+    assert "filled (unknown)" in readout or "filled (nearest)" in readout, readout
+    assert "fill source: theta_v 85, dphi 0, theta_l 80, phi_l 0, kappa 0" in readout
+    mbox = page.locator("#mosaic").bounding_box()
+    page.mouse.move(mbox["x"] + 2, mbox["y"] + 2)
+    assert "measured" in page.locator("#readout").text_content()
+    page.evaluate("cdbrdfViewer.setSize(320, 200)")
