@@ -16,7 +16,6 @@ import signal
 import socket
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -336,7 +335,7 @@ def test_gpu_lookup_matches_evaluate(page, index, name):
     ref = table.evaluate(*q.T)
     ok = rel_close(gpu, ref, 1e-3)
     assert ok.all(), (q[~ok.all(1)][:5], gpu[~ok.all(1)][:5], ref[~ok.all(1)][:5])
-    one = page.evaluate("cdbrdfViewer.evaluate(30, 45, 10, 200, 0.05, {table: %d})" % index)
+    one = page.evaluate(f"cdbrdfViewer.evaluate(30, 45, 10, 200, 0.05, {{table: {index}}})")
     assert rel_close(np.array(one), table.evaluate(30, 45, 10, 200, 0.05), 1e-3).all()
 
 
