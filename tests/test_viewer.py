@@ -137,8 +137,49 @@ def test_parse_grid_refusals(text, msg):
 
 # -- export and server ------------------------------------------------------------------
 @pytest.fixture(scope="module")
-def files():
-    return viewer_files([("denim.h5", materials.load("denim")), ("iso.h5", iso_table())])
+def user_ply(tmp_path_factory):
+    """A user's mesh with per-vertex curvature, written by ``cdbrdf curvature``: a bump, convex on top."""
+    from cdbrdf.render.meshio import Mesh, write_ply
+
+    d = tmp_path_factory.mktemp("mesh")
+    n = 33
+    x = np.linspace(-20.0, 20.0, n)
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    Z = 8.0 * np.exp(-(X**2 + Y**2) / 120.0)
+    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
+    a = (i * n + j).ravel()
+    faces = np.concatenate([np.stack([a, a + n, a + n + 1], 1), np.stack([a, a + n + 1, a + 1], 1)])
+    uv = np.stack([(X.ravel() + 20) / 40, (Y.ravel() + 20) / 40], 1)
+    write_ply(d / "bump.ply", Mesh(np.stack([X.ravel(), Y.ravel(), Z.ravel()], 1), faces, uv=uv))
+    assert main(["-q", "curvature", str(d / "bump.ply"), "-o", str(d / "bump-curvature.ply")]) == 0
+    return d / "bump-curvature.ply"
+
+
+@pytest.fixture(scope="module")
+def files(user_ply):
+    from cdbrdf.render.scenes import prepare_mesh
+    from cdbrdf.view.export import default_meshes
+
+    meshes = {"drape": ("draped cloth", default_meshes()["drape"]), "user": ("bump", prepare_mesh(user_ply))}
+    return viewer_files([("denim.h5", materials.load("denim")), ("iso.h5", iso_table())], meshes=meshes)
+
+
+def test_user_mesh_asset(files, user_ply):
+    from cdbrdf.render.meshio import read_mesh
+
+    h = json.loads(files["assets/mesh-user.json"])
+    m = read_mesh(user_ply)
+    k = m.attributes["curvature"]
+    assert h["n_vertices"] == m.n_vertices and h["curvature_range"] == pytest.approx([k.min(), k.max()], rel=1e-6)
+    assert h["curvature_range"][1] > 0.05  # the top of the bump is convex
+    blob = files["assets/mesh-user.bin"]
+    t = h["blocks"]["tangent"]
+    tan = np.frombuffer(blob, "<f4", t["bytes"] // 4, t["offset"]).reshape(-1, 3)
+    nb = h["blocks"]["normal"]
+    nrm = np.frombuffer(blob, "<f4", nb["bytes"] // 4, nb["offset"]).reshape(-1, 3)
+    np.testing.assert_allclose(np.linalg.norm(tan, axis=1), 1, atol=1e-5)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", tan, nrm), 0, atol=1e-5)  # in the tangent plane
+    assert np.mean(tan[:, 0]) > 0.9  # dP/du: u runs along x
 
 
 def test_export_is_self_contained(files, tmp_path):
@@ -301,7 +342,7 @@ def page(browser, exported):
 def test_page_opens_from_disk_without_console_messages(page):
     assert page.messages == []
     st = page.evaluate("cdbrdfViewer.state()")
-    assert st["tables"] == ["denim.h5", "iso.h5"] and st["surfaces"] == ["sheet", "stand", "drape"]
+    assert st["tables"] == ["denim.h5", "iso.h5"] and st["surfaces"] == ["sheet", "stand", "drape", "user"]
 
 
 @needs_chromium
@@ -379,7 +420,12 @@ def test_brdf_toggle_changes_the_crests_not_the_flat_parts(page):
     page.evaluate("cdbrdfViewer.setMode('brdf')")
     br = pixels(page)
     kb = curvature(page)
+    page.evaluate("cdbrdfViewer.setMode('split')")  # BRDF left of the line, CDBRDF right of it
+    sp = pixels(page)
     page.evaluate("cdbrdfViewer.setMode('cdbrdf')")
+    w = sp.shape[1]
+    np.testing.assert_array_equal(sp[:, : w // 2 - 2], br[:, : w // 2 - 2])
+    np.testing.assert_array_equal(sp[:, w // 2 + 2 :], cd[:, w // 2 + 2 :])
     assert (kb[..., 0][kb[..., 2] > 0.5] == 0).all()  # the plain BRDF looks up kappa = 0
     front = k[..., 2] > 0.5
     crest = front & (k[..., 1] > 0.2)
@@ -412,9 +458,8 @@ def not_blank(png: bytes) -> None:
 
 @needs_chromium
 def test_views_are_not_blank_and_linked(page):
-    page.evaluate("cdbrdfViewer.setSize(480, 300)")
     page.evaluate("cdbrdfViewer.setCamera(50, -90, 150)")
-    for surface in ("sheet", "stand", "drape"):
+    for surface in ("sheet", "stand", "drape", "user"):
         page.evaluate(f"cdbrdfViewer.setSurface('{surface}')")
         not_blank(page.locator("#view").screenshot())
     page.evaluate("cdbrdfViewer.setSurface('sheet')")
@@ -425,7 +470,7 @@ def test_views_are_not_blank_and_linked(page):
     not_blank(page.locator("#polar").screenshot())
     # a click on the surface reads its query and highlights the mosaic cell it reads
     page.evaluate("cdbrdfViewer.setSideBySide(true)")
-    page.locator("#view").click(position={"x": 120, "y": 150})  # the middle of the left table's view
+    page.locator("#view").click(position={"x": 80, "y": 100})  # the middle of the left table's view
     text = page.locator("#pickout").text_content()
     assert "theta_v" in text and "kappa" in text and "mm^-1" in text, text
     st = page.evaluate("cdbrdfViewer.state()")
@@ -440,4 +485,27 @@ def test_views_are_not_blank_and_linked(page):
     mbox = page.locator("#mosaic").bounding_box()
     page.mouse.move(mbox["x"] + 2, mbox["y"] + 2)
     assert "measured" in page.locator("#readout").text_content()
-    page.evaluate("cdbrdfViewer.setSize(320, 200)")
+    # shift-drag moves the light (and its sliders), a plain drag the camera
+    page.evaluate("cdbrdfViewer.setLight(45, 0)")
+    page.locator("#view").scroll_into_view_if_needed()
+    box = page.locator("#view").bounding_box()
+    page.keyboard.down("Shift")
+    page.mouse.move(box["x"] + 100, box["y"] + 100)
+    page.mouse.down()
+    page.mouse.move(box["x"] + 60, box["y"] + 120, steps=2)
+    page.mouse.up()
+    page.keyboard.up("Shift")
+    st = page.evaluate("cdbrdfViewer.state()")
+    assert st["lightPhi"] == pytest.approx(20.0) and st["lightTheta"] == pytest.approx(51.0)
+    assert page.locator("#lightPOut").text_content() == "20.0 deg"
+
+
+def test_cli_export_refuses_a_users_folder(tmp_path, capsys):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep")
+    with pytest.raises(SystemExit) as e:
+        main(["view", str(materials.path("denim")), "--export", str(mine)])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and err.count("\n") == 1 and "not written by cdbrdf" in err
+    assert [p.name for p in mine.iterdir()] == ["notes.txt"]

@@ -20,6 +20,17 @@ def _grid(text: str) -> tuple[float, float, int | None]:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("grid: ")) from None
 
 
+def _export_dir(text: str) -> str:
+    """An output folder cdbrdf may write (new, empty, or an earlier export): refused while parsing."""
+    from ..fsutil import check_output_folder
+
+    try:
+        check_output_folder(text)
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     from ._args import existing_file, int_range, keyword
 
@@ -38,8 +49,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("files", metavar="FILE", nargs="+", type=existing_file(),
                    help="a CDBRDF file (.h5); a second one is shown side by side")
-    p.add_argument("--export", metavar="DIR", help="write the viewer as a static folder DIR instead of serving it "
-                   "(replaced whole if it holds an earlier export and nothing added to it)")
+    p.add_argument("--export", metavar="DIR", type=_export_dir,
+                   help="write the viewer as a static folder DIR instead of serving it (replaced whole "
+                   "if it holds an earlier export and nothing added to it)")
     p.add_argument("--port", type=int_range(1, 65535), default=0, metavar="N",
                    help="TCP port on 127.0.0.1 (default: a free one)")
     p.add_argument("--no-browser", dest="browser", action="store_false", help="do not open a browser")
