@@ -97,6 +97,16 @@ def test_float16_asset():
         table_asset(t, precision="half")
 
 
+def test_grey_tables_and_other_channel_counts():
+    g = cdbrdf.Grid(kappa=[0.0], theta_l=[0.0, 45.0], phi_l=[0.0, 180.0], theta_v=[0.0, 45.0], phi_v=[0.0, 180.0])
+    a = table_asset(make_table(g, channels=1, dtype=np.float32))
+    b = a.header["blocks"]["lookup"]
+    tex = np.frombuffer(a.blob, "<f4", b["bytes"] // 4, b["offset"]).reshape(b["shape"])
+    assert (tex[..., 0] == tex[..., 1]).all() and (tex[..., 0] == tex[..., 2]).all() and a.header["n_channels"] == 1
+    with pytest.raises(OptionError, match="the viewer shows RGB or grey tables; this one has 2 channels"):
+        table_asset(make_table(g, channels=2))
+
+
 def wide_table() -> cdbrdf.CDBRDF:
     g = cdbrdf.Grid(kappa=[0.0], theta_l=[0.0, 45.0], phi_l=[0.0], theta_v=np.arange(0.0, 76.0, 15.0),
                     phi_v=np.arange(360) * 1.0)
@@ -434,6 +444,17 @@ def test_brdf_toggle_changes_the_crests_not_the_flat_parts(page):
     diff = np.abs(cd - br).max(axis=-1)
     assert diff[flat].max() <= 1  # rounding of one 8-bit level at most
     assert np.mean(diff[crest] >= 3) > 0.5, np.percentile(diff[crest], [10, 50, 90])
+    # a crest pixel's colour is the table's value at the query the click reads: f cos(theta_l) pi 2^EV, sRGB
+    from cdbrdf.colour import srgb_encode
+
+    ys, xs = np.nonzero(crest & (k[..., 3] > 0.3))
+    y, x = int(ys[len(ys) // 2]), int(xs[len(xs) // 2])
+    q = page.evaluate(f"cdbrdfViewer.pick({x}, {y})")
+    assert q["kappa"] == pytest.approx(k[y, x, 0], abs=1e-6) and q["kappa"] > 0.2  # crests are convex
+    ev = page.evaluate("cdbrdfViewer.state()")["exposure"]
+    f = materials.load("denim").evaluate(q["theta_v"], q["phi_v"], q["theta_l"], q["phi_l"], q["kappa"])
+    expect = 255 * srgb_encode(np.clip(f * k[y, x, 3] * np.pi * 2**ev, 0, 1))
+    np.testing.assert_allclose(cd[y, x], expect, atol=1.5)
 
 
 @needs_chromium
@@ -447,13 +468,13 @@ def test_bend_slider_changes_the_crest_curvature_shown(page):
     assert page.evaluate("cdbrdfViewer.state()")["amplitude"] == 1
 
 
-def not_blank(png: bytes) -> None:
+def not_blank(png: bytes, colours: int = 10) -> None:
     import io
 
     from PIL import Image
 
     a = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=np.float64)
-    assert a.std() > 8 and len(np.unique(a.reshape(-1, 3) // 16, axis=0)) > 10
+    assert a.std() > 8 and len(np.unique(a.reshape(-1, 3) // 16, axis=0)) > colours
 
 
 @needs_chromium
@@ -463,6 +484,12 @@ def test_views_are_not_blank_and_linked(page):
         page.evaluate(f"cdbrdfViewer.setSurface('{surface}')")
         not_blank(page.locator("#view").screenshot())
     page.evaluate("cdbrdfViewer.setSurface('sheet')")
+    one = page.locator("#view").screenshot()
+    page.evaluate("cdbrdfViewer.setEnvironment(true)")
+    env = page.locator("#view").screenshot()
+    page.evaluate("cdbrdfViewer.setEnvironment(false)")
+    not_blank(env, colours=4)  # a sky lights the sheet evenly
+    assert env != one
     page.evaluate("cdbrdfViewer.setOverlay(true)")
     not_blank(page.locator("#view").screenshot())
     page.evaluate("cdbrdfViewer.setOverlay(false)")
