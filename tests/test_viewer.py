@@ -370,7 +370,7 @@ def random_queries(rng, n):
     m = n // 10
     tv[:m] = 0.0  # the view pole
     tl[m:2 * m] = 0.0  # the light pole
-    pv[2 * m:3 * m] = rng.choice([0.0, 360.0, -360.0, 359.9999, 1e-4, 720.0], m)  # azimuth wrap
+    pv[2 * m:3 * m] = rng.choice([0.0, 360.0, -360.0, 359.9999, 1e-4, 720.0, 1e30, -7.2e12 + 15.5], m)  # wrap
     pl[3 * m:4 * m] = rng.choice([0.0, 330.0, 345.0, -15.0, 360.0], m)
     tv[4 * m:5 * m] = rng.choice([0.0, 15.0, 45.0, 75.0, 90.0], m)  # samples and beyond the last
     k[5 * m:6 * m] = rng.choice([-0.22, 0.0, 0.13, 0.5, -1.0], m)

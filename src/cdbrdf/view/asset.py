@@ -290,6 +290,10 @@ def table_asset(table: Any, *, name: str = "table", precision: str = "auto") -> 
             "phi_l0": lg.phi_l0, "phi_l_step": lg.phi_l_step,
             "phi_v0": lg.phi_v0, "phi_v_step": lg.phi_v_step,
             "isotropic": bool(lg.isotropic),
+            # 1 / step of evenly spaced elevations of >= 3 nodes, else 0 (the shader indexes those by
+            # multiplication, as the RGB kernel; the curvature axis is searched)
+            "theta_l_inv_step": lg.theta_l_inv_step,
+            "theta_v_inv_step": lg.theta_v_inv_step,
             "snap_tolerance": 1e-6,  # cdbrdf.interp.SNAP_TOLERANCE["float32"]
             "texture": {"width": pv * tv, "height": pl * tl, "layers": k, "format": "RGBA", "type": prec},
         },

@@ -47,6 +47,7 @@ uniform ivec3 uN;             // node counts: kappa, theta_l, theta_v
 uniform ivec2 uNphi;          // n_phi_l, n_phi_v
 uniform vec4 uPhi;            // phi_l0, phi_l_step, phi_v0, phi_v_step
 uniform int uIso;             // 1: isotropic (phi_v holds phi_v - phi_l)
+uniform vec3 uInvStep;        // 1 / step of evenly spaced axes (kappa: always 0, theta_l, theta_v), 0 where uneven
 const float SNAP = 1e-6;      // cdbrdf.interp.SNAP_TOLERANCE["float32"]
 
 float snapw(float w) { return w < SNAP ? 0.0 : (w > 1.0 - SNAP ? 1.0 : w); }
@@ -54,12 +55,19 @@ float wrapAz(float x) { return abs(x) < 360.0 ? x : x - 360.0 * trunc(x / 360.0)
 float axisAt(int row, int i) { return texelFetch(uAxes, ivec2(i, row), 0).r; }
 
 // the two nodes of x on a sorted axis (clamped at both ends): node i, weight w of node i+1
-void linearNodes(int row, int n, float x, out int i, out float w) {
+void linearNodes(int row, int n, float inv, float x, out int i, out float w) {
   i = 0; w = 0.0;
   if (n < 2) return;
-  x = clamp(x, axisAt(row, 0), axisAt(row, n - 1));
+  float a0 = axisAt(row, 0);
+  x = clamp(x, a0, axisAt(row, n - 1));
   int lo = 0, hi = n - 1;  // largest lo <= n-2 with axis[lo] <= x
-  while (hi - lo > 1) { int mid = (lo + hi) / 2; if (axisAt(row, mid) <= x) lo = mid; else hi = mid; }
+  if (inv > 0.0) {         // evenly spaced: by multiplication (as the RGB kernel), kept within the axis
+    lo = clamp(int((x - a0) * inv), 0, n - 2);
+    if (axisAt(row, lo) > x) lo = max(lo - 1, 0);
+    else if (lo < n - 2 && axisAt(row, lo + 1) <= x) lo += 1;
+  } else {
+    while (hi - lo > 1) { int mid = (lo + hi) / 2; if (axisAt(row, mid) <= x) lo = mid; else hi = mid; }
+  }
   float a = axisAt(row, lo), b = axisAt(row, lo + 1);
   i = lo; w = snapw((x - a) / (b - a));
 }
@@ -79,9 +87,9 @@ vec3 lookup(float tv, float pv, float tl, float pl, float k) {
   if (uIso == 1) { pv = wrapAz(wrapAz(pv) - wrapAz(pl)); pl = 0.0; }
   int ik, itl, itv, ipl0, ipl1, ipv0, ipv1;
   float wk, wtl, wtv, wpl, wpv;
-  linearNodes(0, uN.x, k, ik, wk);
-  linearNodes(1, uN.y, tl, itl, wtl);
-  linearNodes(2, uN.z, tv, itv, wtv);
+  linearNodes(0, uN.x, uInvStep.x, k, ik, wk);
+  linearNodes(1, uN.y, uInvStep.y, tl, itl, wtl);
+  linearNodes(2, uN.z, uInvStep.z, tv, itv, wtv);
   periodicNodes(uPhi.x, uPhi.y, uNphi.x, pl, ipl0, ipl1, wpl);
   periodicNodes(uPhi.z, uPhi.w, uNphi.y, pv, ipv0, ipv1, wpv);
   // pole rule: on elevation node 0 with weight 1 the azimuth must not matter
@@ -321,6 +329,7 @@ void main() {
     const [nk, npl, ntl, npv, ntv] = L.shape;
     return { asset, h, unit: 2 * index, N: [nk, ntl, ntv], Nphi: [npl, npv],
       phi: [L.phi_l0, L.phi_l_step, L.phi_v0, L.phi_v_step], iso: L.isotropic ? 1 : 0,
+      invStep: [0, L.theta_l_inv_step, L.theta_v_inv_step],
       samples: block(asset, 'samples'), measured: block(asset, 'measured'),
       fillMethod: block(asset, 'fill_method'), fillSource: block(asset, 'fill_source') };
   }
@@ -332,6 +341,7 @@ void main() {
     gl.uniform2i(prog.u.uNphi, tab.Nphi[0], tab.Nphi[1]);
     gl.uniform4f(prog.u.uPhi, tab.phi[0], tab.phi[1], tab.phi[2], tab.phi[3]);
     gl.uniform1i(prog.u.uIso, tab.iso);
+    gl.uniform3f(prog.u.uInvStep, tab.invStep[0], tab.invStep[1], tab.invStep[2]);
   }
 
   function gridGeometry(nx, ny) {  // (s, t) in [0, 1]^2 as positions; the vertex shader shapes it
@@ -527,7 +537,10 @@ void main() {
     const q = new Float32Array(cols * 2 * rows * 4);
     const ok = new Array(n);
     queries.forEach((x, i) => {
-      const [tv, pv, tl, pl, k] = x.map(Number);
+      // azimuths reduced exactly in float64 (fmod, as cdbrdf.interp.wrap_azimuth) before float32 loses them
+      const wrap = (a) => (Math.abs(a) < 360 ? a : a % 360);
+      const [tv, pv0, tl, pl0, k] = x.map(Number);
+      const pv = wrap(pv0), pl = wrap(pl0);
       ok[i] = [tv, pv, tl, pl, k].every(Number.isFinite) && tv >= 0 && tv <= 90 && tl >= 0 && tl <= 90;
       const r = Math.floor(i / per), c = i % per, o = (r * cols * 2 + 2 * c) * 4;
       if (ok[i]) q.set([tv, pv, tl, pl, k, 0, 0, 0], o);
