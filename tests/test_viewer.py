@@ -536,3 +536,18 @@ def test_cli_export_refuses_a_users_folder(tmp_path, capsys):
     err = capsys.readouterr().err
     assert e.value.code == 2 and err.count("\n") == 1 and "not written by cdbrdf" in err
     assert [p.name for p in mine.iterdir()] == ["notes.txt"]
+
+
+@needs_chromium
+def test_page_checks_the_gpus_texture_limits(browser, tmp_path):
+    """A texture beyond this GPU's MAX_TEXTURE_SIZE: the page says which limit and offers --grid."""
+    files = viewer_files([("denim.h5", materials.load("denim"))], meshes={})
+    text = files["data.js"].decode()
+    files["data.js"] = text.replace('"texture":{"width":72', '"texture":{"width":1000000', 1).encode()
+    index = write_viewer(tmp_path / "v", files)
+    page = browser.new_page()
+    page.goto(index.resolve().as_uri(), wait_until="load")
+    err = page.evaluate("cdbrdfViewer.ready.then(() => 'ok', e => e.message)")
+    shown = page.locator("#message").text_content()
+    page.close()
+    assert "1000000 view directions > MAX_TEXTURE_SIZE" in err and "--grid" in err and shown == err
