@@ -390,6 +390,7 @@ def test_gpu_lookup_matches_evaluate(page, index, name):
     assert rel_close(np.array(one), table.evaluate(30, 45, 10, 200, 0.05), 1e-3).all()
 
 
+@pytest.mark.slow  # a page of its own
 @needs_chromium
 def test_gpu_lookup_float16(browser, tmp_path):
     t = materials.load("denim")
@@ -538,6 +539,7 @@ def test_cli_export_refuses_a_users_folder(tmp_path, capsys):
     assert [p.name for p in mine.iterdir()] == ["notes.txt"]
 
 
+@pytest.mark.slow  # a page of its own
 @needs_chromium
 def test_page_checks_the_gpus_texture_limits(browser, tmp_path):
     """A texture beyond this GPU's MAX_TEXTURE_SIZE: the page says which limit and offers --grid."""

@@ -308,7 +308,6 @@ void main() {
     if (tex.layers > limits.MAX_ARRAY_TEXTURE_LAYERS) over.push(`${tex.layers} curvatures > MAX_ARRAY_TEXTURE_LAYERS ${limits.MAX_ARRAY_TEXTURE_LAYERS}`);
     if (over.length) throw fail(`${h.name}: too large for this GPU's textures (${over.join('; ')}); resample it with cdbrdf view --grid THETA_STEP,PHI_STEP`);
     const half = tex.type === 'float16';
-    if (!half && !gl.getExtension('EXT_color_buffer_float')) { /* sampling float32 needs no extension */ }
     const t = gl.createTexture();
     gl.activeTexture(gl.TEXTURE0 + 2 * index);
     gl.bindTexture(gl.TEXTURE_2D_ARRAY, t);
