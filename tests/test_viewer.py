@@ -455,6 +455,7 @@ def test_brdf_toggle_changes_the_crests_not_the_flat_parts(page):
     ev = page.evaluate("cdbrdfViewer.state()")["exposure"]
     f = materials.load("denim").evaluate(q["theta_v"], q["phi_v"], q["theta_l"], q["phi_l"], q["kappa"])
     expect = 255 * srgb_encode(np.clip(f * k[y, x, 3] * np.pi * 2**ev, 0, 1))
+    assert 20 < expect.min() and expect.max() < 235  # not clipped: the colour tells the value
     np.testing.assert_allclose(cd[y, x], expect, atol=1.5)
 
 
@@ -510,6 +511,20 @@ def test_views_are_not_blank_and_linked(page):
     readout = page.evaluate("cdbrdfViewer.mosaicReadout(1, 0, 3, 4)")  # theta_l 80, dphi 0, theta_v 85
     assert "filled (unknown)" in readout or "filled (nearest)" in readout, readout
     assert "fill source: theta_v 85, dphi 0, theta_l 80, phi_l 0, kappa 0" in readout
+    # the polar slice: each pixel is the table at (theta_v = 90 r, phi_v = its angle), the current light
+    from cdbrdf.colour import srgb_encode
+
+    page.evaluate("cdbrdfViewer.setExposure(-3)")  # the random table's values within the display's range
+    st = page.evaluate("cdbrdfViewer.state()")
+    W = H = 200
+    for x, y in ((150, 60), (40, 120), (100, 100)):
+        px = page.evaluate(f"Array.from(document.getElementById('polar').getContext('2d').getImageData({x}, {y}, 1, 1).data)")
+        qx, qy = (x + 0.5) / W * 2 - 1, (H - 1 - y + 0.5) / H * 2 - 1
+        tv, pv = min(np.hypot(qx, qy) * 90, 90), np.degrees(np.arctan2(qy, qx)) % 360
+        f = iso_table().evaluate(tv, pv, st["lightTheta"], st["lightPhi"], -0.2)
+        expect = 255 * srgb_encode(np.clip(f * np.pi * 2 ** st["exposure"], 0, 1))
+        assert 20 < expect.min() and expect.max() < 235
+        np.testing.assert_allclose(px[:3], expect, atol=1.5)
     mbox = page.locator("#mosaic").bounding_box()
     page.mouse.move(mbox["x"] + 2, mbox["y"] + 2)
     assert "measured" in page.locator("#readout").text_content()

@@ -572,9 +572,13 @@ void main() {
 
   // ---------------------------------------------------------------- polar slice
   const polarCanvas = $('polar'), polarCtx = polarCanvas.getContext('2d');
-  function drawPolar() {
+  let polarKey = '';
+  function drawPolar() {  // only when what it shows changed: its read-back would stall every orbit frame
     const tab = tables[state.mosaicTable] || tables[0];
     const W = polarCanvas.width, H = polarCanvas.height;
+    const key = JSON.stringify([tables.indexOf(tab), state.lightTheta, state.lightPhi, state.mosaicK, state.exposure]);
+    if (key === polarKey) return;
+    polarKey = key;
     if (!polarFBO) polarFBO = floatFBO(W, H, false);
     gl.bindFramebuffer(gl.FRAMEBUFFER, polarFBO.fb);
     gl.viewport(0, 0, W, H);
