@@ -279,6 +279,14 @@ def test_cli_export_with_grid(tmp_path, capsys):
     assert h["lookup"]["texture"]["width"] == 72 and h["resampled_from"] == "1x1x2x360x6"
 
 
+def test_cli_export_with_a_users_mesh(tmp_path, user_ply, capsys):
+    assert main(["-q", "view", str(materials.path("denim")), "--mesh", str(user_ply), "--export",
+                 str(tmp_path / "o")]) == 0
+    h = json.loads((tmp_path / "o" / "assets" / "mesh-user.json").read_text())
+    assert h["name"] == "bump-curvature.ply" and h["n_faces"] == 2 * 32 * 32
+    assert '"user":' in (tmp_path / "o" / "data.js").read_text()
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -503,8 +511,17 @@ def test_views_are_not_blank_and_linked(page):
     text = page.locator("#pickout").text_content()
     assert "theta_v" in text and "kappa" in text and "mm^-1" in text, text
     st = page.evaluate("cdbrdfViewer.state()")
-    assert st["pick"] is not None and st["pickCell"] is not None
-    assert 0 <= st["pick"]["theta_v"] <= 90 and -0.3 < st["pick"]["kappa"] < 0.3
+    q, cell = st["pick"], st["pickCell"]
+    assert q["table"] == 0 and 0 <= q["theta_v"] <= 90 and -0.3 < q["kappa"] < 0.3
+    g = materials.load("denim").grid  # the highlighted cell: the sample nearest to the query, kappa nearest too
+
+    def near(axis, x, periodic=False):
+        d = np.abs(axis - x)
+        return int(np.argmin(np.minimum(d, 360 - d) if periodic else d))
+
+    assert cell["kappa_index"] == near(g.kappa, q["kappa"])
+    assert cell["col"] == near(g.phi_v, q["phi_v"], True) * g.theta_v.size + near(g.theta_v, q["theta_v"])
+    assert cell["row"] == near(g.phi_l, q["phi_l"], True) * g.theta_l.size + near(g.theta_l, q["theta_l"])
     # hover read-out of the mosaic: a filled sample of the isotropic table names its source
     page.select_option("#mosaicTable", "1")
     page.select_option("#mosaicK", "0")
