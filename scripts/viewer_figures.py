@@ -80,7 +80,7 @@ def main(argv=None) -> int:
                 save("viewer-drape.png", page.locator("#view").screenshot())
                 page.evaluate(f"{v}.setSurface('stand')")
                 page.evaluate(f"{v}.setStandCurvature(0.22)")
-                page.evaluate(f"{v}.setCamera(35, -75, 80)")
+                page.evaluate(f"{v}.setCamera(30, -15, 90)")
                 save("viewer-stand.png", page.locator("#view").screenshot())
                 save("viewer-2d.png", page.locator("#views2d").screenshot())
             finally:
