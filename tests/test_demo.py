@@ -38,6 +38,11 @@ def test_quick_demo_report_is_complete(quick_demo):
         assert (folder / img).is_file() and (folder / img).stat().st_size > 10_000
         assert "/" not in img  # relative, beside the page
     assert "http://" not in page and "https://" not in page and "<script" not in page
+    # the interactive viewer of the measured tables beside the report, linked from it
+    assert 'href="viewer/index.html"' in page
+    for f in ("index.html", "viewer.js", "data.js", "assets/table-0.json", "assets/table-1.json"):
+        assert (folder / "viewer" / f).is_file(), f
+    assert json.loads((folder / "viewer" / "assets" / "table-1.json").read_text())["name"] == "shot-measured.h5"
     for name in ("denim", "shot"):
         assert name in page
         t = cdbrdf.load(folder / f"{name}-measured.h5")
@@ -105,6 +110,20 @@ def test_report_opens_in_headless_chromium(quick_demo):
             browser.close()
     assert not failed, failed
     assert len(sizes) == 11
+    # the viewer beside it opens from disk too, with no console message
+    from .test_viewer import CHROMIUM_ARGS
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page()
+            messages = []
+            page.on("console", lambda m: messages.append(m.text))
+            page.goto((quick_demo.folder / "viewer" / "index.html").resolve().as_uri(), wait_until="load")
+            tables = page.evaluate("cdbrdfViewer.ready.then(s => s.tables)")
+        finally:
+            browser.close()
+    assert tables == ["denim-measured.h5", "shot-measured.h5"] and messages == []
     for src, complete, width in sizes:
         assert complete and width > 100, (src, complete, width)
     assert "cdbrdf" in title
@@ -122,6 +141,8 @@ def test_rerun_replaces_old_results(tmp_path):
     out = tmp_path / "out"
     run_demo(out, materials=["denim"], config=_tiny_config())
     assert (out / "denim-sine.png").exists() and not (out / "capture-denim").exists()
+    header = json.loads((out / "viewer" / "assets" / "table-1.json").read_text())
+    assert header["name"] == "denim ground truth"  # one material: beside its ground truth
     # (a file the user adds to the folder makes the rerun refuse: test_fsutil, test_cli_demo_refuses_...)
     r = run_demo(out, materials=["shot"], config=_tiny_config())
     names = sorted(p.name for p in out.iterdir())

@@ -37,6 +37,7 @@ COMMANDS: tuple[str, ...] = (
     "curvature",
     "render",
     "synth",
+    "view",
 )
 
 EXIT_USER_ERROR = 2

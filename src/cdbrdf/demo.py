@@ -18,7 +18,8 @@ For each material (denim and shot fabric by default):
 5. **draw** the Fig. 7 mosaics (filled samples marked, differences to kappa = 0);
 6. **render** the paper's sine sheet and a draped cloth under one directional
    light with the plain BRDF and with the CDBRDF (Figs. 9-10);
-7. write ``report.html`` beside the figures.
+7. export the interactive viewer (:mod:`cdbrdf.view`) of the measured tables
+   into ``viewer/`` and write ``report.html`` beside the figures, linking to it.
 
 The output folder is built beside the destination and swapped in whole at
 the end (:func:`cdbrdf.fsutil.output_folder`), so results of different runs
@@ -46,10 +47,14 @@ import numpy as np
 from .colour import auto_exposure_ev, luminance, srgb_to_linear, tonemap_srgb8
 from .table import CDBRDF, PAPER_KAPPA, Grid
 
-__all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth", "WORK_DIR", "COMPARED_FILL"]
+__all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth", "WORK_DIR", "COMPARED_FILL",
+           "VIEWER_DIR"]
 
 #: The fill method the demo compares the default with (the paper's rule).
 COMPARED_FILL = "nearest"
+
+#: Folder of the interactive viewer inside the output folder (its ``index.html`` opens from disk).
+VIEWER_DIR = "viewer"
 
 #: Work folder for intermediate files, inside the partial output folder (removed on success).
 WORK_DIR = ".work"
@@ -379,8 +384,8 @@ def _material(
     return res
 
 
-def _curvature_figure(path: Path) -> None:
-    """The two rendered surfaces coloured by their curvature."""
+def _curvature_figure(path: Path) -> Any:
+    """The two rendered surfaces coloured by their curvature; returns the prepared draped cloth (for the viewer)."""
     from .plot import plot_curvature_map
     from .render.meshes import DrapedCloth, draped_cloth_mesh
     from .render.scenes import SineSheet, prepare_mesh, sine_sheet_mesh
@@ -392,6 +397,20 @@ def _curvature_figure(path: Path) -> None:
         ("draped cloth (curvature from the mesh)", drape.vertices, drape.faces, drape.attributes["curvature"]),
     ])
     fig.savefig(path)
+    return drape
+
+
+def _export_viewer(folder: Path, results: Sequence[MaterialResult], drape: Any) -> None:
+    """The interactive viewer of the measured tables (two side by side; one beside its ground truth)."""
+    from . import materials as mats
+    from .table import load
+    from .view.export import viewer_files, write_viewer
+
+    tables = [(m.measured_path.name, load(m.measured_path)) for m in results[:2]]
+    if len(tables) == 1:
+        tables.append((f"{results[0].name} ground truth", mats.load(results[0].name)))
+    ev = results[0].render_exposure_ev if results else None
+    write_viewer(folder / VIEWER_DIR, viewer_files(tables, meshes={"drape": ("draped cloth", drape)}, exposure_ev=ev))
 
 
 def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialResult], seconds: float) -> Path:
@@ -416,7 +435,8 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
         "convex and concave; cdbrdf measures the photographs into a CDBRDF table exactly as it "
         "would a lab's, fills the directions a concave stand hides, and renders surfaces with the "
         "table, taking the curvature at every point. Compare the CDBRDF renders with the plain "
-        "BRDF (the flat stand's slice) at the crests and valleys.",
+        "BRDF (the flat stand's slice) at the crests and valleys, or bend the sheet yourself in the "
+        f'<a href="{VIEWER_DIR}/index.html">interactive viewer</a> (WebGL2; it opens from disk).',
     )
     intro.figure("surfaces-curvature.png", "Where the surfaces bend",
                  "The two rendered surfaces coloured by the curvature the renderer looks up at each "
@@ -554,14 +574,18 @@ def run_demo(
         # leftovers are swept with it by the next run (cdbrdf.fsutil.sweep_stale)
         work = folder / WORK_DIR
         work.mkdir()
-        _curvature_figure(folder / "surfaces-curvature.png")
+        drape = _curvature_figure(folder / "surfaces-curvature.png")
         for name in materials:
             results.append(_material(name, folder, work, cfg, progress))
         shutil.rmtree(work)
+        t1 = time.perf_counter()
+        _export_viewer(folder, results, drape)
+        viewer_seconds = time.perf_counter() - t1
         seconds = time.perf_counter() - t0
         (folder / "results.json").write_text(json.dumps({
             "config": cfg.name,
             "seconds": seconds,
+            "viewer_seconds": viewer_seconds,
             "materials": [{"name": m.name, "fill_method": m.fill_method, "error": m.error,
                            "per_stand": m.per_stand, "compared_fill": m.compared_fill,
                            "seconds": m.seconds, "figures": m.figures} for m in results],

@@ -1,0 +1,124 @@
+"""``cdbrdf view FILE [FILE2] [--export DIR]``: the interactive viewer in the browser."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+__all__ = ["register", "run"]
+
+
+def _grid(text: str) -> tuple[float, float, int | None]:
+    from ..errors import OptionError
+    from ..view.asset import parse_grid
+
+    try:
+        return parse_grid(text)
+    except OptionError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("grid: ")) from None
+
+
+def _export_dir(text: str) -> str:
+    """An output folder cdbrdf may write (new, empty, or an earlier export): refused while parsing."""
+    from ..fsutil import check_output_folder
+
+    try:
+        check_output_folder(text)
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    from ._args import existing_file, int_range, keyword
+
+    p = sub.add_parser(
+        "view",
+        help="open a table in the interactive viewer (3-D surfaces, BRDF/CDBRDF, mosaic) in the browser",
+        description=(
+            "Serve the interactive viewer of one table, or two side by side, on 127.0.0.1 and print "
+            "its address (the browser opens when there is one): the sine sheet with a bend slider, "
+            "a cylinder stand, a draped cloth and your own mesh under a light you drag, the plain "
+            "BRDF against the CDBRDF, the Fig. 7 mosaic and a polar slice. With --export DIR the "
+            "same viewer is written as a static folder that opens from disk or any web host. "
+            "Ctrl-C stops the server."
+        ),
+        epilog="example: cdbrdf view denim.h5 shot.h5 --mesh shirt-curvature.ply",
+    )
+    p.add_argument("files", metavar="FILE", nargs="+", type=existing_file(),
+                   help="a CDBRDF file (.h5); a second one is shown side by side")
+    p.add_argument("--export", metavar="DIR", type=_export_dir,
+                   help="write the viewer as a static folder DIR instead of serving it (replaced whole "
+                   "if it holds an earlier export and nothing added to it)")
+    p.add_argument("--port", type=int_range(1, 65535), default=0, metavar="N",
+                   help="TCP port on 127.0.0.1 (default: a free one)")
+    p.add_argument("--no-browser", dest="browser", action="store_false", help="do not open a browser")
+    p.add_argument("--mesh", type=existing_file(".ply"), metavar="PLY",
+                   help="a mesh with per-vertex curvature written by cdbrdf curvature")
+    p.add_argument("--grid", type=_grid, metavar="THETA_STEP,PHI_STEP[,N_KAPPA]",
+                   help="resample the tables onto a regular grid first (degrees; e.g. 15,30), for a table "
+                   "too large for the GPU's textures")
+    p.add_argument("--precision", type=keyword(("auto", "float32", "float16")), default="auto",
+                   help="texture precision: auto (float16 only for very large tables), float32 or float16")
+    p.set_defaults(func=run)
+
+
+def _browser_available() -> bool:
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        return False
+    import webbrowser
+
+    try:
+        webbrowser.get()
+    except webbrowser.Error:
+        return False
+    return True
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..errors import OptionError
+    from ..table import load
+    from ..view.asset import resample
+    from ..view.export import MAX_TABLES, default_meshes, export_viewer, viewer_files
+
+    if len(args.files) > MAX_TABLES:
+        raise OptionError(f"FILE: the viewer shows at most {MAX_TABLES} tables side by side, got {len(args.files)}")
+    if args.export:
+        from ..fsutil import check_output_folder
+
+        check_output_folder(args.export)  # refuse at once, before any work
+    tables = []
+    for f in args.files:
+        t = load(f)
+        if args.grid is not None:
+            ts, ps, nk = args.grid
+            t = resample(t, theta_step_deg=ts, phi_step_deg=ps, n_kappa=nk)
+        tables.append((Path(f).name, t))
+    meshes = {"drape": ("draped cloth", default_meshes()["drape"])}
+    if args.mesh:
+        from ..render.scenes import prepare_mesh
+
+        meshes["user"] = (Path(args.mesh).name, prepare_mesh(args.mesh, table=tables[0][1]))
+    files = viewer_files(tables, meshes=meshes, precision=args.precision)
+    if args.export:
+        index = export_viewer(args.export, files)
+        if not args.quiet:
+            print(f"wrote {index} (open it in a browser; the folder works offline and on any static host)")
+        return 0
+    from ..view.server import ViewerServer
+
+    server = ViewerServer(files, port=args.port)
+    print(f"cdbrdf view: serving {', '.join(n for n, _ in tables)} at {server.url} (Ctrl-C stops)", flush=True)
+    if args.browser and _browser_available():
+        import webbrowser
+
+        webbrowser.open(server.url)
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        print("cdbrdf view: stopped", file=sys.stderr)
+    finally:
+        server.close()
+    return 0

@@ -1,0 +1,888 @@
+// cdbrdf viewer: plain WebGL2, no library. The table's lookup runs in GLSL with the rule of
+// cdbrdf.interp (multilinear in five axes, periodic azimuth, pole rule, clamped elevation and
+// kappa, snapping, the isotropic rotation): one more implementation of that rule, tested against
+// CDBRDF.evaluate (tests/test_viewer.py). The data come from data.js (window.CDBRDF_VIEWER_DATA),
+// base64 assets written by cdbrdf.view.export, so that the page works from file:// as well.
+(function () {
+  'use strict';
+
+  const DATA = window.CDBRDF_VIEWER_DATA;
+  const $ = (id) => document.getElementById(id);
+  const KMAX_OVERLAY = 0.25; // mm^-1 at full colour in the curvature overlay
+
+  function fail(text) {
+    const m = $('message');
+    m.textContent = text;
+    m.style.display = 'block';
+    return new Error(text);
+  }
+
+  function decode(b64) {
+    const s = atob(b64);
+    const out = new Uint8Array(s.length);
+    for (let i = 0; i < s.length; i++) out[i] = s.charCodeAt(i);
+    return out.buffer;
+  }
+
+  function base64(bytes) {
+    let s = '';
+    for (let i = 0; i < bytes.length; i += 0x8000) s += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+    return btoa(s);
+  }
+
+  function block(asset, name) {
+    const b = asset.header.blocks[name];
+    const T = { float32: Float32Array, float16: Uint16Array, uint8: Uint8Array, int32: Int32Array,
+      uint32: Uint32Array }[b.dtype];
+    return new T(asset.buffer, b.offset, b.bytes / T.BYTES_PER_ELEMENT);
+  }
+
+  // ---------------------------------------------------------------- GLSL
+  const LOOKUP_GLSL = `
+precision highp float; precision highp int;
+precision highp sampler2DArray; precision highp sampler2D;
+uniform sampler2DArray uTab;  // RGBA: width n_phi_v*n_theta_v, height n_phi_l*n_theta_l, layers n_kappa
+uniform sampler2D uAxes;      // R32F rows: 0 kappa, 1 theta_l, 2 theta_v (lookup nodes)
+uniform ivec3 uN;             // node counts: kappa, theta_l, theta_v
+uniform ivec2 uNphi;          // n_phi_l, n_phi_v
+uniform vec4 uPhi;            // phi_l0, phi_l_step, phi_v0, phi_v_step
+uniform int uIso;             // 1: isotropic (phi_v holds phi_v - phi_l)
+uniform vec3 uInvStep;        // 1 / step of evenly spaced axes (kappa: always 0, theta_l, theta_v), 0 where uneven
+const float SNAP = 1e-6;      // cdbrdf.interp.SNAP_TOLERANCE["float32"]
+
+float snapw(float w) { return w < SNAP ? 0.0 : (w > 1.0 - SNAP ? 1.0 : w); }
+float wrapAz(float x) { return abs(x) < 360.0 ? x : x - 360.0 * trunc(x / 360.0); }
+float axisAt(int row, int i) { return texelFetch(uAxes, ivec2(i, row), 0).r; }
+
+// the two nodes of x on a sorted axis (clamped at both ends): node i, weight w of node i+1
+void linearNodes(int row, int n, float inv, float x, out int i, out float w) {
+  i = 0; w = 0.0;
+  if (n < 2) return;
+  float a0 = axisAt(row, 0);
+  x = clamp(x, a0, axisAt(row, n - 1));
+  int lo = 0, hi = n - 1;  // largest lo <= n-2 with axis[lo] <= x
+  if (inv > 0.0) {         // evenly spaced: by multiplication (as the RGB kernel), kept within the axis
+    lo = clamp(int((x - a0) * inv), 0, n - 2);
+    if (axisAt(row, lo) > x) lo = max(lo - 1, 0);
+    else if (lo < n - 2 && axisAt(row, lo + 1) <= x) lo += 1;
+  } else {
+    while (hi - lo > 1) { int mid = (lo + hi) / 2; if (axisAt(row, mid) <= x) lo = mid; else hi = mid; }
+  }
+  float a = axisAt(row, lo), b = axisAt(row, lo + 1);
+  i = lo; w = snapw((x - a) / (b - a));
+}
+
+// the two nodes of an azimuth on the evenly spaced circle
+void periodicNodes(float phi0, float step, int n, float x, out int i0, out int i1, out float w) {
+  i0 = 0; i1 = 0; w = 0.0;
+  if (n < 2) return;
+  float u = (wrapAz(x) - phi0) / step;
+  float f = floor(u);
+  w = snapw(u - f);
+  int fi = int(f);
+  i0 = ((fi % n) + n) % n; i1 = (i0 + 1) % n;
+}
+
+vec3 lookup(float tv, float pv, float tl, float pl, float k) {
+  if (uIso == 1) { pv = wrapAz(wrapAz(pv) - wrapAz(pl)); pl = 0.0; }
+  int ik, itl, itv, ipl0, ipl1, ipv0, ipv1;
+  float wk, wtl, wtv, wpl, wpv;
+  linearNodes(0, uN.x, uInvStep.x, k, ik, wk);
+  linearNodes(1, uN.y, uInvStep.y, tl, itl, wtl);
+  linearNodes(2, uN.z, uInvStep.z, tv, itv, wtv);
+  periodicNodes(uPhi.x, uPhi.y, uNphi.x, pl, ipl0, ipl1, wpl);
+  periodicNodes(uPhi.z, uPhi.w, uNphi.y, pv, ipv0, ipv1, wpv);
+  // pole rule: on elevation node 0 with weight 1 the azimuth must not matter
+  if (itl == 0 && wtl == 0.0) { wpl = 0.0; if (uIso == 1) wpv = 0.0; }
+  if (itv == 0 && wtv == 0.0) wpv = 0.0;
+  int ntl = uN.y, ntv = uN.z;
+  vec3 acc = vec3(0.0);
+  for (int a = 0; a < 2; a++) {
+    float fa = a == 0 ? 1.0 - wk : wk; if (fa == 0.0) continue;
+    for (int b = 0; b < 2; b++) {
+      float fb = fa * (b == 0 ? 1.0 - wpl : wpl); if (fb == 0.0) continue;
+      int ipl = b == 0 ? ipl0 : ipl1;
+      for (int c = 0; c < 2; c++) {
+        float fc = fb * (c == 0 ? 1.0 - wtl : wtl); if (fc == 0.0) continue;
+        int row = ipl * ntl + itl + c;
+        for (int d = 0; d < 2; d++) {
+          float fd = fc * (d == 0 ? 1.0 - wpv : wpv); if (fd == 0.0) continue;
+          int ipv = d == 0 ? ipv0 : ipv1;
+          for (int e = 0; e < 2; e++) {
+            float fe = fd * (e == 0 ? 1.0 - wtv : wtv); if (fe == 0.0) continue;
+            acc += fe * texelFetch(uTab, ivec3(ipv * ntv + itv + e, row, ik + a), 0).rgb;
+          }
+        }
+      }
+    }
+  }
+  return acc;
+}
+vec3 srgb(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+`;
+
+  const FULLSCREEN_VS = `#version 300 es
+void main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2)); gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }`;
+
+  const EVAL_FS = `#version 300 es
+${LOOKUP_GLSL}
+uniform sampler2D uQ;  // two texels per query: (theta_v, phi_v, theta_l, phi_l), (kappa, 0, 0, 0)
+out vec4 o;
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  vec4 a = texelFetch(uQ, ivec2(2 * p.x, p.y), 0);
+  vec4 b = texelFetch(uQ, ivec2(2 * p.x + 1, p.y), 0);
+  o = vec4(lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
+}`;
+
+  const POLAR_FS = `#version 300 es
+${LOOKUP_GLSL}
+uniform vec2 uL; uniform float uK; uniform vec2 uSize; uniform float uExpo;
+out vec4 o;
+void main() {
+  vec2 q = gl_FragCoord.xy / uSize * 2.0 - 1.0;
+  float r = length(q);
+  if (r > 1.0) { o = vec4(0.125, 0.125, 0.125, 1.0); return; }
+  float pv = r > 0.0 ? degrees(atan(q.y, q.x)) : 0.0;
+  if (pv < 0.0) pv += 360.0;
+  o = vec4(srgb(lookup(min(r * 90.0, 90.0), pv, uL.x, uL.y, uK) * uExpo), 1.0);
+}`;
+
+  const SURFACE_VS = `#version 300 es
+in vec3 aPos; in vec3 aNrm; in vec3 aTan; in float aK;
+uniform mat4 uMVP; uniform int uSurf; uniform float uAmp, uWave, uStandK, uWidth, uDepth;
+out vec3 vWorld; out vec3 vN; out vec3 vT; out float vK; out float vS;
+void main() {
+  vec3 p = aPos;
+  vN = aNrm; vT = aTan; vK = aK; vS = 0.0;
+  if (uSurf == 1) {          // sine sheet: z = A sin(2 pi x / L)
+    float x = (aPos.x - 0.5) * uWidth;
+    p = vec3(x, (aPos.y - 0.5) * uDepth, uAmp * sin(6.283185307179586 * x / uWave));
+    vS = x;
+  } else if (uSurf == 2) {   // a stand of constant curvature: arc length s across
+    float span = uWidth;
+    if (abs(uStandK) > 1e-6) span = min(uWidth, 0.9 * 3.141592653589793 / abs(uStandK));
+    float s = (aPos.x - 0.5) * span, a = uStandK * s;
+    float x = abs(a) < 1e-4 ? s : sin(a) / uStandK;
+    float z = abs(a) < 1e-4 ? -0.5 * uStandK * s * s : (cos(a) - 1.0) / uStandK;
+    p = vec3(x, (aPos.y - 0.5) * uDepth, z);
+    vS = s;
+  }
+  vWorld = p;
+  gl_Position = uMVP * vec4(p, 1.0);
+}`;
+
+  const SURFACE_FS = `#version 300 es
+${LOOKUP_GLSL}
+in vec3 vWorld; in vec3 vN; in vec3 vT; in float vK; in float vS;
+uniform int uSurf; uniform float uAmp, uWave, uStandK;
+uniform vec3 uEye; uniform vec3 uLight; uniform float uExpo;  // uExpo = pi * 2^EV (irradiance pi: white = 1)
+uniform int uEnv; uniform vec3 uEnvDir[9]; uniform float uEnvW[9];
+uniform int uMode; uniform float uSplitX; uniform int uOverlay; uniform float uKmax; uniform int uPick;
+out vec4 o;
+vec2 angles(vec3 d, vec3 n, vec3 t, vec3 b) {
+  vec3 l = vec3(dot(d, t), dot(d, b), dot(d, n));
+  float th = degrees(acos(clamp(l.z, -1.0, 1.0)));
+  float ph = length(l.xy) > 1e-7 ? degrees(atan(l.y, l.x)) : 0.0;
+  if (ph < 0.0) ph += 360.0;
+  return vec2(min(th, 90.0), ph);
+}
+void main() {
+  vec3 n, t; float k;
+  if (uSurf == 1) {
+    float w = 6.283185307179586 / uWave, d1 = uAmp * w * cos(w * vS);
+    n = normalize(vec3(-d1, 0.0, 1.0)); t = normalize(vec3(1.0, 0.0, d1));
+    k = uAmp * w * w * sin(w * vS) / pow(1.0 + d1 * d1, 1.5);  // crest convex: kappa > 0
+  } else if (uSurf == 2) {
+    float a = uStandK * vS;
+    n = vec3(sin(a), 0.0, cos(a)); t = vec3(cos(a), 0.0, -sin(a)); k = uStandK;
+  } else {
+    n = normalize(vN); t = normalize(vT - dot(vT, n) * n); k = vK;
+  }
+  vec3 b = cross(n, t);
+  vec3 v = normalize(uEye - vWorld);
+  bool front = dot(v, n) > 0.0;
+  float kq = (uMode == 0 || (uMode == 2 && gl_FragCoord.x < uSplitX)) ? 0.0 : k;
+  vec2 av = angles(v, n, t, b);
+  if (uPick == 1) { vec2 al = angles(uLight, n, t, b); o = front ? vec4(av, al) : vec4(-1.0); return; }
+  if (uPick == 2) { o = vec4(kq, k, front ? 1.0 : 0.0, dot(uLight, n)); return; }
+  vec3 c = vec3(0.0);
+  if (!front) {
+    c = vec3(0.02);
+  } else if (uEnv == 0) {
+    float cl = dot(uLight, n);
+    if (cl > 0.0) { vec2 al = angles(uLight, n, t, b); c = lookup(av.x, av.y, al.x, al.y, kq) * cl * uExpo; }
+  } else {
+    for (int i = 0; i < 9; i++) {
+      float cl = dot(uEnvDir[i], n);
+      if (cl <= 0.0) continue;
+      vec2 al = angles(uEnvDir[i], n, t, b);
+      c += uEnvW[i] * lookup(av.x, av.y, al.x, al.y, kq) * cl * uExpo;
+    }
+  }
+  vec3 s = srgb(c);
+  if (uOverlay == 1) {
+    float x = clamp(k / uKmax, -1.0, 1.0);
+    vec3 fc = x > 0.0 ? mix(vec3(1.0), vec3(0.85, 0.1, 0.1), x) : mix(vec3(1.0), vec3(0.1, 0.3, 0.9), -x);
+    s = mix(s, fc, 0.6);
+  }
+  if (uMode == 2 && abs(gl_FragCoord.x - uSplitX) < 1.0) s = vec3(1.0);
+  o = vec4(s, 1.0);
+}`;
+
+  // ---------------------------------------------------------------- matrices
+  function perspective(fovy, aspect, near, far) {
+    const f = 1 / Math.tan(fovy / 2), nf = 1 / (near - far);
+    return [f / aspect, 0, 0, 0, 0, f, 0, 0, 0, 0, (far + near) * nf, -1, 0, 0, 2 * far * near * nf, 0];
+  }
+  function lookAt(e, c, up) {
+    const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    const norm = (a) => { const l = Math.hypot(a[0], a[1], a[2]); return [a[0] / l, a[1] / l, a[2] / l]; };
+    const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    const z = norm(sub(e, c)), x = norm(cross(up, z)), y = cross(z, x);
+    return [x[0], y[0], z[0], 0, x[1], y[1], z[1], 0, x[2], y[2], z[2], 0, -dot(x, e), -dot(y, e), -dot(z, e), 1];
+  }
+  function mul(a, b) {  // column-major a * b
+    const o = new Array(16).fill(0);
+    for (let c = 0; c < 4; c++) for (let r = 0; r < 4; r++) for (let k = 0; k < 4; k++) o[c * 4 + r] += a[k * 4 + r] * b[c * 4 + k];
+    return o;
+  }
+  const rad = (d) => d * Math.PI / 180;
+  const dirOf = (thetaDeg, phiDeg) => [Math.sin(rad(thetaDeg)) * Math.cos(rad(phiDeg)),
+    Math.sin(rad(thetaDeg)) * Math.sin(rad(phiDeg)), Math.cos(rad(thetaDeg))];
+
+  // a small sky: zenith, four at 35 degrees, four at 65 degrees; weights sum to 1 (white Lambertian facing up: 1)
+  const ENV = (function () {
+    const d = [[0, 0]], w = [1.0];
+    for (let i = 0; i < 4; i++) { d.push([35, 45 + 90 * i]); w.push(0.9); }
+    for (let i = 0; i < 4; i++) { d.push([65, 90 * i]); w.push(0.6); }
+    const dirs = d.map(([t, p]) => dirOf(t, p));
+    const lamb = dirs.reduce((s, x, i) => s + w[i] * x[2], 0);
+    return { dirs: dirs.flat(), w: w.map((x) => x / lamb) };
+  })();
+
+  // ---------------------------------------------------------------- GL setup
+  const canvas = $('view');
+  const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true });
+  const state = {
+    surface: 'sheet', amplitude: 2.0, wavelength: 20.0, width: 60.0, depth: 60.0, standKappa: 0.13,
+    lightTheta: 45.0, lightPhi: 0.0, env: false, exposure: 0.0, mode: 'cdbrdf', split: 0.5, overlay: false,
+    side: false, cam: { elevation: 50.0, azimuth: -90.0, distance: 150.0 }, mosaicTable: 0, mosaicK: 0,
+    pick: null, drawCalls: 0,
+  };
+  const viewer = { errors: [] };
+  window.cdbrdfViewer = viewer;
+
+  function compile(vs, fs) {
+    const p = gl.createProgram();
+    for (const [type, src] of [[gl.VERTEX_SHADER, vs], [gl.FRAGMENT_SHADER, fs]]) {
+      const s = gl.createShader(type);
+      gl.shaderSource(s, src);
+      gl.compileShader(s);
+      if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw fail('shader: ' + gl.getShaderInfoLog(s));
+      gl.attachShader(p, s);
+    }
+    ['aPos', 'aNrm', 'aTan', 'aK'].forEach((name, i) => gl.bindAttribLocation(p, i, name));  // one VAO layout for every program
+    gl.linkProgram(p);
+    if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw fail('shader link: ' + gl.getProgramInfoLog(p));
+    const u = {};
+    const n = gl.getProgramParameter(p, gl.ACTIVE_UNIFORMS);
+    for (let i = 0; i < n; i++) {
+      const name = gl.getActiveUniform(p, i).name.replace(/\[0\]$/, '');
+      u[name] = gl.getUniformLocation(p, name);
+    }
+    return { p, u };
+  }
+
+  function uploadTable(asset, index) {
+    const h = asset.header, tex = h.lookup.texture;
+    const limits = { MAX_TEXTURE_SIZE: gl.getParameter(gl.MAX_TEXTURE_SIZE),
+      MAX_ARRAY_TEXTURE_LAYERS: gl.getParameter(gl.MAX_ARRAY_TEXTURE_LAYERS) };
+    const over = [];
+    if (tex.width > limits.MAX_TEXTURE_SIZE) over.push(`${tex.width} view directions > MAX_TEXTURE_SIZE ${limits.MAX_TEXTURE_SIZE}`);
+    if (tex.height > limits.MAX_TEXTURE_SIZE) over.push(`${tex.height} light directions > MAX_TEXTURE_SIZE ${limits.MAX_TEXTURE_SIZE}`);
+    if (tex.layers > limits.MAX_ARRAY_TEXTURE_LAYERS) over.push(`${tex.layers} curvatures > MAX_ARRAY_TEXTURE_LAYERS ${limits.MAX_ARRAY_TEXTURE_LAYERS}`);
+    if (over.length) throw fail(`${h.name}: too large for this GPU's textures (${over.join('; ')}); resample it with cdbrdf view --grid THETA_STEP,PHI_STEP`);
+    const half = tex.type === 'float16';
+    const t = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE0 + 2 * index);
+    gl.bindTexture(gl.TEXTURE_2D_ARRAY, t);
+    gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+    gl.texImage3D(gl.TEXTURE_2D_ARRAY, 0, half ? gl.RGBA16F : gl.RGBA32F, tex.width, tex.height, tex.layers, 0,
+      gl.RGBA, half ? gl.HALF_FLOAT : gl.FLOAT, block(asset, 'lookup'));
+    const L = h.lookup, n = Math.max(L.kappa.length, L.theta_l.length, L.theta_v.length);
+    const axes = new Float32Array(3 * n);
+    [L.kappa, L.theta_l, L.theta_v].forEach((a, r) => a.forEach((x, i) => { axes[r * n + i] = x; }));
+    const ta = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE0 + 2 * index + 1);
+    gl.bindTexture(gl.TEXTURE_2D, ta);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.R32F, n, 3, 0, gl.RED, gl.FLOAT, axes);
+    const [nk, npl, ntl, npv, ntv] = L.shape;
+    return { asset, h, unit: 2 * index, N: [nk, ntl, ntv], Nphi: [npl, npv],
+      phi: [L.phi_l0, L.phi_l_step, L.phi_v0, L.phi_v_step], iso: L.isotropic ? 1 : 0,
+      invStep: [0, L.theta_l_inv_step, L.theta_v_inv_step],
+      samples: block(asset, 'samples'), measured: block(asset, 'measured'),
+      fillMethod: block(asset, 'fill_method'), fillSource: block(asset, 'fill_source') };
+  }
+
+  function bindTable(prog, tab) {
+    gl.uniform1i(prog.u.uTab, tab.unit);
+    gl.uniform1i(prog.u.uAxes, tab.unit + 1);
+    gl.uniform3i(prog.u.uN, tab.N[0], tab.N[1], tab.N[2]);
+    gl.uniform2i(prog.u.uNphi, tab.Nphi[0], tab.Nphi[1]);
+    gl.uniform4f(prog.u.uPhi, tab.phi[0], tab.phi[1], tab.phi[2], tab.phi[3]);
+    gl.uniform1i(prog.u.uIso, tab.iso);
+    gl.uniform3f(prog.u.uInvStep, tab.invStep[0], tab.invStep[1], tab.invStep[2]);
+  }
+
+  function gridGeometry(nx, ny) {  // (s, t) in [0, 1]^2 as positions; the vertex shader shapes it
+    const pos = new Float32Array((nx + 1) * (ny + 1) * 3), idx = new Uint32Array(nx * ny * 6);
+    let p = 0, q = 0;
+    for (let i = 0; i <= nx; i++) for (let j = 0; j <= ny; j++) { pos[p++] = i / nx; pos[p++] = j / ny; pos[p++] = 0; }
+    for (let i = 0; i < nx; i++) for (let j = 0; j < ny; j++) {
+      const a = i * (ny + 1) + j, b = a + ny + 1;
+      idx.set([a, b, b + 1, a, b + 1, a + 1], q); q += 6;
+    }
+    return { pos, idx };
+  }
+
+  function makeVAO(prog, pos, nrm, tan, kap, idx) {
+    const vao = gl.createVertexArray();
+    gl.bindVertexArray(vao);
+    const attr = (name, data, size) => {
+      const loc = gl.getAttribLocation(prog.p, name);
+      if (loc < 0) return;
+      if (!data) { gl.disableVertexAttribArray(loc); if (size === 1) gl.vertexAttrib1f(loc, 0); else gl.vertexAttrib3f(loc, 0, 0, 1); return; }
+      const b = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, b);
+      gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW);
+      gl.enableVertexAttribArray(loc);
+      gl.vertexAttribPointer(loc, size, gl.FLOAT, false, 0, 0);
+    };
+    attr('aPos', pos, 3); attr('aNrm', nrm, 3); attr('aTan', tan, 3); attr('aK', kap, 1);
+    const ib = gl.createBuffer();
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ib);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
+    gl.bindVertexArray(null);
+    return { vao, count: idx.length };
+  }
+
+  let surfProg, evalProg, polarProg, tables = [], surfaces = {}, emptyVAO;
+  let pickFBO = null, evalFBO = null, polarFBO = null;
+
+  function floatFBO(w, h, depth) {
+    const tex = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE7);
+    gl.bindTexture(gl.TEXTURE_2D, tex);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, w, h, 0, gl.RGBA, gl.FLOAT, null);
+    const fb = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, tex, 0);
+    let rb = null;
+    if (depth) {
+      rb = gl.createRenderbuffer();
+      gl.bindRenderbuffer(gl.RENDERBUFFER, rb);
+      gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT24, w, h);
+      gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, rb);
+    }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    return { fb, tex, rb, w, h };
+  }
+  function freeFBO(f) { if (f) { gl.deleteFramebuffer(f.fb); gl.deleteTexture(f.tex); if (f.rb) gl.deleteRenderbuffer(f.rb); } }
+
+  // ---------------------------------------------------------------- drawing
+  function viewports() {
+    const W = canvas.width, H = canvas.height;
+    if (state.side && tables.length > 1) {
+      const w = Math.floor(W / 2);
+      return [{ x: 0, y: 0, w, h: H, tab: tables[0] }, { x: w, y: 0, w: W - w, h: H, tab: tables[1] }];
+    }
+    return [{ x: 0, y: 0, w: W, h: H, tab: tables[0] }];
+  }
+
+  function eye() {
+    const c = state.cam, el = rad(c.elevation), az = rad(c.azimuth);
+    return [c.distance * Math.cos(el) * Math.cos(az), c.distance * Math.cos(el) * Math.sin(az), c.distance * Math.sin(el)];
+  }
+
+  function drawSurface(vp, pick) {
+    const s = surfaces[state.surface];
+    const prog = surfProg, u = prog.u, e = eye();
+    gl.viewport(vp.x, vp.y, vp.w, vp.h);
+    gl.useProgram(prog.p);
+    bindTable(prog, vp.tab);
+    const up = Math.abs(state.cam.elevation) > 89.9 ? [0, 1, 0] : [0, 0, 1];
+    const mvp = mul(perspective(rad(35), vp.w / vp.h, state.cam.distance / 50, state.cam.distance * 10), lookAt(e, [0, 0, 0], up));
+    gl.uniformMatrix4fv(u.uMVP, false, mvp);
+    gl.uniform1i(u.uSurf, s.kind);
+    gl.uniform1f(u.uAmp, state.amplitude); gl.uniform1f(u.uWave, state.wavelength);
+    gl.uniform1f(u.uStandK, state.standKappa);
+    gl.uniform1f(u.uWidth, state.width); gl.uniform1f(u.uDepth, state.depth);
+    gl.uniform3fv(u.uEye, e);
+    gl.uniform3fv(u.uLight, dirOf(state.lightTheta, state.lightPhi));
+    gl.uniform1f(u.uExpo, Math.PI * Math.pow(2, state.exposure));
+    gl.uniform1i(u.uEnv, state.env ? 1 : 0);
+    gl.uniform3fv(u.uEnvDir, ENV.dirs); gl.uniform1fv(u.uEnvW, ENV.w);
+    gl.uniform1i(u.uMode, { brdf: 0, cdbrdf: 1, split: 2 }[state.mode]);
+    gl.uniform1f(u.uSplitX, vp.x + state.split * vp.w);
+    gl.uniform1i(u.uOverlay, state.overlay ? 1 : 0);
+    gl.uniform1f(u.uKmax, KMAX_OVERLAY);
+    gl.uniform1i(u.uPick, pick || 0);
+    gl.bindVertexArray(s.vao);
+    gl.drawElements(gl.TRIANGLES, s.count, gl.UNSIGNED_INT, 0);  // one draw call per surface
+    state.drawCalls++;
+    gl.bindVertexArray(null);
+  }
+
+  function draw() {
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.viewport(0, 0, canvas.width, canvas.height);
+    gl.clearColor(0.19, 0.19, 0.19, 1);
+    gl.enable(gl.DEPTH_TEST);
+    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+    for (const vp of viewports()) drawSurface(vp, 0);
+    drawPolar();
+    updateText();
+  }
+
+  function crestCurvature() {  // of the sine sheet: A (2 pi / L)^2
+    return state.amplitude * Math.pow(2 * Math.PI / state.wavelength, 2);
+  }
+
+  function fmtK(k) {
+    const r = Math.abs(k) > 1e-9 ? `radius ${(1 / Math.abs(k)).toFixed(2)} mm` : 'flat';
+    return `${k.toFixed(3)} mm^-1 (${r})`;
+  }
+
+  function updateText() {
+    $('bendOut').textContent = `${state.amplitude.toFixed(2)} mm`;
+    $('waveOut').textContent = `${state.wavelength.toFixed(1)} mm`;
+    $('standKOut').textContent = `${state.standKappa.toFixed(3)}`;
+    $('crest').textContent = state.surface === 'stand' ? fmtK(state.standKappa) + ' (stand)' : fmtK(crestCurvature());
+    $('lightTOut').textContent = `${state.lightTheta.toFixed(1)} deg`;
+    $('lightPOut').textContent = `${state.lightPhi.toFixed(1)} deg`;
+    $('expoOut').textContent = `${state.exposure >= 0 ? '+' : ''}${state.exposure.toFixed(1)}`;
+  }
+
+  function readFloatPass(fbo, x, y, w, h) {
+    const out = new Float32Array(w * h * 4);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fbo.fb);
+    gl.readPixels(x, y, w, h, gl.RGBA, gl.FLOAT, out);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    return out;
+  }
+
+  // pick pass: the query (angles) and the curvature at a pixel, for a rectangle of the canvas
+  function pickPass(x, y, w, h) {
+    if (!pickFBO || pickFBO.w !== canvas.width || pickFBO.h !== canvas.height) {
+      freeFBO(pickFBO); pickFBO = floatFBO(canvas.width, canvas.height, true);
+    }
+    const res = [];
+    for (const mode of [1, 2]) {
+      gl.bindFramebuffer(gl.FRAMEBUFFER, pickFBO.fb);
+      gl.viewport(0, 0, canvas.width, canvas.height);
+      gl.clearColor(-1, -1, -1, -1);
+      gl.enable(gl.DEPTH_TEST);
+      gl.enable(gl.SCISSOR_TEST);
+      gl.scissor(x, y, w, h);
+      gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+      for (const vp of viewports()) drawSurface(vp, mode);
+      gl.disable(gl.SCISSOR_TEST);
+      res.push(readFloatPass(pickFBO, x, y, w, h));
+    }
+    return res;
+  }
+
+  function pickAt(px, py) {  // px, py: CSS pixels from the top left of the canvas
+    const x = Math.round(px * canvas.width / canvas.clientWidth);
+    const y = canvas.height - 1 - Math.round(py * canvas.height / canvas.clientHeight);
+    const [q, k] = pickPass(x, y, 1, 1);
+    if (!(k[2] > 0.5)) { state.pick = null; $('pickout').textContent = 'no surface there'; return null; }
+    const vp = viewports().find((v) => x >= v.x && x < v.x + v.w);
+    const r = { theta_v: q[0], phi_v: q[1], theta_l: q[2], phi_l: q[3], kappa: k[0], kappa_surface: k[1],
+      table: tables.indexOf(vp.tab) };
+    state.pick = r;
+    $('pickout').textContent = `table      ${vp.tab.h.name}\ntheta_v    ${r.theta_v.toFixed(2)} deg\nphi_v      ${r.phi_v.toFixed(2)} deg\n` +
+      `theta_l    ${r.theta_l.toFixed(2)} deg\nphi_l      ${r.phi_l.toFixed(2)} deg\nkappa      ${r.kappa.toFixed(4)} mm^-1` +
+      (r.kappa !== r.kappa_surface ? ` (surface ${r.kappa_surface.toFixed(4)}; plain BRDF)` : '') +
+      (k[3] <= 0 ? '\n(light below this point\'s horizon)' : '');
+    state.mosaicTable = r.table;
+    $('mosaicTable').value = String(r.table);
+    const ks = vp.tab.h.axes.kappa;
+    let best = 0;
+    ks.forEach((kk, i) => { if (Math.abs(kk - r.kappa) < Math.abs(ks[best] - r.kappa)) best = i; });
+    state.mosaicK = best;
+    fillKappaSelect();
+    drawMosaic();
+    draw();
+    return r;
+  }
+
+  // ---------------------------------------------------------------- GPU evaluate
+  function evaluateMany(queries, tableIndex) {
+    const tab = tables[tableIndex || 0];
+    if (!tab) throw new Error(`table ${tableIndex}: not loaded`);
+    const n = queries.length, per = 512, rows = Math.max(1, Math.ceil(n / per)), cols = Math.min(per, Math.max(1, n));
+    const q = new Float32Array(cols * 2 * rows * 4);
+    const ok = new Array(n);
+    queries.forEach((x, i) => {
+      // azimuths reduced exactly in float64 (fmod, as cdbrdf.interp.wrap_azimuth) before float32 loses them
+      const wrap = (a) => (Math.abs(a) < 360 ? a : a % 360);
+      const [tv, pv0, tl, pl0, k] = x.map(Number);
+      const pv = wrap(pv0), pl = wrap(pl0);
+      ok[i] = [tv, pv, tl, pl, k].every(Number.isFinite) && tv >= 0 && tv <= 90 && tl >= 0 && tl <= 90;
+      const r = Math.floor(i / per), c = i % per, o = (r * cols * 2 + 2 * c) * 4;
+      if (ok[i]) q.set([tv, pv, tl, pl, k, 0, 0, 0], o);
+    });
+    const qt = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE6);
+    gl.bindTexture(gl.TEXTURE_2D, qt);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, cols * 2, rows, 0, gl.RGBA, gl.FLOAT, q);
+    if (!evalFBO || evalFBO.w !== cols || evalFBO.h !== rows) { freeFBO(evalFBO); evalFBO = floatFBO(cols, rows, false); }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, evalFBO.fb);
+    gl.viewport(0, 0, cols, rows);
+    gl.disable(gl.DEPTH_TEST);
+    gl.useProgram(evalProg.p);
+    bindTable(evalProg, tab);
+    gl.uniform1i(evalProg.u.uQ, 6);
+    gl.bindVertexArray(emptyVAO);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    gl.bindVertexArray(null);
+    const out = readFloatPass(evalFBO, 0, 0, cols, rows);
+    gl.deleteTexture(qt);
+    const nc = tab.h.n_channels;
+    return queries.map((_, i) => {
+      if (!ok[i]) return new Array(nc).fill(NaN);
+      const r = Math.floor(i / per), c = i % per, o = (r * cols + c) * 4;
+      return nc === 3 ? [out[o], out[o + 1], out[o + 2]] : [out[o]];
+    });
+  }
+
+  // ---------------------------------------------------------------- polar slice
+  const polarCanvas = $('polar'), polarCtx = polarCanvas.getContext('2d');
+  let polarKey = '';
+  function drawPolar() {  // only when what it shows changed: its read-back would stall every orbit frame
+    const tab = tables[state.mosaicTable] || tables[0];
+    const W = polarCanvas.width, H = polarCanvas.height;
+    const key = JSON.stringify([tables.indexOf(tab), state.lightTheta, state.lightPhi, state.mosaicK, state.exposure]);
+    if (key === polarKey) return;
+    polarKey = key;
+    if (!polarFBO) polarFBO = floatFBO(W, H, false);
+    gl.bindFramebuffer(gl.FRAMEBUFFER, polarFBO.fb);
+    gl.viewport(0, 0, W, H);
+    gl.disable(gl.DEPTH_TEST);
+    gl.useProgram(polarProg.p);
+    bindTable(polarProg, tab);
+    gl.uniform2f(polarProg.u.uL, state.lightTheta, state.lightPhi);
+    gl.uniform1f(polarProg.u.uK, tab.h.axes.kappa[state.mosaicK] ?? 0);
+    gl.uniform2f(polarProg.u.uSize, W, H);
+    gl.uniform1f(polarProg.u.uExpo, Math.PI * Math.pow(2, state.exposure));
+    gl.bindVertexArray(emptyVAO);
+    gl.drawArrays(gl.TRIANGLES, 0, 3);
+    gl.bindVertexArray(null);
+    const px = readFloatPass(polarFBO, 0, 0, W, H);
+    const img = polarCtx.createImageData(W, H);
+    for (let y = 0; y < H; y++) for (let x = 0; x < W; x++) {
+      const s = ((H - 1 - y) * W + x) * 4, d = (y * W + x) * 4;
+      img.data[d] = Math.round(px[s] * 255); img.data[d + 1] = Math.round(px[s + 1] * 255);
+      img.data[d + 2] = Math.round(px[s + 2] * 255); img.data[d + 3] = 255;
+    }
+    polarCtx.putImageData(img, 0, 0);
+    // the light's direction
+    const r = state.lightTheta / 90 * (W / 2);
+    polarCtx.strokeStyle = '#ffd27a';
+    polarCtx.beginPath();
+    polarCtx.arc(W / 2 + r * Math.cos(rad(state.lightPhi)), H / 2 - r * Math.sin(rad(state.lightPhi)), 4, 0, 2 * Math.PI);
+    polarCtx.stroke();
+  }
+
+  // ---------------------------------------------------------------- mosaic
+  const mosaicCanvas = $('mosaic'), mosaicCtx = mosaicCanvas.getContext('2d');
+  function srgb8(x) {
+    x = Math.min(Math.max(x, 0), 1);
+    return Math.round(255 * (x <= 0.0031308 ? 12.92 * x : 1.055 * Math.pow(x, 1 / 2.4) - 0.055));
+  }
+  function mosaicGeometry(tab) {
+    const ax = tab.h.axes, cols = ax.phi_v.length * ax.theta_v.length, rows = ax.phi_l.length * ax.theta_l.length;
+    const cell = Math.max(1, Math.floor(432 / Math.max(cols, rows)));
+    return { cols, rows, cell };
+  }
+  function drawMosaic() {
+    const tab = tables[state.mosaicTable] || tables[0];
+    const ax = tab.h.axes, nc = tab.h.n_channels, g = mosaicGeometry(tab), k = state.mosaicK;
+    mosaicCanvas.width = g.cols * g.cell; mosaicCanvas.height = g.rows * g.cell;
+    const img = mosaicCtx.createImageData(g.cols, g.rows);
+    const f = Math.PI * Math.pow(2, state.exposure), per = g.cols * g.rows;
+    for (let r = 0; r < g.rows; r++) for (let c = 0; c < g.cols; c++) {
+      const s = k * per + r * g.cols + c, d = (r * g.cols + c) * 4;
+      for (let ch = 0; ch < 3; ch++) img.data[d + ch] = srgb8(tab.samples[s * nc + (nc === 3 ? ch : 0)] * f);
+      img.data[d + 3] = 255;
+    }
+    const off = document.createElement('canvas');
+    off.width = g.cols; off.height = g.rows;
+    off.getContext('2d').putImageData(img, 0, 0);
+    mosaicCtx.imageSmoothingEnabled = false;
+    mosaicCtx.drawImage(off, 0, 0, g.cols * g.cell, g.rows * g.cell);
+    mosaicCtx.strokeStyle = 'rgba(255,160,60,0.9)';
+    mosaicCtx.lineWidth = 1;
+    for (let r = 0; r < g.rows; r++) for (let c = 0; c < g.cols; c++) {
+      if (tab.measured[k * per + r * g.cols + c]) continue;
+      mosaicCtx.beginPath();
+      mosaicCtx.moveTo(c * g.cell, (r + 1) * g.cell); mosaicCtx.lineTo((c + 1) * g.cell, r * g.cell);
+      mosaicCtx.stroke();
+    }
+    mosaicCtx.strokeStyle = 'rgba(0,0,0,0.6)';  // azimuth groups
+    for (let i = 1; i < ax.phi_v.length; i++) { mosaicCtx.beginPath(); const x = i * ax.theta_v.length * g.cell; mosaicCtx.moveTo(x, 0); mosaicCtx.lineTo(x, g.rows * g.cell); mosaicCtx.stroke(); }
+    for (let i = 1; i < ax.phi_l.length; i++) { mosaicCtx.beginPath(); const y = i * ax.theta_l.length * g.cell; mosaicCtx.moveTo(0, y); mosaicCtx.lineTo(g.cols * g.cell, y); mosaicCtx.stroke(); }
+    const p = state.pick;
+    if (p && p.table === tables.indexOf(tab)) {  // the cell the clicked point reads (nearest sample)
+      const near = (axis, x, periodic) => {
+        let best = 0, bd = Infinity;
+        axis.forEach((a, i) => { let d = Math.abs(a - x); if (periodic) d = Math.min(d, 360 - d); if (d < bd) { bd = d; best = i; } });
+        return best;
+      };
+      let pv = p.phi_v, pl = p.phi_l;
+      if (tab.h.symmetry === 'isotropic') { pv = ((pv - pl) % 360 + 360) % 360; pl = 0; }
+      const c = near(ax.phi_v, pv, true) * ax.theta_v.length + near(ax.theta_v, p.theta_v, false);
+      const r = near(ax.phi_l, pl, true) * ax.theta_l.length + near(ax.theta_l, p.theta_l, false);
+      mosaicCtx.strokeStyle = '#00ffff'; mosaicCtx.lineWidth = 2;
+      mosaicCtx.strokeRect(c * g.cell - 1, r * g.cell - 1, g.cell + 2, g.cell + 2);
+      state.pickCell = { row: r, col: c, kappa_index: k };
+    }
+  }
+  function unravel(flat, shape) {
+    const out = new Array(shape.length);
+    for (let i = shape.length - 1; i >= 0; i--) { out[i] = flat % shape[i]; flat = Math.floor(flat / shape[i]); }
+    return out;
+  }
+  function sampleText(tab, flat) {
+    const ax = tab.h.axes, shape = [ax.kappa.length, ax.phi_l.length, ax.theta_l.length, ax.phi_v.length, ax.theta_v.length];
+    const [ik, ipl, itl, ipv, itv] = unravel(flat, shape);
+    const az = tab.h.symmetry === 'isotropic' ? 'dphi' : 'phi_v';
+    return `theta_v ${ax.theta_v[itv]}, ${az} ${ax.phi_v[ipv]}, theta_l ${ax.theta_l[itl]}, phi_l ${ax.phi_l[ipl]}, kappa ${ax.kappa[ik]}`;
+  }
+  function hoverMosaic(ev) {
+    const tab = tables[state.mosaicTable] || tables[0], g = mosaicGeometry(tab);
+    const rect = mosaicCanvas.getBoundingClientRect();
+    const c = Math.floor((ev.clientX - rect.left) / rect.width * g.cols), r = Math.floor((ev.clientY - rect.top) / rect.height * g.rows);
+    if (c < 0 || r < 0 || c >= g.cols || r >= g.rows) return;
+    $('readout').textContent = readout(tab, state.mosaicK, r, c);
+  }
+  function readout(tab, k, r, c) {
+    const g = mosaicGeometry(tab), nc = tab.h.n_channels, flat = k * g.cols * g.rows + r * g.cols + c;
+    const vals = Array.from(tab.samples.subarray(flat * nc, flat * nc + nc)).map((x) => x.toPrecision(4));
+    const meas = tab.measured[flat] === 1;
+    const method = tab.h.fill_methods[String(tab.fillMethod[flat])] || '?';
+    const src = tab.fillSource[flat];
+    let text = `${sampleText(tab, flat)}\nvalue   ${vals.join(', ')} ${tab.h.quantity === 'brdf' ? 'sr^-1' : '(relative)'}\n`;
+    text += meas ? (tab.h.resampled_from ? 'measured (resampled from the file\'s grid)' : 'measured') : `filled (${method})`;
+    if (!meas) text += src >= 0 ? `\nfill source: ${sampleText(tab, src)}` : '\nfill source: unknown';
+    return text;
+  }
+
+  // ---------------------------------------------------------------- UI
+  function fillKappaSelect() {
+    const tab = tables[state.mosaicTable] || tables[0], sel = $('mosaicK');
+    sel.innerHTML = '';
+    tab.h.axes.kappa.forEach((k, i) => { const o = document.createElement('option'); o.value = String(i); o.textContent = `${k} mm^-1`; sel.appendChild(o); });
+    state.mosaicK = Math.min(state.mosaicK, tab.h.axes.kappa.length - 1);
+    sel.value = String(state.mosaicK);
+  }
+
+  function setDefaultCamera() {
+    const s = surfaces[state.surface];
+    state.cam.distance = s.distance;
+  }
+
+  function bindUI() {
+    const num = (id, key, after) => $(id).addEventListener('input', (e) => { state[key] = Number(e.target.value); if (after) after(); draw(); });
+    num('bend', 'amplitude'); num('wave', 'wavelength'); num('standK', 'standKappa');
+    num('lightT', 'lightTheta'); num('lightP', 'lightPhi'); num('split', 'split');
+    num('expo', 'exposure', drawMosaic);
+    $('env').addEventListener('change', (e) => { state.env = e.target.checked; draw(); });
+    $('overlay').addEventListener('change', (e) => { state.overlay = e.target.checked; draw(); });
+    $('side').addEventListener('change', (e) => { state.side = e.target.checked; draw(); });
+    $('mode').addEventListener('change', (e) => { state.mode = e.target.value; draw(); });
+    $('surface').addEventListener('change', (e) => { state.surface = e.target.value; setDefaultCamera(); draw(); });
+    $('mosaicTable').addEventListener('change', (e) => { state.mosaicTable = Number(e.target.value); fillKappaSelect(); drawMosaic(); draw(); });
+    $('mosaicK').addEventListener('change', (e) => { state.mosaicK = Number(e.target.value); drawMosaic(); draw(); });
+    mosaicCanvas.addEventListener('mousemove', hoverMosaic);
+    let drag = null;
+    canvas.addEventListener('contextmenu', (e) => e.preventDefault());
+    canvas.addEventListener('mousedown', (e) => { drag = { x: e.clientX, y: e.clientY, moved: false, light: e.shiftKey || e.button === 2 }; });
+    window.addEventListener('mouseup', (e) => {
+      if (drag && !drag.moved && e.target === canvas) {
+        const r = canvas.getBoundingClientRect();
+        pickAt(e.clientX - r.left, e.clientY - r.top);
+      }
+      drag = null;
+    });
+    window.addEventListener('mousemove', (e) => {
+      if (!drag) return;
+      const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
+      if (Math.abs(dx) + Math.abs(dy) > 2) drag.moved = true;
+      if (!drag.moved) return;
+      drag.x = e.clientX; drag.y = e.clientY;
+      if (drag.light) {
+        state.lightPhi = ((state.lightPhi - dx * 0.5) % 360 + 360) % 360;
+        state.lightTheta = Math.min(89, Math.max(0, state.lightTheta + dy * 0.3));
+        $('lightT').value = state.lightTheta; $('lightP').value = state.lightPhi;
+      } else {
+        state.cam.azimuth -= dx * 0.4;
+        state.cam.elevation = Math.min(90, Math.max(-10, state.cam.elevation + dy * 0.3));
+      }
+      draw();
+    });
+    canvas.addEventListener('wheel', (e) => { e.preventDefault(); state.cam.distance *= Math.exp(e.deltaY * 0.001); draw(); }, { passive: false });
+  }
+
+  function init() {
+    if (!DATA || !DATA.tables || !DATA.tables.length) throw fail('no table data (data.js is missing or empty)');
+    if (!gl) throw fail('this browser has no WebGL2: the viewer needs it (try a current Chrome, Firefox or Safari)');
+    if (!gl.getExtension('EXT_color_buffer_float')) throw fail('this browser cannot render to float textures (EXT_color_buffer_float): the GPU lookup cannot be read back');
+    surfProg = compile(SURFACE_VS, SURFACE_FS);
+    evalProg = compile(FULLSCREEN_VS, EVAL_FS);
+    polarProg = compile(FULLSCREEN_VS, POLAR_FS);
+    emptyVAO = gl.createVertexArray();
+    tables = DATA.tables.map((a, i) => uploadTable({ header: a.header, buffer: decode(a.data) }, i));
+    const grid = gridGeometry(480, 8);
+    surfaces.sheet = Object.assign(makeVAO(surfProg, grid.pos, null, null, null, grid.idx), { kind: 1, label: 'sine sheet', distance: 150 });
+    surfaces.stand = Object.assign(makeVAO(surfProg, grid.pos, null, null, null, grid.idx), { kind: 2, label: 'cylinder stand', distance: 150 });
+    for (const [key, m] of Object.entries(DATA.meshes || {})) {
+      const a = { header: m.header, buffer: decode(m.data) };
+      const size = Math.max(...a.header.size_mm);
+      surfaces[key] = Object.assign(makeVAO(surfProg, block(a, 'position'), block(a, 'normal'), block(a, 'tangent'),
+        block(a, 'curvature'), block(a, 'index')), { kind: 0, label: a.header.name, distance: 2.2 * size });
+    }
+    const sel = $('surface');
+    for (const [key, s] of Object.entries(surfaces)) { const o = document.createElement('option'); o.value = key; o.textContent = s.label; sel.appendChild(o); }
+    const ms = $('mosaicTable');
+    tables.forEach((t, i) => { const o = document.createElement('option'); o.value = String(i); o.textContent = t.h.name; ms.appendChild(o); });
+    $('tables').textContent = tables.map((t) => `${t.h.name} (${t.h.material || 'table'}, ${t.h.quantity}, ${t.h.symmetry})`).join('  |  ');
+    state.side = tables.length > 1;
+    $('side').checked = state.side;
+    if (tables.length < 2) $('sideLabel').style.display = 'none';
+    const opt = DATA.options || {};
+    state.exposure = Number.isFinite(opt.exposure_ev) ? opt.exposure_ev : tables[0].h.exposure_ev;
+    $('expo').value = state.exposure;
+    const k0 = tables[0].h.axes.kappa;
+    state.mosaicK = k0.indexOf(k0.reduce((b, k) => (Math.abs(k - 0.13) < Math.abs(b - 0.13) ? k : b), k0[0]));
+    fillKappaSelect();
+    bindUI();
+    drawMosaic();
+    draw();
+  }
+
+  // ---------------------------------------------------------------- the JS interface
+  const redraw = (f) => (...args) => { f(...args); draw(); return Promise.resolve(viewer.state()); };
+  Object.assign(viewer, {
+    evaluate: (tv, pv, tl, pl, k, opts) => Promise.resolve(evaluateMany([[tv, pv, tl, pl, k ?? 0]], (opts || {}).table)[0]),
+    evaluateMany: (queries, opts) => Promise.resolve(evaluateMany(queries, (opts || {}).table)),
+    setMode: redraw((m) => {
+      if (!['brdf', 'cdbrdf', 'split'].includes(m)) throw new Error(`mode: ${m} is not one of brdf, cdbrdf, split`);
+      state.mode = m; $('mode').value = m;
+    }),
+    setBend: redraw((a) => { state.amplitude = Number(a); $('bend').value = a; }),
+    setWavelength: redraw((l) => { state.wavelength = Number(l); $('wave').value = l; }),
+    setStandCurvature: redraw((k) => { state.standKappa = Number(k); $('standK').value = k; }),
+    setLight: redraw((t, p) => { state.lightTheta = Number(t); state.lightPhi = Number(p); $('lightT').value = t; $('lightP').value = p; }),
+    setCamera: redraw((elevation, azimuth, distance) => {
+      if (elevation != null) state.cam.elevation = Number(elevation);
+      if (azimuth != null) state.cam.azimuth = Number(azimuth);
+      if (distance != null) state.cam.distance = Number(distance);
+    }),
+    setSurface: redraw((s) => {
+      if (!surfaces[s]) throw new Error(`surface: ${s} is not one of ${Object.keys(surfaces).join(', ')}`);
+      state.surface = s; $('surface').value = s; setDefaultCamera();
+    }),
+    setExposure: redraw((ev) => { state.exposure = Number(ev); $('expo').value = ev; drawMosaic(); }),
+    setEnvironment: redraw((on) => { state.env = !!on; $('env').checked = state.env; }),
+    setSplit: redraw((x) => { state.split = Number(x); $('split').value = x; }),
+    setOverlay: redraw((on) => { state.overlay = !!on; $('overlay').checked = state.overlay; }),
+    setSideBySide: redraw((on) => { state.side = !!on; $('side').checked = state.side; }),
+    setSize: redraw((w, h) => { canvas.width = w; canvas.height = h; }),
+    pick: (x, y) => Promise.resolve(pickAt(x, y)),
+    mosaicReadout: (table, k, row, col) => readout(tables[table || 0], k, row, col),
+    surfaces: () => Object.keys(surfaces),
+    // per-pixel curvature the lookup used (kappa_query, kappa_surface, front, n.l) for the whole canvas
+    // (float32 RGBA rows from the bottom, base64)
+    curvatureImage: () => Promise.resolve({ width: canvas.width, height: canvas.height,
+      data: base64(new Uint8Array(pickPass(0, 0, canvas.width, canvas.height)[1].buffer)) }),
+    // the canvas as 8-bit RGBA rows from the bottom, base64
+    pixels: () => {
+      const out = new Uint8Array(canvas.width * canvas.height * 4);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      gl.readPixels(0, 0, canvas.width, canvas.height, gl.RGBA, gl.UNSIGNED_BYTE, out);
+      return { width: canvas.width, height: canvas.height, data: base64(out) };
+    },
+    // mean time of n frames (ms), each finished on the GPU (a reference: a flat-shaded draw when flat is true)
+    frameTime: (n, flat) => {
+      const frame = () => {
+        if (flat) drawFlat(); else { gl.bindFramebuffer(gl.FRAMEBUFFER, null); gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT); for (const vp of viewports()) drawSurface(vp, 0); }
+        const px = new Uint8Array(4);
+        gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);  // waits for the frame to finish
+      };
+      frame();
+      const t0 = performance.now();
+      for (let i = 0; i < n; i++) frame();
+      const ms = (performance.now() - t0) / n;
+      draw();
+      return Promise.resolve(ms);
+    },
+    state: () => JSON.parse(JSON.stringify(Object.assign({}, state, {
+      crestCurvatureText: $('crest').textContent, crestCurvature: crestCurvature(),
+      tables: tables.map((t) => t.h.name), surfaces: Object.keys(surfaces) }))),
+  });
+
+  let flatProg = null;
+  function drawFlat() {  // the reference draw of the benchmark: the same mesh, Lambert shading, no table
+    if (!flatProg) {
+      flatProg = compile(SURFACE_VS, `#version 300 es
+precision highp float; precision highp int;
+in vec3 vWorld; in vec3 vN; in vec3 vT; in float vK; in float vS;
+uniform int uSurf; uniform float uAmp, uWave, uStandK; uniform vec3 uLight;
+out vec4 o;
+void main() {
+  vec3 n;
+  if (uSurf == 1) { float w = 6.283185307179586 / uWave; n = normalize(vec3(-uAmp * w * cos(w * vS), 0.0, 1.0)); }
+  else if (uSurf == 2) { float a = uStandK * vS; n = vec3(sin(a), 0.0, cos(a)); }
+  else n = normalize(vN);
+  o = vec4(vec3(max(dot(n, uLight), 0.0)), 1.0);
+}`);
+    }
+    const s = surfaces[state.surface], u = flatProg.u, e = eye();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.viewport(0, 0, canvas.width, canvas.height);
+    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+    gl.enable(gl.DEPTH_TEST);
+    gl.useProgram(flatProg.p);
+    for (const vp of viewports()) {
+      gl.viewport(vp.x, vp.y, vp.w, vp.h);
+      const up = Math.abs(state.cam.elevation) > 89.9 ? [0, 1, 0] : [0, 0, 1];
+      gl.uniformMatrix4fv(u.uMVP, false, mul(perspective(rad(35), vp.w / vp.h, state.cam.distance / 50, state.cam.distance * 10), lookAt(e, [0, 0, 0], up)));
+      gl.uniform1i(u.uSurf, s.kind); gl.uniform1f(u.uAmp, state.amplitude); gl.uniform1f(u.uWave, state.wavelength);
+      gl.uniform1f(u.uStandK, state.standKappa); gl.uniform1f(u.uWidth, state.width); gl.uniform1f(u.uDepth, state.depth);
+      gl.uniform3fv(u.uLight, dirOf(state.lightTheta, state.lightPhi));
+      gl.bindVertexArray(s.vao);  // attribute locations match: same vertex shader, bound by name at link
+      gl.drawElements(gl.TRIANGLES, s.count, gl.UNSIGNED_INT, 0);
+      gl.bindVertexArray(null);
+    }
+  }
+
+  viewer.ready = new Promise((resolve, reject) => {
+    try { init(); resolve(viewer.state()); } catch (e) { viewer.errors.push(String(e.message || e)); fail(String(e.message || e)); reject(e); }
+  });
+  viewer.ready.catch(() => {});  // the page shows the message; scripts that await ready see the rejection
+})();

@@ -1,0 +1,169 @@
+"""The viewer as files: the page, its script and the assets, for serving or a static folder.
+
+:func:`viewer_files` builds every file of the viewer in memory:
+
+- ``index.html`` and ``viewer.js``: the page (package data, ``assets/``);
+- ``data.js``: ``window.CDBRDF_VIEWER_DATA``, every asset's JSON header and
+  its binary blob in base64, loaded by a ``<script>`` tag, so that the page
+  opens from ``file://`` (where a browser refuses ``fetch()`` of local files)
+  as well as from any static web host;
+- ``assets/NAME.json`` and ``assets/NAME.bin``: the same assets as plain
+  files (header and little-endian blob, :mod:`cdbrdf.view.asset`) for other
+  tools; the page does not read them.
+
+:func:`export_viewer` writes them as an owned output folder, atomically
+(:func:`cdbrdf.fsutil.output_folder`: built beside the destination and
+swapped in whole; a user's folder is refused); :func:`write_viewer` writes
+them into a folder being built (the demo's).
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import logging
+import re
+from collections.abc import Mapping, Sequence
+from importlib import resources
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+from ..errors import OptionError
+from .asset import Asset, mesh_asset, table_asset
+
+__all__ = [
+    "MAX_TABLES",
+    "PAGE_FILES",
+    "default_meshes",
+    "export_viewer",
+    "viewer_files",
+    "write_viewer",
+]
+
+_LOG = logging.getLogger(__name__)
+
+#: Tables the viewer shows side by side at most.
+MAX_TABLES = 2
+
+#: The page's own files (package data under ``cdbrdf/view/assets``) and their names in the folder.
+PAGE_FILES: Mapping[str, str] = {"viewer.html": "index.html", "viewer.js": "viewer.js"}
+
+#: Vertices along each side of the draped cloth shown in the viewer.
+DRAPE_RESOLUTION = 101
+
+
+def default_meshes(*, drape: Any = None) -> dict[str, Any]:
+    """The meshes every viewer shows: the draped cloth the demo renders (curvature from the mesh).
+
+    Parameters
+    ----------
+    drape
+        An already prepared draped-cloth mesh (the demo has one), else it is
+        built and prepared here (:func:`cdbrdf.render.scenes.prepare_mesh`).
+    """
+    if drape is None:
+        from ..render.meshes import DrapedCloth, draped_cloth_mesh
+        from ..render.scenes import prepare_mesh
+
+        drape = prepare_mesh(draped_cloth_mesh(DrapedCloth(resolution=DRAPE_RESOLUTION)))
+    return {"drape": drape}
+
+
+def _label(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name)[:64] or "asset"
+
+
+def viewer_files(
+    tables: Sequence[tuple[str, Any]],
+    *,
+    meshes: Mapping[str, tuple[str, Any]] | None = None,
+    precision: str = "auto",
+    exposure_ev: float | None = None,
+) -> dict[str, bytes]:
+    """Every file of the viewer, by relative path.
+
+    Parameters
+    ----------
+    tables
+        ``(label, CDBRDF)`` pairs: one table, or two shown side by side.
+    meshes
+        ``{key: (label, prepared Mesh)}``; default: the draped cloth
+        (:func:`default_meshes`). The sine sheet and the stand are drawn by
+        the shader and need no mesh.
+    precision
+        Texture precision (:data:`cdbrdf.view.asset.PRECISIONS`).
+    exposure_ev
+        The page's initial exposure, stops (default: from the first table).
+
+    Raises
+    ------
+    OptionError
+        For no table or more than :data:`MAX_TABLES`.
+    LimitError
+        For a table too large for WebGL2's textures.
+    """
+    if not 1 <= len(tables) <= MAX_TABLES:
+        raise OptionError(f"tables: the viewer shows 1 or {MAX_TABLES} tables side by side, got {len(tables)}")
+    if meshes is None:
+        meshes = {"drape": ("draped cloth", default_meshes()["drape"])}
+    assets: list[tuple[str, Asset]] = []
+    for i, (label, table) in enumerate(tables):
+        assets.append((f"table-{i}", table_asset(table, name=label, precision=precision)))
+    mesh_assets = [(key, mesh_asset(m, name=label)) for key, (label, m) in meshes.items()]
+    files: dict[str, bytes] = {}
+    pkg = resources.files("cdbrdf.view") / "assets"
+    for src, dst in PAGE_FILES.items():
+        files[dst] = (pkg / src).read_bytes()
+
+    def entry(a: Asset) -> dict[str, Any]:
+        return {"header": a.header, "data": base64.b64encode(a.blob).decode("ascii")}
+
+    data = {
+        "tables": [entry(a) for _, a in assets],
+        "meshes": {_label(k): entry(a) for k, a in mesh_assets},
+        "options": {} if exposure_ev is None else {"exposure_ev": float(exposure_ev)},
+    }
+    files["data.js"] = ("window.CDBRDF_VIEWER_DATA = " + json.dumps(data, separators=(",", ":"), allow_nan=False)
+                        + ";\n").encode("ascii")
+    for key, a in assets + [(f"mesh-{_label(k)}", a) for k, a in mesh_assets]:
+        files[f"assets/{key}.json"] = (json.dumps(a.header, indent=1, allow_nan=False) + "\n").encode("ascii")
+        files[f"assets/{key}.bin"] = a.blob
+    return files
+
+
+def write_viewer(folder: str | PathLike[str], files: Mapping[str, bytes]) -> Path:
+    """Write ``files`` (:func:`viewer_files`) into ``folder`` (created if missing); returns its ``index.html``.
+
+    For a folder that is itself being built atomically (the demo's partial
+    output folder); :func:`export_viewer` is the atomic, refusing writer.
+    """
+    root = Path(folder)
+    root.mkdir(parents=True, exist_ok=True)
+    for rel, data in files.items():
+        p = root / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_bytes(data)
+    return root / "index.html"
+
+
+def export_viewer(dest: str | PathLike[str], files: Mapping[str, bytes]) -> Path:
+    """Write the viewer as a self-contained static folder, atomically.
+
+    The folder is built beside ``dest`` and swapped in only when complete
+    (:func:`cdbrdf.fsutil.output_folder`): an error leaves no half-written
+    folder, an earlier export is replaced whole, and a folder cdbrdf did not
+    write (or one with files added since) is refused with
+    :class:`FileExistsError`.
+
+    Returns
+    -------
+    pathlib.Path
+        ``dest/index.html``.
+    """
+    from ..fsutil import output_folder
+
+    with output_folder(dest) as tmp:
+        write_viewer(tmp, files)
+    _LOG.info("wrote the viewer to %s", dest)
+    return Path(dest) / "index.html"

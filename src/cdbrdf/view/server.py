@@ -1,0 +1,142 @@
+"""The local web server of ``cdbrdf view``: the viewer's files from memory, on 127.0.0.1 only.
+
+:class:`ViewerServer` serves the files of :func:`cdbrdf.view.export.viewer_files`
+(GET and HEAD; anything else is 404 or 405), never the file system. A free
+port is chosen unless one is given; a port in use is an
+:class:`~cdbrdf.errors.OptionError` naming it.
+"""
+
+from __future__ import annotations
+
+import errno
+import logging
+import threading
+from collections.abc import Mapping
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from types import TracebackType
+from typing import Any
+from urllib.parse import unquote, urlsplit
+
+from ..errors import OptionError
+
+__all__ = ["HOST", "CONTENT_TYPES", "ViewerServer"]
+
+_LOG = logging.getLogger(__name__)
+
+#: The only address served: this machine.
+HOST = "127.0.0.1"
+
+#: Content types by suffix.
+CONTENT_TYPES: Mapping[str, str] = {
+    ".html": "text/html; charset=utf-8",
+    ".js": "text/javascript; charset=utf-8",
+    ".json": "application/json",
+    ".bin": "application/octet-stream",
+}
+
+
+def _handler(files: Mapping[str, bytes]) -> type[BaseHTTPRequestHandler]:
+    class Handler(BaseHTTPRequestHandler):
+        server_version = "cdbrdf-view"
+
+        def _lookup(self) -> tuple[bytes, str] | None:
+            path = unquote(urlsplit(self.path).path).lstrip("/") or "index.html"
+            data = files.get(path)
+            if data is None:
+                return None
+            suffix = path[path.rfind("."):] if "." in path else ""
+            return data, CONTENT_TYPES.get(suffix, "application/octet-stream")
+
+        def _send(self, body: bool) -> None:
+            found = self._lookup()
+            if found is None:
+                self.send_error(404, "not part of the viewer")
+                return
+            data, ctype = found
+            self.send_response(200)
+            self.send_header("Content-Type", ctype)
+            self.send_header("Content-Length", str(len(data)))
+            self.send_header("Cache-Control", "no-store")
+            self.end_headers()
+            if body:
+                self.wfile.write(data)
+
+        def do_GET(self) -> None:  # noqa: N802 - the http.server API
+            self._send(True)
+
+        def do_HEAD(self) -> None:  # noqa: N802
+            self._send(False)
+
+        def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the http.server API
+            _LOG.debug("%s " + format, self.address_string(), *args)
+
+    return Handler
+
+
+class ViewerServer:
+    """A web server of the viewer's files on :data:`HOST`.
+
+    Parameters
+    ----------
+    files
+        Relative path -> bytes (:func:`cdbrdf.view.export.viewer_files`).
+    port
+        TCP port; 0 (default) picks a free one.
+
+    Raises
+    ------
+    OptionError
+        When the port is in use or cannot be bound (the message names it).
+    """
+
+    def __init__(self, files: Mapping[str, bytes], *, port: int = 0) -> None:
+        if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+            raise OptionError(f"port: expected an integer in [0, 65535], got {port!r}")
+        try:
+            self._httpd = ThreadingHTTPServer((HOST, port), _handler(dict(files)))
+        except OSError as exc:
+            if exc.errno == errno.EADDRINUSE:
+                raise OptionError(f"port {port}: already in use on {HOST}; choose another --port "
+                                  "or leave it out for a free one") from None
+            raise OptionError(f"port {port}: cannot serve on {HOST} ({exc.strerror or exc})") from None
+        self._httpd.daemon_threads = True
+        self._thread: threading.Thread | None = None
+
+    @property
+    def port(self) -> int:
+        """The port served."""
+        return int(self._httpd.server_address[1])
+
+    @property
+    def url(self) -> str:
+        """The viewer's address."""
+        return f"http://{HOST}:{self.port}/"
+
+    def serve_forever(self) -> None:
+        """Serve until :meth:`shutdown` (from another thread) or an interrupt."""
+        self._httpd.serve_forever(poll_interval=0.2)
+
+    def start(self) -> ViewerServer:
+        """Serve from a background thread (tests, scripts); returns self."""
+        self._thread = threading.Thread(target=self.serve_forever, name="cdbrdf-view", daemon=True)
+        self._thread.start()
+        return self
+
+    def shutdown(self) -> None:
+        """Stop serving and close the socket."""
+        if self._thread is not None:
+            self._httpd.shutdown()
+            self._thread.join()
+            self._thread = None
+        self._httpd.server_close()
+
+    def close(self) -> None:
+        """Close the socket (after :meth:`serve_forever` returned)."""
+        self._httpd.server_close()
+
+    def __enter__(self) -> ViewerServer:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.shutdown()
