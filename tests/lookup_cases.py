@@ -542,6 +542,10 @@ def _results(impl: str, table: str, precision: str | None = None) -> dict[str, n
     return out
 
 
+#: (implementation, table) pairs too slow for the default tier.
+_SLOW_PAIRS = frozenset({("scalar_rgb", "fine_azimuth")})
+
+
 def pairs(case: str, *, skip_reference: bool = False, where: Callable[[CDBRDF], bool] | None = None):
     """``(implementation, table)`` parameters of one case: where the implementation applies (and ``where``)."""
     params = []
@@ -551,7 +555,10 @@ def pairs(case: str, *, skip_reference: bool = False, where: Callable[[CDBRDF], 
         for table in TABLE_NAMES:
             t = tables()[table]
             if im.applies(t) and (where is None or where(t)):
-                params.append(pytest.param(name, table, id=f"{name}-{table}"))
+                # the scalar plug-in renders one query per call: on the 720-azimuth table that is
+                # seconds per case, so it runs in the slow tier (every other table runs by default)
+                marks = [pytest.mark.slow] if (name, table) in _SLOW_PAIRS else []
+                params.append(pytest.param(name, table, id=f"{name}-{table}", marks=marks))
     return params
 
 
