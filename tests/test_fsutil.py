@@ -55,6 +55,19 @@ def test_sweep_removes_temporaries_of_dead_runs_only(tmp_path, suffix):
     assert live.exists() and other.exists()
 
 
+def test_atomic_path_sweeps_unless_told_not_to(tmp_path):
+    """sweep=False (many files into a folder just made) leaves the folder unlisted; the default sweeps."""
+    dest = tmp_path / "out.png"
+    stale = _stale_name(dest, "tmp", ".png")
+    stale.write_bytes(b"x")
+    with fsutil.atomic_path(dest, suffix=".png", sweep=False) as tmp:
+        tmp.write_bytes(b"a")
+    assert dest.read_bytes() == b"a" and stale.exists()
+    with fsutil.atomic_path(dest, suffix=".png") as tmp:
+        tmp.write_bytes(b"b")
+    assert dest.read_bytes() == b"b" and not stale.exists()
+
+
 def test_sweep_removes_half_deleted_folders_without_marker(tmp_path):
     dest = tmp_path / "out"
     old = _stale_name(dest, "old")

@@ -222,6 +222,26 @@ def test_other_image_kinds(tmp_path, kind):
     np.testing.assert_allclose(table.values, _expected(mat, g, size=16, field_mm=1.0), rtol=tol)
 
 
+def test_capture_lists_its_folder_a_bounded_number_of_times(tmp_path, monkeypatch):
+    """The photographs go into the folder output_folder made (and swept): none sweeps it again.
+
+    Sweeping per photograph listed the folder once per file, quadratic in the
+    capture's size (the paper's 26,000 photographs took three times as long).
+    """
+    from cdbrdf import fsutil
+
+    calls = []
+    real = fsutil.sweep_stale
+    monkeypatch.setattr(fsutil, "sweep_stale", lambda dest: calls.append(dest) or real(dest))
+    mat = material()
+    g = Grid(kappa=[0.0, 0.22], theta_l=[0.0, 30.0, 60.0], phi_l=[0.0, 180.0], theta_v=[0.0, 30.0, 60.0],
+             phi_v=[0.0, 90.0, 180.0, 270.0])
+    simulate_capture(mat, tmp_path / "cap", grid=g, size=8, field_mm=1.0, noise=NoiseModel(0, 0))
+    n_photos = sum(1 for p in (tmp_path / "cap").rglob("*.png"))
+    assert n_photos >= 2 * 6 * 12
+    assert len(calls) <= 10, f"{len(calls)} sweeps for {n_photos} photographs"
+
+
 def test_plan_png_names_rendered_as_tiff_get_tif_names(tmp_path):
     """A plan's .png names rendered as TIFF/EXR: files and capture.csv carry the format's extension."""
     import csv

@@ -214,18 +214,23 @@ def read_regular(path: str | PathLike[str], *, max_bytes: int) -> bytes:
 
 
 @contextmanager
-def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp") -> Iterator[Path]:
+def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp", sweep: bool = True) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
 
     On any exception the temporary file is removed and ``path`` is untouched.
-    Temporaries of killed runs for the same destination are swept first.
+    Temporaries of killed runs for the same destination are swept first
+    (:func:`sweep_stale`, which lists the folder) unless ``sweep`` is False: a
+    writer of many files into a folder that it has just made with
+    :func:`output_folder` (which sweeps when it makes it) passes False, or
+    writing n files would list the folder n times.
     ``suffix`` is kept for writers that pick the format from the name
     (``.png``, ``.exr``): the temporary is ``.NAME.<pid>...tmp<suffix>``.
     A destination that is a folder or exists and is not a regular file (a
     device, a FIFO, a socket) is refused (:func:`check_output_file`).
     """
     dest = check_output_file(path)
-    sweep_stale(dest)
+    if sweep:
+        sweep_stale(dest)
     tmp_path = temp_sibling(dest, "tmp")
     if suffix and suffix != ".tmp":
         tmp_path = tmp_path.with_name(tmp_path.name + suffix)

@@ -339,7 +339,7 @@ def _png_read(path: Path) -> tuple[NDArray, ImageInfo]:
     return a[..., :keep], info
 
 
-def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6) -> None:
+def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6, sweep: bool = True) -> None:
     """Write a grey or RGB(A) ``uint8``/``uint16`` image as PNG, keeping all bits.
 
     Encoded by libpng (:func:`imagecodecs.png_encode`) and written atomically.
@@ -353,6 +353,10 @@ def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6) ->
         RGB, RGBA), ``uint8`` or ``uint16``.
     level
         zlib compression level, 0 to 9.
+    sweep
+        Sweep temporaries of killed runs beside ``path`` first
+        (:func:`cdbrdf.fsutil.atomic_path`); False for many files written into
+        a folder just made by :func:`cdbrdf.fsutil.output_folder`.
     """
     import imagecodecs
 
@@ -366,7 +370,7 @@ def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6) ->
     if not 0 <= int(level) <= 9:
         raise OptionError(f"level: expected 0 to 9, got {level!r}")
     encoded = imagecodecs.png_encode(np.ascontiguousarray(a), level=int(level))
-    with atomic_path(path, suffix=".png") as tmp:
+    with atomic_path(path, suffix=".png", sweep=sweep) as tmp:
         tmp.write_bytes(encoded)
 
 
@@ -432,7 +436,7 @@ def _tiff_data(path: Path, page: Any, info: ImageInfo,
 
 
 def write_tiff(path: str | PathLike[str], image: ArrayLike, *, compression: str | None = None,
-               tile: tuple[int, int] | None = None) -> None:
+               tile: tuple[int, int] | None = None, sweep: bool = True) -> None:
     """Write an image as TIFF, atomically.
 
     Parameters
@@ -446,12 +450,16 @@ def write_tiff(path: str | PathLike[str], image: ArrayLike, *, compression: str 
         None for uncompressed data.
     tile
         ``(rows, cols)`` of a tiled file; None for strips.
+    sweep
+        Sweep temporaries of killed runs beside ``path`` first
+        (:func:`cdbrdf.fsutil.atomic_path`); False for many files written into
+        a folder just made by :func:`cdbrdf.fsutil.output_folder`.
     """
     import tifffile
 
     a = np.asarray(image)
     photometric = "rgb" if a.ndim == 3 and a.shape[-1] >= 3 else "minisblack"
-    with atomic_path(path, suffix=".tif") as tmp:
+    with atomic_path(path, suffix=".tif", sweep=sweep) as tmp:
         tifffile.imwrite(tmp, a, photometric=photometric, compression=compression, tile=tile)
 
 
@@ -492,7 +500,7 @@ def _exr_read(path: Path) -> tuple[NDArray, ImageInfo]:
     return out, ImageInfo(width, height, len(chans), None, True)
 
 
-def write_exr(path: str | PathLike[str], image: ArrayLike) -> None:
+def write_exr(path: str | PathLike[str], image: ArrayLike, *, sweep: bool = True) -> None:
     """Write a linear grey or RGB image as a float32 OpenEXR file (ZIP compression), atomically.
 
     Parameters
@@ -501,6 +509,10 @@ def write_exr(path: str | PathLike[str], image: ArrayLike) -> None:
         Output file.
     image
         ``(h, w)``, ``(h, w, 1)`` or ``(h, w, 3)`` linear values.
+    sweep
+        Sweep temporaries of killed runs beside ``path`` first
+        (:func:`cdbrdf.fsutil.atomic_path`); False for many files written into
+        a folder just made by :func:`cdbrdf.fsutil.output_folder`.
     """
     import OpenEXR
 
@@ -514,7 +526,7 @@ def write_exr(path: str | PathLike[str], image: ArrayLike) -> None:
     else:
         channels = {"Y": np.ascontiguousarray(a[..., 0])}
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with atomic_path(path, suffix=".exr") as tmp, OpenEXR.File(header, channels) as f:
+    with atomic_path(path, suffix=".exr", sweep=sweep) as tmp, OpenEXR.File(header, channels) as f:
         f.write(str(tmp))
 
 
