@@ -94,7 +94,7 @@ class DemoConfig:
     render_size: tuple[int, int]
     render_spp: int
     keep_capture: bool
-    seconds_per_photo: float = 0.006
+    seconds_per_photo: float = 0.0085  # rendering, noise, writing and measuring one photograph (2 cores)
     seconds_per_render_spp_mpix: float = 0.13
 
     @property
