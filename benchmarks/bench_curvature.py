@@ -30,7 +30,8 @@ import argparse
 import math
 import os
 import sys
-import time
+
+from _timing import best_seconds
 
 TARGET_S_PER_100K = 3.0
 TARGET_LARGE_S = 60.0
@@ -62,15 +63,6 @@ def _scan(n_vertices: int):
     return Mesh(p, f, None, uv)
 
 
-def _best(fn, repeat: int) -> float:
-    fn()
-    best = math.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
-
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -92,11 +84,11 @@ def main(argv=None) -> int:
         n = v.shape[0]
         print(f"{label}: {n:,} vertices, {f.shape[0]:,} faces")
         rep = repair(v, f, uv=uv)
-        t_igl = _best(lambda rep=rep: igl.principal_curvature(rep.vertices, rep.faces, 2, False), repeat)
+        t_igl = best_seconds(lambda rep=rep: igl.principal_curvature(rep.vertices, rep.faces, 2, False), repeat)
         print(f"  libigl principal_curvature (radius 2 edges, repaired surface): {t_igl:7.2f} s "
               f"({t_igl / n * 1e5:.2f} s per 100k vertices)")
         for nb in (5.0, 1.0, 50.0):
-            t = _best(lambda nb=nb, v=v, f=f, uv=uv: surface_curvature(v, f, uv=uv, neighbourhood_mm=nb), repeat)
+            t = best_seconds(lambda nb=nb, v=v, f=f, uv=uv: surface_curvature(v, f, uv=uv, neighbourhood_mm=nb), repeat)
             per = t / n * 1e5
             flag = ""
             if label in ("mesh", "scan") and nb == 5.0 and per > TARGET_S_PER_100K:

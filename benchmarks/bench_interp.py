@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 import tracemalloc
 
 import numpy as np
@@ -23,17 +22,11 @@ from scipy.interpolate import RegularGridInterpolator
 
 import cdbrdf
 
+from _timing import best_seconds
+
 TARGET_RATIO = 50.0
 TARGET_EXTRA_MIB = 64.0
 
-
-def _best(f, repeat: int) -> float:
-    ts = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        f()
-        ts.append(time.perf_counter() - t0)
-    return min(ts)
 
 
 def main(argv=None) -> int:
@@ -63,8 +56,8 @@ def main(argv=None) -> int:
     pts = np.stack([np.clip(k, -0.22, 0.22), pl, np.minimum(tl, 75.0), pv, np.minimum(tv, 75.0)], axis=-1)
 
     table.evaluate(tv[:10], pv[:10], tl[:10], pl[:10], k[:10])  # compile / load cache
-    t_ours = _best(lambda: table.evaluate(tv, pv, tl, pl, k), args.repeat)
-    t_ref = _best(lambda: rgi(pts), max(1, args.repeat // 2))
+    t_ours = best_seconds(lambda: table.evaluate(tv, pv, tl, pl, k), args.repeat, warmup=False)
+    t_ref = best_seconds(lambda: rgi(pts), max(1, args.repeat // 2), warmup=False)
     ours = table.evaluate(tv, pv, tl, pl, k)
     off_pole = (tv >= 15) & (tl >= 15)
     err = float(np.abs(ours - rgi(pts))[off_pole].max())

@@ -31,11 +31,12 @@ import os
 import re
 import sys
 import tempfile
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
+
+from _timing import best_seconds
 
 TARGET_RATIO = 1.25
 
@@ -141,15 +142,6 @@ def token_based_parse(data: bytes, name: str, scan):
     return PlyData(vertex, np.concatenate(faces), None, comments)
 
 
-def _best(fn, repeat: int) -> float:
-    fn()
-    best = math.inf
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
-
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -176,8 +168,8 @@ def main(argv=None) -> int:
         new, old = parse_ply(data, "a.ply"), token_based_parse(data, "a.ply", scan)
         assert np.array_equal(new.faces, old.faces)
         assert all(np.array_equal(new.vertex[k], old.vertex[k]) for k in old.vertex)
-        t_new = _best(lambda: parse_ply(data, "a.ply"), args.repeat)
-        t_old = _best(lambda: token_based_parse(data, "a.ply", scan), args.repeat)
+        t_new = best_seconds(lambda: parse_ply(data, "a.ply"), args.repeat)
+        t_old = best_seconds(lambda: token_based_parse(data, "a.ply", scan), args.repeat)
         ratio = t_new / t_old
         flag = "" if ratio <= TARGET_RATIO else f"  MISSED (target {TARGET_RATIO:g})"
         print("ASCII parse (bytes in memory):")
@@ -194,8 +186,8 @@ def main(argv=None) -> int:
             ours = read_ply(p)
             theirs = load(p)
             assert np.allclose(theirs.vertices, ours.vertices) and np.array_equal(theirs.faces, ours.faces)
-            t_ours = _best(lambda p=p: read_ply(p), args.repeat)
-            t_tri = _best(lambda p=p: load(p), args.repeat)
+            t_ours = best_seconds(lambda p=p: read_ply(p), args.repeat)
+            t_tri = best_seconds(lambda p=p: load(p), args.repeat)
             print(f"  {label:6s}: cdbrdf {t_ours:6.2f} s, trimesh {t_tri:6.2f} s  (trimesh / cdbrdf: "
                   f"{t_tri / t_ours:.2f})")
     print(f"load average at the end: {os.getloadavg()[0]:.1f}")
