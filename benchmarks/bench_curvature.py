@@ -31,7 +31,7 @@ import math
 import os
 import sys
 
-from _timing import best_seconds
+from _common import best_seconds, jittered_triangulation
 
 TARGET_S_PER_100K = 3.0
 TARGET_LARGE_S = 60.0
@@ -47,15 +47,11 @@ def _skirt(n_vertices: int):
 
 def _scan(n_vertices: int):
     import numpy as np
-    from scipy.spatial import Delaunay
 
     from cdbrdf.render.meshio import Mesh
 
-    n = int(round(math.sqrt(n_vertices)))
     rng = np.random.default_rng(0)
-    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n), indexing="ij")
-    uv = np.c_[u.ravel(), v.ravel()] + rng.uniform(-0.3 / n, 0.3 / n, (n * n, 2))
-    f = Delaunay(uv).simplices.astype(np.int64)
+    uv, f = jittered_triangulation(n_vertices, rng)
     r = 1 / 0.22
     a = (uv[:, 0] - 0.5) * math.pi
     p = np.c_[r * np.sin(a), (uv[:, 1] - 0.5) * math.pi * r, r * np.cos(a)]

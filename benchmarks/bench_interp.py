@@ -22,7 +22,7 @@ from scipy.interpolate import RegularGridInterpolator
 
 import cdbrdf
 
-from _timing import best_seconds
+from _common import best_seconds
 
 TARGET_RATIO = 50.0
 TARGET_EXTRA_MIB = 64.0

@@ -36,21 +36,16 @@ from pathlib import Path
 
 import numpy as np
 
-from _timing import best_seconds
+from _common import best_seconds, jittered_triangulation
 
 TARGET_RATIO = 1.25
 
 
 def _mesh(n_vertices: int):
-    from scipy.spatial import Delaunay
-
     from cdbrdf.render.meshio import Mesh
 
-    n = int(round(math.sqrt(n_vertices)))
     rng = np.random.default_rng(0)
-    u, v = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n), indexing="ij")
-    uv = np.c_[u.ravel(), v.ravel()] + rng.uniform(-0.3 / n, 0.3 / n, (n * n, 2))
-    f = Delaunay(uv).simplices.astype(np.int64)
+    uv, f = jittered_triangulation(n_vertices, rng)
     p = np.c_[200 * uv, 5 * np.sin(20 * uv[:, 0])]
     nn = rng.normal(size=p.shape)
     nn /= np.linalg.norm(nn, axis=1, keepdims=True)

@@ -9,31 +9,21 @@ written by the tests from analytic BRDFs, in the formats' published layouts.
 from __future__ import annotations
 
 import functools
-import os
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from cdbrdf.importers import merl, utia
 from cdbrdf.importers.source import Source
 
-ROOT = Path(__file__).resolve().parents[1]
+from .shared_data import shared_file
+
 RGL_FILES = {"matte": "paper_white_rgb.bsdf", "satin": "satin_rosaline_rgb.bsdf", "glossy": "cc_ibiza_sunset_rgb.bsdf"}
-
-
-def shared_data() -> Path:
-    """``../shared/data`` from the repository root (or ``$CDBRDF_SHARED_DATA``)."""
-    env = os.environ.get("CDBRDF_SHARED_DATA")
-    return Path(env) if env else ROOT.parent / "shared" / "data"
 
 
 def rgl_path(kind: str = "matte") -> Path:
     """One of the shared RGL files; skips the test when the shared data are absent."""
-    p = shared_data() / "rgl" / RGL_FILES[kind]
-    if not p.is_file():
-        pytest.skip(f"shared test data absent: {p}")
-    return p
+    return shared_file(f"rgl/{RGL_FILES[kind]}")
 
 
 def need_mitsuba() -> None:

@@ -11,9 +11,10 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay
 
+from .shared_data import shared_file
+
 __all__ = [
     "R_CYL",
-    "SHARED_MESHES",
     "shared_mesh",
     "jittered_uv",
     "cylinder_patch",
@@ -24,37 +25,11 @@ __all__ = [
 
 R_CYL = 1.0 / 0.22  # mm, the paper's largest curvature
 
-#: Real meshes from public repositories (see the data's README), relative to the repository root.
-SHARED_MESHES = Path("..") / "shared" / "data" / "meshes"
-
-
-def _roots() -> list[Path]:
-    """The repository's root, and for a git worktree also the main checkout's."""
-    import subprocess
-
-    root = Path(__file__).resolve().parents[1]
-    roots = [root]
-    try:
-        common = subprocess.run(["git", "rev-parse", "--git-common-dir"], cwd=root, capture_output=True,
-                                text=True, timeout=10).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        common = ""
-    if common:
-        main = (root / common).resolve().parent
-        if main != root:
-            roots.append(main)
-    return roots
 
 
 def shared_mesh(name: str) -> Path:
-    """A mesh of ``../shared/data/meshes`` (from the repository's root); the test is skipped when absent."""
-    import pytest
-
-    for root in _roots():
-        p = (root / SHARED_MESHES / name).resolve()
-        if p.is_file():
-            return p
-    pytest.skip(f"{SHARED_MESHES / name} is absent")
+    """A mesh of ``../shared/data/meshes`` (:mod:`tests.shared_data`); the test is skipped when absent."""
+    return shared_file(f"meshes/{name}")
 
 
 def jittered_uv(nu: int, nv: int, seed: int, jitter: float = 0.4) -> np.ndarray:
