@@ -150,6 +150,9 @@ def test_a_wrong_unit_is_found_and_the_likely_one_named():
     right = surface_curvature(v_m, sk.faces, uv=sk.uv, units="m")
     ok = check_kappa_range(right.kappa, right.areas, (-0.22, 0.22), units=right.units)
     assert ok.outside_share < 0.01 and ok.message is None and ok.likely_units is None
+    # a plain BRDF (one curvature, e.g. an imported file) does not depend on kappa: no warning
+    plain = check_kappa_range(s.kappa, s.areas, (0.0, 0.0), units=s.units, size_units=1.0)
+    assert plain.outside_share > 0.9 and plain.message is None and plain.likely_units is None
 
 
 # -- scan noise, outliers -------------------------------------------------------------

@@ -25,7 +25,7 @@ import cdbrdf
 from cdbrdf import materials
 from cdbrdf.cli import main
 from cdbrdf.errors import LimitError, OptionError
-from cdbrdf.view.asset import WEBGL2_MIN_LIMITS, check_texture, parse_grid, resample, table_asset
+from cdbrdf.view.asset import WEBGL2_MIN_LIMITS, check_texture, parse_grid, resample, table_asset, texture_shape
 from cdbrdf.view.export import export_viewer, viewer_files, write_viewer
 from cdbrdf.view.server import ViewerServer
 
@@ -69,8 +69,11 @@ def test_table_asset_holds_the_lookup_grid():
     lg = t.lookup_grid()
     b = h["blocks"]["lookup"]
     tex = np.frombuffer(a.blob, "<f4", b["bytes"] // 4, b["offset"]).reshape(b["shape"])
-    np.testing.assert_array_equal(tex[..., :3], lg.values)  # the pole rule of interp, not a new one
-    assert h["lookup"]["texture"] == {"width": 72, "height": 72, "layers": 5, "format": "RGBA", "type": "float32"}
+    # each layer: the Fig. 7 image (72 x 72) row-major, folded into rows of 2048 texels, the last padded
+    assert h["lookup"]["texture"] == {"width": 2048, "height": 3, "layers": 5, "columns": 72, "rows": 72,
+                                      "format": "RGBA", "type": "float32"}
+    np.testing.assert_array_equal(unfold(tex, lg.values.shape)[..., :3], lg.values)  # the pole rule of interp, not a new one
+    assert np.all(tex.reshape(5, -1, 4)[:, 72 * 72:] == 0)
     assert h["axes"]["kappa"] == t.kappa.tolist() and h["units"]["kappa"] == "1/mm"
     assert h["symmetry"] == "anisotropic" and h["material"] == "denim" and h["quantity"] == "brdf"
     s = h["blocks"]["samples"]
@@ -87,12 +90,19 @@ def test_isotropic_asset_keeps_its_layout_and_pole_node():
     assert f["dtype"] == "int32" and f["shape"] == list(t.grid.shape)
 
 
+def unfold(tex: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """The lookup texture (layers, height, width, 4) back to (kappa, phi_l, theta_l, phi_v, theta_v, 4)."""
+    n = int(np.prod(shape[1:5]))
+    return tex.reshape(shape[0], -1, 4)[:, :n].reshape(*shape[:5], 4)
+
+
 def test_float16_asset():
     t = materials.load("denim")
     a = table_asset(t, precision="float16")
     b = a.header["blocks"]["lookup"]
     tex = np.frombuffer(a.blob, "<f2", b["bytes"] // 2, b["offset"]).reshape(b["shape"])
-    np.testing.assert_allclose(tex[..., :3], t.lookup_grid().values, rtol=1e-3)
+    lg = t.lookup_grid()
+    np.testing.assert_allclose(unfold(tex, lg.values.shape)[..., :3], lg.values, rtol=1e-3)
     with pytest.raises(OptionError, match="precision: 'half' is not one of auto, float32, float16"):
         table_asset(t, precision="half")
 
@@ -113,12 +123,22 @@ def wide_table() -> cdbrdf.CDBRDF:
     return make_table(g, dtype=np.float32)
 
 
+def many_kappa_table() -> cdbrdf.CDBRDF:
+    """More curvatures than WebGL2 guarantees texture layers (256)."""
+    g = cdbrdf.Grid(kappa=np.linspace(-0.3, 0.3, 257), theta_l=[0.0, 45.0], phi_l=[0.0], theta_v=[0.0, 45.0],
+                    phi_v=[0.0, 180.0])
+    return make_table(g, dtype=np.float32)
+
+
 def test_texture_limit_names_the_limit_and_grid():
     t = wide_table()
-    with pytest.raises(LimitError, match=r"wide: too large .*2160 view directions \(texture width\) > "
-                       r"MAX_TEXTURE_SIZE 2048.*--grid THETA_STEP,PHI_STEP"):
-        check_texture(t, name="wide")
-    check_texture(t, limits={**WEBGL2_MIN_LIMITS, "MAX_TEXTURE_SIZE": 4096})
+    check_texture(t)  # 2,160 view directions: folded into rows of 2048, within the guaranteed size
+    assert texture_shape(t) == (2048, 3, 1)
+    with pytest.raises(LimitError, match=r"wide: too large .*4,320 light x view directions per curvature > "
+                       r"MAX_TEXTURE_SIZE\^2 = 4,096 texels.*--grid THETA_STEP,PHI_STEP"):
+        check_texture(t, name="wide", limits={**WEBGL2_MIN_LIMITS, "MAX_TEXTURE_SIZE": 64})
+    with pytest.raises(LimitError, match=r"257 curvatures \(texture layers\) > MAX_ARRAY_TEXTURE_LAYERS 256"):
+        check_texture(many_kappa_table())
     small = resample(t, **dict(zip(("theta_step_deg", "phi_step_deg", "n_kappa"), parse_grid("15,30"))))
     assert small.shape == (1, 1, 6, 12, 6, 3) or small.grid.phi_v.size == 12
     check_texture(small)
@@ -256,11 +276,11 @@ def test_cli_errors_are_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("cdbrdf view: error: ") and str(bad) in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
-    wide = tmp_path / "wide.h5"
-    wide_table().save(wide)
-    assert main(["view", str(wide), "--export", str(tmp_path / "o")]) == 2
+    deep = tmp_path / "deep.h5"
+    many_kappa_table().save(deep)
+    assert main(["view", str(deep), "--export", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert "MAX_TEXTURE_SIZE 2048" in err and "--grid" in err and err.count("\n") == 1
+    assert "MAX_ARRAY_TEXTURE_LAYERS 256" in err and "--grid" in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
     d = materials.path("denim")
     assert main(["view", str(d), str(d), str(d), "--export", str(tmp_path / "o")]) == 2
@@ -276,7 +296,7 @@ def test_cli_export_with_grid(tmp_path, capsys):
     assert main(["view", str(wide), "--grid", "15,30", "--export", str(tmp_path / "o")]) == 0
     assert "wrote" in capsys.readouterr().out
     h = json.loads((tmp_path / "o" / "assets" / "table-0.json").read_text())
-    assert h["lookup"]["texture"]["width"] == 72 and h["resampled_from"] == "1x1x2x360x6"
+    assert h["lookup"]["texture"]["columns"] == 72 and h["resampled_from"] == "1x1x2x360x6"
 
 
 def test_cli_export_with_a_users_mesh(tmp_path, user_ply, capsys):
@@ -396,6 +416,27 @@ def test_gpu_lookup_matches_evaluate(page, index, name):
     assert ok.all(), (q[~ok.all(1)][:5], gpu[~ok.all(1)][:5], ref[~ok.all(1)][:5])
     one = page.evaluate(f"cdbrdfViewer.evaluate(30, 45, 10, 200, 0.05, {{table: {index}}})")
     assert rel_close(np.array(one), table.evaluate(30, 45, 10, 200, 0.05), 1e-3).all()
+
+
+@pytest.mark.slow  # a page of its own and an import
+@needs_chromium
+def test_gpu_lookup_on_an_imported_rgl_table(browser, tmp_path):
+    """A real measured material (RGL satin) imported at the default grid (isotropic, 8,100 view
+    directions at 2 degrees, folded into the texture): the GPU lookup matches evaluate."""
+    from cdbrdf.importers import import_brdf
+
+    from .import_helpers import need_mitsuba, rgl_path
+
+    need_mitsuba()
+    t = import_brdf(rgl_path("satin"))
+    assert t.isotropic and texture_shape(t)[0] == 2048
+    index = export_viewer(tmp_path / "v", viewer_files([("satin.h5", t)], meshes={}))
+    page, messages = open_page(browser, index.resolve().as_uri())
+    q = random_queries(np.random.default_rng(11), 1000)
+    gpu = np.array(page.evaluate("(q) => cdbrdfViewer.evaluateMany(q)", q.tolist()))
+    page.close()
+    assert messages == []
+    assert rel_close(gpu, t.evaluate(*q.T), 1e-3).all()
 
 
 @pytest.mark.slow  # a page of its own
@@ -577,11 +618,12 @@ def test_page_checks_the_gpus_texture_limits(browser, tmp_path):
     """A texture beyond this GPU's MAX_TEXTURE_SIZE: the page says which limit and offers --grid."""
     files = viewer_files([("denim.h5", materials.load("denim"))], meshes={})
     text = files["data.js"].decode()
-    files["data.js"] = text.replace('"texture":{"width":72', '"texture":{"width":1000000', 1).encode()
+    assert '"texture":{"width":2048' in text
+    files["data.js"] = text.replace('"texture":{"width":2048', '"texture":{"width":1000000', 1).encode()
     index = write_viewer(tmp_path / "v", files)
     page = browser.new_page()
     page.goto(index.resolve().as_uri(), wait_until="load")
     err = page.evaluate("cdbrdfViewer.ready.then(() => 'ok', e => e.message)")
     shown = page.locator("#message").text_content()
     page.close()
-    assert "1000000 view directions > MAX_TEXTURE_SIZE" in err and "--grid" in err and shown == err
+    assert "texture width 1000000 > MAX_TEXTURE_SIZE" in err and "--grid" in err and shown == err

@@ -177,6 +177,10 @@ def check_kappa_range(
     lo, hi = float(min(kappa_range)), float(max(kappa_range))
     tol = 1e-9 * max(1.0, abs(lo), abs(hi))
     share = _outside(k, w, lo, hi, tol)
+    if hi - lo <= tol:
+        # one curvature (a plain BRDF, e.g. an imported file): the table does not depend on kappa,
+        # so clamping changes nothing and there is nothing to warn about or to suggest
+        return KappaRangeCheck(share, (lo, hi), None, None)
     likely = None
     if share > SUGGEST_OUTSIDE_SHARE:
         k_model = k * units.mm_per_unit  # per model unit

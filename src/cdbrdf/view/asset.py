@@ -4,11 +4,14 @@ A table asset holds, in one little-endian blob:
 
 - ``lookup``: the table's :class:`~cdbrdf.interp.LookupGrid` values (the pole
   rule already applied by :func:`cdbrdf.interp.prepare`: elevation node 0 is
-  theta = 0 and holds the ring mean), as an RGBA texture array of
-  ``width = n_phi_v * n_theta_v`` (view direction, elevation inside an
-  azimuth group), ``height = n_phi_l * n_theta_l`` (light direction) and one
-  layer per curvature: the paper's Fig. 7 layout, with the lookup's elevation
-  nodes. float32, or float16 when the float32 texture is larger than
+  theta = 0 and holds the ring mean), as an RGBA texture array with one
+  layer per curvature. Each layer is the paper's Fig. 7 image (rows: light
+  directions, columns: view directions, elevation inside an azimuth group,
+  with the lookup's elevation nodes) read in row-major order and folded into
+  rows of :func:`texture_shape`'s width: texel ``i = row * n_columns +
+  column`` lies at ``(i % width, i // width)``, so a fine isotropic table
+  (8,100 view directions at 2 degrees) fits as well as the paper's grid.
+  float32, or float16 when the float32 texture is larger than
   :data:`FLOAT16_ABOVE_BYTES` (``precision="auto"``);
 - ``samples``: the stored samples (float32, the table's channels) for the
   mosaic read-out;
@@ -109,11 +112,16 @@ class _Blob:
         return b"".join(self.parts)
 
 
-def texture_shape(table: Any) -> tuple[int, int, int]:
-    """``(width, height, layers)`` of a table's lookup texture (pole nodes included)."""
+def texture_shape(table: Any, *, max_width: int = WEBGL2_MIN_LIMITS["MAX_TEXTURE_SIZE"]) -> tuple[int, int, int]:
+    """``(width, height, layers)`` of a table's lookup texture (pole nodes included).
+
+    A layer's ``n_light * n_view`` texels are folded into rows of at most ``max_width``.
+    """
     lg = table.lookup_grid()
     k, pl, tl, pv, tv, _ = lg.shape
-    return pv * tv, pl * tl, k
+    n = pl * tl * pv * tv
+    width = min(n, int(max_width))
+    return width, -(-n // width), k
 
 
 def check_texture(table: Any, *, name: str = "table", limits: Mapping[str, int] = WEBGL2_MIN_LIMITS) -> None:
@@ -124,14 +132,14 @@ def check_texture(table: Any, *, name: str = "table", limits: Mapping[str, int] 
     LimitError
         Naming the limit, the size asked for and ``--grid`` resampling.
     """
-    w, h, layers = texture_shape(table)
     tex = limits["MAX_TEXTURE_SIZE"]
     lay = limits["MAX_ARRAY_TEXTURE_LAYERS"]
+    _, h, layers = texture_shape(table, max_width=tex)
+    lg = table.lookup_grid()
+    n = int(np.prod(lg.shape[1:5]))
     problems = []
-    if w > tex:
-        problems.append(f"{w} view directions (texture width) > MAX_TEXTURE_SIZE {tex}")
     if h > tex:
-        problems.append(f"{h} light directions (texture height) > MAX_TEXTURE_SIZE {tex}")
+        problems.append(f"{n:,} light x view directions per curvature > MAX_TEXTURE_SIZE^2 = {tex * tex:,} texels")
     if layers > lay:
         problems.append(f"{layers} curvatures (texture layers) > MAX_ARRAY_TEXTURE_LAYERS {lay}")
     if problems:
@@ -259,8 +267,13 @@ def table_asset(table: Any, *, name: str = "table", precision: str = "auto") -> 
     rgba[..., 3] = 1.0
     prec = _precision(rgba, precision)
     blob = _Blob()
-    # (kappa, phi_l, theta_l, phi_v, theta_v, 4) is already (layer, row, column, texel) in C order
-    blob.add("lookup", rgba, "float16" if prec == "float16" else "float32")
+    # (kappa, phi_l, theta_l, phi_v, theta_v, 4) in C order is each layer's Fig. 7 image row by row:
+    # folded into rows of the texture's width, the last row padded
+    width, height, _ = texture_shape(table)
+    flat = rgba.reshape(k, -1, 4)
+    folded = np.zeros((k, width * height, 4), dtype=np.float32)
+    folded[:, : flat.shape[1]] = flat
+    blob.add("lookup", folded.reshape(k, height, width, 4), "float16" if prec == "float16" else "float32")
     blob.add("samples", np.asarray(table.values, dtype=np.float32), "float32")
     blob.add("measured", np.asarray(table.measured, dtype=np.uint8), "uint8")
     blob.add("fill_method", np.asarray(table.fill_method, dtype=np.uint8), "uint8")
@@ -295,7 +308,8 @@ def table_asset(table: Any, *, name: str = "table", precision: str = "auto") -> 
             "theta_l_inv_step": lg.theta_l_inv_step,
             "theta_v_inv_step": lg.theta_v_inv_step,
             "snap_tolerance": 1e-6,  # cdbrdf.interp.SNAP_TOLERANCE["float32"]
-            "texture": {"width": pv * tv, "height": pl * tl, "layers": k, "format": "RGBA", "type": prec},
+            "texture": {"width": width, "height": height, "layers": k, "columns": pv * tv, "rows": pl * tl,
+                        "format": "RGBA", "type": prec},
         },
         "fill_methods": {str(c): n for n, c in FILL_METHOD_CODES.items()},
         "exposure_ev": _exposure_ev(vals),

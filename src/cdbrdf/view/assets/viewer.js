@@ -41,7 +41,8 @@
   const LOOKUP_GLSL = `
 precision highp float; precision highp int;
 precision highp sampler2DArray; precision highp sampler2D;
-uniform sampler2DArray uTab;  // RGBA: width n_phi_v*n_theta_v, height n_phi_l*n_theta_l, layers n_kappa
+uniform sampler2DArray uTab;  // RGBA, a layer per kappa: the Fig. 7 image row-major, folded into rows of uTexW
+uniform int uTexW;            // texture width: texel i = row * n_columns + column lies at (i % uTexW, i / uTexW)
 uniform sampler2D uAxes;      // R32F rows: 0 kappa, 1 theta_l, 2 theta_v (lookup nodes)
 uniform ivec3 uN;             // node counts: kappa, theta_l, theta_v
 uniform ivec2 uNphi;          // n_phi_l, n_phi_v
@@ -95,7 +96,7 @@ vec3 lookup(float tv, float pv, float tl, float pl, float k) {
   // pole rule: on elevation node 0 with weight 1 the azimuth must not matter
   if (itl == 0 && wtl == 0.0) { wpl = 0.0; if (uIso == 1) wpv = 0.0; }
   if (itv == 0 && wtv == 0.0) wpv = 0.0;
-  int ntl = uN.y, ntv = uN.z;
+  int ntl = uN.y, ntv = uN.z, ncol = uNphi.y * uN.z;
   vec3 acc = vec3(0.0);
   for (int a = 0; a < 2; a++) {
     float fa = a == 0 ? 1.0 - wk : wk; if (fa == 0.0) continue;
@@ -110,7 +111,8 @@ vec3 lookup(float tv, float pv, float tl, float pl, float k) {
           int ipv = d == 0 ? ipv0 : ipv1;
           for (int e = 0; e < 2; e++) {
             float fe = fd * (e == 0 ? 1.0 - wtv : wtv); if (fe == 0.0) continue;
-            acc += fe * texelFetch(uTab, ivec3(ipv * ntv + itv + e, row, ik + a), 0).rgb;
+            int i = row * ncol + ipv * ntv + itv + e;
+            acc += fe * texelFetch(uTab, ivec3(i % uTexW, i / uTexW, ik + a), 0).rgb;
           }
         }
       }
@@ -303,8 +305,8 @@ void main() {
     const limits = { MAX_TEXTURE_SIZE: gl.getParameter(gl.MAX_TEXTURE_SIZE),
       MAX_ARRAY_TEXTURE_LAYERS: gl.getParameter(gl.MAX_ARRAY_TEXTURE_LAYERS) };
     const over = [];
-    if (tex.width > limits.MAX_TEXTURE_SIZE) over.push(`${tex.width} view directions > MAX_TEXTURE_SIZE ${limits.MAX_TEXTURE_SIZE}`);
-    if (tex.height > limits.MAX_TEXTURE_SIZE) over.push(`${tex.height} light directions > MAX_TEXTURE_SIZE ${limits.MAX_TEXTURE_SIZE}`);
+    if (tex.width > limits.MAX_TEXTURE_SIZE) over.push(`texture width ${tex.width} > MAX_TEXTURE_SIZE ${limits.MAX_TEXTURE_SIZE}`);
+    if (tex.height > limits.MAX_TEXTURE_SIZE) over.push(`texture height ${tex.height} > MAX_TEXTURE_SIZE ${limits.MAX_TEXTURE_SIZE}`);
     if (tex.layers > limits.MAX_ARRAY_TEXTURE_LAYERS) over.push(`${tex.layers} curvatures > MAX_ARRAY_TEXTURE_LAYERS ${limits.MAX_ARRAY_TEXTURE_LAYERS}`);
     if (over.length) throw fail(`${h.name}: too large for this GPU's textures (${over.join('; ')}); resample it with cdbrdf view --grid THETA_STEP,PHI_STEP`);
     const half = tex.type === 'float16';
@@ -328,7 +330,7 @@ void main() {
     const [nk, npl, ntl, npv, ntv] = L.shape;
     return { asset, h, unit: 2 * index, N: [nk, ntl, ntv], Nphi: [npl, npv],
       phi: [L.phi_l0, L.phi_l_step, L.phi_v0, L.phi_v_step], iso: L.isotropic ? 1 : 0,
-      invStep: [0, L.theta_l_inv_step, L.theta_v_inv_step],
+      invStep: [0, L.theta_l_inv_step, L.theta_v_inv_step], texW: tex.width,
       samples: block(asset, 'samples'), measured: block(asset, 'measured'),
       fillMethod: block(asset, 'fill_method'), fillSource: block(asset, 'fill_source') };
   }
@@ -341,6 +343,7 @@ void main() {
     gl.uniform4f(prog.u.uPhi, tab.phi[0], tab.phi[1], tab.phi[2], tab.phi[3]);
     gl.uniform1i(prog.u.uIso, tab.iso);
     gl.uniform3f(prog.u.uInvStep, tab.invStep[0], tab.invStep[1], tab.invStep[2]);
+    gl.uniform1i(prog.u.uTexW, tab.texW);
   }
 
   function gridGeometry(nx, ny) {  // (s, t) in [0, 1]^2 as positions; the vertex shader shapes it
