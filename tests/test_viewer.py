@@ -307,6 +307,48 @@ def test_cli_export_with_a_users_mesh(tmp_path, user_ply, capsys):
     assert '"user":' in (tmp_path / "o" / "data.js").read_text()
 
 
+def _bump_obj(path, *, units_per_mm: float = 1.0) -> None:
+    """The bump of ``user_ply`` as a Y-up OBJ (height along +y, the bump's y along -z), no curvature."""
+    n = 17
+    x = np.linspace(-20.0, 20.0, n)
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    H = 8.0 * np.exp(-(X**2 + Y**2) / 120.0)
+    lines = [f"v {a:.6f} {h:.6f} {-b:.6f}" for a, b, h in
+             zip(X.ravel() * units_per_mm, Y.ravel() * units_per_mm, H.ravel() * units_per_mm, strict=True)]
+    for i in range(n - 1):
+        for j in range(n - 1):
+            a = i * n + j + 1
+            lines += [f"f {a} {a + n} {a + n + 1}", f"f {a} {a + n + 1} {a + 1}"]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _mesh_positions(folder):
+    h = json.loads((folder / "assets" / "mesh-user.json").read_text())
+    b = h["blocks"]["position"]
+    blob = (folder / "assets" / "mesh-user.bin").read_bytes()
+    return h, np.frombuffer(blob, "<f4", b["bytes"] // 4, b["offset"]).reshape(-1, 3)
+
+
+def test_cli_export_turns_a_y_up_obj_upright(tmp_path, capsys):
+    obj = tmp_path / "bump.obj"
+    _bump_obj(obj, units_per_mm=0.1)  # in cm
+    assert main(["view", str(materials.path("denim")), "--mesh", str(obj), "--units", "cm", "--export",
+                 str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert "up axis: y (the object is flat along y)" in err
+    h, pos = _mesh_positions(tmp_path / "o")
+    # z-up and in mm: 40 x 40 mm wide, 8 mm high; the top of the bump is convex (curvature in 1/mm)
+    np.testing.assert_allclose(h["size_mm"], [40.0, 40.0, 8.0 - 8.0 * np.exp(-800 / 120)], rtol=1e-4)
+    top = np.argmax(pos[:, 2])
+    assert abs(pos[top, 0]) < 1e-4 and abs(pos[top, 1]) < 1e-4
+    assert h["curvature_range"][1] > 0.05
+    # --up z keeps the file's axes: the bump then stands along y
+    assert main(["-q", "view", str(materials.path("denim")), "--mesh", str(obj), "--units", "cm", "--up", "z",
+                 "--export", str(tmp_path / "o")]) == 0
+    h, _ = _mesh_positions(tmp_path / "o")
+    np.testing.assert_allclose(h["size_mm"], [40.0, 8.0 - 8.0 * np.exp(-800 / 120), 40.0], rtol=1e-4)
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

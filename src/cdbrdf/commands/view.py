@@ -32,7 +32,10 @@ def _export_dir(text: str) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ..render.meshio import MESH_FORMATS
+    from ..render.scenes import UP_AXES
     from ._args import existing_file, int_range, keyword
+    from .curvature import mesh_options
 
     p = sub.add_parser(
         "view",
@@ -45,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             "same viewer is written as a static folder that opens from disk or any web host. "
             "Ctrl-C stops the server."
         ),
-        epilog="example: cdbrdf view denim.h5 shot.h5 --mesh shirt-curvature.ply",
+        epilog="example: cdbrdf view denim.h5 shot.h5 --mesh shirt.obj --units cm",
     )
     p.add_argument("files", metavar="FILE", nargs="+", type=existing_file(),
                    help="a CDBRDF file (.h5); a second one is shown side by side")
@@ -55,8 +58,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--port", type=int_range(1, 65535), default=0, metavar="N",
                    help="TCP port on 127.0.0.1 (default: a free one)")
     p.add_argument("--no-browser", dest="browser", action="store_false", help="do not open a browser")
-    p.add_argument("--mesh", type=existing_file(".ply"), metavar="PLY",
-                   help="a mesh with per-vertex curvature written by cdbrdf curvature")
+    p.add_argument("--mesh", type=existing_file(*MESH_FORMATS), metavar="MESH",
+                   help=f"your own mesh ({', '.join(MESH_FORMATS)}; repaired, its curvature computed in "
+                   "1/mm from --units unless the file has it, e.g. one written by cdbrdf curvature)")
+    mesh_options(p)
+    p.add_argument("--up", choices=UP_AXES, default="auto",
+                   help="up axis of --mesh (default auto: recorded in the file, else the format's usual one)")
     p.add_argument("--grid", type=_grid, metavar="THETA_STEP,PHI_STEP[,N_KAPPA]",
                    help="resample the tables onto a regular grid first (degrees; e.g. 15,30), for a table "
                    "too large for the GPU's textures")
@@ -75,6 +82,25 @@ def _browser_available() -> bool:
     except webbrowser.Error:
         return False
     return True
+
+
+def _user_mesh(args: argparse.Namespace, table: object) -> object:
+    """``--mesh`` prepared as ``cdbrdf render`` prepares it, in the viewer's z-up frame; reported."""
+    from ..render.meshio import read_mesh
+    from ..render.scenes import prepare_mesh, z_up_mesh
+    from ._progress import ProgressBars
+    from .curvature import LARGE_MESH_FACES, print_mesh_report
+
+    source = read_mesh(args.mesh)
+    big = source.faces.shape[0] >= LARGE_MESH_FACES
+    with ProgressBars(quiet=args.quiet or not big, unit="vtx") as bars:
+        mesh = prepare_mesh(source, units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame,
+                            table=table, progress=bars.callback("curvature"))
+    world, up, why = z_up_mesh(mesh, args.up)
+    if not args.quiet:
+        print_mesh_report(str(args.mesh), mesh)
+        print(f"{args.mesh}: up axis: {up} ({why})", file=sys.stderr)
+    return world
 
 
 def run(args: argparse.Namespace) -> int:
@@ -98,9 +124,7 @@ def run(args: argparse.Namespace) -> int:
         tables.append((Path(f).name, t))
     meshes = {"drape": ("draped cloth", default_meshes()["drape"])}
     if args.mesh:
-        from ..render.scenes import prepare_mesh
-
-        meshes["user"] = (Path(args.mesh).name, prepare_mesh(args.mesh, table=tables[0][1]))
+        meshes["user"] = (Path(args.mesh).name, _user_mesh(args, tables[0][1]))
     files = viewer_files(tables, meshes=meshes, precision=args.precision)
     if args.export:
         index = export_viewer(args.export, files)

@@ -85,6 +85,7 @@ __all__ = [
     "prepare_mesh",
     "detect_up",
     "to_z_up",
+    "z_up_mesh",
     "frame_camera",
     "directional_light",
     "studio_environment",
@@ -389,6 +390,30 @@ def to_z_up(points: NDArray[np.float64], up: str) -> NDArray[np.float64]:
     raise MeshError(f"up: {up!r} is not one of y, z")
 
 
+def _check_up(up: object) -> None:
+    if up not in UP_AXES:
+        raise OptionError(f"up: {up!r:.40} is not one of {', '.join(UP_AXES)}")
+
+
+def z_up_mesh(mesh: Mesh, up: str = "auto") -> tuple[Mesh, str, str]:
+    """A copy of ``mesh`` in the z-up world frame, the up axis it had and why.
+
+    ``up``: ``"auto"`` (:func:`detect_up`), ``"y"`` or ``"z"``. Vertices,
+    normals and tangents are turned (:func:`to_z_up`) and the copy records
+    ``up = "z"``; the returned reason is ``"given"`` for an explicit axis.
+    """
+    _check_up(up)
+    axis, why = detect_up(mesh) if up == "auto" else (up, "given")
+    world = mesh.copy()
+    world.vertices = to_z_up(mesh.vertices, axis)
+    if mesh.normals is not None:
+        world.normals = to_z_up(mesh.normals, axis)
+    if mesh.tangents is not None:
+        world.tangents = to_z_up(mesh.tangents, axis)
+    world.metadata["up"] = "z"
+    return world, axis, why
+
+
 def frame_camera(
     points: NDArray[np.float64], *, width: int, height: int, elevation_deg: float, azimuth_deg: float,
     fov_deg: float, fill: float = FRAME_FILL,
@@ -651,8 +676,7 @@ def mesh_scene(
     """
     if lighting not in LIGHTINGS:
         raise OptionError(f"lighting: {lighting!r} is not one of {', '.join(LIGHTINGS)}")
-    if up not in UP_AXES:
-        raise OptionError(f"up: {up!r} is not one of {', '.join(UP_AXES)}")
+    _check_up(up)
     from ..curvature import MESH_ATTRIBUTES
 
     if curvature_mode not in MESH_ATTRIBUTES:
@@ -661,13 +685,7 @@ def mesh_scene(
         mesh = prepare_mesh(mesh, units=units, table=table if not isinstance(table, (str, PathLike)) else None)
     if mesh.uv is None:
         raise MeshError("mesh: no UV coordinates, so no anisotropy frame (dP/du) for the CDBRDF")
-    axis = detect_up(mesh)[0] if up == "auto" else up
-    world = mesh.copy()
-    world.vertices = to_z_up(mesh.vertices, axis)
-    if mesh.normals is not None:
-        world.normals = to_z_up(mesh.normals, axis)
-    if mesh.tangents is not None:
-        world.tangents = to_z_up(mesh.tangents, axis)
+    world = z_up_mesh(mesh, up)[0]
     lights: list[dict] = []
     if light == "auto":
         if lighting == "paper":
