@@ -349,6 +349,10 @@ def test_cli_export_turns_a_y_up_obj_upright(tmp_path, capsys):
     np.testing.assert_allclose(h["size_mm"], [40.0, 8.0 - 8.0 * np.exp(-800 / 120), 40.0], rtol=1e-4)
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -360,8 +364,10 @@ def test_cli_serves_until_interrupted_and_refuses_a_busy_port(tmp_path):
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
     cmd = [sys.executable, "-m", "cdbrdf.cli", "view", str(materials.path("denim"))]
+    # Ctrl-C as in a terminal: a suite run as a background job has SIGINT ignored, which the child
+    # would inherit (and Python then installs no KeyboardInterrupt handler)
     p = subprocess.Popen(cmd + ["--port", str(_free_port())], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True, env=env)
+                         text=True, env=env, preexec_fn=_default_sigint)
     try:
         line = p.stdout.readline()
         assert "serving denim.h5 at http://127.0.0.1:" in line, line + p.stderr.read()
