@@ -675,3 +675,34 @@ def test_page_checks_the_gpus_texture_limits(browser, tmp_path):
     shown = page.locator("#message").text_content()
     page.close()
     assert "texture width 1000000 > MAX_TEXTURE_SIZE" in err and "--grid" in err and shown == err
+
+
+def test_a_wide_isotropic_mosaic_is_wrapped_and_read_back(browser, tmp_path):
+    """An isotropic table's Fig. 7 image is one light azimuth tall: shown wrapped, each cell once."""
+    g = cdbrdf.Grid(kappa=[0.0], theta_l=np.arange(0.0, 76.0, 15.0), phi_l=[0.0],
+                    theta_v=np.arange(0.0, 76.0, 15.0), phi_v=np.arange(0.0, 360.0, 10.0), symmetry="isotropic")
+    t = make_table(g, seed=5, dtype=np.float32)
+    index = export_viewer(tmp_path / "v", viewer_files([("iso.h5", t)], meshes={}))
+    page, messages = open_page(browser, index.resolve().as_uri())
+    try:
+        lay = page.evaluate("cdbrdfViewer.mosaicLayout()")
+        assert (lay["rows"], lay["cols"]) == (6, 36 * 6) and lay["bands"] > 1
+        assert 0.5 <= lay["width"] / lay["height"] <= 2.0  # not a 216 x 6 strip
+        seen = page.evaluate("""(() => { const L = cdbrdfViewer.mosaicLayout(), out = [];
+            for (let y = 0; y < L.H; y++) for (let x = 0; x < L.W; x++) out.push(cdbrdfViewer.mosaicAt(x, y));
+            return out; })()""")
+        cells = [(s["row"], s["col"]) for s in seen if s is not None]
+        assert sorted(cells) == [(r, c) for r in range(6) for c in range(216)]  # every sample exactly once
+        # hovering a display cell reads the sample it shows
+        x, y = 2 * 6 + 3, lay["H"] - 2  # a cell of the last band
+        want = page.evaluate(f"cdbrdfViewer.mosaicAt({x}, {y})")
+        box = page.locator("#mosaic").bounding_box()
+        page.locator("#mosaic").hover(position={"x": (x + 0.5) * box["width"] / lay["W"],
+                                                "y": (y + 0.5) * box["height"] / lay["H"]})
+        text = page.locator("#readout").text_content()
+        assert text == page.evaluate(f"cdbrdfViewer.mosaicReadout(0, 0, {want['row']}, {want['col']})")
+        itv, ipv = want["col"] % 6, want["col"] // 6
+        assert text.startswith(f"theta_v {g.theta_v[itv]:g}, dphi {g.phi_v[ipv]:g}, theta_l {g.theta_l[want['row']]:g}")
+        assert messages == []
+    finally:
+        page.close()

@@ -617,38 +617,62 @@ void main() {
     x = Math.min(Math.max(x, 0), 1);
     return Math.round(255 * (x <= 0.0031308 ? 12.92 * x : 1.055 * Math.pow(x, 1 / 2.4) - 0.055));
   }
+  // The Fig. 7 image is rows x cols (light x view directions). A table much wider than tall (an
+  // isotropic one has a single light azimuth) is shown wrapped: its view-azimuth groups run in
+  // bands of `per` groups, one band under the other, like lines of text, so the picture stays
+  // roughly square. (x, y) are display cells; (r, c) the Fig. 7 row and column.
   function mosaicGeometry(tab) {
-    const ax = tab.h.axes, cols = ax.phi_v.length * ax.theta_v.length, rows = ax.phi_l.length * ax.theta_l.length;
-    const cell = Math.max(1, Math.floor(432 / Math.max(cols, rows)));
-    return { cols, rows, cell };
+    const ax = tab.h.axes, tv = ax.theta_v.length, pv = ax.phi_v.length;
+    const cols = pv * tv, rows = ax.phi_l.length * ax.theta_l.length;
+    const per = cols > 2 * rows ? Math.min(pv, Math.max(1, Math.round(Math.sqrt(pv * rows / tv)))) : pv;
+    const bands = Math.ceil(pv / per), W = per * tv, H = bands * rows;
+    const cell = Math.max(1, Math.floor(432 / Math.max(W, H)));
+    return { cols, rows, tv, pv, per, bands, W, H, cell };
+  }
+  function toDisplay(g, r, c) {
+    const ipv = Math.floor(c / g.tv), band = Math.floor(ipv / g.per);
+    return { x: (ipv % g.per) * g.tv + (c % g.tv), y: band * g.rows + r };
+  }
+  function fromDisplay(g, x, y) {
+    if (x < 0 || y < 0 || x >= g.W || y >= g.H) return null;
+    const ipv = Math.floor(y / g.rows) * g.per + Math.floor(x / g.tv);
+    if (ipv >= g.pv) return null;
+    return { r: y % g.rows, c: ipv * g.tv + (x % g.tv) };
   }
   function drawMosaic() {
     const tab = tables[state.mosaicTable] || tables[0];
     const ax = tab.h.axes, nc = tab.h.n_channels, g = mosaicGeometry(tab), k = state.mosaicK;
-    mosaicCanvas.width = g.cols * g.cell; mosaicCanvas.height = g.rows * g.cell;
-    const img = mosaicCtx.createImageData(g.cols, g.rows);
+    mosaicCanvas.width = g.W * g.cell; mosaicCanvas.height = g.H * g.cell;
+    const img = mosaicCtx.createImageData(g.W, g.H);
     const f = Math.PI * Math.pow(2, state.exposure), per = g.cols * g.rows;
+    for (let i = 0; i < img.data.length; i += 4) { img.data[i] = img.data[i + 1] = img.data[i + 2] = 40; img.data[i + 3] = 255; }
     for (let r = 0; r < g.rows; r++) for (let c = 0; c < g.cols; c++) {
-      const s = k * per + r * g.cols + c, d = (r * g.cols + c) * 4;
+      const s = k * per + r * g.cols + c, p = toDisplay(g, r, c), d = (p.y * g.W + p.x) * 4;
       for (let ch = 0; ch < 3; ch++) img.data[d + ch] = srgb8(tab.samples[s * nc + (nc === 3 ? ch : 0)] * f);
-      img.data[d + 3] = 255;
     }
     const off = document.createElement('canvas');
-    off.width = g.cols; off.height = g.rows;
+    off.width = g.W; off.height = g.H;
     off.getContext('2d').putImageData(img, 0, 0);
     mosaicCtx.imageSmoothingEnabled = false;
-    mosaicCtx.drawImage(off, 0, 0, g.cols * g.cell, g.rows * g.cell);
+    mosaicCtx.drawImage(off, 0, 0, g.W * g.cell, g.H * g.cell);
     mosaicCtx.strokeStyle = 'rgba(255,160,60,0.9)';
     mosaicCtx.lineWidth = 1;
     for (let r = 0; r < g.rows; r++) for (let c = 0; c < g.cols; c++) {
       if (tab.measured[k * per + r * g.cols + c]) continue;
+      const p = toDisplay(g, r, c);
       mosaicCtx.beginPath();
-      mosaicCtx.moveTo(c * g.cell, (r + 1) * g.cell); mosaicCtx.lineTo((c + 1) * g.cell, r * g.cell);
+      mosaicCtx.moveTo(p.x * g.cell, (p.y + 1) * g.cell); mosaicCtx.lineTo((p.x + 1) * g.cell, p.y * g.cell);
       mosaicCtx.stroke();
     }
+    const line = (x0, y0, x1, y1) => { mosaicCtx.beginPath(); mosaicCtx.moveTo(x0, y0); mosaicCtx.lineTo(x1, y1); mosaicCtx.stroke(); };
     mosaicCtx.strokeStyle = 'rgba(0,0,0,0.6)';  // azimuth groups
-    for (let i = 1; i < ax.phi_v.length; i++) { mosaicCtx.beginPath(); const x = i * ax.theta_v.length * g.cell; mosaicCtx.moveTo(x, 0); mosaicCtx.lineTo(x, g.rows * g.cell); mosaicCtx.stroke(); }
-    for (let i = 1; i < ax.phi_l.length; i++) { mosaicCtx.beginPath(); const y = i * ax.theta_l.length * g.cell; mosaicCtx.moveTo(0, y); mosaicCtx.lineTo(g.cols * g.cell, y); mosaicCtx.stroke(); }
+    for (let i = 1; i < g.per; i++) line(i * g.tv * g.cell, 0, i * g.tv * g.cell, g.H * g.cell);
+    for (let b = 0; b < g.bands; b++) for (let i = 1; i < ax.phi_l.length; i++) {
+      const y = (b * g.rows + i * ax.theta_l.length) * g.cell;
+      line(0, y, g.W * g.cell, y);
+    }
+    mosaicCtx.strokeStyle = 'rgba(255,255,255,0.8)';  // bands of a wrapped mosaic
+    for (let b = 1; b < g.bands; b++) line(0, b * g.rows * g.cell, g.W * g.cell, b * g.rows * g.cell);
     const p = state.pick;
     if (p && p.table === tables.indexOf(tab)) {  // the cell the clicked point reads (nearest sample)
       const near = (axis, x, periodic) => {
@@ -660,8 +684,9 @@ void main() {
       if (tab.h.symmetry === 'isotropic') { pv = ((pv - pl) % 360 + 360) % 360; pl = 0; }
       const c = near(ax.phi_v, pv, true) * ax.theta_v.length + near(ax.theta_v, p.theta_v, false);
       const r = near(ax.phi_l, pl, true) * ax.theta_l.length + near(ax.theta_l, p.theta_l, false);
+      const q = toDisplay(g, r, c);
       mosaicCtx.strokeStyle = '#00ffff'; mosaicCtx.lineWidth = 2;
-      mosaicCtx.strokeRect(c * g.cell - 1, r * g.cell - 1, g.cell + 2, g.cell + 2);
+      mosaicCtx.strokeRect(q.x * g.cell - 1, q.y * g.cell - 1, g.cell + 2, g.cell + 2);
       state.pickCell = { row: r, col: c, kappa_index: k };
     }
   }
@@ -679,9 +704,10 @@ void main() {
   function hoverMosaic(ev) {
     const tab = tables[state.mosaicTable] || tables[0], g = mosaicGeometry(tab);
     const rect = mosaicCanvas.getBoundingClientRect();
-    const c = Math.floor((ev.clientX - rect.left) / rect.width * g.cols), r = Math.floor((ev.clientY - rect.top) / rect.height * g.rows);
-    if (c < 0 || r < 0 || c >= g.cols || r >= g.rows) return;
-    $('readout').textContent = readout(tab, state.mosaicK, r, c);
+    const q = fromDisplay(g, Math.floor((ev.clientX - rect.left) / rect.width * g.W),
+      Math.floor((ev.clientY - rect.top) / rect.height * g.H));
+    if (q === null) return;
+    $('readout').textContent = readout(tab, state.mosaicK, q.r, q.c);
   }
   function readout(tab, k, r, c) {
     const g = mosaicGeometry(tab), nc = tab.h.n_channels, flat = k * g.cols * g.rows + r * g.cols + c;
@@ -818,6 +844,14 @@ void main() {
     setSize: redraw((w, h) => { canvas.width = w; canvas.height = h; }),
     pick: (x, y) => Promise.resolve(pickAt(x, y)),
     mosaicReadout: (table, k, row, col) => readout(tables[table || 0], k, row, col),
+    // the shown mosaic's layout (display cells W x H of `cell` pixels, wrapped in `bands` of `per`
+    // view-azimuth groups) and the Fig. 7 row and column a display cell shows (null: none)
+    mosaicLayout: () => Object.assign(mosaicGeometry(tables[state.mosaicTable] || tables[0]),
+      { width: mosaicCanvas.width, height: mosaicCanvas.height }),
+    mosaicAt: (x, y) => {
+      const q = fromDisplay(mosaicGeometry(tables[state.mosaicTable] || tables[0]), x, y);
+      return q === null ? null : { row: q.r, col: q.c };
+    },
     surfaces: () => Object.keys(surfaces),
     // per-pixel curvature the lookup used (kappa_query, kappa_surface, front, n.l) for the whole canvas
     // (float32 RGBA rows from the bottom, base64)
