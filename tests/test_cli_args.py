@@ -120,6 +120,8 @@ BAD: list[tuple[list[str], list[str], str]] = [
     (SYNTH, ["--kappa", "inf"], "--kappa"),
     (SYNTH, ["--set", "thickness_mm=nan"], "thickness_mm"),
     (["demo", "-o", "{o}/demo", "--material", "velvet"], [], "--material"),
+    (["demo", "-o", "{o}/demo"], ["--wall-height", "-1"], "--wall-height"),
+    (["demo", "-o", "{o}/demo"], ["--face-width", "100"], "must stay below 180"),
 ]
 
 

@@ -13,6 +13,7 @@ import pytest
 
 import cdbrdf
 from cdbrdf.demo import DemoConfig, compare_with_truth, run_demo
+from cdbrdf.errors import OptionError
 from cdbrdf.table import Grid
 
 from .conftest import make_table
@@ -151,6 +152,35 @@ def test_rerun_replaces_old_results(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no partial folders left
 
 
+@pytest.mark.slow
+def test_stands_without_walls_hide_fewer_directions(tmp_path):
+    from cdbrdf.measure.stands import Stand, hidden_mask
+
+    g = Grid(kappa=[-0.22, 0.0, 0.22], theta_l=[0.0, 60.0, 75.0], phi_l=[0.0, 180.0],
+             theta_v=[0.0, 60.0, 75.0], phi_v=[0.0, 180.0])
+    cfg = DemoConfig(name="tiny", grid=g, image_px=24, capture_spp=1, render_size=(48, 32), render_spp=1,
+                     keep_capture=False)
+    stands = [Stand(float(k), wall_height_mm=0.0) for k in g.kappa]
+    r = run_demo(tmp_path / "out", materials=["denim"], config=cfg, stands=stands)
+    res = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert [s["wall_height_mm"] for s in res["stands"]] == [0.0, 0.0, 0.0]
+    filled = [s["filled"] for s in r.materials[0].per_stand]
+    # what the stands hide, with the rig's patch test (2 mm field over the photograph's pixels)
+    hid = hidden_mask(g, stands, pixel_mm=2.0 / cfg.image_px) > 0
+    walled = hidden_mask(g, [Stand(float(k)) for k in g.kappa], pixel_mm=2.0 / cfg.image_px) > 0
+    assert filled == [int(h.sum()) for h in hid] and 0 < filled[0] < int(walled[0].sum())
+    assert "walls 0 mm high" in r.report.read_text()
+
+
+def test_stands_must_cover_every_curvature(tmp_path):
+    from cdbrdf.measure.stands import Stand
+
+    cfg = _tiny_config()
+    with pytest.raises(OptionError, match="no stand is described for kappa = 0.22"):
+        run_demo(tmp_path / "o", materials=["denim"], config=cfg, stands=[Stand(-0.22), Stand(0.0)])
+    assert not (tmp_path / "o").exists()
+
+
 def test_refuses_a_foreign_folder(tmp_path):
     out = tmp_path / "mine"
     out.mkdir()
@@ -221,7 +251,7 @@ def test_work_folder_is_inside_the_partial_output(tmp_path, monkeypatch):
     monkeypatch.setattr(demo, "_curvature_figure", lambda path: None)
     seen = []
 
-    def material(name, folder, work, cfg, progress):
+    def material(name, folder, work, cfg, stands, progress):
         seen.append((folder, work))
         (work / "capture-x").mkdir()
         raise KeyboardInterrupt

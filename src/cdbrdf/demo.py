@@ -36,16 +36,19 @@ import json
 import math
 import shutil
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .colour import auto_exposure_ev, luminance, srgb_to_linear, tonemap_srgb8
 from .table import CDBRDF, PAPER_KAPPA, Grid
+
+if TYPE_CHECKING:
+    from .measure.stands import Stand
 
 __all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth", "WORK_DIR", "COMPARED_FILL",
            "VIEWER_DIR"]
@@ -312,13 +315,13 @@ def _material(
     folder: Path,
     work: Path,
     config: DemoConfig,
+    stands: Sequence[Stand],
     progress: Progress | None,
 ) -> MaterialResult:
     from . import materials
     from .measure import measure
     from .measure.capture import write_plan
     from .measure.fill import refill
-    from .measure.stands import default_stand
     from .plot import plot_mosaic, plot_render_comparison
     from .render.meshes import draped_cloth_mesh
     from .render.scenes import mesh_scene, prepare_mesh, sine_scene
@@ -329,7 +332,6 @@ def _material(
                          photos=config.n_photos)
     capture = (folder if config.keep_capture else work) / f"capture-{name}"
     plan = work / f"plan-{name}"
-    stands = [default_stand(float(k)) for k in config.grid.kappa]
 
     t0 = time.perf_counter()
     write_plan(plan, config.grid, stands)
@@ -413,7 +415,20 @@ def _export_viewer(folder: Path, results: Sequence[MaterialResult], drape: Any) 
     write_viewer(folder / VIEWER_DIR, viewer_files(tables, meshes={"drape": ("draped cloth", drape)}, exposure_ev=ev))
 
 
-def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialResult], seconds: float) -> Path:
+def _stands_text(stands: Sequence[Stand]) -> str:
+    """The stands' geometry in words (the concave ones': face width and wall height)."""
+    from .measure.stands import DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM
+
+    shapes = sorted({(st.face_width_mm, st.wall_height_mm) for st in stands if st.kappa < 0})
+    if not shapes:
+        return "no concave stand"
+    words = "; ".join(f"faces {w:g} mm wide, walls {h:g} mm high" for w, h in shapes)
+    paper = shapes == [(DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM)]
+    return f"concave stands: {words}" + (" (the default, as the paper's)" if paper else "")
+
+
+def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialResult], seconds: float,
+                  stands: Sequence[Stand]) -> Path:
     from .report import Report, provenance_text
 
     g = config.grid
@@ -424,7 +439,8 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
             f"Run <code>{config.name}</code>: {g.phi_v.size * g.theta_v.size} view x "
             f"{g.phi_l.size * g.theta_l.size} light directions x {g.kappa.size} stand curvatures "
             f"({', '.join(f'{k:g}' for k in g.kappa)} mm<sup>-1</sup>), photographs of "
-            f"{config.image_px} x {config.image_px} pixels from a simulated rig; total time "
+            f"{config.image_px} x {config.image_px} pixels from a simulated rig ({_stands_text(stands)}); "
+            "total time "
             f"{seconds / 60:.1f} min."
         ),
     )
@@ -533,6 +549,7 @@ def run_demo(
     quick: bool = False,
     materials: Sequence[str] = ("denim", "shot"),
     config: DemoConfig | None = None,
+    stands: Mapping[float, Stand] | Sequence[Stand] | None = None,
     progress: Progress | None = None,
 ) -> DemoResult:
     """Run the paper end to end and write ``report.html`` into ``output``.
@@ -550,6 +567,11 @@ def run_demo(
         Bundled material names (:func:`cdbrdf.materials.names`).
     config
         Explicit settings (overrides ``quick``).
+    stands
+        The stands' geometry, one per curvature of the grid (any others are
+        ignored); default the paper's (:func:`cdbrdf.measure.stands.default_stand`:
+        6 mm faces, concave troughs with 1 mm walls). ``docs/capture.md``
+        ("Filling") compares designs.
     progress
         ``progress(stage, done, total)`` callback.
     """
@@ -565,6 +587,10 @@ def run_demo(
         raise OptionError(f"materials: {unknown} unknown; valid: {', '.join(mats.names())}")
     if not materials:
         raise OptionError("materials: give at least one")
+    from .measure.stands import default_stand, stand_for
+
+    kappas = [float(k) for k in cfg.grid.kappa]
+    chosen = [default_stand(k) if stands is None else stand_for(stands, k) for k in kappas]
     check_output_folder(output)  # fail now, not after the whole run
     set_variant()  # checks libLLVM before anything long starts
     t0 = time.perf_counter()
@@ -576,7 +602,7 @@ def run_demo(
         work.mkdir()
         drape = _curvature_figure(folder / "surfaces-curvature.png")
         for name in materials:
-            results.append(_material(name, folder, work, cfg, progress))
+            results.append(_material(name, folder, work, cfg, chosen, progress))
         shutil.rmtree(work)
         t1 = time.perf_counter()
         _export_viewer(folder, results, drape)
@@ -586,11 +612,12 @@ def run_demo(
             "config": cfg.name,
             "seconds": seconds,
             "viewer_seconds": viewer_seconds,
+            "stands": [st.to_dict() for st in chosen],
             "materials": [{"name": m.name, "fill_method": m.fill_method, "error": m.error,
                            "per_stand": m.per_stand, "compared_fill": m.compared_fill,
                            "seconds": m.seconds, "figures": m.figures} for m in results],
         }, indent=2) + "\n")
-        _write_report(folder, cfg, results, seconds)
+        _write_report(folder, cfg, results, seconds, chosen)
     final = Path(output)
     for m in results:
         m.measured_path = final / m.measured_path.name

@@ -30,6 +30,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--quick", action="store_true", help="coarse grid and small images: a few minutes")
     p.add_argument("--material", action="append", dest="materials", metavar="NAME", type=_material,
                    help="bundled material to run (repeatable; default: denim and shot)")
+    from .plan import stand_options
+
+    stand_options(p)
     p.set_defaults(func=run)
 
 
@@ -37,9 +40,11 @@ def run(args: argparse.Namespace) -> int:
     from ..demo import CONFIGS, run_demo
     from ..fsutil import check_output_folder
     from ._progress import ProgressBars
+    from .plan import stands_from_args
 
     check_output_folder(args.output)  # refuse at once, before the estimate and the run
     cfg = CONFIGS["quick" if args.quick else "full"]
+    stands = stands_from_args(args, cfg.grid.kappa)
     materials = args.materials or ["denim", "shot"]
     est = cfg.expected_seconds(len(materials))
     if not args.quiet:
@@ -52,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     with ProgressBars(quiet=args.quiet, leave=True, mininterval=0.1) as bars:
-        result = run_demo(args.output, quick=args.quick, materials=materials, progress=bars.update)
+        result = run_demo(args.output, quick=args.quick, materials=materials,
+                          stands=stands, progress=bars.update)
     if not args.quiet:
         for m in result.materials:
             print(f"{m.name}: median error of measured samples "

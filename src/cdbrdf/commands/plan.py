@@ -3,11 +3,38 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-__all__ = ["register", "run", "check_grid_rows"]
+if TYPE_CHECKING:
+    from ..measure.stands import Stand
+
+__all__ = ["register", "run", "check_grid_rows", "stand_options", "stands_from_args"]
+
+
+def stand_options(p: argparse.ArgumentParser) -> None:
+    """``--face-width`` and ``--wall-height``: the stands' geometry (shared with ``cdbrdf demo``)."""
+    from ..measure.stands import DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM
+    from ._args import finite_float
+
+    p.add_argument("--face-width", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
+                   metavar="MM", help=f"fabric face width (arc) of the stands, mm ({DEFAULT_FACE_WIDTH_MM:g})")
+    p.add_argument("--wall-height", type=finite_float(0, 1000, unit="mm"), default=None, metavar="MM",
+                   help="concave stands: wall height above the face's edges, mm "
+                   f"({DEFAULT_WALL_HEIGHT_MM:g}; 0: a trough cut into a flat block, which hides far fewer "
+                   "directions)")
+
+
+def stands_from_args(args: argparse.Namespace, kappa: Iterable[float]) -> list[Stand]:
+    """One :class:`~cdbrdf.measure.stands.Stand` per curvature, from :func:`stand_options`."""
+    from ..measure.stands import DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM, Stand
+
+    w = DEFAULT_FACE_WIDTH_MM if args.face_width is None else args.face_width
+    h = DEFAULT_WALL_HEIGHT_MM if args.wall_height is None else args.wall_height
+    return [Stand(kappa=float(k), face_width_mm=w, wall_height_mm=h) for k in kappa]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,10 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="largest elevation, degrees, below 90 (75)")
     p.add_argument("--phi-step", type=finite_float(0, 360, lo_open=True, unit="deg"), default=30.0,
                    help="azimuth step, degrees, dividing 360 (30)")
-    p.add_argument("--face-width", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
-                   help="fabric face width (arc), mm (6)")
-    p.add_argument("--wall-height", type=finite_float(0, 1000, unit="mm"), default=None,
-                   help="concave stands: wall height above the face's edges, mm (1)")
+    stand_options(p)
     p.add_argument("--pixel-mm", type=finite_float(0, 1000, unit="mm"), default=0.0,
                    help="size of a camera pixel at the stand, mm: hidden marks then cover the "
                    "whole patch, not only its centre (default 0: centre only)")
@@ -74,7 +98,7 @@ def check_grid_rows(grid, *, white: bool = True, brackets: int = 1) -> None:  # 
 def run(args: argparse.Namespace) -> int:
     from ..fsutil import check_output_file
     from ..measure.capture import CAPTURE_FILE, STAND_FILE, write_plan
-    from ..measure.stands import DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM, Stand, hidden_mask
+    from ..measure.stands import hidden_mask
     from ..table import PAPER_KAPPA, Grid
 
     out = Path(args.output)
@@ -87,12 +111,7 @@ def run(args: argparse.Namespace) -> int:
     grid = Grid.regular(theta_step_deg=args.theta_step, phi_step_deg=args.phi_step,
                         theta_max_deg=args.theta_max, kappa=kappa)
     check_grid_rows(grid, white=not args.no_white)
-    stands = [
-        Stand(kappa=float(k),
-              face_width_mm=DEFAULT_FACE_WIDTH_MM if args.face_width is None else args.face_width,
-              wall_height_mm=DEFAULT_WALL_HEIGHT_MM if args.wall_height is None else args.wall_height)
-        for k in grid.kappa
-    ]
+    stands = stands_from_args(args, grid.kappa)
     rows = write_plan(out, grid, stands, extension=args.format, white=not args.no_white,
                       pixel_mm=args.pixel_mm, patch_px=args.patch)
     hid = hidden_mask(grid, stands, pixel_mm=args.pixel_mm, patch_px=args.patch)
