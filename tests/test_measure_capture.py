@@ -18,7 +18,7 @@ from cdbrdf.measure.capture import (
     row_kind,
     write_plan,
 )
-from cdbrdf.measure.stands import Stand, read_stands
+from cdbrdf.measure.stands import Stand, hidden_mask, read_stands
 
 from .measure_helpers import (
     SMALL,
@@ -191,6 +191,17 @@ def test_cli_plan(tmp_path, capsys):
     assert "kappa -0.22 1/mm" in text and (out / "plan.png").stat().st_size > 0
     assert main(["plan", "-o", str(out)]) == 2  # exists
     assert "already exists" in capsys.readouterr().err
+
+
+def test_cli_plan_says_what_stands_without_walls_would_hide(tmp_path, capsys):
+    grid = Grid.paper()
+    bare = hidden_mask(grid, [Stand(float(k), wall_height_mm=0.0) for k in grid.kappa])
+    assert main(["plan", "-o", str(tmp_path / "a"), "--no-picture"]) == 0
+    line = capsys.readouterr().out.splitlines()[-1]
+    assert line == (f"  without walls (--wall-height 0) the concave stands would hide {int((bare[0] > 0).sum())} "
+                    f"at -0.22, {int((bare[1] > 0).sum())} at -0.13")
+    assert main(["plan", "-o", str(tmp_path / "b"), "--no-picture", "--wall-height", "0"]) == 0
+    assert "without walls" not in capsys.readouterr().out
 
 
 # --------------------------------------------------------------------------- brackets and re-written plans

@@ -127,4 +127,12 @@ def run(args: argparse.Namespace) -> int:
             h = hid[i]
             print(f"  kappa {k:+g} 1/mm: {int((h > 0).sum())} of {h.size} hidden "
                   f"(view {int((h & 1).astype(bool).sum())}, light {int((h & 2).astype(bool).sum())})")
+        walled = [i for i, st in enumerate(stands) if st.kappa < 0 and st.wall_height_mm > 0 and hid[i].any()]
+        if walled:  # the walls hide most of it (docs/capture.md, "Filling": the fill's error grows with it)
+            from dataclasses import replace
+
+            bare = [replace(st, wall_height_mm=0.0) for st in stands]
+            hid0 = hidden_mask(grid, bare, pixel_mm=args.pixel_mm, patch_px=args.patch)
+            counts = ", ".join(f"{int((hid0[i] > 0).sum())} at {grid.kappa[i]:+g}" for i in walled)
+            print(f"  without walls (--wall-height 0) the concave stands would hide {counts}")
     return 0
