@@ -165,9 +165,9 @@ def test_stands_without_walls_hide_fewer_directions(tmp_path):
     res = json.loads((tmp_path / "out" / "results.json").read_text())
     assert [s["wall_height_mm"] for s in res["stands"]] == [0.0, 0.0, 0.0]
     filled = [s["filled"] for s in r.materials[0].per_stand]
-    # what the stands hide, with the rig's patch test (2 mm field over the photograph's pixels)
-    hid = hidden_mask(g, stands, pixel_mm=2.0 / cfg.image_px) > 0
-    walled = hidden_mask(g, [Stand(float(k)) for k in g.kappa], pixel_mm=2.0 / cfg.image_px) > 0
+    # what the stands hide, with the rig's patch test (the field over the photograph's pixels)
+    hid = hidden_mask(g, stands, pixel_mm=cfg.field_mm / cfg.image_px) > 0
+    walled = hidden_mask(g, [Stand(float(k)) for k in g.kappa], pixel_mm=cfg.field_mm / cfg.image_px) > 0
     assert filled == [int(h.sum()) for h in hid] and 0 < filled[0] < int(walled[0].sum())
     assert "walls 0 mm high" in r.report.read_text()
 
@@ -251,7 +251,7 @@ def test_work_folder_is_inside_the_partial_output(tmp_path, monkeypatch):
     monkeypatch.setattr(demo, "_curvature_figure", lambda path: None)
     seen = []
 
-    def material(name, folder, work, cfg, stands, progress):
+    def material(name, folder, work, cfg, stands, progress, discard):
         seen.append((folder, work))
         (work / "capture-x").mkdir()
         raise KeyboardInterrupt

@@ -192,8 +192,8 @@ def _missing_key(f):
 def _wrong_shape(f):
     with np.load(f) as z:
         d = dict(z)
-    k = next(k for k in d if k.startswith("v"))
-    d[k] = d[k][:2]
+    k = next(k for k in d if k.startswith("patches_c"))
+    d[k] = d[k][:, :2]
     np.savez(f, **d)
 
 

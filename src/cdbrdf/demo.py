@@ -37,6 +37,7 @@ import math
 import shutil
 import time
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -86,6 +87,10 @@ class DemoConfig:
         Samples per pixel of the comparison renders.
     keep_capture
         Keep the photographs in the output folder (else they are deleted).
+    field_mm
+        Width of the photographs' field at the stand, mm (the pixel size is
+        ``field_mm / image_px``; the 7 x 7 patch the measurement averages is
+        7 pixels of that size).
     seconds_per_photo, seconds_per_render_spp_mpix
         Rough costs on a 2-core machine, for the time estimate printed up front.
     """
@@ -97,8 +102,9 @@ class DemoConfig:
     render_size: tuple[int, int]
     render_spp: int
     keep_capture: bool
-    seconds_per_photo: float = 0.0085  # rendering, noise, writing and measuring one photograph (2 cores)
-    seconds_per_render_spp_mpix: float = 0.13
+    field_mm: float = 1.0
+    seconds_per_photo: float = 0.002  # rendering, noise, writing and measuring one photograph (2 cores)
+    seconds_per_render_spp_mpix: float = 0.25
 
     @property
     def n_photos(self) -> int:
@@ -125,7 +131,7 @@ CONFIGS: dict[str, DemoConfig] = {
             theta_v=np.array([0.0, 30.0, 60.0, 75.0]),
             phi_v=np.array([0.0, 90.0, 180.0, 270.0]),
         ),
-        image_px=64,
+        image_px=32,
         capture_spp=4,
         render_size=(384, 256),
         render_spp=16,
@@ -134,7 +140,7 @@ CONFIGS: dict[str, DemoConfig] = {
     "full": DemoConfig(
         name="full",
         grid=Grid.paper(),
-        image_px=64,
+        image_px=32,
         capture_spp=4,
         render_size=(768, 512),
         render_spp=64,
@@ -163,13 +169,21 @@ class MaterialResult:
 
 @dataclass
 class DemoResult:
-    """The demo's output folder, report and per-material results."""
+    """The demo's output folder, report and per-material results.
+
+    ``timings_s``: seconds per stage, summed over the materials
+    (``photographs``, ``measuring``, ``figures``, ``render_sine``,
+    ``render_drape``), plus ``surfaces_figure``, ``cleanup`` (waiting for
+    the photographs' deletion, which runs beside the renders), ``viewer``
+    and ``total``; written to ``results.json`` under the same name.
+    """
 
     folder: Path
     report: Path
     config: DemoConfig
     materials: list[MaterialResult]
     seconds: float
+    timings_s: dict[str, float] = field(default_factory=dict)
 
 
 def compare_with_truth(measured: CDBRDF, truth: CDBRDF) -> tuple[dict[str, float], list[dict[str, Any]]]:
@@ -317,7 +331,9 @@ def _material(
     config: DemoConfig,
     stands: Sequence[Stand],
     progress: Progress | None,
+    discard: Callable[[Path], object],
 ) -> MaterialResult:
+    """Photograph, measure, draw and render one material; ``discard(folder)`` deletes a folder in the background."""
     from . import materials
     from .measure import measure
     from .measure.capture import write_plan
@@ -335,7 +351,7 @@ def _material(
 
     t0 = time.perf_counter()
     write_plan(plan, config.grid, stands)
-    simulate_capture(truth, capture, plan=plan / "capture.csv", size=config.image_px,
+    simulate_capture(truth, capture, plan=plan / "capture.csv", size=config.image_px, field_mm=config.field_mm,
                      spp=config.capture_spp, seed=1, progress=_stage(progress, f"{name}: photographs"))
     res.seconds["photographs"] = time.perf_counter() - t0
 
@@ -360,6 +376,8 @@ def _material(
     fig.savefig(folder / f"{name}-mosaic-truth.png")
     res.figures["mosaic_truth"] = f"{name}-mosaic-truth.png"
     res.seconds["figures"] = time.perf_counter() - t0
+    if not config.keep_capture:
+        discard(capture)  # 26,000 files: deleted while the renders run
 
     size = config.render_size
     common: dict[str, Any] = dict(size=size, spp=config.render_spp, light=(45.0, 0.0, math.pi))
@@ -439,7 +457,8 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
             f"Run <code>{config.name}</code>: {g.phi_v.size * g.theta_v.size} view x "
             f"{g.phi_l.size * g.theta_l.size} light directions x {g.kappa.size} stand curvatures "
             f"({', '.join(f'{k:g}' for k in g.kappa)} mm<sup>-1</sup>), photographs of "
-            f"{config.image_px} x {config.image_px} pixels from a simulated rig ({_stands_text(stands)}); "
+            f"{config.image_px} x {config.image_px} pixels ({config.field_mm:g} mm wide at the stand) from a "
+            f"simulated rig ({_stands_text(stands)}); "
             "total time "
             f"{seconds / 60:.1f} min."
         ),
@@ -595,23 +614,37 @@ def run_demo(
     set_variant()  # checks libLLVM before anything long starts
     t0 = time.perf_counter()
     results = []
+    timings: dict[str, float] = {}
     with output_folder(output) as folder:
         # intermediate files live inside the partial folder, so that a killed run's
         # leftovers are swept with it by the next run (cdbrdf.fsutil.sweep_stale)
         work = folder / WORK_DIR
         work.mkdir()
+        t = time.perf_counter()
         drape = _curvature_figure(folder / "surfaces-curvature.png")
-        for name in materials:
-            results.append(_material(name, folder, work, cfg, chosen, progress))
+        timings["surfaces_figure"] = time.perf_counter() - t
+        deletions: list[Future] = []
+        with ThreadPoolExecutor(max_workers=1) as deleter:  # left only once every deletion is done
+            for name in materials:
+                results.append(_material(name, folder, work, cfg, chosen, progress,
+                                         lambda p: deletions.append(deleter.submit(shutil.rmtree, p))))
+            t = time.perf_counter()
+        for d in deletions:
+            d.result()  # a deletion's error, if any
+        timings["cleanup"] = time.perf_counter() - t  # waiting for the deletions still running
+        for m in results:
+            for stage, sec in m.seconds.items():
+                timings[stage] = timings.get(stage, 0.0) + sec
+        t = time.perf_counter()
         shutil.rmtree(work)
-        t1 = time.perf_counter()
         _export_viewer(folder, results, drape)
-        viewer_seconds = time.perf_counter() - t1
+        timings["viewer"] = time.perf_counter() - t
         seconds = time.perf_counter() - t0
+        timings["total"] = seconds
         (folder / "results.json").write_text(json.dumps({
             "config": cfg.name,
             "seconds": seconds,
-            "viewer_seconds": viewer_seconds,
+            "timings_s": timings,
             "stands": [st.to_dict() for st in chosen],
             "materials": [{"name": m.name, "fill_method": m.fill_method, "error": m.error,
                            "per_stand": m.per_stand, "compared_fill": m.compared_fill,
@@ -622,4 +655,4 @@ def run_demo(
     for m in results:
         m.measured_path = final / m.measured_path.name
     return DemoResult(folder=final, report=final / "report.html", config=cfg, materials=results,
-                      seconds=seconds)
+                      seconds=seconds, timings_s=timings)

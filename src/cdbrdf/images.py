@@ -48,6 +48,7 @@ import sys
 import threading
 import zlib
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
@@ -339,7 +340,19 @@ def _png_read(path: Path) -> tuple[NDArray, ImageInfo]:
     return a[..., :keep], info
 
 
-def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6, sweep: bool = True) -> None:
+@contextmanager
+def _destination(path: str | PathLike[str], suffix: str, atomic: bool) -> Iterator[Path]:
+    """The path a writer writes to: a temporary renamed onto ``path`` (``atomic``), or ``path`` made new."""
+    if atomic:
+        with atomic_path(path, suffix=suffix) as tmp:
+            yield tmp
+    else:
+        with open(path, "xb"):  # a new file: nothing is ever replaced
+            pass
+        yield Path(path)
+
+
+def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6, atomic: bool = True) -> None:
     """Write a grey or RGB(A) ``uint8``/``uint16`` image as PNG, keeping all bits.
 
     Encoded by libpng (:func:`imagecodecs.png_encode`) and written atomically.
@@ -353,10 +366,13 @@ def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6, sw
         RGB, RGBA), ``uint8`` or ``uint16``.
     level
         zlib compression level, 0 to 9.
-    sweep
-        Sweep temporaries of killed runs beside ``path`` first
-        (:func:`cdbrdf.fsutil.atomic_path`); False for many files written into
-        a folder just made by :func:`cdbrdf.fsutil.output_folder`.
+    atomic
+        Write a temporary beside ``path`` and rename it
+        (:func:`cdbrdf.fsutil.atomic_path`). False only for the many files
+        written into a partial folder of :func:`cdbrdf.fsutil.output_folder`,
+        which is published whole once complete: written in place, without
+        a temporary, a sweep of the folder or an fsync each (an existing file
+        is refused: ``FileExistsError``).
     """
     import imagecodecs
 
@@ -370,8 +386,12 @@ def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6, sw
     if not 0 <= int(level) <= 9:
         raise OptionError(f"level: expected 0 to 9, got {level!r}")
     encoded = imagecodecs.png_encode(np.ascontiguousarray(a), level=int(level))
-    with atomic_path(path, suffix=".png", sweep=sweep) as tmp:
-        tmp.write_bytes(encoded)
+    if atomic:
+        with atomic_path(path, suffix=".png") as tmp:
+            tmp.write_bytes(encoded)
+    else:
+        with open(path, "xb") as fh:  # a new file: nothing is ever replaced
+            fh.write(encoded)
 
 
 # --------------------------------------------------------------------------- TIFF
@@ -436,7 +456,7 @@ def _tiff_data(path: Path, page: Any, info: ImageInfo,
 
 
 def write_tiff(path: str | PathLike[str], image: ArrayLike, *, compression: str | None = None,
-               tile: tuple[int, int] | None = None, sweep: bool = True) -> None:
+               tile: tuple[int, int] | None = None, atomic: bool = True) -> None:
     """Write an image as TIFF, atomically.
 
     Parameters
@@ -450,16 +470,19 @@ def write_tiff(path: str | PathLike[str], image: ArrayLike, *, compression: str 
         None for uncompressed data.
     tile
         ``(rows, cols)`` of a tiled file; None for strips.
-    sweep
-        Sweep temporaries of killed runs beside ``path`` first
-        (:func:`cdbrdf.fsutil.atomic_path`); False for many files written into
-        a folder just made by :func:`cdbrdf.fsutil.output_folder`.
+    atomic
+        Write a temporary beside ``path`` and rename it
+        (:func:`cdbrdf.fsutil.atomic_path`). False only for the many files
+        written into a partial folder of :func:`cdbrdf.fsutil.output_folder`,
+        which is published whole once complete: written in place, without
+        a temporary, a sweep of the folder or an fsync each (an existing file
+        is refused: ``FileExistsError``).
     """
     import tifffile
 
     a = np.asarray(image)
     photometric = "rgb" if a.ndim == 3 and a.shape[-1] >= 3 else "minisblack"
-    with atomic_path(path, suffix=".tif", sweep=sweep) as tmp:
+    with _destination(path, ".tif", atomic) as tmp:
         tifffile.imwrite(tmp, a, photometric=photometric, compression=compression, tile=tile)
 
 
@@ -500,7 +523,7 @@ def _exr_read(path: Path) -> tuple[NDArray, ImageInfo]:
     return out, ImageInfo(width, height, len(chans), None, True)
 
 
-def write_exr(path: str | PathLike[str], image: ArrayLike, *, sweep: bool = True) -> None:
+def write_exr(path: str | PathLike[str], image: ArrayLike, *, atomic: bool = True) -> None:
     """Write a linear grey or RGB image as a float32 OpenEXR file (ZIP compression), atomically.
 
     Parameters
@@ -509,10 +532,13 @@ def write_exr(path: str | PathLike[str], image: ArrayLike, *, sweep: bool = True
         Output file.
     image
         ``(h, w)``, ``(h, w, 1)`` or ``(h, w, 3)`` linear values.
-    sweep
-        Sweep temporaries of killed runs beside ``path`` first
-        (:func:`cdbrdf.fsutil.atomic_path`); False for many files written into
-        a folder just made by :func:`cdbrdf.fsutil.output_folder`.
+    atomic
+        Write a temporary beside ``path`` and rename it
+        (:func:`cdbrdf.fsutil.atomic_path`). False only for the many files
+        written into a partial folder of :func:`cdbrdf.fsutil.output_folder`,
+        which is published whole once complete: written in place, without
+        a temporary, a sweep of the folder or an fsync each (an existing file
+        is refused: ``FileExistsError``).
     """
     import OpenEXR
 
@@ -526,7 +552,7 @@ def write_exr(path: str | PathLike[str], image: ArrayLike, *, sweep: bool = True
     else:
         channels = {"Y": np.ascontiguousarray(a[..., 0])}
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with atomic_path(path, suffix=".exr", sweep=sweep) as tmp, OpenEXR.File(header, channels) as f:
+    with _destination(path, ".exr", atomic) as tmp, OpenEXR.File(header, channels) as f:
         f.write(str(tmp))
 
 

@@ -64,6 +64,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"{m.name}: median error of measured samples "
                   f"{100 * m.error['median_rel_error_measured']:.2f} %, "
                   f"{sum(s['filled'] for s in m.per_stand)} samples filled", file=sys.stderr)
-        print(f"done in {result.seconds / 60:.1f} min", file=sys.stderr)
+        stages = ", ".join(f"{k.replace('_', ' ')} {v:.0f} s" for k, v in result.timings_s.items() if k != "total")
+        print(f"done in {result.seconds / 60:.1f} min ({stages})", file=sys.stderr)
     print(f"report: {result.report.resolve()}")
     return 0

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from ..errors import CaptureError, TableError
 from ..frames import direction_from_angles
 from ..table import CDBRDF
-from .capture import Capture
+from .capture import Capture, CaptureRow
 from .fill import DEFAULT_FILL, angle_between_deg, check_fill_method, fill, fill_provenance
 from .patch import merge_exposures, patch_statistics
 from .stands import KAPPA_TOL_PER_MM
@@ -78,10 +78,39 @@ class MeasureReport:
         return "\n".join(lines)
 
 
-def _dirs_distance(tv1, pv1, tl1, pl1, tv2, pv2, tl2, pl2) -> NDArray[np.float64]:  # noqa: ANN001
-    """angle(view) + angle(light) in degrees (the fill distance)."""
-    return angle_between_deg(direction_from_angles(tv1, pv1), direction_from_angles(tv2, pv2)) + \
-        angle_between_deg(direction_from_angles(tl1, pl1), direction_from_angles(tl2, pl2))
+def _nearest_white(cap: Capture, samples: list[CaptureRow], whites: list[tuple[CaptureRow, NDArray]]
+                   ) -> NDArray[np.intp]:
+    """For each sample row, the index into ``whites`` of the white reference that calibrates it.
+
+    The nearest in ``angle(view) + angle(light)`` (degrees; ties within 1e-9
+    to the first) among the references without a curvature or of the
+    sample's curvature.
+
+    Raises
+    ------
+    CaptureError
+        When no white reference applies to a sample's curvature.
+    """
+    w_rows = [r for r, _ in whites]
+    w_view = direction_from_angles(np.array([r.theta_v for r in w_rows]), np.array([r.phi_v for r in w_rows]))
+    w_light = direction_from_angles(np.array([r.theta_l for r in w_rows]), np.array([r.phi_l for r in w_rows]))
+    w_any = np.array([math.isnan(r.kappa) for r in w_rows])
+    w_kappa = np.array([0.0 if math.isnan(r.kappa) else r.kappa for r in w_rows])
+    out = np.empty(len(samples), dtype=np.intp)
+    for start in range(0, len(samples), 4096):  # (samples x whites) distances a block at a time
+        block = samples[start:start + 4096]
+        view = direction_from_angles(np.array([r.theta_v for r in block]), np.array([r.phi_v for r in block]))
+        light = direction_from_angles(np.array([r.theta_l for r in block]), np.array([r.phi_l for r in block]))
+        d = (angle_between_deg(view[:, None, :], w_view[None, :, :])
+             + angle_between_deg(light[:, None, :], w_light[None, :, :]))
+        kappa = np.array([r.kappa for r in block])
+        applies = w_any[None, :] | (np.abs(w_kappa[None, :] - kappa[:, None]) <= KAPPA_TOL_PER_MM)
+        d = np.where(applies, d, np.inf)
+        none = ~np.isfinite(d).any(axis=1)
+        if none.any():
+            raise CaptureError(f"{cap.folder}: no white reference applies to kappa {kappa[np.argmax(none)]:g}")
+        out[start:start + len(block)] = np.argmax(d <= d.min(axis=1, keepdims=True) + 1e-9, axis=1)
+    return out
 
 
 def merged(cap: Capture, idx: list[int], results: dict, darks: dict[float, NDArray] | None
@@ -194,9 +223,6 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
         whites.append((r, w))
         rep.n_white += len(ok)
     if whites:
-        w_k = np.array([-1e300 if math.isnan(r.kappa) else r.kappa for r, _ in whites])
-        w_dirs = np.array([(r.theta_v, r.phi_v, r.theta_l, r.phi_l) for r, _ in whites])
-        w_vals = np.array([w for _, w in whites])
         rep.quantity = "brdf"
 
     values = np.full(grid.shape + (nc,), np.nan)
@@ -206,6 +232,7 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
     skipped = np.zeros(grid.shape, dtype=bool)
     saturated = np.zeros(grid.shape, dtype=bool)
     n_used = 0
+    good_rows: list[tuple[Any, NDArray, NDArray, CaptureRow]] = []  # (sample index, mean, std, first row)
     for idx in cap.brackets("sample").values():
         sidx = cap.sample_index[idx[0]]
         photographed[sidx] = True
@@ -220,20 +247,15 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
         if not good:
             saturated[sidx] = True
             continue
-        r = rows[idx[0]]
-        c = math.cos(math.radians(r.theta_l))
-        scale = np.full(nc, 1.0 / c)
-        if whites:
-            d = _dirs_distance(r.theta_v, r.phi_v, r.theta_l, r.phi_l,
-                               w_dirs[:, 0], w_dirs[:, 1], w_dirs[:, 2], w_dirs[:, 3])
-            d = np.where((w_k == -1e300) | (np.abs(w_k - r.kappa) <= KAPPA_TOL_PER_MM), d, np.inf)
-            if not np.isfinite(d).any():
-                raise CaptureError(f"{cap.folder}: no white reference applies to kappa {r.kappa:g}")
-            j = int(np.flatnonzero(d <= d.min() + 1e-9)[0])
-            scale = scale / w_vals[j] * (albedo / math.pi)
-        values[sidx] = mean * scale
-        std[sidx] = sd * scale
-        valid[sidx] = True
+        good_rows.append((sidx, mean, sd, rows[idx[0]]))
+    white_of = _nearest_white(cap, [r for *_, r in good_rows], whites) if whites else None
+    for n, (at, mean, sd, r) in enumerate(good_rows):
+        scale = np.full(nc, 1.0 / math.cos(math.radians(r.theta_l)))
+        if white_of is not None:
+            scale = scale / whites[white_of[n]][1] * (albedo / math.pi)
+        values[at] = mean * scale
+        std[at] = sd * scale
+        valid[at] = True
 
     rep.n_samples = int(np.prod(grid.shape))
     rep.n_measured = int(valid.sum())

@@ -1,9 +1,11 @@
 """The rig's Mitsuba 3 scenes: a stand with the fabric on it, or the white reference plate.
 
-One scene per stand is loaded once; the camera and light are then moved
-through :func:`mitsuba.traverse` between renders (``sensor.to_world``,
-``light.to_world``; :mod:`cdbrdf.rig.camera`), so the traced kernels are
-reused. The ``direct`` integrator traces shadow rays, so on a concave stand
+A scene holds one stand (or the white plate) and a row of orthographic
+cameras (:func:`~cdbrdf.rig.camera.camera_row`), one per view direction of
+the photographs it makes, side by side on one film: one ``mi.render``
+photographs the stand from every view under one light. The light is then moved through
+:func:`mitsuba.traverse` (``light.to_world``; :mod:`cdbrdf.rig.camera`)
+between renders, so the traced kernels are reused. The ``direct`` integrator traces shadow rays, so on a concave stand
 the walls and the trough shadow the centre at grazing light, and at grazing
 views the camera sees the trough or a wall instead of the centre: the
 paper's artefact appears by itself. The functions take the :mod:`mitsuba`
@@ -13,6 +15,7 @@ set, by the caller), so importing this module loads neither.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -20,7 +23,7 @@ from numpy.typing import NDArray
 
 from ..measure.stands import Stand
 from ..table import CDBRDF
-from .camera import sensor_to_world
+from .camera import camera_row
 from .stands import stand_meshes
 
 __all__ = ["STAND_REFLECTANCE", "stand_scene", "white_scene"]
@@ -43,20 +46,17 @@ def _mi_mesh(mi, name: str, m: dict[str, NDArray], bsdf: Any):  # noqa: ANN001, 
     return mesh
 
 
-def _scene(mi, cr, parts: dict[str, Any], *, size: int, field_mm: float, spp: int):  # noqa: ANN001, ANN202
-    """The rig's scene with ``parts`` (shapes by name): the ``direct`` integrator, the camera, the light."""
+def _scene(mi, cr, parts: dict[str, Any], *, views: Sequence[NDArray], size: int, field_mm: float,  # noqa: ANN001, ANN202
+           spp: int):
+    """The rig's scene with ``parts`` (shapes by name): the ``direct`` integrator, the cameras, the light.
+
+    ``views``: unit view directions; camera ``i`` fills columns
+    ``i * size .. (i + 1) * size`` of the film.
+    """
     d = {
         "type": "scene",
         "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
-        "sensor": {
-            "type": "orthographic",
-            "to_world": sensor_to_world(mi, np.array([0.0, 0.0, 1.0]), size, field_mm),
-            "near_clip": 1.0,
-            "far_clip": 1000.0,
-            "film": {"type": "hdrfilm", "width": size, "height": size, "rfilter": {"type": "box"},
-                     "pixel_format": "rgb"},
-            "sampler": {"type": "stratified", "sample_count": spp},
-        },
+        "sensor": camera_row(mi, views, size=size, field_mm=field_mm, spp=spp),
         "light": {"type": "directional", "direction": [0.0, 0.0, -1.0],
                   "irradiance": {"type": "rgb", "value": 1.0}},
     }
@@ -68,7 +68,8 @@ def stand_scene(mi, cr, table: CDBRDF, stand: Stand, **kw: Any):  # noqa: ANN001
     """The scene of a stand: the fabric (the ``cdbrdf`` BSDF at its curvature), the white body.
 
     ``mi`` is :mod:`mitsuba`, ``cr`` :mod:`cdbrdf.render` (variant set);
-    ``kw``: ``size``, ``field_mm``, ``spp``.
+    ``kw``: ``views`` (unit view directions, one camera each), ``size``,
+    ``field_mm``, ``spp``.
     """
     fabric = cr.make_bsdf(table, mode="cdbrdf", curvature=float(stand.kappa))
     white = mi.load_dict({"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {

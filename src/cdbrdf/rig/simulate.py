@@ -21,6 +21,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..errors import CaptureError, OptionError
 from ..frames import direction_from_angles
@@ -28,7 +29,7 @@ from ..images import FORMATS
 from ..measure.capture import CAPTURE_FILE, STAND_FILE, CaptureRow, Plan, file_key, read_plan, write_plan, write_rows
 from ..measure.stands import KAPPA_TOL_PER_MM, Stand, default_stand, stand_for, write_stands
 from ..table import CDBRDF, Grid
-from .camera import light_to_world, sensor_to_world
+from .camera import light_to_world
 from .scenes import stand_scene, white_scene
 from .sensor import IMAGE_KINDS, NoiseModel, encode, extension, write_photograph
 
@@ -139,9 +140,9 @@ def simulate_capture(
     patch_px
         Without ``plan``: the patch size the plan's ``hidden`` marks assume.
     seed
-        Noise seed (each photograph draws from ``(seed, row)``).
+        Noise seed (the photographs of one rendering draw from ``(seed, its first row)``).
     progress
-        ``progress(done, total)`` after each photograph.
+        ``progress(done, total)`` (photographs) after each rendering's photographs are written.
     """
     if not isinstance(image_kind, str) or image_kind not in IMAGE_KINDS:
         raise OptionError(f"image_kind: {image_kind!r:.40} is not one of {', '.join(IMAGE_KINDS)}")
@@ -211,51 +212,105 @@ def _fill_capture(
     cr.set_variant()
     import mitsuba as mi
 
-    kw = {"size": size, "field_mm": field_mm, "spp": spp}
     rep = SimulationReport(out)
-    by_scene: dict[Any, list[int]] = {}
-    for i, r in enumerate(rows):
-        key = r.kind if r.kind in ("dark", "white") else r.kappa
-        by_scene.setdefault(key, []).append(i)
-    total = len(rows)
-    done = 0
     t0 = time.perf_counter()
-    for key, idx in by_scene.items():
-        if key == "dark":
-            scene = None
-        elif key == "white":
+    folders: set[Path] = set()
+
+    def emit(members: list[tuple[int, int]], film: NDArray[np.float64] | None) -> None:
+        """Expose, add noise to, encode and write the photographs of ``(row, camera slot)`` pairs.
+
+        ``film``: the rendering, cameras side by side (None: dark frames). The
+        noise of a rendering's photographs is drawn from ``(seed, its first row)``.
+        """
+        idx = [i for i, _ in members]
+        if film is None:
+            lin = np.zeros((len(members), size, size, 3))
+        else:
+            lin = film.reshape(size, -1, size, film.shape[-1])[:, [j for _, j in members], :, :3]
+            lin = np.moveaxis(lin, 1, 0)
+        scale = np.array([gain * rows[i].exposure for i in idx])
+        noisy = noise.apply(lin * scale[:, None, None, None], np.random.default_rng([int(seed), idx[0]]))
+        codes, n_saturated = encode(noisy, image_kind)
+        rep.n_saturated_pixels += n_saturated
+        for n, i in enumerate(idx):
+            path = out / rows[i].file
+            if path.parent not in folders:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                folders.add(path.parent)
+            write_photograph(path, codes[n], image_kind)
+            rep.files.append(rows[i].file)
+        rep.n_images += len(idx)
+        rep.n_white += sum(rows[i].kind == "white" for i in idx)
+        if progress is not None:
+            progress(rep.n_images, len(rows))
+
+    for batch in _batches(rows):
+        if batch.key == "dark":
+            rep.n_dark += len(batch.rows)
+            for c in range(0, len(batch.rows), MAX_BATCH_VIEWS):
+                emit([(i, 0) for i in batch.rows[c:c + MAX_BATCH_VIEWS]], None)
+            continue
+        kw = {"views": [direction_from_angles(tv, pv) for tv, pv in batch.views], "size": size,
+              "field_mm": field_mm, "spp": spp}
+        if batch.key == "white":
             scene = white_scene(mi, cr, white_albedo, **kw)
         else:
-            scene = stand_scene(mi, cr, table, stand_for(stand_list, key), **kw)
-        params = mi.traverse(scene) if scene is not None else None
-        for i in idx:
-            r = rows[i]
-            if scene is None or params is None:
-                lin = np.zeros((size, size, 3))
-                rep.n_dark += 1
-            else:
-                v = direction_from_angles(r.theta_v, r.phi_v)
-                light = direction_from_angles(r.theta_l, r.phi_l)
-                params["sensor.to_world"] = sensor_to_world(mi, v, size, field_mm)
-                params["light.to_world"] = light_to_world(mi, light)
-                params.update()
-                img = np.asarray(mi.render(scene, seed=(seed * 1000003 + i) % 2**32),  # type: ignore[arg-type]
-                                 dtype=np.float64)
-                lin = img[..., :3] * gain * r.exposure
-                if key == "white":
-                    rep.n_white += 1
-            rng = np.random.default_rng([int(seed), i])
-            lin = noise.apply(lin, rng)
-            codes, nsat = encode(lin, image_kind)
-            rep.n_saturated_pixels += nsat
-            write_photograph(out / r.file, codes, image_kind)
-            rep.files.append(r.file)
-            rep.n_images += 1
-            done += 1
-            if progress is not None:
-                progress(done, total)
+            scene = stand_scene(mi, cr, table, stand_for(stand_list, float(batch.key)), **kw)
+        params = mi.traverse(scene)
+        for light, members in batch.lights.items():
+            params["light.to_world"] = light_to_world(mi, direction_from_angles(*light))
+            params.update()
+            # one launch photographs every view of the batch under this light
+            film = np.asarray(mi.render(scene, seed=(seed * 1000003 + members[0][0]) % 2**32),  # type: ignore[arg-type]
+                              dtype=np.float64)
+            emit(members, film)
+        del scene, params
     rep.seconds_rendering = time.perf_counter() - t0
     return rep
+
+
+#: Most cameras (view directions) on one film: one launch renders that many photographs.
+MAX_BATCH_VIEWS = 96
+
+
+@dataclass
+class _Batch:
+    """Rows photographed with one scene: ``key`` (a stand's kappa, ``"white"`` or ``"dark"``),
+    its cameras' ``views`` (``(theta_v, phi_v)``, degrees) and, per light ``(theta_l, phi_l)``,
+    the ``(row index, camera slot)`` pairs it photographs."""
+
+    key: float | str
+    rows: list[int] = field(default_factory=list)
+    views: list[tuple[float, float]] = field(default_factory=list)
+    lights: dict[tuple[float, float], list[tuple[int, int]]] = field(default_factory=dict)
+
+
+def _batches(rows: Sequence[CaptureRow]) -> list[_Batch]:
+    """Group a capture's rows into :class:`_Batch` es: per scene, at most :data:`MAX_BATCH_VIEWS` views each.
+
+    Rows of one scene with the same view and light (exposure brackets) share
+    one rendering; each still gets its own exposure and noise.
+    """
+    by_scene: dict[float | str, list[int]] = {}
+    for i, r in enumerate(rows):
+        by_scene.setdefault(r.kind if r.kind in ("dark", "white") else float(r.kappa), []).append(i)
+    out: list[_Batch] = []
+    for key, idx in by_scene.items():
+        if key == "dark":
+            out.append(_Batch(key, rows=idx))
+            continue
+        views = list(dict.fromkeys((rows[i].theta_v, rows[i].phi_v) for i in idx))
+        for c in range(0, len(views), MAX_BATCH_VIEWS):
+            chunk = views[c:c + MAX_BATCH_VIEWS]
+            slot = {v: j for j, v in enumerate(chunk)}
+            b = _Batch(key, views=chunk)
+            for i in idx:
+                j = slot.get((rows[i].theta_v, rows[i].phi_v))
+                if j is not None:
+                    b.rows.append(i)
+                    b.lights.setdefault((rows[i].theta_l, rows[i].phi_l), []).append((i, j))
+            out.append(b)
+    return out
 
 
 def _copy_plan(plan: Plan, out: Path, ext: str) -> tuple[list[CaptureRow], list[Stand]]:
