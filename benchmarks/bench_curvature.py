@@ -31,6 +31,8 @@ import math
 import os
 import sys
 
+from cdbrdf._jit import cpu_count
+
 from _common import best_seconds, jittered_triangulation
 
 TARGET_S_PER_100K = 3.0
@@ -72,7 +74,7 @@ def main(argv=None) -> int:
     from cdbrdf.curvature import repair, surface_curvature
 
     ok = True
-    print(f"cores: {os.cpu_count()}, numba threads: {os.environ.get('NUMBA_NUM_THREADS', 'all')}")
+    print(f"cores: {os.cpu_count()}, threads: {cpu_count()}")
     for label, mesh, repeat in (("mesh", _skirt(args.vertices), args.repeat),
                                 ("scan", _scan(args.vertices), args.repeat),
                                 ("large", _skirt(args.large_faces // 2), 1)):

@@ -21,6 +21,7 @@ import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 
 import cdbrdf
+from cdbrdf._jit import cpu_count
 
 from _common import best_seconds
 
@@ -36,7 +37,6 @@ def main(argv=None) -> int:
     ap.add_argument("--memory-queries", type=int, default=10_000_000)
     args = ap.parse_args(argv)
 
-    import numba
 
     g = cdbrdf.Grid.paper()
     rng = np.random.default_rng(0)
@@ -75,7 +75,7 @@ def main(argv=None) -> int:
     del out, qs
 
     rows = [
-        ("threads (numba)", f"{numba.get_num_threads()}"),
+        ("threads", f"{cpu_count()}"),
         ("queries", f"{n:,}"),
         ("cdbrdf lookup", f"{t_ours * 1e3:.1f} ms  ({n / t_ours / 1e6:.1f} M lookups/s)"),
         ("scipy RegularGridInterpolator", f"{t_ref * 1e3:.1f} ms  ({n / t_ref / 1e6:.2f} M lookups/s)"),

@@ -1,4 +1,4 @@
-"""numba's ``njit`` with an on-disk cache only where one can be written.
+"""numba's ``njit`` with an on-disk cache only where one can be written, and kernels run in threads.
 
 ``@numba.njit(cache=True)`` raises ``RuntimeError: cannot cache function``
 when it is *applied* (at import) if no cache location is writable: the
@@ -9,17 +9,25 @@ function when it is decorated and, when the answer is no, compiles that
 function in memory (``cache=False``) instead: the program works, it only
 compiles again in the next process. numba's global configuration is not
 touched, so other packages in the process are unaffected.
+
+:func:`run_split` runs a kernel over contiguous ranges of its items in
+threads, one per CPU. The package's kernels are compiled serial (``nogil``,
+taking ``start, stop``) and parallelised this way instead of with numba's
+``parallel=True``, which takes about four times as long to compile (13 s
+instead of 3.5 s for the lookup kernel on 2 cores), a cost every fresh
+install pays.
 """
 
 from __future__ import annotations
 
 import logging
+import os
 from collections.abc import Callable
 from typing import Any
 
 import numba
 
-__all__ = ["njit"]
+__all__ = ["njit", "run_split", "cpu_count"]
 
 _log = logging.getLogger(__name__)
 
@@ -57,3 +65,42 @@ def njit(*args: Any, **options: Any) -> Any:
             return numba.njit(**dict(options, cache=False))(func)
 
     return decorate
+
+
+def cpu_count() -> int:
+    """The CPUs this process may run on (its affinity mask where the system has one)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - no sched_getaffinity (macOS, Windows)
+        return max(1, os.cpu_count() or 1)
+
+
+def run_split(kernel: Callable[..., Any], n: int, *args: Any, grain: int = 1) -> list[Any]:
+    """Run ``kernel(*args, start, stop)`` over ``range(n)`` split into contiguous ranges, one thread each.
+
+    Parameters
+    ----------
+    kernel
+        A compiled kernel that releases the GIL (``nogil=True``) and treats
+        the items of ``range(start, stop)`` independently of the others.
+    n
+        Number of items.
+    *args
+        The kernel's arguments before ``start, stop``.
+    grain
+        Fewest items worth a thread of their own: at most ``n // grain``
+        threads, and one (this thread, no pool) when ``n < 2 * grain``.
+
+    Returns
+    -------
+    list
+        The kernel's results, one per range, in order.
+    """
+    parts = max(1, min(cpu_count(), n // max(1, grain)))
+    if parts == 1:
+        return [kernel(*args, 0, n)]
+    from concurrent.futures import ThreadPoolExecutor
+
+    edges = [n * i // parts for i in range(parts + 1)]
+    with ThreadPoolExecutor(max_workers=parts) as pool:
+        return list(pool.map(lambda i: kernel(*args, edges[i], edges[i + 1]), range(parts)))

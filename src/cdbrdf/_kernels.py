@@ -2,22 +2,27 @@
 
 Numba was chosen over a C/C++ extension because it needs no compiler on the
 user's machine (wheels for every platform NumPy supports), compiles lazily on
-first use (nothing happens at import), caches the machine code on disk, and
-parallelises with ``prange`` over all cores.
+first use (nothing happens at import) and caches the machine code on disk.
+The kernels are serial over a range of queries and release the GIL;
+:func:`cdbrdf.interp.evaluate` runs ranges in threads over the CPUs. (numba's
+``parallel=True`` took four times as long to compile, about 13 s a kernel,
+paid by every fresh install.) Each kernel is compiled once: it reads a
+:class:`cdbrdf.interp.KernelGrid`, whose types are the same for every table,
+and read-only float64 query arrays.
 
 The kernels implement the rule stated in :mod:`cdbrdf.interp` (clamped
 curvature and elevations, periodic azimuth with an exact ``fmod`` wrap, the
 pole rule, the rotation of queries on isotropic tables, weights snapped to 0
 or 1 within the tolerance ``tol``) on a
-:class:`cdbrdf.interp.LookupGrid`, which they take as one argument (a named
+:class:`cdbrdf.interp.KernelGrid`, which they take as one argument (a named
 tuple: numba reads its fields by name). The snap tolerance is an argument
 too, not a global of this module, so that numba's on-disk cache (keyed on
 this file) can never keep a stale copy of interp's constant. This module
 imports nothing of the package but :mod:`cdbrdf._jit`.
 
 :func:`lookup_rgb` (RGB tables with evenly spaced elevations, the common
-case) is about 4x faster than a scalar kernel (6.5 ms instead of 30 ms for
-10^6 queries on 2 cores) without changing numba's global configuration: per
+case) is about 4x faster than a scalar kernel without changing numba's
+global configuration: per
 block of queries, the index math is written with selects only so that
 LLVM's loop vectoriser handles several queries at once, and the 32 corners
 are summed with explicit LLVM vector instructions (:func:`_blend_rgb`, a
@@ -29,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 from llvmlite import ir
-from numba import prange, types
+from numba import types
 from numba.core.extending import intrinsic
 
 from ._jit import njit
@@ -278,8 +283,8 @@ def _elevation_select(x, inv_step, n, tol):
     return i, _snap(u - i, tol)
 
 
-@njit(parallel=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
-def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
+@njit(nogil=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
+def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, start, stop, out, offset):
     """:func:`lookup_generic` for RGB tables with evenly spaced elevations.
 
     Same arguments and results (up to rounding) where ``g.rgb_kernel`` holds:
@@ -297,7 +302,7 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
     valid query with :func:`_blend_rgb` and classifies the invalid ones.
     """
     flat = g.flat
-    n_k, n_pl, n_tl, n_pv, n_tv, _ = g.values.shape
+    n_k, n_pl, n_tl, n_pv, n_tv, _ = g.shape
     inv_tl = g.theta_l_inv_step
     inv_tv = g.theta_v_inv_step
     pl0 = g.phi_l0
@@ -319,18 +324,16 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
     d_k = n_pl * n_tl * s_tlight if n_k > 1 else 0
     inv_npl = 1.0 / n_pl
     inv_npv = 1.0 / n_pv
-    n_blocks = (n + _BLOCK - 1) // _BLOCK
     bad_v = 0
     bad_l = 0
-    for blk in prange(n_blocks):
-        start = blk * _BLOCK
-        m = min(_BLOCK, n - start)
-        qbuf = np.empty((5, _BLOCK), dtype=np.float64)
-        ibuf = np.empty((5, _BLOCK), dtype=np.int64)
-        fbuf = np.empty((12, _BLOCK), dtype=np.float64)
+    qbuf = np.empty((5, _BLOCK), dtype=np.float64)
+    ibuf = np.empty((5, _BLOCK), dtype=np.int64)
+    fbuf = np.empty((12, _BLOCK), dtype=np.float64)
+    for first in range(start, stop, _BLOCK):
+        m = min(_BLOCK, stop - first)
         # contiguous copies of the (possibly broadcast) queries: lets the next loop vectorise
         for j in range(m):
-            q = start + j
+            q = first + j
             qbuf[0, j] = q_tv[q * s_tv]
             pv = _wrap_azimuth(q_pv[q * s_pv])
             pl = _wrap_azimuth(q_pl[q * s_pl])
@@ -396,7 +399,7 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
             fbuf[10, j] = wpv * wu0
             fbuf[11, j] = wpv * wtv
         for j in range(m):
-            row = offset + start + j
+            row = offset + first + j
             if ibuf[4, j] == 0:
                 bad = _invalid(qbuf[0, j], qbuf[1, j], qbuf[2, j], qbuf[3, j], qbuf[4, j])
                 if bad == 2 or bad == 4:
@@ -421,24 +424,25 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
     return bad_v, bad_l
 
 
-@njit(parallel=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
-def lookup_generic(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
-    """Interpolate ``n`` queries on the prepared grid ``g`` into ``out[offset:offset + n]``.
+@njit(nogil=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
+def lookup_generic(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, start, stop, out, offset):
+    """Interpolate queries ``start`` to ``stop`` on the grid ``g`` into ``out[offset + start:offset + stop]``.
 
-    ``g`` is a :class:`cdbrdf.interp.LookupGrid` (its ``flat`` holds
+    ``g`` is a :class:`cdbrdf.interp.KernelGrid` (its ``flat`` holds
     ``stride`` values per sample), ``tol`` the weight snap tolerance
-    (``cdbrdf.interp.SNAP_TOLERANCE["float64"]``). Query arrays have length
-    ``n`` or 1 (broadcast). Rows with a non-finite component, or an
-    elevation outside [0, 90], are NaN; the counts of bad view and light
-    elevations are returned.
+    (``cdbrdf.interp.SNAP_TOLERANCE["float64"]``). Query arrays are read-only
+    float64, of one length or of length 1 (broadcast). Rows with a
+    non-finite component, or an elevation outside [0, 90], are NaN; the
+    counts of bad view and light elevations are returned. The GIL is
+    released: :func:`cdbrdf.interp.evaluate` runs ranges in threads.
 
     The 32 corners are summed as 8 light/curvature corners of 4-corner view
     bilinear sums; every node is reproduced exactly (weights 0 and 1 only).
     """
-    # the grid's fields as locals: the parallel loop's body takes arrays and scalars only
+    # the grid's fields as locals
     flat = g.flat
     stride = g.stride
-    n_k, n_pl, n_tl, n_pv, n_tv, n_c = g.values.shape
+    n_k, n_pl, n_tl, n_pv, n_tv, n_c = g.shape
     kap, kap_d = g.kappa, g.kappa_inv_d
     thl, thl_d, inv_tl = g.theta_l, g.theta_l_inv_d, g.theta_l_inv_step
     thv, thv_d, inv_tv = g.theta_v, g.theta_v_inv_d, g.theta_v_inv_step
@@ -453,7 +457,8 @@ def lookup_generic(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
     s_tlight = n_pv * s_view
     bad_v = 0
     bad_l = 0
-    for i in prange(n):
+    acc = np.zeros(n_c)  # one sample's channels, summed here: out is written once per row
+    for i in range(start, stop):
         tv, pv, tl, pl, k = _query(q_tv, q_pv, q_tl, q_pl, q_k, i, s_tv, s_pv, s_tl, s_pl, s_k)
         row = offset + i
         bad = _invalid(tv, pv, tl, pl, k)
@@ -494,8 +499,7 @@ def lookup_generic(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
         w01 = (1.0 - wpv) * wtv
         w10 = wpv * (1.0 - wtv)
         w11 = wpv * wtv
-        for c in range(n_c):
-            out[row, c] = 0.0
+        acc[:] = 0.0
         for a in range(2):
             ka = ik if a == 0 else ik1
             wa = (1.0 - wk) if a == 0 else wk
@@ -508,8 +512,10 @@ def lookup_generic(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, n, out, offset):
                     bd = np.uint64(((ka * n_pl + pe) * n_tl + td) * s_tlight)
                     for c in range(n_c):
                         cc = np.uint64(c)
-                        out[row, c] += wd * (
+                        acc[c] += wd * (
                             (w00 * flat[bd + v00 + cc] + w01 * flat[bd + v01 + cc])
                             + (w10 * flat[bd + v10 + cc] + w11 * flat[bd + v11 + cc])
                         )
+        for c in range(n_c):
+            out[row, c] = acc[c]
     return bad_v, bad_l

@@ -65,6 +65,7 @@ from .errors import QueryError
 
 __all__ = [
     "KERNELS",
+    "KernelGrid",
     "MAX_ELEVATION_DEG",
     "PERIOD_DEG",
     "RGB_MAX_KAPPA",
@@ -101,6 +102,9 @@ _ON_INVALID: tuple[str, ...] = ("raise", "nan")
 
 #: Queries handled per kernel call when inputs need broadcasting copies.
 _CHUNK = 1 << 16
+
+#: Fewest queries worth a thread of their own (a thread costs about 0.1 ms).
+_MIN_QUERIES_PER_THREAD = 1 << 14
 
 
 def snap_tolerance(precision: DTypeLike) -> float:
@@ -141,6 +145,36 @@ def wrap_azimuth(phi_deg: float) -> float:
     if -PERIOD_DEG < x < PERIOD_DEG:
         return x
     return math.fmod(x, PERIOD_DEG) if math.isfinite(x) else math.nan
+
+
+class KernelGrid(NamedTuple):
+    """What the compiled kernels of :mod:`cdbrdf._kernels` read, with one type for every table.
+
+    The fields of :class:`LookupGrid` the kernels use, ``flat`` always in
+    float64 (the kernels compute in float64 whatever the table's dtype, so a
+    float32 table's samples are widened exactly) and the shape as integers:
+    numba then compiles each kernel once, not once per table dtype.
+    """
+
+    flat: NDArray[np.float64]
+    stride: int
+    shape: tuple[int, int, int, int, int, int]
+    kappa: NDArray[np.float64]
+    kappa_inv_d: NDArray[np.float64]
+    theta_l: NDArray[np.float64]
+    theta_l_inv_d: NDArray[np.float64]
+    theta_l_inv_step: float
+    theta_v: NDArray[np.float64]
+    theta_v_inv_d: NDArray[np.float64]
+    theta_v_inv_step: float
+    phi_l0: float
+    phi_l_inv_step: float
+    phi_v0: float
+    phi_v_inv_step: float
+    kappa_node: tuple[float, ...]
+    kappa_scan: tuple[float, ...]
+    kappa_slot_inv_d: tuple[float, ...]
+    isotropic: bool
 
 
 class LookupGrid(NamedTuple):
@@ -188,6 +222,8 @@ class LookupGrid(NamedTuple):
         True for an isotropic table: queries are rotated to light azimuth 0
         (the view azimuth axis holds ``phi_v - phi_l``) and the light pole
         node holds the mean over that axis (see the module docstring).
+    kernel
+        The fields the compiled kernels read (:class:`KernelGrid`).
     """
 
     values: NDArray[np.floating]
@@ -212,6 +248,7 @@ class LookupGrid(NamedTuple):
     kappa_scan: tuple[float, ...]
     kappa_slot_inv_d: tuple[float, ...]
     isotropic: bool
+    kernel: KernelGrid
 
     def __repr__(self) -> str:
         return (f"LookupGrid(shape={self.shape}, dtype={self.values.dtype}, stride={self.stride}, "
@@ -336,29 +373,25 @@ def prepare(table: _Table) -> LookupGrid:
     inv_tl, inv_tv = _inv_step(theta_l), _inv_step(theta_v)
     n_pl, n_pv = int(np.size(g.phi_l)), int(np.size(g.phi_v))
     k_node, k_scan, k_inv = _kappa_slots(kappa)
+    axes: dict[str, Any] = {
+        "kappa": kappa, "kappa_inv_d": _inv_spacing(kappa),
+        "theta_l": theta_l, "theta_l_inv_d": _inv_spacing(theta_l), "theta_l_inv_step": inv_tl,
+        "theta_v": theta_v, "theta_v_inv_d": _inv_spacing(theta_v), "theta_v_inv_step": inv_tv,
+        "phi_l0": float(g.phi_l[0]), "phi_l_inv_step": n_pl / PERIOD_DEG,
+        "phi_v0": float(g.phi_v[0]), "phi_v_inv_step": n_pv / PERIOD_DEG,
+        "kappa_node": k_node, "kappa_scan": k_scan, "kappa_slot_inv_d": k_inv, "isotropic": iso,
+    }
+    kernel = KernelGrid(flat=_frozen(flat, np.float64, copy=False), stride=stride,
+                        shape=tuple(int(n) for n in values.shape), **axes)  # type: ignore[arg-type]
     return LookupGrid(
         values=values,
         flat=flat,
         stride=stride,
-        kappa=kappa,
-        kappa_inv_d=_inv_spacing(kappa),
-        theta_l=theta_l,
-        theta_l_inv_d=_inv_spacing(theta_l),
-        theta_l_inv_step=inv_tl,
-        theta_v=theta_v,
-        theta_v_inv_d=_inv_spacing(theta_v),
-        theta_v_inv_step=inv_tv,
-        phi_l0=float(g.phi_l[0]),
         phi_l_step=PERIOD_DEG / n_pl,
-        phi_l_inv_step=n_pl / PERIOD_DEG,
-        phi_v0=float(g.phi_v[0]),
         phi_v_step=PERIOD_DEG / n_pv,
-        phi_v_inv_step=n_pv / PERIOD_DEG,
         rgb_kernel=bool(nc == 3 and inv_tl > 0.0 and inv_tv > 0.0 and kappa.size <= RGB_MAX_KAPPA),
-        kappa_node=k_node,
-        kappa_scan=k_scan,
-        kappa_slot_inv_d=k_inv,
-        isotropic=iso,
+        kernel=kernel,
+        **axes,
     )
 
 
@@ -374,6 +407,26 @@ def _as_query(name: str, x: ArrayLike) -> NDArray[np.floating]:
             raise QueryError(f"{name}: complex values are not angles or curvatures")
         a = a.astype(np.float64)
     return a
+
+
+def _kernel_array(a: NDArray[Any]) -> NDArray[np.float64]:
+    """A read-only view of a 1-D float64 query array: the kernels see one array type (no recompiling)."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
+
+
+def _run(run: Any, grid: KernelGrid, tol: float, queries: list[Any], n: int, out: NDArray[np.float64],
+         offset: int) -> tuple[int, int]:
+    """Run a lookup kernel over ``n`` queries into ``out[offset:offset + n]``, in threads when large.
+
+    Returns the counts of bad view and light elevations.
+    """
+    from ._jit import run_split
+
+    got = run_split(lambda start, stop: run(grid, tol, *queries, start, stop, out, offset), n,
+                    grain=_MIN_QUERIES_PER_THREAD)
+    return sum(g[0] for g in got), sum(g[1] for g in got)
 
 
 def evaluate(
@@ -449,26 +502,26 @@ def evaluate(
     n = int(np.prod(shape, dtype=np.int64))
     out = np.empty((n, nc), dtype=np.float64)
 
-    direct: list[NDArray[np.floating] | None] = []
+    direct: list[NDArray[np.float64] | None] = []
     for q in qs:
         if q.size == 1:
-            direct.append(q.reshape(1).astype(np.float64))
+            direct.append(_kernel_array(q.reshape(1).astype(np.float64)))
         elif q.shape == shape and q.flags.c_contiguous and q.dtype == np.float64:
-            direct.append(q.reshape(-1))
+            direct.append(_kernel_array(q.reshape(-1)))
         else:
             direct.append(None)
     bad_v = bad_l = 0
     if n == 0:
         pass
     elif all(d is not None for d in direct):
-        bad_v, bad_l = run(lg, tol, *direct, n, out, 0)
+        bad_v, bad_l = _run(run, lg.kernel, tol, direct, n, out, 0)
     else:
         views = [np.broadcast_to(q, shape) if d is None else None for q, d in zip(qs, direct)]
         for s in range(0, n, _CHUNK):
             e = min(n, s + _CHUNK)
-            args = [d if d is not None else v.flat[s:e].astype(np.float64, copy=False)  # type: ignore[union-attr]
+            args = [d if d is not None else _kernel_array(v.flat[s:e].astype(np.float64))  # type: ignore[union-attr]
                     for d, v in zip(direct, views)]
-            a, b = run(lg, tol, *args, e - s, out, s)
+            a, b = _run(run, lg.kernel, tol, args, e - s, out, s)
             bad_v += a
             bad_l += b
     if on_invalid == "raise" and (bad_v or bad_l):

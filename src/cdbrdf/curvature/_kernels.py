@@ -12,15 +12,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
 from .._jit import njit
 
 #: Iterations of the fit: a height quadric, then the normal-section model twice.
 FIT_ITERATIONS = 3
 
-#: Vertices per task of the parallel loops (scratch arrays are allocated once per task).
-BLOCK = 256
+#: Fewest vertices worth a thread of their own (:func:`cdbrdf._jit.run_split`).
+GRAIN = 256
 
 #: Tukey biweight constant (95 % efficiency under Gaussian noise), in robust standard deviations.
 TUKEY_C = 4.685
@@ -312,12 +311,12 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
     status[i] = 0
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def fit_vertices(
     q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, radius, k_min, cos_max,
-    k1, k2, d1, d2, nrm, status,
+    k1, k2, d1, d2, nrm, status, start, stop,
 ):
-    """Fit the surface around every query vertex; write principal curvatures and directions.
+    """Fit the surface around the query vertices ``start`` to ``stop``; write principal curvatures and directions.
 
     For query ``i`` the candidates are its k nearest samples (``nbr[i]``,
     sorted by distance ``nbr_d[i]``) of the same connected component whose
@@ -341,33 +340,32 @@ def fit_vertices(
     its folds), the test is dropped for that vertex.
 
     ``status``: 0 fitted, 1 too few samples (curvature 0), 2 no normal.
+    Releases the GIL: :func:`cdbrdf._jit.run_split` runs ranges in threads.
     """
-    nq = q_pos.shape[0]
     kk = nbr.shape[1]
-    n_blocks = (nq + BLOCK - 1) // BLOCK
-    for blk in prange(n_blocks):
-        sel = np.empty(kk, np.int64)
-        x = np.empty(kk)
-        y = np.empty(kk)
-        h = np.empty(kk)
-        g = np.empty(kk)
-        wg = np.empty(kk)
-        w = np.empty(kk)
-        res = np.empty(kk)
-        tmp = np.empty(kk)
-        m = np.empty((6, 6))
-        b = np.empty(6)
-        coef = np.zeros(6)
-        row = np.empty(6)
-        for i in range(blk * BLOCK, min(nq, (blk + 1) * BLOCK)):
-            _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, radius, k_min, cos_max,
-                     k1, k2, d1, d2, nrm, status, sel, x, y, h, g, wg, w, res, tmp, m, b, coef, row)
+    sel = np.empty(kk, np.int64)
+    x = np.empty(kk)
+    y = np.empty(kk)
+    h = np.empty(kk)
+    g = np.empty(kk)
+    wg = np.empty(kk)
+    w = np.empty(kk)
+    res = np.empty(kk)
+    tmp = np.empty(kk)
+    m = np.empty((6, 6))
+    b = np.empty(6)
+    coef = np.zeros(6)
+    row = np.empty(6)
+    for i in range(start, stop):
+        _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, radius, k_min, cos_max,
+                 k1, k2, d1, d2, nrm, status, sel, x, y, h, g, wg, w, res, tmp, m, b, coef, row)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def transfer_tensors(q_nrm, q_comp, s_nrm, s_comp, s_ok, s_fn, s_k1, s_k2, s_d1, s_d2, nbr, nbr_d, sigma,
-                     cos_max, k1, k2, d1, d2, status):
-    """Curvature at vertices from the fits at nearby samples (a mesh much finer than the neighbourhood).
+                     cos_max, k1, k2, d1, d2, status, start, stop):
+    """Curvature at vertices ``start`` to ``stop`` from the fits at nearby samples (a mesh much finer
+    than the neighbourhood).
 
     The shape operators ``k1 d1 d1^T + k2 d2 d2^T`` of the query's nearest
     fitted samples (same component, normal within the cone) are averaged with
@@ -378,11 +376,10 @@ def transfer_tensors(q_nrm, q_comp, s_nrm, s_comp, s_ok, s_fn, s_k1, s_k2, s_d1,
     again. ``status``: 0 done, 1 no
     usable sample.
     """
-    nq = q_nrm.shape[0]
     kk = nbr.shape[1]
     ns = s_nrm.shape[0]
     inv2 = 0.5 / (sigma * sigma)
-    for i in prange(nq):
+    for i in range(start, stop):
         n0 = q_nrm[i, 0]
         n1 = q_nrm[i, 1]
         n2 = q_nrm[i, 2]

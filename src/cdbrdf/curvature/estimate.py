@@ -227,7 +227,8 @@ def fit_curvatures(
     """
     from scipy.spatial import cKDTree
 
-    from ._kernels import fit_vertices, transfer_tensors
+    from .._jit import run_split
+    from ._kernels import GRAIN, fit_vertices, transfer_tensors
 
     if not (math.isfinite(radius) and radius > 0):
         raise MeshError(f"neighbourhood: the radius must be positive and finite, got {radius!r}")
@@ -255,10 +256,10 @@ def fit_curvatures(
     for start in range(0, nq, CHUNK):
         stop = min(nq, start + CHUNK)
         dist, idx = _neighbours(tree, q_pos[start:stop], k, radius, sp.shape[0], coarse)
-        fit_vertices(q_pos[start:stop], q_nrm[start:stop], q_comp[start:stop], sp, sn, sw, sc, idx, dist,
-                     float(radius), MIN_NEIGHBOURS, cos_max,
-                     k1[start:stop], k2[start:stop], d1[start:stop], d2[start:stop],
-                     fitted_n[start:stop], status[start:stop])
+        run_split(fit_vertices, stop - start, q_pos[start:stop], q_nrm[start:stop], q_comp[start:stop], sp, sn,
+                  sw, sc, idx, dist, float(radius), MIN_NEIGHBOURS, cos_max,
+                  k1[start:stop], k2[start:stop], d1[start:stop], d2[start:stop],
+                  fitted_n[start:stop], status[start:stop], grain=GRAIN)
         if progress is not None:
             progress(stop, total)
     # where the nearest samples belong to other components (a sash over a coarse skirt), look further
@@ -273,9 +274,9 @@ def fit_curvatures(
         r1, r2 = np.zeros(retry.size), np.zeros(retry.size)
         e1, e2, en = np.zeros((retry.size, 3)), np.zeros((retry.size, 3)), np.zeros((retry.size, 3))
         rs = np.zeros(retry.size, np.int8)
-        fit_vertices(q_pos[retry], q_nrm[retry], q_comp[retry], sp, sn, sw, sc,
-                     np.ascontiguousarray(idx, np.int64), np.ascontiguousarray(dist), float(radius),
-                     MIN_NEIGHBOURS, cos_max, r1, r2, e1, e2, en, rs)
+        run_split(fit_vertices, retry.size, q_pos[retry], q_nrm[retry], q_comp[retry], sp, sn, sw, sc,
+                  np.ascontiguousarray(idx, np.int64), np.ascontiguousarray(dist), float(radius),
+                  MIN_NEIGHBOURS, cos_max, r1, r2, e1, e2, en, rs, grain=GRAIN)
         k1[retry], k2[retry], d1[retry], d2[retry], fitted_n[retry], status[retry] = r1, r2, e1, e2, en, rs
     if thinned:
         spacing = radius * math.sqrt(math.pi / SAMPLES_PER_NEIGHBOURHOOD)
@@ -288,10 +289,10 @@ def fit_curvatures(
             stop = min(n, start + CHUNK)
             dist, idx = tree.query(pos[start:stop], k=kt, workers=-1)
             dist, idx = dist.reshape(stop - start, kt), idx.reshape(stop - start, kt)
-            transfer_tensors(nrm[start:stop], comp[start:stop], sn, sc, ok, fitted_n, k1, k2, d1, d2,
-                             np.ascontiguousarray(idx, dtype=np.int64), np.ascontiguousarray(dist),
-                             float(spacing), cos_max, vk1[start:stop], vk2[start:stop], vd1[start:stop],
-                             vd2[start:stop], vstatus[start:stop])
+            run_split(transfer_tensors, stop - start, nrm[start:stop], comp[start:stop], sn, sc, ok, fitted_n,
+                      k1, k2, d1, d2, np.ascontiguousarray(idx, dtype=np.int64), np.ascontiguousarray(dist),
+                      float(spacing), cos_max, vk1[start:stop], vk2[start:stop], vd1[start:stop],
+                      vd2[start:stop], vstatus[start:stop], grain=GRAIN)
             if progress is not None:
                 progress(nq + stop, total)
         k1, k2, d1, d2, status = vk1, vk2, vd1, vd2, vstatus

@@ -1,16 +1,15 @@
 """Compiled kernels: ray marching over a periodic height field and the
 reflectance integral over the visible micro-surface. Private.
 
-Every per-sample sum runs sequentially inside one ``prange`` iteration, so the
-results do not depend on the number of threads.
+Each kernel handles items ``start`` to ``stop`` (views, lights or pairs) and
+releases the GIL; :func:`cdbrdf._jit.run_split` runs ranges in threads.
+Every per-item sum runs sequentially within its item, so the results do not
+depend on the number of threads.
 """
 
 from __future__ import annotations
 
 import math
-
-import numpy as np
-from numba import prange
 
 from .._jit import njit
 from .fibre import P_B, P_G, P_INK, P_R, _terms
@@ -70,21 +69,19 @@ def _texel(x, y, xmap, dy, nx, ny):
     return j * nx + i
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def trace_views(H, xmap, dy, step, views, points):
-    """Texel hit first by each view ray.
+@njit(cache=True, nogil=True, error_model="numpy")
+def trace_views(H, xmap, dy, step, views, points, out, start, stop):
+    """Texel hit first by each view ray, for views ``start`` to ``stop``.
 
     Rays start on the plane just above the highest point, at ``points (N, 2)``
-    (spread uniformly over the repeat), and travel along ``-v``. Returns
-    ``(n_views, N)`` int64 flat texel indices.
+    (spread uniformly over the repeat), and travel along ``-v``. Writes
+    ``out (n_views, N)``: int64 flat texel indices.
     """
     ny, nx = H.shape
     zmax = H.max() + 1e-6
     zmin = H.min()
-    nv = views.shape[0]
     npt = points.shape[0]
-    out = np.empty((nv, npt), dtype=np.int64)
-    for iv in prange(nv):
+    for iv in range(start, stop):
         vx, vy, vz = views[iv, 0], views[iv, 1], views[iv, 2]
         tmax = (zmax - zmin) / max(vz, 1e-9) + step
         for r in range(npt):
@@ -111,7 +108,6 @@ def trace_views(H, xmap, dy, step, views, points):
                         lo = mid
                 t = hi
             out[iv, r] = _texel(x0 - t * vx, y0 - t * vy, xmap, dy, nx, ny)
-    return out
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -131,18 +127,17 @@ def _lit(H, xs, xmap, dy, zmax, step, j, i, lx, ly, lz):
     return 1
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def shadow_maps(H, xs, xmap, dy, step, lights, needed):
-    """``(n_lights, ny * nx)`` uint8: 1 where a texel centre sees the light.
+@njit(cache=True, nogil=True, error_model="numpy")
+def shadow_maps(H, xs, xmap, dy, step, lights, needed, out, start, stop):
+    """Write ``out (n_lights, ny * nx)`` uint8 (zeroed), for lights ``start`` to ``stop``: 1 where a texel
+    centre sees the light.
 
     ``xs``: texel centres along x. Only texels with ``needed[flat] != 0`` are
     traced (others are left 0).
     """
     ny, nx = H.shape
     zmax = H.max() + 1e-6
-    nl = lights.shape[0]
-    out = np.zeros((nl, ny * nx), dtype=np.uint8)
-    for il in prange(nl):
+    for il in range(start, stop):
         lx, ly, lz = lights[il, 0], lights[il, 1], lights[il, 2]
         if lz <= 0.0:
             continue
@@ -152,20 +147,18 @@ def shadow_maps(H, xs, xmap, dy, step, lights, needed):
             j = k // nx
             i = k - j * nx
             out[il, k] = _lit(H, xs, xmap, dy, zmax, step, j, i, lx, ly, lz)
-    return out
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def integrate(pair_v, pair_l, views, lights, hits, shadow, shadow_row, normal, tangent, kind, params):
-    """Mean over the view rays of ``f_p(v, l) (n_p . l)+ V(p, l)`` per pair.
+@njit(cache=True, nogil=True, error_model="numpy")
+def integrate(pair_v, pair_l, views, lights, hits, shadow, shadow_row, normal, tangent, kind, params, out,
+              start, stop):
+    """Mean over the view rays of ``f_p(v, l) (n_p . l)+ V(p, l)`` per pair, for pairs ``start`` to ``stop``.
 
     ``pair_v``/``pair_l`` index ``views``/``lights``; ``shadow_row[l]`` is the
-    row of ``shadow`` for light ``l``. Returns ``(n_pairs, 3)``.
+    row of ``shadow`` for light ``l``. Writes ``out (n_pairs, 3)``.
     """
-    npair = pair_v.shape[0]
     npt = hits.shape[1]
-    out = np.zeros((npair, 3))
-    for q in prange(npair):
+    for q in range(start, stop):
         iv = pair_v[q]
         il = pair_l[q]
         vx, vy, vz = views[iv, 0], views[iv, 1], views[iv, 2]
@@ -195,4 +188,3 @@ def integrate(pair_v, pair_l, views, lights, hits, shadow, shadow_row, normal, t
         out[q, 0] = r_acc / npt
         out[q, 1] = g_acc / npt
         out[q, 2] = b_acc / npt
-    return out

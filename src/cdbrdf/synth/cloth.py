@@ -61,6 +61,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._jit import run_split
 from ..errors import OptionError, QueryError
 from ..frames import direction_from_angles
 from ..table import CDBRDF, Grid
@@ -419,7 +420,9 @@ class ClothModel:
         inv_v = inv_v.reshape(-1)
         inv_l = inv_l.reshape(-1)
         H = np.ascontiguousarray(hf.height)
-        hits = _trace.trace_views(H, xmap, dy, step, np.ascontiguousarray(uv), self._points(hf))
+        points = self._points(hf)
+        hits = np.empty((uv.shape[0], points.shape[0]), dtype=np.int64)
+        run_split(_trace.trace_views, uv.shape[0], H, xmap, dy, step, np.ascontiguousarray(uv), points, hits)
         needed = np.zeros(ny * nx, dtype=np.uint8)
         needed[np.unique(hits)] = 1
         normal = np.ascontiguousarray(hf.normal.reshape(-1, 3))
@@ -428,16 +431,18 @@ class ClothModel:
         order = np.argsort(inv_l, kind="stable")
         for c0 in range(0, ul.shape[0], _LIGHT_CHUNK):
             c1 = min(c0 + _LIGHT_CHUNK, ul.shape[0])
-            sm = _trace.shadow_maps(H, xs, xmap, dy, step, np.ascontiguousarray(ul[c0:c1]), needed)
+            sm = np.zeros((c1 - c0, ny * nx), dtype=np.uint8)
+            run_split(_trace.shadow_maps, c1 - c0, H, xs, xmap, dy, step, np.ascontiguousarray(ul[c0:c1]), needed,
+                      sm)
             row = np.full(ul.shape[0], -1, dtype=np.int64)
             row[c0:c1] = np.arange(c1 - c0)
             sel = order[(inv_l[order] >= c0) & (inv_l[order] < c1)]
             if sel.size == 0:
                 continue
-            out[sel] = _trace.integrate(
-                inv_v[sel].astype(np.int64), inv_l[sel].astype(np.int64), uv, ul, hits, sm, row,
-                normal, tangent, kind, self._kernel_params,
-            )
+            part = np.zeros((sel.size, 3))
+            run_split(_trace.integrate, sel.size, inv_v[sel].astype(np.int64), inv_l[sel].astype(np.int64), uv, ul,
+                      hits, sm, row, normal, tangent, kind, self._kernel_params, part, grain=16)
+            out[sel] = part
         return out
 
     def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:

@@ -42,7 +42,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 from numpy.typing import NDArray
 
 from .._jit import njit
@@ -113,17 +112,16 @@ def _terms(nx, ny, nz, tx, ty, tz, vx, vy, vz, lx, ly, lz, p):
     return spec, col
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def _albedo_kernel(views, p, mode, n_theta, n_phi):
-    """Directional albedo, frame n = z, t = x, for each view in ``views (n, 3)``.
+@njit(cache=True, nogil=True, error_model="numpy")
+def _albedo_kernel(views, p, mode, n_theta, n_phi, out, start, stop):
+    """Directional albedo into ``out``, frame n = z, t = x, for views ``start`` to ``stop`` of ``views (n, 3)``.
 
     mode 0: bare specular lobe ``chalf g_s``; 1: bare volume lobe
     ``g_v / (cos ti + cos tr)``; 2: the full local BRDF with unit albedo.
     """
-    out = np.zeros(views.shape[0])
     dt = 0.5 * math.pi / n_theta
     dp = 2.0 * math.pi / n_phi
-    for iv in prange(views.shape[0]):
+    for iv in range(start, stop):
         vx, vy, vz = views[iv, 0], views[iv, 1], views[iv, 2]
         acc = 0.0
         for it in range(n_theta):
@@ -156,7 +154,6 @@ def _albedo_kernel(views, p, mode, n_theta, n_phi):
                         )
                 acc += f * ct * st
         out[iv] = acc * dt * dp
-    return out
 
 
 def _norm_views() -> NDArray[np.float64]:
@@ -226,8 +223,8 @@ class FibreLobes:
 def lobe_norms(p: NDArray[np.float64]) -> tuple[float, float]:
     """Largest directional albedo of the bare specular and volume lobes (x margin)."""
     views = _norm_views()
-    ns = float(_albedo_kernel(views, p, 0, _ALBEDO_N_THETA, _ALBEDO_N_PHI).max())
-    nv = float(_albedo_kernel(views, p, 1, _ALBEDO_N_THETA, _ALBEDO_N_PHI).max())
+    ns = float(_albedo(views, p, 0).max())
+    nv = float(_albedo(views, p, 1).max())
     return ns * _NORM_MARGIN, nv * _NORM_MARGIN
 
 
@@ -236,5 +233,14 @@ def local_albedo_max(p: NDArray[np.float64]) -> float:
     q = np.array(p, dtype=np.float64)
     q[P_R:P_B + 1] = 1.0
     q[P_INK] = 1.0
-    a = _albedo_kernel(_norm_views(), q, 2, _ALBEDO_N_THETA, _ALBEDO_N_PHI)
+    a = _albedo(_norm_views(), q, 2)
     return float(a.max()) * _NORM_MARGIN
+
+
+def _albedo(views: NDArray[np.float64], p: NDArray[np.float64], mode: int) -> NDArray[np.float64]:
+    """:func:`_albedo_kernel` for every view, in threads."""
+    from .._jit import run_split
+
+    out = np.zeros(views.shape[0])
+    run_split(_albedo_kernel, views.shape[0], views, p, mode, _ALBEDO_N_THETA, _ALBEDO_N_PHI, out, grain=4)
+    return out
