@@ -37,12 +37,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..demo import CONFIGS, run_demo
+    from ..demo import CONFIGS, DEMO_MAKER, DEMO_SIGNATURE, run_demo
     from ..fsutil import check_output_folder
     from ._progress import ProgressBars
     from .plan import stands_from_args
 
-    check_output_folder(args.output)  # refuse at once, before the estimate and the run
+    # refuse at once, before the estimate and the run
+    check_output_folder(args.output, maker=DEMO_MAKER, signature=DEMO_SIGNATURE)
     cfg = CONFIGS["quick" if args.quick else "full"]
     stands = stands_from_args(args, cfg.grid.kappa)
     materials = args.materials or ["denim", "shot"]

@@ -22,11 +22,13 @@ def _grid(text: str) -> tuple[float, float, int | None]:
 
 def _export_dir(text: str) -> str:
     """An output folder cdbrdf may write (new, empty, or an earlier export): refused while parsing."""
+    from ..errors import OutputError
     from ..fsutil import check_output_folder
+    from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
 
     try:
-        check_output_folder(text)
-    except OSError as exc:
+        check_output_folder(text, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE)
+    except (OSError, OutputError) as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
     return text
 
@@ -113,8 +115,9 @@ def run(args: argparse.Namespace) -> int:
         raise OptionError(f"FILE: the viewer shows at most {MAX_TABLES} tables side by side, got {len(args.files)}")
     if args.export:
         from ..fsutil import check_output_folder
+        from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
 
-        check_output_folder(args.export)  # refuse at once, before any work
+        check_output_folder(args.export, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE)  # before any work
     tables = []
     for f in args.files:
         t = load(f)
