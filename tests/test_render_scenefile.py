@@ -260,6 +260,26 @@ def test_the_limits_apply_to_the_film_and_sampler_a_scene_really_has(cr, tmp_pat
     assert "\n" not in str(exc.value)
 
 
+def test_the_command_checks_the_scene_s_film_not_its_unused_size_option(cr, tmp_path, monkeypatch, capsys):
+    """An 8 x 8 scene was refused by the default --size; -D w=0 gave a traceback."""
+    from cdbrdf.cli import main
+
+    path = param_scene(tmp_path)
+    out = tmp_path / "o.exr"
+    monkeypatch.setenv("CDBRDF_MAX_RENDER_PIXELS", "100")
+    assert main(["-q", "render", str(path), "-o", str(out), "-D", "w=8", "-D", "h=8", "-D", "spp=1"]) == 0
+    assert main(["-q", "render", str(path), "-o", str(out), "-D", "w=20", "-D", "h=20"]) == 2
+    assert "20 x 20 film: 400 pixels exceed the limit of 100" in capsys.readouterr().err
+    for defines, words in ((["-D", "w=0"], "film size 0 x 9"), (["-D", "spp=2000000000"], "sample_count"),
+                           (["--spp", "1", "-D", "w=1"], None)):
+        status = main(["-q", "render", str(path), "-o", str(out), *defines])
+        err = capsys.readouterr().err
+        if words is None:
+            assert status == 0
+        else:
+            assert status == 2 and words in err and err.count("\n") == 1 and "Traceback" not in err
+
+
 @pytest.mark.parametrize("kind", ["fifo", "/dev/zero"])
 @pytest.mark.parametrize("where", ["shape", "include"])
 def test_files_a_scene_names_are_never_opened_when_special(cr, tmp_path, kind, where):
@@ -283,6 +303,20 @@ def test_files_a_scene_names_are_never_opened_when_special(cr, tmp_path, kind, w
     from cdbrdf.render.scenefile import ply_unit_mm
 
     assert ply_unit_mm(special) is None  # the header reader never blocks or reads without end
+
+
+def test_an_output_over_a_file_the_scene_reads_is_refused(cr, tmp_path, capsys):
+    from cdbrdf.cli import main
+
+    path = write_scene(tmp_path)
+    env = tmp_path / "env.exr"
+    mi.Bitmap(np.ones((4, 8, 3), np.float32)).write(str(env))
+    path.write_text(path.read_text().replace("<integrator", '<emitter type="envmap"><string name="filename" '
+                                             'value="env.exr"/></emitter><integrator'))
+    before = env.read_bytes()
+    assert main(["-q", "render", str(path), "-o", str(env), "-D", "spp=1"]) == 2
+    err = capsys.readouterr().err
+    assert "env.exr: is the input" in err and err.count("\n") == 1 and env.read_bytes() == before
 
 
 def test_a_scene_without_integrator_is_one_line(cr, tmp_path, capsys):
