@@ -15,6 +15,13 @@ only those in ``allowed`` (the project's own error classes) are acceptable.
 A target returns ``"ok"`` when the input was accepted and gave the same
 result as the unmutated input, ``"changed"`` when it was accepted but gave a
 different result (a silently changed value), or raises.
+
+:func:`fuzz_generated` runs targets that build each input themselves from a
+random generator seeded by ``(seed, index)`` (``target(rng, workdir)``): a
+file with random CF attributes, a special file under a random reader, a
+command whose output aliases one of its inputs. Such a target returns
+``"ok"`` when the run behaved as the rule says (refused with one line, or
+accepted unchanged) and ``"bad"`` (or raises) otherwise.
 """
 
 from __future__ import annotations
@@ -30,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["mutate", "FuzzReport", "fuzz"]
+__all__ = ["mutate", "FuzzReport", "fuzz", "fuzz_generated"]
 
 _INTERESTING = (0, 1, 0x7F, 0x80, 0xFF, 0xFFFF, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF)
 
@@ -110,23 +117,44 @@ def _resolve(name: str):
     return getattr(importlib.import_module(mod), attr)
 
 
-def _worker(target_name, seeds, start, stop, seed, max_ops, progress, results):
+def _worker(target_name, seeds, start, stop, seed, max_ops, progress, results, generated=False):
     target = _resolve(target_name)
     with tempfile.TemporaryDirectory(prefix="cdbrdf-fuzz-") as tmp:
-        work = Path(tmp)
         for i in range(start, stop):
             progress.value = i
             rng = np.random.default_rng([seed, i])
-            base = seeds[int(rng.integers(0, len(seeds)))]
-            data = mutate(base, rng, max_ops=max_ops)
+            work = Path(tmp) / str(i)
+            work.mkdir()
             try:
-                out = target(data, work)
-                outcome, detail = (str(out), "") if out in ("ok", "changed") else ("ok", "")
+                if generated:
+                    out = target(rng, work)
+                else:
+                    base = seeds[int(rng.integers(0, len(seeds)))]
+                    out = target(mutate(base, rng, max_ops=max_ops), work)
+                outcome, detail = (str(out), "") if out in ("ok", "changed", "bad") else ("ok", "")
             except BaseException as exc:  # noqa: BLE001 - classified by the parent
                 outcome = type(exc).__module__ + "." + type(exc).__qualname__
                 detail = f"{exc}"[:300] + " | " + traceback.format_exc(limit=-2)[-600:].replace("\n", " / ")
             results.send((i, outcome, detail))
+            _rmtree(work)
         progress.value = stop
+
+
+def _rmtree(p: Path) -> None:
+    import shutil
+
+    shutil.rmtree(p, ignore_errors=True)
+
+
+def fuzz_generated(target: str, *, n: int, seed: int = 0, per_input_s: float = 10.0,
+                   allowed: tuple[type[BaseException], ...] = (), startup_s: float = 60.0) -> FuzzReport:
+    """Run ``n`` inputs that ``target(rng, workdir)`` builds itself (see the module docstring).
+
+    ``"bad"``, hangs, crashes and exceptions not in ``allowed`` are listed in
+    :attr:`FuzzReport.bad`.
+    """
+    return fuzz(target, [], n=n, seed=seed, per_input_s=per_input_s, allowed=allowed, startup_s=startup_s,
+                _generated=True)
 
 
 def fuzz(
@@ -139,6 +167,7 @@ def fuzz(
     allowed: tuple[type[BaseException], ...] = (),
     max_ops: int = 4,
     startup_s: float = 60.0,
+    _generated: bool = False,
 ) -> FuzzReport:
     """Run ``n`` mutated inputs through ``target`` (``"module:function"``).
 
@@ -168,7 +197,8 @@ def fuzz(
         progress = ctx.Value("q", -1)
         results, child_end = ctx.Pipe(duplex=False)
         proc = ctx.Process(
-            target=_worker, args=(target, seeds, start, n, seed, max_ops, progress, child_end), daemon=True
+            target=_worker, args=(target, seeds, start, n, seed, max_ops, progress, child_end, _generated),
+            daemon=True,
         )
         proc.start()
         child_end.close()

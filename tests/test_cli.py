@@ -163,3 +163,133 @@ def test_keyboard_interrupt_exits_130(monkeypatch, capsys):
     monkeypatch.setattr(info, "run", interrupted)
     assert main(["info", "x.h5"]) == 130
     assert capsys.readouterr().err == "cdbrdf: interrupted\n"
+
+
+# -- hostile input, second round ------------------------------------------------------------------------
+def _run(argv):
+    """``main(argv)``'s exit status, whether it returns or exits while parsing."""
+    try:
+        return main(argv)
+    except SystemExit as e:
+        return e.code
+
+
+def _aliased_cases(tmp_path, table_file):
+    """For every command that reads and writes files: its argv with an output that is (or holds) an input."""
+    from cdbrdf.fsutil import output_folder
+
+    p, t = table_file
+    one = tmp_path / "flat.h5"
+    t.brdf(0.0).save(one)
+    (tmp_path / "k13.h5").write_bytes(one.read_bytes())
+    (tmp_path / "scan.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                       "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                       "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    (tmp_path / "env.exr").write_bytes(b"an environment map")
+    (tmp_path / "t.png").write_bytes(p.read_bytes())  # a table whose name says png
+    with output_folder(tmp_path / "sim") as d:  # an earlier simulated capture, its plan the input now
+        (d / "capture.csv").write_text("file,kappa,theta_l,phi_l,theta_v,phi_v,exposure,kind,encoding\n")
+    with output_folder(tmp_path / "demo", maker="demo", signature=("report.html",)) as d:
+        (d / "report.html").write_text("r")
+        (d / "denim.h5").write_bytes(p.read_bytes())
+    s = str
+    return {
+        "curvature": ["curvature", s(tmp_path / "scan.ply"), "-o", s(tmp_path / "scan.ply")],
+        "import": ["import", s(one), "-o", s(one), "--grid", "regular:45,120"],
+        "stack": ["stack", "--kappa", "0", s(one), "--kappa", "0.13", s(tmp_path / "k13.h5"), "-o",
+                  s(tmp_path / "k13.h5")],
+        "render": ["render", s(p), "--mesh", s(tmp_path / "scan.ply"), "--envmap", s(tmp_path / "env.exr"), "-o",
+                   s(tmp_path / "env.exr")],
+        "render-table": ["render", s(p), "--scene", "sine", "-o", s(p)],
+        "mosaic": ["mosaic", s(tmp_path / "t.png"), "-o", s(tmp_path / "t.png")],
+        "view": ["view", s(tmp_path / "demo" / "denim.h5"), "--export", s(tmp_path / "demo")],
+        "simulate-capture": ["simulate-capture", s(p), "--plan", s(tmp_path / "sim" / "capture.csv"), "-o",
+                             s(tmp_path / "sim")],
+    }
+
+
+def _snapshot(folder):
+    return {q: q.read_bytes() for q in sorted(folder.rglob("*")) if q.is_file() and not q.is_symlink()}
+
+
+@pytest.mark.parametrize("command", ["curvature", "import", "stack", "render", "render-table", "mosaic", "view",
+                                     "simulate-capture"])
+def test_an_output_that_is_or_holds_an_input_is_refused_by_every_command(tmp_path, table_file, capsys, command):
+    """The one output rule: scan.ply -o scan.ply, import flat.h5 -o flat.h5, --export over the inputs' folder..."""
+    argv = _aliased_cases(tmp_path, table_file)[command]
+    before = _snapshot(tmp_path)
+    assert _run(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert ("is the input" in err or "holds the input" in err or "an output folder of `cdbrdf demo`" in err), err
+    assert _snapshot(tmp_path) == before  # every file untouched, byte for byte
+
+
+def _holder(path):
+    code = ("import sys, time\nfrom cdbrdf.fsutil import output_lock\n"
+            "with output_lock(sys.argv[1]):\n    print('held', flush=True)\n    time.sleep(60)\n")
+    p = subprocess.Popen([sys.executable, "-c", code, str(path)], stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "held"
+    return p
+
+
+def test_a_second_run_on_the_same_output_is_refused_at_once(tmp_path, table_file, capsys):
+    p, t = table_file
+    out = tmp_path / "o.h5"
+    out.write_bytes(b"the first run's result")
+    holder = _holder(out)
+    try:
+        for argv in (["synth", "denim", "-o", str(out)], ["import", str(p), "-o", str(out)],
+                     ["measure", str(tmp_path), "-o", str(out), "--force"]):
+            assert _run(argv) == 2
+            err = capsys.readouterr().err
+            assert f"o.h5: another cdbrdf run (process {holder.pid}) is writing it" in err and err.count("\n") == 1
+        assert out.read_bytes() == b"the first run's result"
+        assert not (tmp_path / "o.h5.ckpt").exists()
+    finally:
+        holder.kill()
+        holder.wait()
+        holder.stdout.close()
+
+
+def test_broken_pipe_on_stdout_ends_quietly(tmp_path, small_grid):
+    p = tmp_path / "big.h5"
+    make_table(small_grid, attrs={"provenance": {"notes": "x" * 200_000}}).save(p)  # more than a pipe holds
+    proc = subprocess.Popen([sys.executable, "-m", "cdbrdf.cli", "info", str(p)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader goes away at once (`cdbrdf info big.h5 | head -0`)
+    err = proc.stderr.read()
+    proc.stderr.close()
+    assert proc.wait() in (0, 141) and err == b""
+
+
+def test_control_characters_of_a_file_are_escaped_when_printed(tmp_path, small_grid, capsys):
+    evil = "\x1b[31mred\x1b]0;owned\x07\u202e"
+    p = tmp_path / "t.h5"
+    make_table(small_grid, attrs={"material": evil, "colour_space": evil, "provenance": evil}).save(p)
+    assert main(["info", str(p)]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "\x07" not in out and "\u202e" not in out
+    assert "\\x1b[31mred" in out and "\\u202e" in out
+    bad = tmp_path / "b\x1b[2J.h5"
+    bad.write_bytes(b"not a table")
+    assert main(["info", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "\x1b" not in err and "b\\x1b[2J.h5" in err and err.count("\n") == 1
+
+
+def test_a_full_disk_is_one_line_and_keeps_the_old_file(tmp_path):
+    import resource
+
+    out = tmp_path / "Z.h5"
+    out.write_bytes(b"old" * 1000)
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (16_384, 16_384))
+
+    r = subprocess.run([sys.executable, "-m", "cdbrdf.cli", "-q", "synth", "denim", "--kappa", "0", "--grid",
+                        "regular:30,60", "-o", str(out)], capture_output=True, text=True, preexec_fn=small_files,
+                       timeout=300)
+    assert r.returncode == 2, r  # not a segfault in HDF5's close
+    assert r.stderr.count("\n") == 1 and "Z.h5: cannot be written: no space left" in r.stderr
+    assert out.read_bytes() == b"old" * 1000 and sorted(q.name for q in tmp_path.iterdir()) == ["Z.h5"]

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from cdbrdf import fsutil
+from cdbrdf.errors import OutputError
 from cdbrdf.fsutil import output_folder
 
 
@@ -329,3 +330,125 @@ def test_output_folder_without_manifest_is_replaced_as_before(tmp_path):
         with output_folder(dest) as d:
             (d / "new.txt").write_text("2")
         assert sorted(p.name for p in dest.iterdir() if not p.name.startswith(".")) == ["new.txt"]
+
+
+# -- hostile input, second round: special files, outputs over inputs, locks, modes, full disks -------------
+def test_check_regular_refuses_special_files_before_opening_them(tmp_path):
+    zero = tmp_path / "zero"
+    zero.symlink_to("/dev/zero")
+    for p in [*_specials(tmp_path).values(), zero]:
+        with pytest.raises(OSError, match=r"not a regular file \(a (FIFO|character device|socket)\)"):
+            fsutil.check_regular(p)  # a FIFO would block, /dev/zero never end
+    with pytest.raises(IsADirectoryError, match=r"not a regular file \(a folder\)"):
+        fsutil.check_regular(tmp_path)
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        fsutil.check_regular(tmp_path / "missing")
+    (tmp_path / "f").write_bytes(b"x")
+    assert fsutil.check_regular(tmp_path / "f") == tmp_path / "f"
+
+
+def test_find_overlap_sees_links_relative_names_and_folders(tmp_path, monkeypatch):
+    import os
+
+    a = tmp_path / "in" / "a.h5"
+    a.parent.mkdir()
+    a.write_bytes(b"a")
+    (tmp_path / "link.h5").symlink_to(a)
+    os.link(a, tmp_path / "hard.h5")
+    monkeypatch.chdir(tmp_path / "in")
+    inputs = [a]
+    for out, folder, relation in [("a.h5", False, "is"), ("./a.h5", False, "is"), ("../in/a.h5", False, "is"),
+                                  (tmp_path / "link.h5", False, "is"), (tmp_path / "hard.h5", False, "is"),
+                                  (tmp_path / "in", True, "holds"), (tmp_path, True, "holds")]:
+        hit = fsutil.find_overlap([(out, folder)], inputs)
+        assert hit is not None and hit[1] == a and hit[2] == relation, (out, hit)
+    assert fsutil.find_overlap([("b.h5", False), (tmp_path / "other", True)], inputs) is None
+    # a folder read whole: nothing may be written inside it
+    hit = fsutil.find_overlap([(tmp_path / "in" / "new.h5", False)], [tmp_path / "in"])
+    assert hit is not None and hit[2] == "is inside"
+    with pytest.raises(OutputError, match=r"a\.h5: is the input .*a\.h5; writing it would replace what the run reads"):
+        fsutil.check_not_input([("a.h5", False)], inputs)
+    with pytest.raises(OutputError, match=r"holds the input .*a\.h5"):
+        fsutil.check_not_input([(tmp_path, True)], inputs)
+
+
+def _hold_lock(path, seconds=30.0):
+    """A separate process holding the output lock of ``path`` (flock is per process here)."""
+    code = ("import sys, time\nfrom cdbrdf.fsutil import output_lock\n"
+            "with output_lock(sys.argv[1]):\n    print('held', flush=True)\n    time.sleep(float(sys.argv[2]))\n")
+    p = subprocess.Popen([sys.executable, "-c", code, str(path), str(seconds)], stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "held"
+    return p
+
+
+def test_output_lock_refuses_a_second_run_and_a_killed_holder_releases_it(tmp_path):
+    out = tmp_path / "out.h5"
+    holder = _hold_lock(out)
+    try:
+        with pytest.raises(OutputError, match=rf"out\.h5: another cdbrdf run \(process {holder.pid}\) is writing it"):
+            with fsutil.output_lock(out):
+                pass
+    finally:
+        holder.kill()  # SIGKILL: the system releases the lock
+        holder.wait()
+        holder.stdout.close()
+    with fsutil.output_lock(out):
+        with fsutil.output_lock(out):  # nested in one process (a command and the library it calls)
+            pass
+    assert list(tmp_path.iterdir()) == []  # the killed holder's lock file is gone with the next run
+
+
+def test_output_lock_leaves_no_lock_file(tmp_path):
+    with fsutil.output_lock(tmp_path / "x.png"):
+        assert (tmp_path / ".x.png.lock").read_text().strip() == str(__import__("os").getpid())
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_path_keeps_the_mode_of_the_file_it_replaces(tmp_path):
+    import os
+    import stat
+
+    dest = tmp_path / "t.bin"
+    dest.write_bytes(b"old")
+    os.chmod(dest, 0o600)
+    with fsutil.atomic_path(dest) as tmp:
+        os.chmod(tmp, 0o644)  # whatever the writer made
+        tmp.write_bytes(b"new")
+    assert dest.read_bytes() == b"new" and stat.S_IMODE(dest.stat().st_mode) == 0o600
+    new = tmp_path / "n.bin"
+    with fsutil.atomic_path(new) as tmp:
+        os.chmod(tmp, 0o600)  # mkstemp-like: a new file gets the usual 0666 & ~umask instead
+        tmp.write_bytes(b"x")
+    assert stat.S_IMODE(new.stat().st_mode) == 0o666 & ~fsutil._umask()
+
+
+def test_atomic_path_turns_a_full_disk_into_one_line_and_keeps_the_old_file(tmp_path):
+    import errno
+
+    dest = tmp_path / "t.bin"
+    dest.write_bytes(b"old")
+    with pytest.raises(OSError, match=r"t\.bin: cannot be written: no space left") as exc:
+        with fsutil.atomic_path(dest) as tmp:
+            tmp.write_bytes(b"half")
+            raise OSError(errno.ENOSPC, "No space left on device")
+    assert exc.value.errno == errno.ENOSPC and "\n" not in str(exc.value)
+    assert dest.read_bytes() == b"old" and sorted(p.name for p in tmp_path.iterdir()) == ["t.bin"]
+
+
+def test_output_folders_are_replaced_only_by_the_command_that_made_them(tmp_path):
+    with output_folder(tmp_path / "demo", maker="demo") as d:
+        (d / "report.html").write_text("r")
+    with pytest.raises(OutputError, match=r"an output folder of `cdbrdf demo`, not of `cdbrdf view --export`"):
+        fsutil.check_output_folder(tmp_path / "demo", maker="view --export", signature=("index.html",))
+    with pytest.raises(OutputError):
+        with output_folder(tmp_path / "demo", maker="view --export"):
+            pass
+    assert (tmp_path / "demo" / "report.html").read_text() == "r"
+    with output_folder(tmp_path / "demo", maker="demo") as d:  # the same command replaces it
+        (d / "report.html").write_text("r2")
+    # a folder marked before makers were recorded: replaced only when it looks like the maker's (its signature)
+    with output_folder(tmp_path / "old") as d:
+        (d / "capture.csv").write_text("c")
+    with pytest.raises(OutputError, match=r"not by `cdbrdf view --export` \(it has no index\.html\)"):
+        fsutil.check_output_folder(tmp_path / "old", maker="view --export", signature=("index.html", "data.js"))
+    fsutil.check_output_folder(tmp_path / "old")  # the maker that records none (the simulated rig)

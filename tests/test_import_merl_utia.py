@@ -164,3 +164,43 @@ def test_unknown_files_name_the_formats(tmp_path):
         detect_format(p)
     with pytest.raises(FormatError, match="format: 'brdf' is not one of auto, rgl"):
         read_source(p, format="brdf")
+
+
+# -- hostile input, second round: one plausibility bound for every format, special files -----------------
+@pytest.mark.parametrize("encoding, stored", [("srgb", 9e5), ("linear", 9e5), ("srgb", 200.0), ("linear", 2e5)])
+def test_an_absurd_utia_value_is_refused_by_the_shared_bound(tmp_path, utia_file, encoding, stored):
+    """One value of 9e5 (under the old bound of 1e6) turned the table's mean from 0.3 into 4.2e8."""
+    src = write_utia(tmp_path / "a.bin", encoding=encoding) if encoding == "linear" else utia_file
+    raw = np.frombuffer(src.read_bytes(), "<f8").copy().reshape(utia.SHAPE)
+    raw[1, 2, 3, 4, 5] = stored
+    p = tmp_path / "absurd.bin"
+    p.write_bytes(raw.astype("<f8").tobytes())
+    with pytest.raises(FormatError, match=r"absurd\.bin: .*beyond .*1e\+05") as err:
+        read_source(p, encoding=encoding)
+    assert "\n" not in str(err.value)
+
+
+def test_an_absurd_merl_value_is_refused_by_the_shared_bound(tmp_path, merl_file):
+    data = bytearray(merl_file.read_bytes())
+    data[12 + 8 * 5000:12 + 8 * 5001] = np.array([1e9], "<f8").tobytes()  # 6.7e5 sr^-1 once scaled
+    p = tmp_path / "absurd.binary"
+    p.write_bytes(bytes(data))
+    with pytest.raises(FormatError, match=r"absurd\.binary: BRDF values .* up to 6\.67e\+05, beyond 1e\+05"):
+        read_source(p)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero", "folder"])
+@pytest.mark.parametrize("fmt", ["auto", "merl", "utia", "rgl"])
+def test_special_files_are_refused_before_they_are_read(tmp_path, kind, fmt):
+    """read_source('fifo.bin') hung; read_source('/dev/zero', format='merl') raised a bare MemoryError."""
+    import os
+
+    p = tmp_path / "x.bin"
+    if kind == "fifo":
+        os.mkfifo(p)
+    elif kind == "folder":
+        p.mkdir()
+    else:
+        p.symlink_to(kind)
+    with pytest.raises(FormatError, match=r"x\.bin: (not a regular file|is a folder)"):
+        read_source(p, format=fmt)

@@ -207,3 +207,36 @@ def test_bad_files_are_refused_in_one_line_naming_the_file(tmp_path, case, match
     import re
 
     assert re.search(match, msg), msg
+
+
+# -- hostile input, second round ------------------------------------------------------------------------
+@pytest.mark.parametrize("wavelengths", [
+    [780.0, 680.0, 580.0, 480.0, 380.0],  # descending: imported with other colours
+    [380.0, 480.0, 480.0, 680.0, 780.0],  # a duplicate
+    [550.0],
+])
+def test_wavelengths_must_increase(tmp_path, wavelengths):
+    wl = np.asarray(wavelengths, np.float32)
+    grey = _fields()["rgb"][:, :, 1:2]
+    p = tmp_path / "w.bsdf"
+    rgl.write_tensor_file(p, _fields(rgb=None, wavelengths=wl, spectra=np.repeat(grey, wl.size, axis=2)))
+    with pytest.raises(FormatError, match=r"w\.bsdf: 'wavelengths' must be at least 2, strictly increasing"):
+        read_source(p)
+
+
+def test_a_file_whose_valid_bits_are_all_zero_is_refused_like_merl_and_utia(tmp_path):
+    """It imported as a table measured 0 %, exit 0."""
+    p = tmp_path / "none.bsdf"
+    rgl.write_tensor_file(p, _fields(valid=np.zeros(6, np.uint8)))
+    with pytest.raises(FormatError, match=r"none\.bsdf: holds no measured sample \(every 'valid' bit is 0\)"):
+        read_source(p)
+
+
+def test_an_absurd_brdf_value_is_refused_by_the_shared_bound(tmp_path):
+    need_mitsuba()
+    rgb = _fields()["rgb"].copy()
+    rgb[0, 1, :, 2, 2] = 1e12  # finite, within the field bound of 1e30, far beyond any BRDF
+    p = tmp_path / "hot.bsdf"
+    rgl.write_tensor_file(p, _fields(rgb=rgb))
+    with pytest.raises(FormatError, match=r"hot\.bsdf: BRDF values \(Mitsuba's measured plug-in\) up to .*beyond 1e\+05"):
+        read_source(p)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import os
+import sys
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -117,11 +119,14 @@ def test_save_with_an_unknown_compression_lists_the_valid_ones(tmp_path, small_g
     assert not list(tmp_path.iterdir())
 
 
-def _write_then_edit(tmp_path, small_grid, edit):
+def _write_then_edit(tmp_path, small_grid, edit, *, keep_digest=False):
+    """A file edited in place; without its data digest (as another writer's file) unless ``keep_digest``."""
     p = tmp_path / "t.h5"
     make_table(small_grid).save(p, compression=None)
     with h5py.File(p, "r+") as f:
         edit(f)
+        if not keep_digest and "cdbrdf_data_sha256" in f.attrs:
+            del f.attrs["cdbrdf_data_sha256"]
     return p
 
 
@@ -213,7 +218,6 @@ def test_saved_file_has_umask_permissions(tmp_path, small_grid):
 
 # -- hardening: hangs, memory, error classes, checksums, spec enforcement -------------------------
 
-from pathlib import Path  # noqa: E402
 
 from cdbrdf import io, schema  # noqa: E402
 from cdbrdf.errors import LimitError  # noqa: E402
@@ -409,6 +413,7 @@ def test_spec_is_enforced(tmp_path, small_grid, edit, match):
     make_table(small_grid, attrs={"material": "m"}, std=np.full(small_grid.shape + (3,), 0.1)).save(p)
     with h5py.File(p, "r+") as f:
         edit(f)
+        del f.attrs["cdbrdf_data_sha256"]  # as another writer's file: each rule, not the digest, refuses it
     with pytest.raises(FormatError, match=match) as info:
         cdbrdf.load(p)
     assert str(info.value).startswith(str(p) + ": ")
@@ -487,9 +492,197 @@ def test_load_of_something_that_is_not_a_file_name_or_not_a_regular_file(tmp_pat
             cdbrdf.load(bad)
     fifo = tmp_path / "t.h5"
     os.mkfifo(fifo)  # reading it would block forever
-    with pytest.raises(FormatError, match=r"t\.h5: is not a regular file"):
+    with pytest.raises(FormatError, match=r"t\.h5: not a regular file \(a FIFO\)"):
         cdbrdf.load(fifo)
     dev = tmp_path / "zero.h5"
     dev.symlink_to("/dev/zero")
-    with pytest.raises(FormatError, match=r"zero\.h5: is not a regular file"):
+    with pytest.raises(FormatError, match=r"zero\.h5: not a regular file \(a character device\)"):
         cdbrdf.load(dev)
+
+
+# -- hostile input, second round --------------------------------------------------------------------------
+def _looping_legacy_file(tmp_path, table, monkeypatch):
+    """A file without metadata checksums whose damaged global heap makes HDF5 loop forever."""
+    p = _legacy_file(tmp_path, table, monkeypatch)
+    _zero_global_heap(p)
+    return p
+
+
+def test_the_legacy_reader_never_imports_from_the_current_folder(tmp_path, rich_table, monkeypatch):
+    """`cd dataset && cdbrdf info legacy.nc` with a pickle.py beside the file ran that file."""
+    import subprocess
+    import sys
+
+    p = _legacy_file(tmp_path, rich_table, monkeypatch)
+    marker = tmp_path / "ran"
+    for name in ("pickle", "json", "numpy", "h5py", "cdbrdf", "io", "selectors", "ctypes"):
+        (tmp_path / f"{name}.py").write_text(f"open({str(marker)!r}, 'a').write({name!r})\n")
+    code = "import cdbrdf, sys; t = cdbrdf.load(sys.argv[1]); print(t.shape)"
+    env = dict(os.environ, PYTHONSAFEPATH="1")  # the test's own interpreter must not import them either
+    r = subprocess.run([sys.executable, "-c", code, p.name], cwd=tmp_path, capture_output=True, text=True,
+                       env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == str(rich_table.shape) and not marker.exists()
+
+
+def test_a_looping_legacy_file_is_refused_within_seconds(tmp_path, rich_table, monkeypatch):
+    import time
+
+    p = _looping_legacy_file(tmp_path, rich_table, monkeypatch)
+    monkeypatch.setattr(io, "LEGACY_READ_TIMEOUT_S", 3.0)  # the default, whatever another test set
+    t0 = time.monotonic()
+    with pytest.raises(FormatError, match=r"old\.h5: reading it took longer than 3 s and was stopped"):
+        cdbrdf.load(p)
+    assert time.monotonic() - t0 < 10.0  # 3 s after the reader started (about 4 s here); 30 s and more before
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc lists a process's children")
+def test_killing_the_reader_s_parent_leaves_no_process(tmp_path, rich_table, monkeypatch):
+    """kill -9 of a `cdbrdf info` reading a damaged file: its reader spun on at full CPU for ever before."""
+    import signal
+    import subprocess
+    import time
+
+    p = _looping_legacy_file(tmp_path, rich_table, monkeypatch)
+    parent = subprocess.Popen([sys.executable, "-m", "cdbrdf.cli", "info", str(p)], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)
+    child = None
+    deadline = time.monotonic() + 60
+    while child is None and time.monotonic() < deadline and parent.poll() is None:
+        for task in Path(f"/proc/{parent.pid}/task").glob("*/children"):
+            kids = task.read_text().split()
+            if kids:
+                child = int(kids[0])
+        time.sleep(0.05)
+    assert child is not None, "the reader's child was not seen"
+    parent.send_signal(signal.SIGKILL)
+    parent.wait()
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            state = Path(f"/proc/{child}/stat").read_text().split(")")[-1].split()[0]
+        except FileNotFoundError:
+            break
+        if state in ("Z", "X"):  # dead, waiting to be reaped by init
+            break
+        time.sleep(0.05)
+    else:
+        os.kill(child, signal.SIGKILL)
+        pytest.fail("the reader outlived its parent")
+
+
+def test_fletcher32_blind_spot_is_covered_by_the_data_digest(tmp_path, small_grid):
+    """Two bytes 0x0000 -> 0xFFFF inside theta_l keep Fletcher-32's sums: 15 degrees loaded as 15.49999."""
+    p = tmp_path / "t.h5"
+    make_table(small_grid).save(p)
+    data = bytearray(p.read_bytes())
+    axis = np.asarray(small_grid.theta_l, "<f8")
+    i = data.find(axis.tobytes())
+    assert i > 0 and axis[1] != 0.0
+    data[i + 8 + 2 : i + 8 + 4] = b"\xff\xff"  # a zero 16-bit word of theta_l[1]
+    p.write_bytes(bytes(data))
+    with h5py.File(p, "r") as f:  # HDF5's checksum does not see it
+        assert {f["theta_l"][1], f["theta_v"][1]} != {axis[1]}
+    with pytest.raises(FormatError, match=r"t\.h5: checksum mismatch in the data"):
+        cdbrdf.load(p)
+
+
+@pytest.mark.parametrize("edit", [
+    lambda f: f["reflectance"].__setitem__((0, 0, 0, 0, 0, 0), 0.123),
+    lambda f: f["kappa"].__setitem__(0, -0.5),
+    lambda f: f["measured"].__setitem__((0, 0, 0, 0, 0), 0),
+])
+def test_changed_data_of_a_1_3_file_is_a_checksum_mismatch(tmp_path, small_grid, edit):
+    p = _write_then_edit(tmp_path, small_grid, edit, keep_digest=True)
+    with pytest.raises(FormatError, match="checksum mismatch in the data"):
+        cdbrdf.load(p)
+
+
+@pytest.mark.parametrize("variable, attrs, match", [
+    ("reflectance", {"scale_factor": 2.0}, r"'reflectance' is packed \(scale_factor = 2\.0\)"),
+    ("reflectance", {"add_offset": 1.0}, r"'reflectance' is packed \(add_offset = 1\.0\)"),
+    ("theta_l", {"scale_factor": np.float32(0.5)}, r"'theta_l' is packed"),
+    ("measured", {"scale_factor": 2}, r"'measured' is packed"),
+    ("kappa", {"units": "1/m"}, r"'kappa' is in '1/m', expected '1/mm'"),
+    ("theta_v", {"units": "radian"}, r"'theta_v' is in 'radian', expected 'degree'"),
+    ("reflectance", {"units": "1"}, r"'reflectance' is in '1', expected '1/sr'"),
+    ("reflectance", {"_FillValue": np.float32(0.5)}, r"'reflectance' holds 1 value\(s\) equal to its _FillValue"),
+    ("measured", {"missing_value": np.uint8(1)}, r"'measured' holds \d+ value\(s\) equal to its missing_value"),
+])
+def test_cf_packing_units_and_missing_values_are_never_ignored(tmp_path, small_grid, variable, attrs, match):
+    """xarray applies them: read as stored, a scale_factor of 2 gave half of xarray's values."""
+    values = make_table(small_grid).values.copy()
+    values[0, 0, 0, 0, 0, 0] = 0.5
+    p = tmp_path / "t.h5"
+    CDBRDF(values, **small_grid.axes(), attrs={"quantity": "brdf"}).save(p)
+    with h5py.File(p, "r+") as f:
+        for k, v in attrs.items():
+            f[variable].attrs[k] = v
+    with pytest.raises(FormatError, match=r"t\.h5: " + match):
+        cdbrdf.load(p)
+
+
+def test_equivalent_unit_spellings_and_unmatched_fill_values_are_read(tmp_path, small_grid):
+    t = make_table(small_grid, attrs={"quantity": "brdf"})
+    p = tmp_path / "t.h5"
+    t.save(p)
+    with h5py.File(p, "r+") as f:
+        f["theta_l"].attrs["units"] = "degrees"
+        f["kappa"].attrs["units"] = "mm-1"
+        f["reflectance"].attrs["units"] = "sr-1"
+        f["reflectance"].attrs["_FillValue"] = np.float64(np.nan)  # what xarray writes: no value equals it
+        f["measured"].attrs["_FillValue"] = np.uint8(255)
+    assert cdbrdf.load(p) == t
+
+
+def test_a_table_round_trips_through_xarray_to_netcdf(tmp_path, rich_table):
+    """cdbrdf.load(f).to_xarray().to_netcdf(x) failed: a dict attribute is not netCDF-legal."""
+    import xarray as xr
+
+    ds = rich_table.to_xarray()
+    for value in ds.attrs.values():  # netCDF-legal: strings, numbers, arrays of numbers
+        assert isinstance(value, (str, int, float, np.ndarray, np.number)) and not isinstance(value, bool)
+    assert json.loads(ds.attrs["provenance"]) == rich_table.attrs["provenance"]
+    x = tmp_path / "x.nc"
+    ds.to_netcdf(x)
+    back = cdbrdf.load(x)
+    assert back == rich_table and back.attrs == rich_table.attrs
+    with xr.open_dataset(x) as opened:
+        assert CDBRDF.from_xarray(opened) == rich_table
+    edited = ds.assign_attrs(material="renamed")  # a mirror edited without cdbrdf_attrs: refused, not guessed
+    with pytest.raises(cdbrdf.TableError, match=r"attrs\['material'\]: 'renamed' disagrees"):
+        CDBRDF.from_xarray(edited)
+
+
+def test_a_file_of_another_brdf_format_suggests_cdbrdf_import(tmp_path):
+    p = tmp_path / "cc_ibiza_sunset_rgb.bsdf"
+    p.write_bytes(b"tensor_file\0\x01\x00" + bytes(100))
+    with pytest.raises(FormatError, match=r"\.bsdf: not an HDF5 file .*`cdbrdf import FILE -o OUT\.h5`"):
+        cdbrdf.load(p)
+
+
+def test_saving_keeps_the_mode_of_the_file_it_replaces(tmp_path, small_grid):
+    import stat
+
+    p = tmp_path / "t.h5"
+    make_table(small_grid).save(p)
+    os.chmod(p, 0o600)
+    make_table(small_grid, seed=1).save(p)
+    assert stat.S_IMODE(p.stat().st_mode) == 0o600
+
+
+def test_saving_onto_a_full_disk_is_one_line_and_keeps_the_old_file(tmp_path, small_grid):
+    import subprocess
+
+    p = tmp_path / "t.h5"
+    p.write_bytes(b"old" * 100)
+    code = ("import resource, sys, numpy as np, cdbrdf\n"
+            "g = cdbrdf.Grid.paper()\n"
+            "t = cdbrdf.CDBRDF(np.random.default_rng(0).random(g.shape + (3,)), **g.axes())\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (8192, 8192))\n"
+            "try:\n    t.save(sys.argv[1])\nexcept OSError as e:\n    print(e)\n")
+    r = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stderr == "", r  # no traceback, no crash in HDF5's close
+    assert r.stdout.strip().endswith("t.h5: cannot be written: no space left on the device (or the file-size limit "
+                                     "or the quota reached); the old file, if any, is kept")
+    assert p.read_bytes() == b"old" * 100 and sorted(q.name for q in tmp_path.iterdir()) == ["t.h5"]

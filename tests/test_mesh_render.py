@@ -254,3 +254,23 @@ def test_render_options_are_checked(variant, tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and word in err, (extra, err)
     assert not (tmp_path / "x.png").exists()
+
+
+# -- hostile input, second round ------------------------------------------------------------------------
+@pytest.mark.parametrize("name, data", [("env.exr", b"\x76\x2f\x31\x01" + bytes(300)), ("env.exr", b"junk"),
+                                        ("env.hdr", b"#?RADIANCE\nFORMAT=junk\n\n-Y 4 +X x\n")])
+def test_a_damaged_envmap_is_one_line(variant, tmp_path, capsys, name, data):
+    """A damaged --envmap gave a traceback (Mitsuba's bitmap reader)."""
+    from cdbrdf.cli import main
+
+    table = tmp_path / "k.h5"
+    kappa_table().save(table)
+    v, f, uv, _ = cylinder_patch(R_CYL, n=10)
+    src = write_obj(tmp_path / "c.obj", v, f, uv)
+    env = tmp_path / name
+    env.write_bytes(data)
+    assert main(["-q", "render", str(table), "--mesh", str(src), "--envmap", str(env), "-o", str(tmp_path / "x.png"),
+                 "--size", "16x12", "--spp", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err and name in err, err
+    assert not (tmp_path / "x.png").exists()

@@ -446,3 +446,43 @@ def test_ascii_ply_values_are_the_correctly_rounded_doubles(tmp_path):
     got = np.stack([d.vertex[k] for k in "xyz"], axis=1).reshape(-1)
     want = np.array([float(t) for t in tokens])
     assert np.array_equal(got.view(np.int64), want.view(np.int64))
+
+
+# -- hostile input, second round ------------------------------------------------------------------------
+@pytest.mark.parametrize("face", ["f 0 1 2", "f 1/1 2/2 0/3", "f 1/0 2/2 3/3", "f -0 1 2", "  f\t1 0 2"])
+def test_obj_index_0_names_no_vertex_and_is_refused(tmp_path, face):
+    """OBJ indices count from 1: `f 0 1 2` was accepted (read as the last vertex)."""
+    p = tmp_path / "zero.obj"
+    p.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n" + face + "\n")
+    with pytest.raises(MeshError, match=r"zero\.obj: line 7: a face refers to index 0"):
+        read_mesh(p)
+    p.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 -1 3\n")
+    assert read_mesh(p).faces.shape == (2, 3)  # 1 and -1 (the last vertex) are valid indices
+
+
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero"])
+@pytest.mark.parametrize("ext", ["ply", "obj", "stl"])
+def test_special_files_are_refused_before_they_are_read(tmp_path, kind, ext):
+    import os
+
+    p = tmp_path / f"m.{ext}"
+    if kind == "fifo":
+        os.mkfifo(p)
+    else:
+        p.symlink_to(kind)
+    with pytest.raises(MeshError, match=rf"m\.{ext}: cannot be read \(not a regular file"):
+        read_mesh(p)
+
+
+@pytest.mark.parametrize("far", [1e10, 1e14])
+def test_a_mesh_with_a_vertex_kilometres_away_is_refused(far):
+    """One triangle 1e10-1e14 mm long rendered an all-black image with exit 0 (the object shrank below a pixel)."""
+    v, f, uv, _ = cylinder_patch(R_CYL, n=12)
+    n = len(v)
+    v = np.r_[v, [[far, 0, 0], [far, 1, 0], [far, 0, 1]]]
+    f = np.r_[f, [[n, n + 1, n + 2]]]
+    uv = np.r_[uv, np.zeros((3, 2))]
+    with pytest.raises(MeshError, match=r"mm across \(unit mm\), beyond 1e\+06 mm"):
+        prepare_mesh(Mesh(v, f, None, uv, {}, None, {}))
+    with pytest.raises(MeshError, match=r"unit m\), beyond 1e\+06 mm"):  # a wrong unit: 1 km in metres is 1e6 mm
+        prepare_mesh(Mesh(v[:n] * 1e4, f[:-1], None, uv[:n], {}, None, {}), units="m")

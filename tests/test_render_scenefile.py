@@ -229,3 +229,133 @@ def test_render_command_with_a_scene_file(cr, tmp_path):
         assert not out.exists()
     assert main(["-q", "render", str(tmp_path / "kappa.h5"), "-o", str(tmp_path / "x.png"), "-D", "spp=1",
                  "--scene", "sine"]) == 2
+
+
+# -- hostile input, second round: limits on what is rendered, special files, clamped curvature ----------------
+def param_scene(folder, **kw):
+    """write_scene with the film's size as $w x $h (defaults 9) and the sampler's count as $spp."""
+    path = write_scene(folder, **kw)
+    xml = path.read_text().replace('<default name="spp" value="4"/>', '<default name="spp" value="4"/>'
+                                   '<default name="w" value="9"/><default name="h" value="9"/>')
+    xml = xml.replace('<integer name="width" value="9"/><integer name="height" value="9"/>',
+                      '<integer name="width" value="$w"/><integer name="height" value="$h"/>')
+    path.write_text(xml)
+    return path
+
+
+@pytest.mark.parametrize("defines, match", [
+    ({"w": "0"}, r"film size 0 x 9; a film needs at least 1 x 1 pixels"),
+    ({"h": "-3"}, r"film size 9 x -3"),
+    ({"w": "9000", "h": "9000"}, r"9000 x 9000 film: 81,000,000 pixels exceed the limit of 67,108,864 "
+                                 r"\(raise it with CDBRDF_MAX_RENDER_PIXELS\)"),
+    ({"spp": "2000000000"}, r"sample_count 2,000,000,000; a render takes 1 to 65,536 samples per pixel"),
+])
+def test_the_limits_apply_to_the_film_and_sampler_a_scene_really_has(cr, tmp_path, defines, match):
+    """A 9000 x 9000 film rendered for minutes, -D spp=2e9 promised 967 h, -D w=0 gave a traceback."""
+    from cdbrdf.errors import LimitError
+
+    path = param_scene(tmp_path)
+    with pytest.raises((SceneError, LimitError), match=match) as exc:
+        cr.load_file(path, variables=defines)
+    assert "\n" not in str(exc.value)
+
+
+def test_the_command_checks_the_scene_s_film_not_its_unused_size_option(cr, tmp_path, monkeypatch, capsys):
+    """An 8 x 8 scene was refused by the default --size; -D w=0 gave a traceback."""
+    from cdbrdf.cli import main
+
+    path = param_scene(tmp_path)
+    out = tmp_path / "o.exr"
+    monkeypatch.setenv("CDBRDF_MAX_RENDER_PIXELS", "100")
+    assert main(["-q", "render", str(path), "-o", str(out), "-D", "w=8", "-D", "h=8", "-D", "spp=1"]) == 0
+    assert main(["-q", "render", str(path), "-o", str(out), "-D", "w=20", "-D", "h=20"]) == 2
+    assert "20 x 20 film: 400 pixels exceed the limit of 100" in capsys.readouterr().err
+    for defines, words in ((["-D", "w=0"], "film size 0 x 9"), (["-D", "spp=2000000000"], "sample_count"),
+                           (["--spp", "1", "-D", "w=1"], None)):
+        status = main(["-q", "render", str(path), "-o", str(out), *defines])
+        err = capsys.readouterr().err
+        if words is None:
+            assert status == 0
+        else:
+            assert status == 2 and words in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero"])
+@pytest.mark.parametrize("where", ["shape", "include"])
+def test_files_a_scene_names_are_never_opened_when_special(cr, tmp_path, kind, where):
+    """A <shape type="ply"> naming a FIFO hung for ever, one naming /dev/zero grew to 5.5 GB in 30 s."""
+    import os
+
+    path = write_scene(tmp_path)
+    special = tmp_path / ("special.ply" if where == "shape" else "special.xml")
+    if kind == "fifo":
+        os.mkfifo(special)
+    else:
+        special.symlink_to(kind)
+    xml = path.read_text()
+    if where == "shape":
+        xml = xml.replace('value="cyl.ply"', f'value="{special.name}"')
+    else:
+        xml = xml.replace("<integrator", f'<include filename="{special.name}"/><integrator')
+    path.write_text(xml)
+    with pytest.raises(SceneError, match=rf"{special.name}.*not a regular file"):
+        cr.load_file(path)
+    from cdbrdf.render.scenefile import ply_unit_mm
+
+    assert ply_unit_mm(special) is None  # the header reader never blocks or reads without end
+
+
+def test_an_output_over_a_file_the_scene_reads_is_refused(cr, tmp_path, capsys):
+    from cdbrdf.cli import main
+
+    path = write_scene(tmp_path)
+    env = tmp_path / "env.exr"
+    mi.Bitmap(np.ones((4, 8, 3), np.float32)).write(str(env))
+    path.write_text(path.read_text().replace("<integrator", '<emitter type="envmap"><string name="filename" '
+                                             'value="env.exr"/></emitter><integrator'))
+    before = env.read_bytes()
+    assert main(["-q", "render", str(path), "-o", str(env), "-D", "spp=1"]) == 2
+    err = capsys.readouterr().err
+    assert "env.exr: is the input" in err and err.count("\n") == 1 and env.read_bytes() == before
+
+
+def test_a_scene_without_integrator_is_one_line(cr, tmp_path, capsys):
+    from cdbrdf.cli import main
+
+    path = write_scene(tmp_path)
+    path.write_text(path.read_text().replace('<integrator type="path"><integer name="max_depth" value="2"/>'
+                                             '</integrator>', ""))
+    assert main(["-q", "render", str(path), "-o", str(tmp_path / "o.exr")]) == 2
+    err = capsys.readouterr().err
+    assert "the scene has no integrator" in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("scale", ["0.001", "0.0001", "0.05"])
+def test_the_plugin_clamps_any_curvature_and_never_crashes(cr, tmp_path, scale):
+    """A garment in metres under <scale value="0.001"/> without --units: 1000 x the curvature (a bus error
+    was reported). Curvatures of any size, infinite or NaN give a finite image, clamped to the table's ends."""
+    mesh = cylinder()
+    k = mesh.attributes["curvature"]
+    k[::7] = np.nan
+    k[1::7] = 1e30
+    k[2::7] = -np.inf
+    path = write_scene(tmp_path, mesh=mesh, shape_extra=f'<transform name="to_world"><scale value="{scale}"/>'
+                       "</transform>")
+    xml = path.read_text().replace('<scale value="3"/>', f'<scale value="{3 * float(scale)!r}"/>')
+    xml = xml.replace('origin="0, 0, 100"', f'origin="0, 0, {100 * float(scale)!r}"')
+    path.write_text(xml)
+    img = np.array(mi.render(cr.load_file(path), spp=4))
+    assert np.all(np.isfinite(img)) and img[..., :3].max() > 0
+    lo, hi = np.pi * (0.5 - 0.22), np.pi * (0.5 + 0.22)  # the kappa table's values at its ends
+    assert lo * 0.99 <= apex(img) <= hi * 1.01
+
+
+def test_plugin_errors_of_cdbrdf_load_dict_are_one_line(cr, tmp_path):
+    with pytest.raises(SceneError) as exc:
+        cr.load_dict({"type": "cdbrdf", "filename": str(tmp_path / "missing.h5")})
+    msg = str(exc.value)
+    assert "\n" not in msg and "Traceback" not in msg and "missing.h5' not found" in msg
+    bsdf_file = tmp_path / "ibiza.bsdf"
+    bsdf_file.write_bytes(b"tensor_file\0\x01\x00" + bytes(64))
+    with pytest.raises(SceneError, match=r"ibiza\.bsdf: not an HDF5 file .*`cdbrdf import FILE -o OUT\.h5`"):
+        cr.load_dict({"type": "cdbrdf", "filename": str(bsdf_file)})

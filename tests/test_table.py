@@ -347,3 +347,26 @@ def test_bad_regular_grids(kw, match):
 
     with pytest.raises(CDBRDFError, match=match):
         Grid.regular(**kw)
+
+
+# -- hostile input, second round ------------------------------------------------------------------------
+@pytest.mark.parametrize("peak", [1e307, -1e307, 1e31])
+def test_values_whose_sums_would_overflow_are_refused(peak):
+    """A float64 table of 1e307 gave NaN for finite queries (its pole ring means overflowed)."""
+    v = np.full((1, 2, 2, 2, 2, 3), 1e307 if abs(peak) > 1e300 else 0.2)
+    v[0, 0, 1, 0, 1, 0] = peak
+    with pytest.raises(TableError, match=r"values: \d+ value\(s\) beyond \+-1e\+30"):
+        _table(v)
+    t = _table(np.full((1, 2, 2, 2, 2, 3), 1e29))  # the bound itself is far beyond any reflectance
+    assert np.all(np.isfinite(t.evaluate(0.0, 10.0, 30.0, 200.0)))
+
+
+def test_masked_queries_are_refused_unless_nothing_is_masked():
+    from cdbrdf.errors import QueryError
+
+    t = _table()
+    q = np.ma.masked_array([10.0, 20.0], mask=[False, True])
+    with pytest.raises(QueryError, match=r"phi_v: a masked array with masked entries"):
+        t.evaluate(10.0, q, 20.0, 0.0)
+    np.testing.assert_array_equal(t.evaluate(10.0, np.ma.masked_array([10.0, 20.0]), 20.0, 0.0),
+                                  t.evaluate(10.0, [10.0, 20.0], 20.0, 0.0))

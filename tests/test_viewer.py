@@ -268,6 +268,79 @@ def test_server_serves_the_files_and_refuses_a_busy_port(files):
             ViewerServer(files, port=srv.port)
 
 
+def _request(port, path="/data.js", headers=None):
+    """The status of a raw GET with exactly ``headers`` (Host included: no client adds its own)."""
+    head = "".join(f"{k}: {v}\r\n" for k, v in (headers or {}).items())
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+        s.sendall(f"GET {path} HTTP/1.1\r\n{head}Connection: close\r\n\r\n".encode("latin-1"))
+        data = b""
+        while b"\r\n\r\n" not in data:
+            chunk = s.recv(65536)
+            if not chunk:
+                break
+            data += chunk
+    status_line, _, rest = data.partition(b"\r\n")
+    return int(status_line.split()[1]), rest.decode("latin-1").lower()
+
+
+def test_server_answers_only_its_own_host_and_origin(files):
+    """It answered any Host (DNS rebinding) and served data.js to any Origin (a <script src> on another site)."""
+    with ViewerServer(files).start() as srv:
+        host = f"127.0.0.1:{srv.port}"
+        own = f"http://{host}"
+        status, head = _request(srv.port, headers={"Host": host})
+        assert status == 200 and "cross-origin-resource-policy: same-origin" in head
+        assert _request(srv.port, headers={"Host": f"localhost:{srv.port}"})[0] == 200
+        assert _request(srv.port, headers={"Host": host, "Origin": own, "Referer": own + "/",
+                                           "Sec-Fetch-Site": "same-origin"})[0] == 200
+        refused = [{"Host": f"evil.example:{srv.port}"}, {"Host": "127.0.0.1"}, {"Host": f"127.0.0.1:{srv.port + 1}"},
+                   {}, {"Host": host, "Origin": "http://evil.example"}, {"Host": host, "Origin": "null"},
+                   {"Host": host, "Referer": "http://evil.example/page.html"},
+                   {"Host": host, "Sec-Fetch-Site": "cross-site"}, {"Host": host, "Sec-Fetch-Site": "same-site"}]
+        for headers in refused:
+            assert _request(srv.port, headers=headers)[0] == 403, headers
+            assert _request(srv.port, "/assets/table-0.bin", headers=headers)[0] == 403, headers
+        # the page itself may be opened from a link on another site (it holds no data), never for another Host
+        assert _request(srv.port, "/", {"Host": host, "Sec-Fetch-Site": "cross-site", "Sec-Fetch-Mode": "navigate"})[0] == 200
+        assert _request(srv.port, "/", {"Host": f"evil.example:{srv.port}"})[0] == 403
+
+
+def test_a_client_that_resets_mid_download_is_logged_without_a_traceback(files, capfd, caplog):
+    import logging
+    import struct
+    import time
+
+    caplog.set_level(logging.DEBUG, logger="cdbrdf.view.server")
+    with ViewerServer(files).start() as srv:
+        for _ in range(3):
+            s = socket.create_connection(("127.0.0.1", srv.port))
+            s.sendall(f"GET /data.js HTTP/1.1\r\nHost: 127.0.0.1:{srv.port}\r\n\r\n".encode())
+            s.recv(100)
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+            s.close()  # a reset while the server still writes data.js
+        time.sleep(0.5)
+        assert _request(srv.port, headers={"Host": f"127.0.0.1:{srv.port}"})[0] == 200  # still serving
+    err = capfd.readouterr().err
+    assert "Traceback" not in err and err == "", err
+    assert all("\n" not in r.getMessage() for r in caplog.records)
+
+
+def test_export_never_replaces_a_folder_another_command_made(tmp_path, files):
+    """--export onto a capture folder wiped 735 photographs; onto the demo's folder, its input tables."""
+    from cdbrdf.errors import OutputError
+    from cdbrdf.fsutil import output_folder
+
+    with output_folder(tmp_path / "capture") as d:  # a simulated capture: no maker recorded
+        (d / "capture.csv").write_text("file\n")
+        (d / "k0").mkdir()
+        (d / "k0" / "a.png").write_bytes(b"photo")
+    with pytest.raises(OutputError, match=r"capture: an output folder cdbrdf made, but not by `cdbrdf view --export`"):
+        export_viewer(tmp_path / "capture", files)
+    assert (tmp_path / "capture" / "k0" / "a.png").read_bytes() == b"photo"
+    export_viewer(tmp_path / "v", files)
+    export_viewer(tmp_path / "v", files)  # an earlier export is replaced
+
+
 # -- command line ------------------------------------------------------------------------
 def test_cli_errors_are_one_line(tmp_path, capsys):
     bad = tmp_path / "bad.h5"

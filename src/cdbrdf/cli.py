@@ -9,6 +9,14 @@ line ``cdbrdf COMMAND: error: MESSAGE`` to stderr and exit with status 2; so do
 :class:`MemoryError` and :class:`RecursionError` (naming the limits that bound
 the work). The limit variables (:mod:`cdbrdf.limits`) are checked before the
 options are parsed (one line naming a bad one, status 2). ``--debug`` shows the traceback instead.
+
+Every command runs under the one output rule (:func:`cdbrdf.commands._args.guarded`:
+no output is, holds or lies inside an input; one run at a time per output).
+Everything printed, log lines included, goes through
+:func:`cdbrdf.commands._text.printable` (a file's escape sequences never reach
+the terminal). When the reader of the output goes away (``cdbrdf info f.h5 |
+head -1``) the command ends quietly with status 141, as a Unix tool killed by
+SIGPIPE does.
 """
 
 from __future__ import annotations
@@ -42,6 +50,8 @@ COMMANDS: tuple[str, ...] = (
 
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
+#: 128 + SIGPIPE: what a shell reports for a tool whose reader went away.
+EXIT_BROKEN_PIPE = 141
 
 
 class Parser(argparse.ArgumentParser):
@@ -57,13 +67,45 @@ class Parser(argparse.ArgumentParser):
 
 
 def _one_line(text: str) -> str:
-    return " ".join(str(text).split())
+    """One line of text, its control characters escaped (:func:`cdbrdf.commands._text.printable`)."""
+    from .commands._text import printable
+
+    return printable(" ".join(str(text).split()))
+
+
+class _PrintableFormatter(logging.Formatter):
+    """Log lines with the control characters of their (file-provided) text escaped."""
+
+    def format(self, record: logging.LogRecord) -> str:  # noqa: D102 - logging API
+        from .commands._text import printable
+
+        return printable(super().format(record), newlines=True)
+
+
+def _quiet_stdout() -> None:
+    """Send what is left for standard output to the null device (its reader went away)."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # pragma: no cover - stdout without a descriptor
+        pass
 
 
 def _module(command: str) -> str:
     """The module of a sub-command: dashes become underscores, a Python keyword gets one appended (import_)."""
     name = command.replace("-", "_")
     return f"{name}_" if keyword.iskeyword(name) else name
+
+
+def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    """The parser of one sub-command."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return action.choices[command]
+    raise LookupError(f"no sub-command {command!r}")  # pragma: no cover - build_parser registers them all
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -135,7 +177,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        0 on success, 2 for a user error, 130 when interrupted. Bad arguments,
+        0 on success, 2 for a user error, 130 when interrupted, 141 when the
+        reader of standard output went away. Bad arguments,
         ``--help`` and ``--version`` exit through :class:`SystemExit` (status
         2, 0 and 0).
     """
@@ -161,18 +204,25 @@ def main(argv: Sequence[str] | None = None) -> int:
             return EXIT_USER_ERROR
     parser = build_parser()
     args = parser.parse_args(_join_negative_lists(argv))
-    logging.basicConfig(
-        level=logging.DEBUG if args.debug else logging.WARNING,
-        format="%(levelname)s %(name)s: %(message)s",
-    )
+    handler = logging.StreamHandler()
+    handler.setFormatter(_PrintableFormatter("%(levelname)s %(name)s: %(message)s"))
+    logging.basicConfig(level=logging.DEBUG if args.debug else logging.WARNING, handlers=[handler])
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return EXIT_USER_ERROR
     try:
-        return int(args.func(args) or 0)
+        from .commands._args import guarded
+
+        with guarded(_subparser(parser, args.command), args):
+            status = int(args.func(args) or 0)
+        sys.stdout.flush()  # a reader gone away is seen here, not at exit
+        return status
     except KeyboardInterrupt:
         print("cdbrdf: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        _quiet_stdout()
+        return EXIT_BROKEN_PIPE
     except (ValueError, OSError, LookupError) as exc:
         if args.debug:
             raise

@@ -52,10 +52,16 @@ if TYPE_CHECKING:
     from .measure.stands import Stand
 
 __all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth", "WORK_DIR", "COMPARED_FILL",
-           "VIEWER_DIR"]
+           "VIEWER_DIR", "DEMO_MAKER", "DEMO_SIGNATURE"]
 
 #: The fill method the demo compares the default with (the paper's rule).
 COMPARED_FILL = "nearest"
+
+#: The maker the demo's output folder names in its owner mark (:func:`cdbrdf.fsutil.output_folder`).
+DEMO_MAKER = "demo"
+
+#: Files every output folder of the demo holds.
+DEMO_SIGNATURE: tuple[str, ...] = ("report.html",)
 
 #: Folder of the interactive viewer inside the output folder (its ``index.html`` opens from disk).
 VIEWER_DIR = "viewer"
@@ -610,12 +616,12 @@ def run_demo(
 
     kappas = [float(k) for k in cfg.grid.kappa]
     chosen = [default_stand(k) if stands is None else stand_for(stands, k) for k in kappas]
-    check_output_folder(output)  # fail now, not after the whole run
+    check_output_folder(output, maker=DEMO_MAKER, signature=DEMO_SIGNATURE)  # fail now, not after the whole run
     set_variant()  # checks libLLVM before anything long starts
     t0 = time.perf_counter()
     results = []
     timings: dict[str, float] = {}
-    with output_folder(output) as folder:
+    with output_folder(output, maker=DEMO_MAKER, signature=DEMO_SIGNATURE) as folder:
         # intermediate files live inside the partial folder, so that a killed run's
         # leftovers are swept with it by the next run (cdbrdf.fsutil.sweep_stale)
         work = folder / WORK_DIR

@@ -19,6 +19,7 @@ __all__ = [
     "CaptureError",
     "LimitError",
     "OptionError",
+    "OutputError",
 ]
 
 
@@ -68,4 +69,13 @@ class OptionError(CDBRDFError, ValueError):
     The message names the option, the value given and the valid values
     (e.g. ``scheduler``, ``compression``, a material name, an image array of
     the wrong shape or type).
+    """
+
+
+class OutputError(CDBRDFError, ValueError):
+    """An output cannot be written without destroying something or colliding with another run.
+
+    It is one of the run's inputs (or a folder holding one), an output
+    folder that another command made, or another run is writing it. The
+    message names the output and the reason; nothing has been written.
     """

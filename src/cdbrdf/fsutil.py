@@ -12,15 +12,33 @@ Three rules every writer in cdbrdf follows:
    (``.NAME.<pid>.<random>.<kind>``); :func:`sweep_stale` removes those whose
    process is gone (a run killed with SIGKILL), so nothing piles up.
 
-Output folders of whole runs (``cdbrdf demo``, ``cdbrdf simulate-capture``)
-are built as a partial folder beside the destination and swapped in whole
-(:func:`output_folder`); :func:`check_output_folder` refuses a bad destination
-before any work, including an earlier output folder that holds files its run
-did not write (the owner mark keeps the run's manifest).
+Output folders of whole runs (``cdbrdf demo``, ``cdbrdf simulate-capture``,
+``cdbrdf view --export``) are built as a partial folder beside the
+destination and swapped in whole (:func:`output_folder`);
+:func:`check_output_folder` refuses a bad destination before any work,
+including an earlier output folder that holds files its run did not write
+(the owner mark keeps the run's manifest) or that another command made (the
+mark names its maker).
+
+Three more rules protect what a run reads and what another run writes:
+
+- every path cdbrdf reads is checked to be a regular file before it is
+  opened (:func:`check_regular`, :func:`read_regular`): a FIFO would block
+  the reader forever and a device such as ``/dev/zero`` never end it;
+- an output is never one of the run's inputs, never a folder that holds one
+  and never inside an input folder (:func:`find_overlap`,
+  :func:`check_not_input`), links followed;
+- one run at a time writes an output (:func:`output_lock`: an advisory lock
+  on ``.NAME.lock`` beside it); a second run is refused at once.
+
+A replaced file keeps the permission bits of the file it replaces, and a
+write that fails because the disk (or the file-size limit) is full is one
+line naming the file; the old file is left as it was (:func:`atomic_path`).
 """
 
 from __future__ import annotations
 
+import errno
 import json
 import logging
 import os
@@ -29,16 +47,22 @@ import secrets
 import shutil
 import socket
 import stat
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from os import PathLike
 from pathlib import Path
+
+from .errors import OutputError
 
 __all__ = [
     "OWNER_MARK",
     "atomic_path",
     "check_output_file",
+    "check_regular",
     "read_regular",
+    "find_overlap",
+    "check_not_input",
+    "output_lock",
     "temp_sibling",
     "mark_owned",
     "is_owned",
@@ -185,13 +209,54 @@ def check_output_file(path: str | PathLike[str]) -> Path:
     return dest
 
 
+def check_regular(path: str | PathLike[str]) -> Path:
+    """Refuse, before anything opens it, a path to read that is not a regular file.
+
+    Links are followed. A FIFO would block a reader forever, a device such
+    as ``/dev/zero`` never end it and a socket is no file: every reader in
+    cdbrdf (tables, imported BRDF files, meshes, photographs, capture files,
+    scene files and what they name) checks its path here first, and readers
+    of whole files read through :func:`read_regular`.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    FileNotFoundError
+        When ``path`` does not exist (or is a dangling link).
+    IsADirectoryError
+        When it is a folder.
+    OSError
+        When it is anything else that is not a regular file (the message says
+        what it is), or cannot be examined (a link loop, a folder without
+        permission, a name with a NUL character).
+    """
+    p = Path(path)
+    try:
+        mode = os.stat(p).st_mode
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{p}: no such file") from None
+    except (OSError, ValueError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise OSError(f"{p}: cannot be examined ({why})") from None
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(f"{p}: not a regular file (a folder)")
+    if not stat.S_ISREG(mode):
+        raise OSError(f"{p}: not a regular file ({_kind_of(mode)}); it is not read: reading it could block or "
+                      "never end")
+    return p
+
+
 def read_regular(path: str | PathLike[str], *, max_bytes: int) -> bytes:
     """The bytes of a regular file, reading at most ``max_bytes + 1`` of them.
 
     A FIFO, a device (``/dev/zero``), a socket or a folder is refused before
-    it is opened (so reading never blocks or runs without end), checked again
-    on the open file; a result longer than ``max_bytes`` means the file is
-    larger than that (the caller refuses it).
+    it is opened (:func:`check_regular`, so reading never blocks or runs
+    without end), checked again on the open file; a result longer than
+    ``max_bytes`` means the file is larger than that (the caller refuses it).
 
     Raises
     ------
@@ -201,16 +266,222 @@ def read_regular(path: str | PathLike[str], *, max_bytes: int) -> bytes:
         When it is not a regular file (the message says what it is) or
         cannot be read.
     """
-    p = Path(path)
-    mode = p.stat().st_mode
-    if not stat.S_ISREG(mode):
-        raise OSError(f"{p}: not a regular file ({_kind_of(mode)})")
+    p = check_regular(path)
     fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
     with os.fdopen(fd, "rb") as fh:
         mode = os.fstat(fh.fileno()).st_mode
         if not stat.S_ISREG(mode):  # replaced since the check
             raise OSError(f"{p}: not a regular file ({_kind_of(mode)})")
         return fh.read(max(int(max_bytes), 0) + 1)
+
+
+def _resolved(p: Path, cache: dict[Path, Path]) -> Path:
+    """``p`` with its folder's links resolved (the name itself kept: it may not exist yet)."""
+    parent = p.parent
+    if parent not in cache:
+        try:
+            cache[parent] = parent.resolve()
+        except (OSError, RuntimeError):
+            cache[parent] = parent.absolute()
+    return cache[parent] / p.name
+
+
+def find_overlap(outputs: Iterable[tuple[str | PathLike[str], bool]],
+                 inputs: Iterable[str | PathLike[str]]) -> tuple[Path, Path, str] | None:
+    """The first output that is an input, holds one or lies inside an input folder.
+
+    The one rule of every command: an output file must not be an input; an
+    output folder (replaced whole, or written into) must not be an input
+    and must not hold one; no output may lie inside a folder the run reads
+    as a whole. The same file is recognised through symbolic and hard links
+    (device and inode) and by its resolved path (for names that do not exist
+    yet).
+
+    Parameters
+    ----------
+    outputs
+        ``(path, is_folder)`` of everything the run writes or replaces.
+    inputs
+        Files and folders the run reads.
+
+    Returns
+    -------
+    tuple or None
+        ``(output, input, relation)`` with relation ``"is"``, ``"holds"``
+        or ``"is inside"``; None when there is no overlap.
+    """
+    cache: dict[Path, Path] = {}
+    ins = [Path(p) for p in inputs]
+    by_path: dict[Path, Path] = {}
+    by_inode: dict[tuple[int, int], Path] = {}
+    parents: dict[Path, Path] = {}  # resolved folder -> an input inside it
+    in_folders: dict[Path, Path] = {}
+    for p in ins:
+        r = _resolved(p, cache)
+        by_path.setdefault(r, p)
+        parents.setdefault(r.parent, p)
+        try:
+            st = os.stat(p)
+        except (OSError, ValueError):
+            continue
+        by_inode.setdefault((st.st_dev, st.st_ino), p)
+        if stat.S_ISDIR(st.st_mode):
+            try:
+                in_folders.setdefault(p.resolve(), p)
+            except (OSError, RuntimeError):
+                in_folders.setdefault(r, p)
+    for out, folder in outputs:
+        t = Path(out)
+        r = _resolved(t, cache)
+        if r in by_path:
+            return t, by_path[r], "is"
+        ost: os.stat_result | None
+        try:
+            ost = os.stat(t)
+        except (OSError, ValueError):
+            ost = None
+        if ost is not None and (ost.st_dev, ost.st_ino) in by_inode:
+            return t, by_inode[(ost.st_dev, ost.st_ino)], "is"
+        if ost is not None and stat.S_ISDIR(ost.st_mode):
+            try:
+                r = t.resolve()
+            except (OSError, RuntimeError):
+                pass
+        if folder:
+            for d, p in parents.items():
+                if d == r or r in d.parents:
+                    return t, p, "holds"
+        for d, p in in_folders.items():
+            if r != d and d in r.parents:
+                return t, p, "is inside"
+    return None
+
+
+def check_not_input(outputs: Iterable[tuple[str | PathLike[str], bool]],
+                    inputs: Iterable[str | PathLike[str]]) -> None:
+    """Refuse, before any work, an output that is, holds or lies inside an input (:func:`find_overlap`).
+
+    Raises
+    ------
+    OutputError
+        ``"scan.ply: is the input scan.ply; writing it would replace what the
+        run reads (choose another output name)"``.
+    """
+    hit = find_overlap(outputs, inputs)
+    if hit is None:
+        return
+    out, inp, relation = hit
+    if relation == "is":
+        raise OutputError(f"{out}: is the input {inp}; writing it would replace what the run reads "
+                          "(choose another output name)")
+    if relation == "holds":
+        raise OutputError(f"{out}: holds the input {inp}, which writing this output folder could replace or "
+                          "delete; choose another output folder")
+    raise OutputError(f"{out}: lies inside the input folder {inp}; choose an output outside it")
+
+
+def _lock_holder(fd: int) -> int | None:
+    try:
+        text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+    except OSError:  # pragma: no cover - a vanished descriptor
+        return None
+    return int(text) if text.isdigit() else None
+
+
+@contextmanager
+def output_lock(path: str | PathLike[str]) -> Iterator[Path]:
+    """Hold the lock of an output for a whole run: one run at a time writes it.
+
+    The lock is an advisory ``flock`` on ``.NAME.lock`` beside the output
+    (file or folder), holding the process id of its holder; it is removed
+    when the run ends and released by the system when the process dies
+    (SIGKILL included), so a killed run never blocks the next. Nested use in
+    one process (a command and the library function it calls) is allowed.
+    On systems without ``fcntl`` nothing is locked.
+
+    Raises
+    ------
+    OutputError
+        When another process holds the lock: ``"out.h5: another cdbrdf run
+        (process 1234) is writing it; wait for it to end or choose another
+        output"``.
+    """
+    dest = Path(path)
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        yield dest
+        return
+    lock = dest.with_name(f".{dest.name}.lock")
+    while True:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o666 & ~_umask())
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            holder = _lock_holder(fd)
+            os.close(fd)
+            if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                raise
+            if holder == os.getpid():  # this process holds it (nested): the outer use releases it
+                yield dest
+                return
+            who = f" (process {holder})" if holder else ""
+            raise OutputError(f"{dest}: another cdbrdf run{who} is writing it; wait for it to end or choose "
+                              "another output") from None
+        try:  # the holder before us may have removed the file after we opened it: lock the one that is there
+            same = os.fstat(fd).st_ino == os.stat(lock).st_ino
+        except OSError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
+        yield dest
+    finally:
+        try:
+            os.unlink(lock)
+        except OSError:  # pragma: no cover - removed by hand
+            pass
+        os.close(fd)
+
+
+#: errno values of a full disk, a file-size limit (``ulimit -f``) or a full quota.
+_NO_SPACE = frozenset(e for e in (getattr(errno, n, None) for n in ("ENOSPC", "EFBIG", "EDQUOT")) if e is not None)
+
+
+def _no_space(exc: BaseException, folder: Path, written: int) -> bool:
+    """Whether a failed write ran out of space.
+
+    Its errno says so, the folder's file system is full, or the ``written``
+    bytes reached the process's file-size limit (``ulimit -f``): libraries
+    often report these as other errors.
+    """
+    if isinstance(exc, OSError) and exc.errno in _NO_SPACE:
+        return True
+    if isinstance(exc, (KeyboardInterrupt, SystemExit)):
+        return False
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+        if soft != resource.RLIM_INFINITY and written >= soft:
+            return True
+    except (ImportError, OSError, ValueError):  # pragma: no cover - not POSIX
+        pass
+    try:
+        st = os.statvfs(folder)
+    except (OSError, AttributeError):
+        return False
+    return st.f_bavail == 0 or (st.f_favail == 0 and st.f_files > 0)
+
+
+def _no_space_error(dest: Path) -> OSError:
+    exc = OSError(f"{dest}: cannot be written: no space left on the device (or the file-size limit or the "
+                  "quota reached); the old file, if any, is kept")
+    exc.errno = errno.ENOSPC
+    return exc
 
 
 @contextmanager
@@ -227,8 +498,16 @@ def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp", sweep: bool 
     (``.png``, ``.exr``): the temporary is ``.NAME.<pid>...tmp<suffix>``.
     A destination that is a folder or exists and is not a regular file (a
     device, a FIFO, a socket) is refused (:func:`check_output_file`).
+
+    The new file gets the permission bits of the file it replaces (a 0600
+    table stays 0600), else the usual ``0666 & ~umask``, whatever mode the
+    writer created it with. A write that fails because the disk, the quota
+    or the file-size limit is full raises one :class:`OSError` naming the
+    file (errno ``ENOSPC``), whatever the writing library raised; the old
+    file is left as it was.
     """
     dest = check_output_file(path)
+    folder = dest.parent if str(dest.parent) else Path(".")
     if sweep:
         sweep_stale(dest)
     tmp_path = temp_sibling(dest, "tmp")
@@ -241,19 +520,34 @@ def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp", sweep: bool 
         with open(tmp_path, "rb+") as fh:
             os.fsync(fh.fileno())
         check_output_file(dest)  # not made a device or FIFO meanwhile
+        try:
+            mode = stat.S_IMODE(os.stat(dest).st_mode)
+        except OSError:
+            mode = 0o666 & ~_umask()
+        os.chmod(tmp_path, mode)
         os.replace(tmp_path, dest)
-    except BaseException:
+    except BaseException as exc:
+        try:
+            written = tmp_path.stat().st_size
+        except OSError:
+            written = 0
         tmp_path.unlink(missing_ok=True)
+        if _no_space(exc, folder, written):
+            raise _no_space_error(dest) from None
         raise
 
 
-def mark_owned(folder: str | PathLike[str], kind: str, *, files: list[str] | None = None) -> None:
+def mark_owned(folder: str | PathLike[str], kind: str, *, files: list[str] | None = None,
+               maker: str | None = None) -> None:
     """Write the owner marker into ``folder`` (which cdbrdf has just created).
 
     ``files``: the manifest of what cdbrdf wrote there (:func:`output_folder`),
-    relative POSIX paths, folders ending in ``/``.
+    relative POSIX paths, folders ending in ``/``. ``maker``: the command
+    that made it (``"demo"``, ``"view --export"``), when it says.
     """
     info: dict[str, object] = {"written_by": "cdbrdf", "kind": kind}
+    if maker is not None:
+        info["maker"] = maker
     if files is not None:
         info["files"] = files
     Path(folder, OWNER_MARK).write_text(json.dumps(info) + "\n", encoding="utf-8")
@@ -330,11 +624,20 @@ def same_file(a: str | PathLike[str], b: str | PathLike[str]) -> bool:
         return Path(a).resolve() == Path(b).resolve()
 
 
-def check_output_folder(path: str | PathLike[str]) -> Path:
+def check_output_folder(path: str | PathLike[str], *, maker: str | None = None,
+                        signature: tuple[str, ...] = ()) -> Path:
     """Refuse, before any work, an output folder that :func:`output_folder` would refuse.
 
     Cheap (no file is written), so that a command fails at once instead of
     after its computation. Returns the folder as a :class:`~pathlib.Path`.
+
+    Parameters
+    ----------
+    path
+        The output folder.
+    maker, signature
+        The command that writes it and files every folder it writes holds
+        (see :func:`output_folder`).
 
     Raises
     ------
@@ -343,6 +646,10 @@ def check_output_folder(path: str | PathLike[str]) -> Path:
         make, an output folder of cdbrdf that holds files its run did not
         write (added since: a measured table, notes; listed in the message),
         or the current folder (or one that holds it).
+    OutputError
+        When it is an output folder that another command made (the demo's,
+        a simulated capture, the viewer's export): only the command that
+        made a folder replaces it.
     """
     dest = Path(path)
     if dest.exists() or dest.is_symlink():
@@ -353,6 +660,7 @@ def check_output_folder(path: str | PathLike[str]) -> Path:
                 f"{dest}: folder exists, is not empty and was not written by cdbrdf; "
                 "choose another output folder"
             )
+        _refuse_other_maker(dest, maker, signature)
         _refuse_added_files(dest)
         cwd = Path.cwd().resolve()
         if cwd == dest.resolve() or dest.resolve() in cwd.parents:
@@ -364,13 +672,20 @@ def check_output_folder(path: str | PathLike[str]) -> Path:
 
 
 @contextmanager
-def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
+def output_folder(path: str | PathLike[str], *, maker: str | None = None,
+                  signature: tuple[str, ...] = ()) -> Iterator[Path]:
     """Build an output folder beside ``path`` and swap it in only on success.
 
     Old results are never mixed with new ones: the new folder replaces a
-    previous cdbrdf output folder whole. A folder that exists, is not empty
-    and was not made by cdbrdf is refused (nothing of the user's is deleted),
-    as is the current folder (:func:`check_output_folder`).
+    previous output folder of the same command whole. A folder that exists,
+    is not empty and was not made by cdbrdf is refused (nothing of the
+    user's is deleted), as is the current folder (:func:`check_output_folder`).
+    The owner mark names ``maker``, the command that made the folder; a
+    folder another command made (a demo's output under ``view --export``) is
+    refused. A folder marked before the maker was recorded is replaced only
+    when it holds every file of ``signature`` (the files every folder of
+    that command holds: ``report.html`` for the demo). The run holds the
+    folder's lock (:func:`output_lock`) while it works.
     On failure (or interrupt) the partial folder is removed and the old one
     left as it was; partial folders of killed runs (``.NAME.<pid>...partial``,
     with everything inside them) are removed by the next run.
@@ -380,30 +695,53 @@ def output_folder(path: str | PathLike[str]) -> Iterator[Path]:
     pathlib.Path
         The partial folder to fill (marked as cdbrdf's own).
     """
-    dest = check_output_folder(path)
+    dest = check_output_folder(path, maker=maker, signature=signature)
     parent = dest.parent if str(dest.parent) else Path(".")
     parent.mkdir(parents=True, exist_ok=True)
-    sweep_stale(dest)
-    tmp = temp_sibling(dest, "partial")
-    tmp.mkdir(mode=0o777)
-    try:
-        mark_owned(tmp, _OUTPUT_KIND)
-        (tmp / _OUTPUT_MARKER).write_text("written by cdbrdf; the whole folder is replaced on the next run\n")
-        yield tmp
-        # the manifest: what this run wrote; anything added later stops the next run from replacing it
-        mark_owned(tmp, _OUTPUT_KIND, files=_entries(tmp))
-        if dest.exists() or dest.is_symlink():
-            check_output_folder(dest)  # files added to the old folder while this run worked
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    if dest.exists():
-        old = temp_sibling(dest, "old")
-        dest.rename(old)
-        tmp.rename(dest)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        tmp.rename(dest)
+    with output_lock(dest):
+        sweep_stale(dest)
+        tmp = temp_sibling(dest, "partial")
+        tmp.mkdir(mode=0o777)
+        try:
+            mark_owned(tmp, _OUTPUT_KIND, maker=maker)
+            (tmp / _OUTPUT_MARKER).write_text("written by cdbrdf; the whole folder is replaced on the next run\n")
+            yield tmp
+            # the manifest: what this run wrote; anything added later stops the next run from replacing it
+            mark_owned(tmp, _OUTPUT_KIND, files=_entries(tmp), maker=maker)
+            if dest.exists() or dest.is_symlink():
+                check_output_folder(dest, maker=maker, signature=signature)  # changed while this run worked
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        if dest.exists():
+            old = temp_sibling(dest, "old")
+            dest.rename(old)
+            tmp.rename(dest)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            tmp.rename(dest)
+
+
+def _refuse_other_maker(dest: Path, maker: str | None, signature: tuple[str, ...]) -> None:
+    """Refuse to replace an output folder that another command made (an empty folder is anyone's)."""
+    if not any(dest.iterdir()):
+        return
+    info = _read_mark(dest) if is_owned(dest) else None
+    made_by = info.get("maker") if info else None
+    if isinstance(made_by, str):
+        if made_by != maker:
+            raise OutputError(
+                f"{dest}: an output folder of `cdbrdf {made_by}`"
+                + (f", not of `cdbrdf {maker}`" if maker else "")
+                + "; only the command that made a folder replaces it: choose another output folder"
+            )
+        return
+    missing = [f for f in signature if not (dest / f).is_file()]
+    if missing and maker is not None:
+        raise OutputError(
+            f"{dest}: an output folder cdbrdf made, but not by `cdbrdf {maker}` (it has no {missing[0]}); only "
+            "the command that made a folder replaces it: choose another output folder"
+        )
 
 
 def _refuse_added_files(dest: Path) -> None:

@@ -396,6 +396,8 @@ def prepare(table: _Table) -> LookupGrid:
 
 
 def _as_query(name: str, x: ArrayLike) -> NDArray[np.floating]:
+    if np.ma.is_masked(x):  # np.asarray would drop the mask: masked entries would be looked up as numbers
+        raise QueryError(f"{name}: a masked array with masked entries; fill them (e.g. .filled(np.nan): NaN rows)")
     try:
         a = np.asarray(x)
     except (TypeError, ValueError) as exc:

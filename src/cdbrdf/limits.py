@@ -23,6 +23,8 @@ limit                      environment variable             default
 ``json_bytes``             ``CDBRDF_MAX_JSON_BYTES``        16,777,216 bytes
 ``csv_bytes``              ``CDBRDF_MAX_CSV_BYTES``         2,147,483,648 bytes
 =========================  ===============================  ==================
+
+One bound is fixed: :data:`MAX_SPP`, the samples per pixel of one render.
 """
 
 from __future__ import annotations
@@ -33,7 +35,11 @@ from dataclasses import dataclass
 
 from .errors import LimitError
 
-__all__ = ["Limit", "LIMITS", "MAX_VALUE", "limit", "check", "check_environment"]
+__all__ = ["Limit", "LIMITS", "MAX_VALUE", "MAX_SPP", "limit", "check", "check_environment"]
+
+#: Most samples per pixel of one render (``--spp``, a scene's sampler, ``-D spp=...``): 65,536 spp of a
+#: 512 x 384 image already take hours on a CPU; more is a typo, never a useful render.
+MAX_SPP = 65536
 
 
 @dataclass(frozen=True)

@@ -63,7 +63,12 @@ __all__ = [
     "MIRRORED_ATTRS",
     "ATTRS_JSON_ATTR",
     "DIGEST_ATTR",
+    "DATA_DIGEST_ATTR",
     "WRITER_ATTRS",
+    "UNIT_SPELLINGS",
+    "PACKING_ATTRS",
+    "MISSING_VALUE_ATTRS",
+    "same_units",
     "CONVENTIONS",
     "SYMMETRY_ATTR",
     "SYMMETRIES",
@@ -82,7 +87,7 @@ __all__ = [
 #: Value of the global attribute ``format``.
 FORMAT_NAME = "cdbrdf"
 #: ``MAJOR.MINOR`` of the layout: readers accept any minor version of their major version.
-FORMAT_VERSION = "1.2"
+FORMAT_VERSION = "1.3"
 
 # -- dimensions -------------------------------------------------------------------------
 #: Dimension names of the reflectance, in storage order (``docs/conventions.md``).
@@ -204,10 +209,26 @@ MIRRORED_ATTRS: tuple[str, ...] = ("quantity", "colour_space")
 ATTRS_JSON_ATTR = "cdbrdf_attrs"
 #: Global attribute with the SHA-256 of ``cdbrdf_attrs`` and the channel names (since 1.1).
 DIGEST_ATTR = "cdbrdf_sha256"
+#: Global attribute with the SHA-256 of the axes and of every data variable as stored (since 1.3).
+DATA_DIGEST_ATTR = "cdbrdf_data_sha256"
 #: Global attributes the writer sets itself, never mirrors of table attributes.
 WRITER_ATTRS: frozenset[str] = frozenset(
-    ("format", "format_version", "software", "Conventions", ATTRS_JSON_ATTR, DIGEST_ATTR)
+    ("format", "format_version", "software", "Conventions", ATTRS_JSON_ATTR, DIGEST_ATTR, DATA_DIGEST_ATTR)
 )
+#: Spellings of each unit the readers accept in a ``units`` attribute (UDUNITS spellings of the same
+#: unit, as other tools write them); any other unit is refused: the values would mean something else.
+UNIT_SPELLINGS: Mapping[str, frozenset[str]] = MappingProxyType({
+    "1/mm": frozenset({"1/mm", "mm-1", "mm^-1", "1 mm-1", "mm**-1"}),
+    "degree": frozenset({"degree", "degrees", "deg"}),
+    "1/sr": frozenset({"1/sr", "sr-1", "sr^-1", "1 sr-1", "sr**-1"}),
+    "1": frozenset({"1", ""}),
+})
+#: CF packing attributes (``value = stored * scale_factor + add_offset``): readers refuse a variable
+#: that has them (the layout stores unpacked floats; a reader that ignored them would read other values).
+PACKING_ATTRS: tuple[str, ...] = ("scale_factor", "add_offset")
+#: CF attributes marking missing values: a stored value equal to one of them is missing (xarray reads
+#: it as NaN), which a table cannot hold.
+MISSING_VALUE_ATTRS: tuple[str, ...] = ("_FillValue", "missing_value")
 #: Value of the global attribute ``Conventions``.
 CONVENTIONS = "CF-1.10"
 
@@ -270,6 +291,12 @@ def reflectance_units(quantity: str) -> str:
         For a quantity that is not one of :data:`QUANTITIES` (the message lists them).
     """
     return _REFLECTANCE_UNITS[check_quantity(quantity)]
+
+
+def same_units(given: str, expected: str) -> bool:
+    """Whether a ``units`` attribute ``given`` names the unit ``expected`` (:data:`UNIT_SPELLINGS`)."""
+    g = " ".join(str(given).split())
+    return g in UNIT_SPELLINGS.get(expected, frozenset({expected}))
 
 
 def variable_attrs(name: str, quantity: str) -> dict[str, Any]:

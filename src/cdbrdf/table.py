@@ -70,6 +70,7 @@ __all__ = [
     "Grid",
     "CDBRDF",
     "load",
+    "MAX_ABS_VALUE",
     "AXES",
     "QUANTITIES",
     "PAPER_KAPPA",
@@ -78,6 +79,13 @@ __all__ = [
     "MAX_ABS_KAPPA",
     "MIN_AXIS_STEP",
 ]
+
+#: Largest magnitude of a table value. Far beyond any reflectance (measured BRDFs stay below about 1e5
+#: sr^-1, :data:`cdbrdf.importers.source.MAX_PLAUSIBLE_BRDF`), and small enough that every sum the lookup,
+#: its pole rule and the renderer (float32) make of the values stays finite: a float64 table of 1e307
+#: would give NaN for finite queries (its ring means overflow).
+MAX_ABS_VALUE = 1e30
+
 
 class CDBRDF:
     """A curvature-dependent BRDF sampled on a 5-D grid (RGB or other channels).
@@ -89,7 +97,7 @@ class CDBRDF:
         sr^-1 for ``quantity="brdf"``. Stored as float32 or float64 (integer
         and other float dtypes are converted to float64; bool, complex, time,
         object and string dtypes and masked arrays with masked entries are
-        refused). Must be finite.
+        refused). Must be finite and within +-:data:`MAX_ABS_VALUE`.
     kappa
         Curvatures, mm^-1, strictly increasing.
     theta_l, phi_l, theta_v, phi_v
@@ -236,6 +244,11 @@ class CDBRDF:
         if not np.all(np.isfinite(v)):
             bad = int(np.count_nonzero(~np.isfinite(v)))
             raise TableError(f"{name}: contains {bad} NaN or infinite value(s)")
+        if v.size and float(np.max(np.abs(v))) > MAX_ABS_VALUE:
+            bad = int(np.count_nonzero(np.abs(v) > MAX_ABS_VALUE))
+            top = float(np.max(np.abs(v)))
+            raise TableError(f"{name}: {bad} value(s) beyond +-{MAX_ABS_VALUE:g} (up to {top:.3g}): not a "
+                             "reflectance, and its sums would overflow")
         v = np.array(v, order="C", copy=True)
         v.setflags(write=False)
         return v
@@ -672,7 +685,11 @@ class CDBRDF:
         ``fill_weights`` (dimensions ... ``fill_slot``) and, when present,
         ``reflectance_std`` and ``fill_std``;
         coordinates; ``units``, ``long_name`` and flag attributes as in the
-        file; ``attrs`` copied (non-scalar values as they are). Needs xarray.
+        file; the global attributes of the file (:func:`cdbrdf.io.global_attrs`:
+        every value netCDF-legal, non-scalar attributes such as ``provenance``
+        as JSON text, ``cdbrdf_attrs`` holding them all), so that
+        ``to_xarray().to_netcdf(path)`` writes a file :func:`cdbrdf.load`
+        reads back as this table. Needs xarray.
         """
         import xarray as xr
 
@@ -683,21 +700,25 @@ class CDBRDF:
         coords[FILL_SLOT] = (FILL_SLOT, np.arange(self._fill_sources.shape[-1], dtype=np.int32),
                              variable_attrs(FILL_SLOT, q))
         data = {name: (DATA_VARIABLES[name], a, variable_attrs(name, q)) for name, a in parts.variables().items()}
-        return xr.Dataset(data, coords=coords, attrs=copy.deepcopy(self._attrs))
+        return xr.Dataset(data, coords=coords, attrs=_io.global_attrs(parts))
 
     @classmethod
     def from_xarray(cls, ds: Any) -> CDBRDF:
         """A table from a :class:`xarray.Dataset` laid out as :meth:`to_xarray` makes.
 
         Dimensions are transposed into the table's order when needed; values
-        are validated as by the constructor. Channel names that are not the
+        are validated as by the constructor. The table's attributes are
+        ``cdbrdf_attrs`` when the dataset has it (as :meth:`to_xarray` and a
+        file give it; every attribute mirroring one of its entries must agree
+        with it, :func:`cdbrdf.io.attrs_from_globals`), else the dataset's
+        attributes but the format's own. Channel names that are not the
         defaults become ``attrs["channels"]`` (unless the attrs name them).
         """
         for name in (REFLECTANCE, *SAMPLE_AXES):
             if name not in ds.variables:
                 raise TableError(f"ds: the dataset has no variable {name!r}")
         arrays = {name: ds[name].transpose(*dims).values for name, dims in DATA_VARIABLES.items() if name in ds}
-        attrs = dict(ds.attrs)
+        attrs = _io.attrs_from_globals(ds.attrs)
         if CHANNEL in ds.coords:
             attrs = with_channel_names(attrs, [str(c) for c in ds[CHANNEL].values])
         parts = TableParts(

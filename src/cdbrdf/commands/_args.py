@@ -15,14 +15,21 @@ A command adopts a factory with one line per option, e.g.::
 
 The callables are also usable outside argparse (they raise
 :class:`argparse.ArgumentTypeError`, a plain :class:`Exception`).
+
+Path types carry a ``role`` (``"input"``, ``"output"`` for a file,
+``"output_folder"``): :func:`guarded` reads the roles of a parsed command and
+applies the one output rule of every command before it runs (no output is,
+holds or lies inside an input; one run at a time writes an output).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import re
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +41,12 @@ __all__ = [
     "size_wxh",
     "square_size",
     "existing_file",
+    "input_path",
+    "output_path",
     "output_file",
+    "output_folder",
+    "with_role",
+    "guarded",
     "seed",
     "name_or_index",
     "keyword",
@@ -63,8 +75,14 @@ def _interval(lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) 
     return f"a number in {'(' if lo_open else '['}{_fmt(lo)}, {_fmt(hi)}{')' if hi_open else ']'}"
 
 
-def _named(func: _Type, name: str) -> _Type:
+#: Roles of path types (see :func:`guarded`).
+ROLES = ("input", "output", "output_folder")
+
+
+def _named(func: _Type, name: str, role: str | None = None) -> _Type:
     func.__name__ = name  # argparse names the type in some messages
+    if role is not None:
+        setattr(func, "role", role)  # noqa: B010 - an attribute functions do not declare
     return func
 
 
@@ -276,7 +294,10 @@ def _suffixes(kinds: Iterable[str]) -> tuple[str, ...]:
 
 
 def existing_file(*kinds: str) -> _Type:
-    """A file that exists (and is not a folder), with one of the suffixes ``kinds`` if given.
+    """A regular file that exists, with one of the suffixes ``kinds`` if given (an input).
+
+    A folder, a FIFO, a device or a socket is refused
+    (:func:`cdbrdf.fsutil.check_regular`: reading it could block or never end).
 
     Examples
     --------
@@ -291,13 +312,44 @@ def existing_file(*kinds: str) -> _Type:
             got = repr(p.suffix) if p.suffix else "no suffix"
             raise argparse.ArgumentTypeError(
                 f"{text}: expected a {' or '.join(suffixes)} file, got {got}")
-        if p.is_dir():
-            raise argparse.ArgumentTypeError(f"{text}: is a folder, expected a file")
-        if not p.is_file():
-            raise argparse.ArgumentTypeError(f"{text}: no such file")
+        from ..fsutil import check_regular
+
+        try:
+            check_regular(p)
+        except IsADirectoryError:
+            raise argparse.ArgumentTypeError(f"{text}: is a folder, expected a file") from None
+        except FileNotFoundError:
+            raise argparse.ArgumentTypeError(f"{text}: no such file") from None
+        except OSError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
         return text
 
-    return _named(parse, "file")
+    return _named(parse, "file", "input")
+
+
+def with_role(func: _Type, role: str) -> _Type:
+    """``func`` (an argparse type) marked as parsing a path of ``role`` (:data:`ROLES`) for :func:`guarded`."""
+    if role not in ROLES:
+        raise ValueError(f"role: {role!r} is not one of {', '.join(ROLES)}")
+    return _named(func, getattr(func, "__name__", "path"), role)
+
+
+def input_path() -> _Type:
+    """A path the command reads and checks itself (an input for :func:`guarded`)."""
+
+    def parse(text: str) -> str:
+        return text
+
+    return _named(parse, "path", "input")
+
+
+def output_path() -> _Type:
+    """A file the command writes and checks itself (an output for :func:`guarded`)."""
+
+    def parse(text: str) -> str:
+        return text
+
+    return _named(parse, "path", "output")
 
 
 def output_file(*kinds: str) -> _Type:
@@ -322,7 +374,82 @@ def output_file(*kinds: str) -> _Type:
             raise argparse.ArgumentTypeError(str(exc)) from None
         return text
 
-    return _named(parse, "file")
+    return _named(parse, "file", "output")
+
+
+def output_folder(*, maker: str | None = None, signature: tuple[str, ...] = (), replaced: bool = True) -> _Type:
+    """An output folder: one replaced whole (:func:`cdbrdf.fsutil.check_output_folder`), or written into.
+
+    Parameters
+    ----------
+    maker, signature
+        The command that makes the folder and the files each of its folders
+        holds (:func:`cdbrdf.fsutil.output_folder`).
+    replaced
+        False for a folder files are written into (``cdbrdf plan``): not checked here.
+    """
+
+    def parse(text: str) -> str:
+        if replaced:
+            from ..errors import OutputError
+            from ..fsutil import check_output_folder
+
+            try:
+                check_output_folder(text, maker=maker, signature=signature)
+            except (OSError, OutputError) as exc:
+                raise argparse.ArgumentTypeError(str(exc)) from None
+        return text
+
+    return _named(parse, "folder", "output_folder")
+
+
+def _values(value: Any) -> Iterator[str]:
+    if isinstance(value, (list, tuple)):
+        for v in value:
+            yield from _values(v)
+    elif isinstance(value, (str, os.PathLike)):
+        yield os.fspath(value)
+
+
+@contextmanager
+def guarded(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Iterator[None]:
+    """Run a parsed command under the one output rule of every command.
+
+    The paths of ``args`` whose option types carry a role (:data:`ROLES`)
+    are its inputs and outputs. Before the command runs, an output that is,
+    holds or lies inside an input is refused
+    (:func:`cdbrdf.fsutil.check_not_input`); then the lock of every output
+    is held (:func:`cdbrdf.fsutil.output_lock`) until the command returns,
+    so a second run on the same output is refused at once.
+
+    Raises
+    ------
+    cdbrdf.errors.OutputError
+        One line naming the output and the input, or the run that holds it.
+    """
+    from ..fsutil import check_not_input, output_lock
+
+    inputs: list[str] = []
+    outputs: list[tuple[str, bool]] = []
+    for action in parser._actions:
+        role = getattr(action.type, "role", None)
+        if role not in ROLES:
+            continue
+        for value in _values(getattr(args, action.dest, None)):
+            if role == "input":
+                if os.path.lexists(value):  # a stand's K in `stack --kappa K FILE` is no path
+                    inputs.append(value)
+            elif value.strip():
+                outputs.append((value, role == "output_folder"))
+    check_not_input(outputs, inputs)
+    with ExitStack() as stack:
+        for out, folder in outputs:
+            p = Path(out)
+            if p.name in ("", ".", "..") or out.endswith(("/", os.sep)) or (not folder and p.is_dir()):
+                continue  # not a file name: the command refuses it with its own message
+            if p.absolute().parent.is_dir():  # a folder yet to be made locks itself (output_folder)
+                stack.enter_context(output_lock(p))
+        yield
 
 
 def name_or_index(*, hi: int = 63, pattern: str = r"[A-Za-z_][A-Za-z0-9_]{0,31}") -> _Type:

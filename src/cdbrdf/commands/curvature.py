@@ -13,9 +13,10 @@ frame recorded in the header (``cdbrdf render`` reuses them).
 from __future__ import annotations
 
 import argparse
-import sys
 
 import numpy as np
+
+from ._text import say
 
 __all__ = ["register", "run", "LARGE_MESH_FACES", "mesh_options", "print_mesh_report"]
 
@@ -46,12 +47,12 @@ def print_mesh_report(label: str, mesh: object) -> None:
     meta = getattr(mesh, "metadata", {})
     repairs = meta.get("repairs") or []
     if repairs:
-        print(f"{label}: repaired: {', '.join(repairs)}", file=sys.stderr)
+        say(f"{label}: repaired: {', '.join(repairs)}", err=True)
     line = "; ".join(str(meta[k]) for k in ("units_note", "neighbourhood_note") if meta.get(k))
     if line:
-        print(f"{label}: {line}; frame: {meta.get('frame', '?')}", file=sys.stderr)
+        say(f"{label}: {line}; frame: {meta.get('frame', '?')}", err=True)
     for note in meta.get("notes") or []:
-        print(f"{label}: note: {note}", file=sys.stderr)
+        say(f"{label}: note: {note}", err=True)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -101,10 +102,10 @@ def run(args: argparse.Namespace) -> int:
         k = out.attributes["curvature"]
         share = out.metadata.get("outside_share")
         rng = "the table's" if table is not None else "the paper's"
-        print(
+        say(
             f"{args.output}: {out.n_vertices} vertices, {out.faces.shape[0]} faces; curvature 1/mm: "
             f"min {k.min():.4g}, median {np.median(k):.4g}, max {k.max():.4g}"
             + (f"; {share:.1%} of the surface outside {rng} kappa range" if share is not None else ""),
-            file=sys.stderr,
+            err=True,
         )
     return 0

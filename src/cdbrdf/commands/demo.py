@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import sys
+
+from ._text import say
 
 __all__ = ["register", "run"]
 
@@ -25,8 +26,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "the Fig. 7 mosaics and render the sine sheet and a draped cloth with the plain BRDF and "
         "the CDBRDF; writes DIR/report.html.",
     )
-    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (replaced whole if it "
-                   "holds an earlier cdbrdf output and nothing added to it since)")
+    from ._args import output_folder
+
+    p.add_argument("-o", "--output", required=True, metavar="DIR", type=output_folder(replaced=False),
+                   help="output folder (replaced whole if it holds an earlier output of the demo and nothing "
+                   "added to it since)")
     p.add_argument("--quick", action="store_true", help="coarse grid and small images: a few minutes")
     p.add_argument("--material", action="append", dest="materials", metavar="NAME", type=_material,
                    help="bundled material to run (repeatable; default: denim and shot)")
@@ -37,34 +41,35 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..demo import CONFIGS, run_demo
+    from ..demo import CONFIGS, DEMO_MAKER, DEMO_SIGNATURE, run_demo
     from ..fsutil import check_output_folder
     from ._progress import ProgressBars
     from .plan import stands_from_args
 
-    check_output_folder(args.output)  # refuse at once, before the estimate and the run
+    # refuse at once, before the estimate and the run
+    check_output_folder(args.output, maker=DEMO_MAKER, signature=DEMO_SIGNATURE)
     cfg = CONFIGS["quick" if args.quick else "full"]
     stands = stands_from_args(args, cfg.grid.kappa)
     materials = args.materials or ["denim", "shot"]
     est = cfg.expected_seconds(len(materials))
     if not args.quiet:
         g = cfg.grid
-        print(
+        say(
             f"cdbrdf demo ({cfg.name}): {len(materials)} material(s), "
             f"{cfg.n_photos:,} photographs each on a {g.phi_v.size * g.theta_v.size} x "
             f"{g.phi_l.size * g.theta_l.size} x {g.kappa.size} grid; expected time about "
             f"{max(1, round(est / 60))} min on a 2-core machine",
-            file=sys.stderr,
+            err=True,
         )
     with ProgressBars(quiet=args.quiet, leave=True, mininterval=0.1) as bars:
         result = run_demo(args.output, quick=args.quick, materials=materials,
                           stands=stands, progress=bars.update)
     if not args.quiet:
         for m in result.materials:
-            print(f"{m.name}: median error of measured samples "
+            say(f"{m.name}: median error of measured samples "
                   f"{100 * m.error['median_rel_error_measured']:.2f} %, "
-                  f"{sum(s['filled'] for s in m.per_stand)} samples filled", file=sys.stderr)
+                  f"{sum(s['filled'] for s in m.per_stand)} samples filled", err=True)
         stages = ", ".join(f"{k.replace('_', ' ')} {v:.0f} s" for k, v in result.timings_s.items() if k != "total")
-        print(f"done in {result.seconds / 60:.1f} min ({stages})", file=sys.stderr)
-    print(f"report: {result.report.resolve()}")
+        say(f"done in {result.seconds / 60:.1f} min ({stages})", err=True)
+    say(f"report: {result.report.resolve()}")
     return 0

@@ -6,6 +6,8 @@ import argparse
 import time
 from typing import Any
 
+from ._text import say
+
 __all__ = ["register", "run", "add_import_options", "import_options", "summary"]
 
 _GRIDS = "default | paper | native | regular:THETA_STEP,PHI_STEP[,THETA_MAX]"
@@ -119,5 +121,5 @@ def run(args: argparse.Namespace) -> int:
                             progress=bars.callback("resample"), **import_options(args))
     table.save(args.output)
     if not quiet:
-        print(f"wrote {args.output}: {summary(table)}; {time.perf_counter() - t0:.1f} s")
+        say(f"wrote {args.output}: {summary(table)}; {time.perf_counter() - t0:.1f} s")
     return 0

@@ -11,6 +11,8 @@ import numpy as np
 if TYPE_CHECKING:
     from ..table import CDBRDF
 
+from ._text import printable, say
+
 __all__ = ["register", "run", "describe"]
 
 
@@ -21,7 +23,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Show what a CDBRDF file holds: grid, quantity, material, "
         "provenance, measured fraction and the value range per channel.",
     )
-    p.add_argument("file", help="a CDBRDF file (.h5)")
+    from ._args import input_path
+
+    p.add_argument("file", type=input_path(), help="a CDBRDF file (.h5)")
     p.add_argument("--json", action="store_true", help="print the information as JSON")
     p.set_defaults(func=run)
 
@@ -65,15 +69,15 @@ def run(args: argparse.Namespace) -> int:
     table = load(args.file)
     info = describe(table)
     if args.json:
-        print(json.dumps(info, indent=2, sort_keys=True))
+        say(json.dumps(info, indent=2, sort_keys=True))
         return 0
     g = table.grid
-    lines = [
-        f"file          {args.file}",
-        f"material      {info['material'] or '(not recorded)'}",
+    lines = [  # the file's own text (material, colour space, channels, provenance) with control characters escaped
+        f"file          {printable(args.file)}",
+        f"material      {printable(info['material'] or '(not recorded)')}",
         f"quantity      {table.quantity}"
         + ("  (BRDF, sr^-1)" if table.quantity == "brdf" else "  (BRDF up to an unknown scale)"),
-        f"colour space  {info['colour_space']}",
+        f"colour space  {printable(info['colour_space'])}",
         f"symmetry      {table.symmetry}"
         + ("  (phi_l = 0; phi_v holds the azimuth difference phi_v - phi_l)" if table.isotropic else ""),
         f"values        {table.shape} {table.values.dtype}"
@@ -90,10 +94,10 @@ def run(args: argparse.Namespace) -> int:
         f"std           {'stored' if table.std is not None else 'none'}",
     ]
     for name, r in info["channels"].items():
-        lines.append(f"channel {name:5s} min {r['min']:.4g}  mean {r['mean']:.4g}  max {r['max']:.4g}")
+        lines.append(f"channel {printable(name):5s} min {r['min']:.4g}  mean {r['mean']:.4g}  max {r['max']:.4g}")
     prov = info["provenance"]
     if prov is not None:
-        text = json.dumps(prov, indent=2, sort_keys=True) if not isinstance(prov, str) else prov
+        text = json.dumps(prov, indent=2, sort_keys=True) if not isinstance(prov, str) else printable(prov)
         lines.append("provenance    " + text.replace("\n", "\n              "))
-    print("\n".join(lines))
+    say("\n".join(lines))
     return 0

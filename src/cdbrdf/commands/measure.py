@@ -6,7 +6,8 @@ import argparse
 from pathlib import Path
 
 from ..measure.fill import DEFAULT_FILL, FILL_METHODS
-from ._args import finite_float, int_range, keyword
+from ._args import finite_float, int_range, keyword, output_path
+from ._text import say
 
 __all__ = ["register", "run"]
 
@@ -24,7 +25,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "sources and an uncertainty. An interrupted run resumes from FILE.ckpt. See docs/capture.md.",
     )
     p.add_argument("capture", metavar="CAPTURE_DIR", help="capture folder with capture.csv")
-    p.add_argument("-o", "--output", required=True, metavar="FILE", help="CDBRDF file to write (.h5)")
+    p.add_argument("-o", "--output", required=True, metavar="FILE", type=output_path(),
+                   help="CDBRDF file to write (.h5)")
     p.add_argument("--patch", type=int_range(1, 999), default=7, help="patch size N in pixels, 1 to 999 (7)")
     p.add_argument("--linear", action="store_true", help="integer images hold linear values, not sRGB")
     p.add_argument("--skip-bad", action="store_true",
@@ -61,12 +63,11 @@ def run(args: argparse.Namespace) -> int:
                 fill=args.fill,
             )
     except KeyboardInterrupt:
-        import sys
 
-        print(f"cdbrdf measure: progress kept in {out}.ckpt; run the same command again to resume",
-              file=sys.stderr)
+        say(f"cdbrdf measure: progress kept in {out}.ckpt; run the same command again to resume",
+              err=True)
         raise
     if not args.quiet:
-        print(report.summary())
-        print(f"wrote {out}")
+        say(report.summary())
+        say(f"wrote {out}")
     return 0

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import os
 from pathlib import Path
 
 from ..errors import OptionError
+from ._text import say
 
 __all__ = ["register", "run", "FORMATS"]
 
@@ -22,7 +22,7 @@ def _exposure_type():  # noqa: ANN202 - an argparse type
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._args import finite_float, name_or_index
+    from ._args import finite_float, input_path, name_or_index, output_path
 
     p = sub.add_parser(
         "mosaic",
@@ -37,8 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         ),
         epilog="example: cdbrdf mosaic denim.h5 -o denim.png --kappa 0 0.13 0.22",
     )
-    p.add_argument("file", metavar="FILE", help="a CDBRDF file (.h5)")
-    p.add_argument("-o", "--output", metavar="OUT", required=True,
+    p.add_argument("file", metavar="FILE", type=input_path(), help="a CDBRDF file (.h5)")
+    p.add_argument("-o", "--output", metavar="OUT", required=True, type=output_path(),
                    help="the image to write (.png, .pdf or .svg); replaced if it exists")
     p.add_argument("--kappa", metavar="K", type=finite_float(-100, 100, unit="1/mm"), nargs="+", action="extend",
                    help="curvatures to show, mm^-1, as sampled in the file "
@@ -75,12 +75,6 @@ def _output(path_text: str) -> tuple[Path, str]:
     return out, fmt
 
 
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
 def run(args: argparse.Namespace) -> int:
     from ..io import atomic_path
     from ..plot import plot_mosaic
@@ -99,9 +93,8 @@ def run(args: argparse.Namespace) -> int:
         dpi=args.dpi,
     )
     with atomic_path(out) as tmp:
-        fig.savefig(tmp, format=fmt, dpi=args.dpi)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
+        fig.savefig(tmp, format=fmt, dpi=args.dpi)  # atomic_path gives the file its mode
     if not args.quiet:
         n = len(args.kappa) if args.kappa else table.kappa.size
-        print(f"wrote {out} ({n} curvature{'s' * (n != 1)}, {fmt.upper()})")
+        say(f"wrote {out} ({n} curvature{'s' * (n != 1)}, {fmt.upper()})")
     return 0

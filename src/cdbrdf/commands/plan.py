@@ -12,6 +12,8 @@ import numpy as np
 if TYPE_CHECKING:
     from ..measure.stands import Stand
 
+from ._text import say
+
 __all__ = ["register", "run", "check_grid_rows", "stand_options", "stands_from_args"]
 
 
@@ -38,7 +40,7 @@ def stands_from_args(args: argparse.Namespace, kappa: Iterable[float]) -> list[S
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._args import finite_float, float_list, int_range
+    from ._args import finite_float, float_list, int_range, output_folder
 
     p = sub.add_parser(
         "plan",
@@ -49,7 +51,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "plus white-reference rows, a summary and a picture of the hidden regions "
         "(plan.png, Fig. 7 layout). See docs/capture.md.",
     )
-    p.add_argument("-o", "--output", required=True, help="capture folder to create")
+    p.add_argument("-o", "--output", required=True, type=output_folder(replaced=False),
+                   help="capture folder to create")
     p.add_argument("--kappa", type=float_list(-100, 100, unique=True, unit="1/mm"), default=None,
                    help="stand curvatures in 1/mm, comma-separated (default -0.22,-0.13,0,0.13,0.22)")
     p.add_argument("--theta-step", type=finite_float(0, 90, lo_open=True, unit="deg"), default=15.0,
@@ -122,10 +125,10 @@ def run(args: argparse.Namespace) -> int:
     if not args.quiet:
         n_s = sum(1 for r in rows if r["kind"] == "sample")
         n_w = len(rows) - n_s
-        print(f"{out / CAPTURE_FILE}: {len(rows)} photographs ({n_s} samples, {n_w} white references)")
+        say(f"{out / CAPTURE_FILE}: {len(rows)} photographs ({n_s} samples, {n_w} white references)")
         for i, k in enumerate(grid.kappa):
             h = hid[i]
-            print(f"  kappa {k:+g} 1/mm: {int((h > 0).sum())} of {h.size} hidden "
+            say(f"  kappa {k:+g} 1/mm: {int((h > 0).sum())} of {h.size} hidden "
                   f"(view {int((h & 1).astype(bool).sum())}, light {int((h & 2).astype(bool).sum())})")
         walled = [i for i, st in enumerate(stands) if st.kappa < 0 and st.wall_height_mm > 0 and hid[i].any()]
         if walled:  # the walls hide most of it (docs/capture.md, "Filling": the fill's error grows with it)
@@ -134,5 +137,5 @@ def run(args: argparse.Namespace) -> int:
             bare = [replace(st, wall_height_mm=0.0) for st in stands]
             hid0 = hidden_mask(grid, bare, pixel_mm=args.pixel_mm, patch_px=args.patch)
             counts = ", ".join(f"{int((hid0[i] > 0).sum())} at {grid.kappa[i]:+g}" for i in walled)
-            print(f"  without walls (--wall-height 0) the concave stands would hide {counts}")
+            say(f"  without walls (--wall-height 0) the concave stands would hide {counts}")
     return 0

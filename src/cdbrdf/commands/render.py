@@ -35,17 +35,18 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
 from ..errors import OptionError
+from ..limits import MAX_SPP
+from ._text import say
 
 __all__ = ["register", "run"]
 
+#: Default image size of the built-in scenes.
+_SIZE = (512, 384)
 
-#: Largest --spp; the passes of a render use seeds ``seed .. seed + spp // 16``.
-MAX_SPP = 65536
-
+#: The passes of a render use seeds ``seed .. seed + spp // 16``.
 _SEED_MAX = 2**32 - 1 - MAX_SPP
 
 #: Options of the built-in scenes that a scene file defines itself (refused with SCENE.xml when changed).
@@ -63,6 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         existing_file,
         finite_float,
         float_list,
+        input_path,
         int_range,
         key_value,
         keyword,
@@ -80,7 +82,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "unless the file has it). PNG is sRGB-encoded after the exposure (radiance x 2^EV, clipped; "
         "default: chosen from the render); EXR is linear.",
     )
-    p.add_argument("file", help="a CDBRDF file (.h5), or a Mitsuba scene (.xml) using <bsdf type=\"cdbrdf\">")
+    p.add_argument("file", type=input_path(),
+                   help="a CDBRDF file (.h5), or a Mitsuba scene (.xml) using <bsdf type=\"cdbrdf\">")
     what = p.add_mutually_exclusive_group()
     what.add_argument("--scene", choices=["sine"], help="built-in scene: the paper's sine sheet")
     what.add_argument("--mesh", metavar="MESH", type=existing_file(*MESH_FORMATS),
@@ -96,8 +99,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"samples per pixel, 1 to {MAX_SPP} (default: 64; a scene file: its sensor's)")
     p.add_argument("-D", dest="define", action="append", default=[], type=key_value(), metavar="NAME=VALUE",
                    help="a scene file's parameter $NAME (as Mitsuba's -D; repeatable)")
-    p.add_argument("--size", type=size_wxh(), default="512x384", metavar="WxH",
-                   help="image size (default: 512x384; at most CDBRDF_MAX_RENDER_PIXELS pixels)")
+    p.add_argument("--size", type=size_wxh(), default=None, metavar="WxH",
+                   help=f"image size (default: {_SIZE[0]}x{_SIZE[1]}; at most CDBRDF_MAX_RENDER_PIXELS pixels; a "
+                   "scene file: its film's)")
     p.add_argument("--lighting", choices=LIGHTINGS, default=None,
                    help="studio: an environment and a key light; paper: one directional light "
                    "(default: studio for --mesh, paper for --scene)")
@@ -189,7 +193,7 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
             raise OptionError(f"{out}: --compare writes a figure; use {', '.join(FIGURE_FORMATS)}")
     elif ext not in IMAGE_FORMATS:
         raise OptionError(f"{out}: unknown image type {ext!r}; use {' or '.join(IMAGE_FORMATS)}")
-    width, height = args.size
+    width, height = args.size or _SIZE
     is_mesh = args.scene != "sine"
     lighting = args.lighting or ("studio" if is_mesh else "paper")
     elev, azim = args.view if args.view is not None else (DEFAULT_MESH_VIEW if is_mesh else DEFAULT_SINE_VIEW)
@@ -234,7 +238,7 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
         up, why = (args.up, "given") if args.up != "auto" else detect_up(mesh)
         if not args.quiet:
             print_mesh_report(str(args.mesh), mesh)
-            print(f"{args.mesh}: up axis: {up} ({why}); lighting: {lighting}", file=sys.stderr)
+            say(f"{args.mesh}: up axis: {up} ({why}); lighting: {lighting}", err=True)
 
         def build(mode: str) -> object:
             return mesh_scene(table, mesh, mode=mode, lighting=lighting, light=light, envmap=args.envmap,
@@ -265,7 +269,7 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
         write_render(out, shown[..., :3])
     if not args.quiet:
         expo = f", exposure {ev:+.2f} EV ({how})" if ext != ".exr" or args.compare else ""
-        print(f"{out}: written ({width}x{height}, {args.spp} spp{expo})", file=sys.stderr)
+        say(f"{out}: written ({width}x{height}, {args.spp} spp{expo})", err=True)
     return 0
 
 
@@ -301,11 +305,18 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     cr.set_variant(args.variant)
     import mitsuba as mi
 
-    scene = cr.load_file(args.file, variables=dict(args.define), unit_mm=float(unit_mm))
+    from ..fsutil import check_not_input
+    from ..render.scenefile import LoadReport
+
+    report = LoadReport()
+    scene = cr.load_file(args.file, variables=dict(args.define), unit_mm=float(unit_mm), report=report)
+    check_not_input([(out, False)], report.files)  # e.g. -o over the scene's environment map
     if not isinstance(scene, mi.Scene):
         raise SceneError(f"{args.file}: holds a {type(scene).__name__}, not a scene")
     if not scene.sensors():
         raise SceneError(f"{args.file}: the scene has no sensor to render from")
+    if scene.integrator() is None:
+        raise SceneError(f"{args.file}: the scene has no integrator (add one, e.g. <integrator type=\"path\"/>)")
     with ProgressBars(quiet=args.quiet, unit="spp", leave=True) as bars:
         image = render_scene(scene, spp=args.spp, seed=args.seed, progress=bars.callback("rendering"))
     if out.suffix.lower() == ".exr":
@@ -318,6 +329,6 @@ def _run_scene_file(args: argparse.Namespace) -> int:
         expo = f", exposure {ev:+.2f} EV ({'auto' if args.exposure == 'auto' else 'given'})"
     if not args.quiet:
         h, w = image.shape[:2]
-        print(f"{out}: written ({w}x{h}, {args.spp or scene.sensors()[0].sampler().sample_count()} spp, "
-              f"{args.variant}{expo})", file=sys.stderr)
+        say(f"{out}: written ({w}x{h}, {args.spp or scene.sensors()[0].sampler().sample_count()} spp, "
+              f"{args.variant}{expo})", err=True)
     return 0

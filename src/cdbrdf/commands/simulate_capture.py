@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from ..rig import NoiseModel
 
+from ._text import say
+
 __all__ = ["register", "run"]
 
 
@@ -37,7 +39,7 @@ def _material(text: str) -> str:
 
 def register(sub: argparse._SubParsersAction) -> None:
     from ..rig.sensor import IMAGE_KINDS
-    from ._args import existing_file, finite_float, float_list, int_range, seed, square_size
+    from ._args import existing_file, finite_float, float_list, int_range, output_folder, seed, square_size, with_role
 
     p = sub.add_parser(
         "simulate-capture",
@@ -48,8 +50,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "and read noise, plus white references. The folder can then be measured with "
         "`cdbrdf measure`. See docs/capture.md.",
     )
-    p.add_argument("material", type=_material, help="preset name (see cdbrdf.materials) or a CDBRDF file")
-    p.add_argument("-o", "--output", required=True, metavar="DIR",
+    p.add_argument("material", type=with_role(_material, "input"),
+                   help="preset name (see cdbrdf.materials) or a CDBRDF file")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", type=output_folder(replaced=False),
                    help="capture folder to write (new, empty, or an earlier simulated capture, replaced "
                    "whole unless files were added to it since)")
     p.add_argument("--plan", type=existing_file(".csv"), default=None,
@@ -85,5 +88,5 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed, progress=bars.callback("render"),
         )
     if not args.quiet:
-        print(rep.summary())
+        say(rep.summary())
     return 0

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import time
 
+from ._text import say
+
 __all__ = ["register", "run"]
 
 
@@ -27,7 +29,7 @@ def _kappa_or_file(text: str) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._args import output_file
+    from ._args import output_file, with_role
     from .import_ import add_import_options
 
     p = sub.add_parser(
@@ -42,7 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog="example: cdbrdf stack --kappa 0 flat.h5 --kappa 0.13 stand1.h5 --kappa 0.22 stand2.h5 -o denim.h5",
     )
     p.add_argument("--kappa", dest="entries", nargs=2, action="append", required=True, metavar=("K", "FILE"),
-                   type=_kappa_or_file,
+                   type=with_role(_kappa_or_file, "input"),
                    help="a stand's curvature in 1/mm and its plain BRDF file (repeat for every stand)")
     p.add_argument("-o", "--output", required=True, type=output_file(".h5", ".nc"), help="the CDBRDF file to write")
     add_import_options(p)
@@ -68,5 +70,5 @@ def run(args: argparse.Namespace) -> int:
     table.save(args.output)
     if not quiet:
         ks = ", ".join(f"{k:g}" for k in table.kappa)
-        print(f"wrote {args.output}: kappa {ks} 1/mm; {summary(table)}; {time.perf_counter() - t0:.1f} s")
+        say(f"wrote {args.output}: kappa {ks} 1/mm; {summary(table)}; {time.perf_counter() - t0:.1f} s")
     return 0

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import OptionError
+from ._text import say
 
 __all__ = ["register", "run", "parse_grid", "parse_sets"]
 
@@ -144,6 +145,6 @@ def run(args: argparse.Namespace) -> int:
         table = model.tabulate(grid, progress=bars.callback(f"synth {args.preset}"))
     table.save(args.output)
     if not quiet:
-        print(f"wrote {args.output}: {args.preset}, shape {table.shape}, "
+        say(f"wrote {args.output}: {args.preset}, shape {table.shape}, "
               f"{time.perf_counter() - t0:.1f} s")
     return 0

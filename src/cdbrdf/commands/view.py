@@ -7,6 +7,8 @@ import os
 import sys
 from pathlib import Path
 
+from ._text import say
+
 __all__ = ["register", "run"]
 
 
@@ -20,21 +22,11 @@ def _grid(text: str) -> tuple[float, float, int | None]:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("grid: ")) from None
 
 
-def _export_dir(text: str) -> str:
-    """An output folder cdbrdf may write (new, empty, or an earlier export): refused while parsing."""
-    from ..fsutil import check_output_folder
-
-    try:
-        check_output_folder(text)
-    except OSError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    return text
-
-
 def register(sub: argparse._SubParsersAction) -> None:
     from ..render.meshio import MESH_FORMATS
     from ..render.scenes import UP_AXES
-    from ._args import existing_file, int_range, keyword
+    from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
+    from ._args import existing_file, int_range, keyword, output_folder
     from .curvature import mesh_options
 
     p = sub.add_parser(
@@ -52,9 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("files", metavar="FILE", nargs="+", type=existing_file(),
                    help="a CDBRDF file (.h5); a second one is shown side by side")
-    p.add_argument("--export", metavar="DIR", type=_export_dir,
+    p.add_argument("--export", metavar="DIR", type=output_folder(maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE),
                    help="write the viewer as a static folder DIR instead of serving it (replaced whole "
-                   "if it holds an earlier export and nothing added to it)")
+                   "only if it holds an earlier export of the viewer and nothing added to it)")
     p.add_argument("--port", type=int_range(1, 65535), default=0, metavar="N",
                    help="TCP port on 127.0.0.1 (default: a free one)")
     p.add_argument("--no-browser", dest="browser", action="store_false", help="do not open a browser")
@@ -99,7 +91,7 @@ def _user_mesh(args: argparse.Namespace, table: object) -> object:
     world, up, why = z_up_mesh(mesh, args.up)
     if not args.quiet:
         print_mesh_report(str(args.mesh), mesh)
-        print(f"{args.mesh}: up axis: {up} ({why})", file=sys.stderr)
+        say(f"{args.mesh}: up axis: {up} ({why})", err=True)
     return world
 
 
@@ -113,8 +105,9 @@ def run(args: argparse.Namespace) -> int:
         raise OptionError(f"FILE: the viewer shows at most {MAX_TABLES} tables side by side, got {len(args.files)}")
     if args.export:
         from ..fsutil import check_output_folder
+        from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
 
-        check_output_folder(args.export)  # refuse at once, before any work
+        check_output_folder(args.export, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE)  # before any work
     tables = []
     for f in args.files:
         t = load(f)
@@ -129,12 +122,12 @@ def run(args: argparse.Namespace) -> int:
     if args.export:
         index = export_viewer(args.export, files)
         if not args.quiet:
-            print(f"wrote {index} (open it in a browser; the folder works offline and on any static host)")
+            say(f"wrote {index} (open it in a browser; the folder works offline and on any static host)")
         return 0
     from ..view.server import ViewerServer
 
     server = ViewerServer(files, port=args.port)
-    print(f"cdbrdf view: serving {', '.join(n for n, _ in tables)} at {server.url} (Ctrl-C stops)", flush=True)
+    say(f"cdbrdf view: serving {', '.join(n for n, _ in tables)} at {server.url} (Ctrl-C stops)", flush=True)
     if args.browser and _browser_available():
         import webbrowser
 
@@ -142,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         server.serve_forever()
     except KeyboardInterrupt:
-        print("cdbrdf view: stopped", file=sys.stderr)
+        say("cdbrdf view: stopped", err=True)
     finally:
         server.close()
     return 0

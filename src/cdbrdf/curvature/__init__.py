@@ -39,7 +39,7 @@ from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, Principa
 from .frames import FRAMES
 from .repair import WELD_TOLERANCE, RepairedMesh, repair, weld
 from .surface import CURVATURE_MODES, SurfaceCurvature, check_neighbourhood, surface_curvature
-from .units import UNITS_MM, KappaRangeCheck, Units, check_kappa_range, parse_units
+from .units import MAX_SIZE_MM, UNITS_MM, KappaRangeCheck, Units, check_kappa_range, check_size, parse_units
 
 __all__ = [
     "ATTRIBUTES",
@@ -56,6 +56,8 @@ __all__ = [
     "parse_units",
     "KappaRangeCheck",
     "check_kappa_range",
+    "check_size",
+    "MAX_SIZE_MM",
     "PrincipalCurvatures",
     "SurfaceCurvature",
     "RepairedMesh",

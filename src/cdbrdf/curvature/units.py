@@ -32,6 +32,8 @@ __all__ = [
     "check_kappa_range",
     "WARN_OUTSIDE_SHARE",
     "SUGGEST_OUTSIDE_SHARE",
+    "MAX_SIZE_MM",
+    "check_size",
 ]
 
 #: Named length units: millimetres per unit.
@@ -45,6 +47,29 @@ WARN_OUTSIDE_SHARE = 0.10
 
 #: Share above which the likely unit is suggested.
 SUGGEST_OUTSIDE_SHARE = 0.5
+
+#: Largest extent of a mesh in mm (1 km). The renderer holds positions in float32: at 1 km they are
+#: still resolved to 0.06 mm, finer than any curvature neighbourhood, while the camera frames the whole
+#: mesh, so one triangle 1e10 mm long shrinks the object to less than a pixel (an all-black image).
+#: Nothing cdbrdf renders (a garment, a sample, a set) is larger; a larger mesh has a wrong unit or a
+#: damaged vertex.
+MAX_SIZE_MM = 1e6
+
+
+def check_size(vertices: ArrayLike, units: Units, *, name: str = "mesh") -> float:
+    """The mesh's extent (bounding-box diagonal) in mm; a :class:`MeshError` beyond :data:`MAX_SIZE_MM`.
+
+    Vertices that are not all finite numbers are left to the mesh's own checks (NaN for a size).
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    if v.size == 0 or v.ndim != 2 or not np.isfinite(v).all():
+        return math.nan if v.size else 0.0
+    with np.errstate(over="ignore", invalid="ignore"):
+        size = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0))) * units.mm_per_unit
+    if not size <= MAX_SIZE_MM:
+        raise MeshError(f"{name}: {size:.3g} mm across (unit {units}), beyond {MAX_SIZE_MM:g} mm: a wrong unit or a "
+                        "vertex far from the rest (a triangle that long leaves the object less than a pixel)")
+    return size
 
 
 @dataclass(frozen=True)

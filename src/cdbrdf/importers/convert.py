@@ -75,15 +75,20 @@ def detect_format(path: str | PathLike[str]) -> str:
     FormatError
         When neither the content nor the suffix tells.
     """
+    from ..fsutil import check_regular
     from .merl import DIMS
     from .rgl import MAGIC
     from .utia import FILE_BYTES
 
     p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"{p}: no such file")
-    if p.is_dir():
-        raise FormatError(f"{p}: is a folder, not a BRDF file")
+    try:
+        check_regular(p)  # a FIFO would block the read below, a device never end a later one
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{p}: no such file") from None
+    except IsADirectoryError:
+        raise FormatError(f"{p}: is a folder, not a BRDF file") from None
+    except OSError as exc:
+        raise FormatError(f"{exc}; not a BRDF file") from None
     try:
         with open(p, "rb") as f:
             head = f.read(12)

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import FormatError
-from .source import Source, file_sha256, read_bytes
+from .source import Source, check_plausible, file_sha256, read_bytes
 
 __all__ = ["DIMS", "SCALES", "HEADER_BYTES", "FILE_BYTES", "read", "write", "half_diff"]
 
@@ -135,13 +135,11 @@ def read(path: str | PathLike[str], *, material: str | None = None) -> Source:
     bad = int(np.count_nonzero(~np.isfinite(raw)))
     if bad:
         raise _fail(p, f"holds {bad} NaN or infinite value(s)")
-    top = float(np.abs(raw).max())
-    if top > 1e15:
-        raise _fail(p, f"holds values up to {top:.3g}: damaged or not a MERL file")
     valid = np.all(raw >= 0.0, axis=0)
     if not valid.any():
         raise _fail(p, "holds no measured sample (every value is negative)")
     rgb = np.moveaxis(raw, 0, -1) * np.asarray(SCALES)
+    check_plausible(p, rgb[valid], what="BRDF values (sr^-1, the reader's channel scales applied)")
     n_bad = int(valid.size - np.count_nonzero(valid))
     details: dict[str, Any] = {
         "layout": "3 int32 (90, 90, 180) + 3 x 90 x 90 x 180 float64 (R, G, B; phi_d fastest)",

@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import FormatError
-from .source import Source, file_sha256, mitsuba, mitsuba_brdf, read_bytes
+from .source import Source, check_plausible, file_sha256, mitsuba, mitsuba_brdf, read_bytes
 
 __all__ = ["MAGIC", "DTYPES", "read_tensor_file", "write_tensor_file", "spectral_to_rgb_weights", "read"]
 
@@ -240,6 +240,10 @@ def _validate(path: Path, f: Mapping[str, NDArray[Any]]) -> dict[str, Any]:
         refl = out["spectra"]
         if refl.shape[2] != wl.size:
             raise _fail(path, f"'spectra' has {refl.shape[2]} wavelengths but 'wavelengths' {wl.size}")
+        w64 = out["wavelengths"].astype(np.float64)
+        if wl.size < 2 or not np.all(np.diff(w64) > 0):  # descending: other colours; repeated: no spectrum
+            raise _fail(path, "'wavelengths' must be at least 2, strictly increasing (got "
+                              f"{', '.join(f'{x:g}' for x in w64[:6])}{' ...' if w64.size > 6 else ''} nm)")
     else:
         refl = out["rgb"] = np.array(_field(path, f, "rgb", 5, "f"), dtype=np.float32)
         if refl.shape[2] != 3:
@@ -270,6 +274,8 @@ def _validate(path: Path, f: Mapping[str, NDArray[Any]]) -> dict[str, Any]:
         if v.dtype != np.uint8 or v.size * 8 < n_valid:
             raise _fail(path, f"'valid' holds {v.size} bytes, {(n_valid + 7) // 8} are needed for its bits")
         bits = np.unpackbits(np.asarray(v).reshape(-1))[:n_valid]  # most significant bit first
+        if not bits.any():
+            raise _fail(path, "holds no measured sample (every 'valid' bit is 0)")
         out["valid"] = bits.reshape(n_ph, n_th, ny, nx).astype(np.float32)
     out["spectral"] = spectral
     return out
@@ -370,6 +376,7 @@ class _Evaluator:
         if bad:
             raise _fail(self.path, f"Mitsuba's measured plug-in gives NaN or infinite values at {bad} of {f.shape[0]} "
                                    "directions: the file's distributions are damaged")
+        check_plausible(self.path, f, what="BRDF values (Mitsuba's measured plug-in)")
 
     def __call__(self, theta_v: NDArray[np.float64], phi_v: NDArray[np.float64], theta_l: NDArray[np.float64],
                  phi_l: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:

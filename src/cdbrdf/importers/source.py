@@ -24,7 +24,18 @@ from numpy.typing import NDArray
 if TYPE_CHECKING:
     from ..table import CDBRDF
 
-__all__ = ["Evaluator", "Source", "file_sha256", "read_bytes", "table_on", "mitsuba", "mitsuba_brdf"]
+__all__ = ["Evaluator", "Source", "MAX_PLAUSIBLE_BRDF", "check_plausible", "file_sha256", "read_bytes", "table_on",
+           "mitsuba", "mitsuba_brdf"]
+
+#: Largest value, in sr^-1 (or the relative unit of a ``"relative"`` source), that any imported file may
+#: hold, for every format alike (RGL, MERL, UTIA, CDBRDF): 1e5. A BRDF value f over the solid angle it
+#: stands for, w, reflects f cos(theta) w of the light; energy conservation (at most all of it) bounds
+#: f <= 1 / (cos(theta) w). The finest angular resolution of the public databases' instruments is
+#: about a tenth of a degree (a cone of 1e-5 sr), so no measured value can exceed about 1e5: a mirror-
+#: like peak reads at most that, the glossiest RGL materials about 1e3. A larger value is damage or a
+#: file in another unit, and a single one of them dominates every mean of the table (a UTIA value of 9e5,
+#: decoded, turned a table's mean from 0.3 into 4.2e8). The sRGB-encoded UTIA values are checked decoded.
+MAX_PLAUSIBLE_BRDF = 1e5
 
 #: ``evaluate(theta_v, phi_v, theta_l, phi_l)`` (degrees, 1-D float64 arrays of one length n) ->
 #: ``(values (n, 3) sr^-1 or relative, measured (n,) in [0, 1] or None = all measured)``.
@@ -138,6 +149,32 @@ def mitsuba_brdf(bsdf: Any, theta_v: NDArray[np.float64], phi_v: NDArray[np.floa
     return bsdf.eval(mi.BSDFContext(), si, wo) / dr.maximum(wo.z, 1e-6), wi, wo
 
 
+def check_plausible(path: Path, values: NDArray[np.floating], *, what: str = "values") -> None:
+    """Refuse NaN or infinite ``values``, or any beyond :data:`MAX_PLAUSIBLE_BRDF` (one line naming the file).
+
+    The one value check of every reader, applied to the values as the table
+    will hold them (decoded, scaled to sr^-1), measured ones only.
+
+    Raises
+    ------
+    FormatError
+        ``"f.bin: holds values up to 1.6e+14, beyond 1e+05 (no measured BRDF reaches it): damaged, or not in
+        sr^-1"``.
+    """
+    from ..errors import FormatError
+
+    v = np.asarray(values)
+    if not v.size:
+        return
+    bad = int(np.count_nonzero(~np.isfinite(v)))
+    if bad:
+        raise FormatError(f"{path}: {what} hold {bad} NaN or infinite value(s)")
+    top = float(np.max(np.abs(v)))
+    if top > MAX_PLAUSIBLE_BRDF:
+        raise FormatError(f"{path}: {what} up to {top:.3g}, beyond {MAX_PLAUSIBLE_BRDF:.0e} (no measured BRDF reaches "
+                          "it): damaged, or not in sr^-1")
+
+
 def file_sha256(data: bytes) -> str:
     """SHA-256 of ``data`` as hex."""
     return hashlib.sha256(data).hexdigest()
@@ -151,20 +188,30 @@ def read_bytes(path: str | PathLike[str], *, what: str) -> tuple[Path, bytes]:
     FileNotFoundError
         When ``path`` does not exist.
     FormatError
-        When it is a folder or cannot be read.
+        When it is a folder, not a regular file (a FIFO, a device: refused
+        before it is opened) or cannot be read.
     LimitError
         When it is larger than 8 bytes per value of the ``table_samples`` limit.
     """
     from .. import limits
     from ..errors import FormatError
+    from ..fsutil import check_regular, read_regular
 
     p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"{p}: no such file")
-    if p.is_dir():
-        raise FormatError(f"{p}: is a folder, not {what}")
     try:
-        limits.check("table_samples", p.stat().st_size / 8.0, what=f"{p}: a file of {p.stat().st_size} bytes")
-        return p, p.read_bytes()
+        check_regular(p)  # a FIFO would block the read, /dev/zero never end it
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{p}: no such file") from None
+    except IsADirectoryError:
+        raise FormatError(f"{p}: is a folder, not {what}") from None
+    except OSError as exc:
+        raise FormatError(f"{exc}; not {what}") from None
+    cap = int(limits.limit("table_samples").value()) * 8
+    try:
+        size = p.stat().st_size
+        limits.check("table_samples", size / 8.0, what=f"{p}: a file of {size} bytes")
+        data = read_regular(p, max_bytes=cap)
     except OSError as exc:
         raise FormatError(f"{p}: cannot be read ({exc.strerror or exc})") from None
+    limits.check("table_samples", len(data) / 8.0, what=f"{p}: a file of at least {len(data)} bytes")
+    return p, data

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FormatError
-from .source import Source, file_sha256, table_on
+from .source import Source, check_plausible, file_sha256, table_on
 
 __all__ = ["read"]
 
@@ -35,6 +35,7 @@ def read(path: str | PathLike[str], *, material: str | None = None) -> Source:
             "(take one slice with CDBRDF.brdf(kappa) and save it)")
     if table.n_channels != 3:
         raise FormatError(f"{p}: has {table.n_channels} channels; stacking and import need RGB (3)")
+    check_plausible(p, table.values[table.measured], what="measured values")
     k = float(table.kappa[0])
     mask = None if table.measured.all() else table_on(table.grid, table.measured[..., None].astype(np.float64))
 

@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from ..colour import srgb_to_linear
+from ..colour import linear_to_srgb, srgb_to_linear
 from ..errors import FormatError
 from ..grid import Grid
-from .source import Source, file_sha256, read_bytes, table_on
+from .source import MAX_PLAUSIBLE_BRDF, Source, check_plausible, file_sha256, read_bytes, table_on
 
 __all__ = ["SHAPE", "FILE_BYTES", "THETA_DEG", "PHI_DEG", "ENCODINGS", "read", "write", "native_grid"]
 
@@ -39,8 +39,6 @@ FILE_BYTES = 8 * int(np.prod(SHAPE))
 THETA_DEG = np.arange(6, dtype=np.float64) * 15.0
 #: Azimuths of the samples, degrees.
 PHI_DEG = np.arange(48, dtype=np.float64) * 7.5
-#: Largest magnitude of a stored value (the database's are sRGB-encoded, near 1).
-_MAX_ABS = 1e6
 #: How the stored values are encoded: choices of ``read(..., encoding=)``.
 ENCODINGS: tuple[str, ...] = ("srgb", "linear")
 
@@ -69,9 +67,12 @@ def read(path: str | PathLike[str], *, material: str | None = None, encoding: st
     bad = int(np.count_nonzero(~np.isfinite(raw)))
     if bad:
         raise FormatError(f"{p}: holds {bad} NaN or infinite value(s)")
+    # the shared plausibility bound, on the stored values first (decoding an absurd one would overflow)
+    bound = MAX_PLAUSIBLE_BRDF if encoding == "linear" else float(linear_to_srgb(MAX_PLAUSIBLE_BRDF))
     top = float(np.abs(raw).max())
-    if top > _MAX_ABS:
-        raise FormatError(f"{p}: holds values up to {top:.3g} (the database's are near 1): damaged or not a UTIA file")
+    if top > bound:
+        raise FormatError(f"{p}: holds values up to {top:.3g}, beyond {bound:.4g} ({MAX_PLAUSIBLE_BRDF:.0e} decoded; "
+                          "the database's are near 1): damaged or not a UTIA file")
     # (c, ti, pi, tv, pv) -> (kappa = 1, phi_l, theta_l, phi_v, theta_v, c)
     v = np.transpose(raw, (2, 1, 4, 3, 0))[None]
     measured = np.all(v >= 0.0, axis=-1)
@@ -80,6 +81,7 @@ def read(path: str | PathLike[str], *, material: str | None = None, encoding: st
     v = np.maximum(v, 0.0)
     if encoding == "srgb":
         v = srgb_to_linear(v)
+    check_plausible(p, v[measured], what="decoded values")
     g = native_grid()
     table = table_on(g, v, measured=measured, attrs={"quantity": "relative"})
 

@@ -29,6 +29,7 @@ The result is built in memory and written with :meth:`CDBRDF.save`
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import numbers
@@ -40,7 +41,7 @@ from typing import Any
 from numpy.typing import NDArray
 
 from ..errors import OptionError
-from ..fsutil import check_output_file
+from ..fsutil import check_output_file, output_lock
 from ..images import ImageError
 from ..table import CDBRDF
 from .calibrate import MeasureReport, assemble
@@ -328,6 +329,9 @@ def measure(
         ``output`` exists and ``overwrite`` is False, exists and is not a
         regular file (a device, a FIFO: never replaced), or ``<output>.ckpt``
         exists and is not a checkpoint cdbrdf made (all before any work).
+    OutputError
+        Another run is measuring into ``output`` (its lock,
+        :func:`cdbrdf.fsutil.output_lock`, is held while the run works).
     OSError
         A scheduler address that cannot be reached (before the checkpoint
         is created).
@@ -341,68 +345,70 @@ def measure(
         check_output_file(bad_list_path(out_path))
         if not overwrite and (out_path.exists() or out_path.is_symlink()):
             raise FileExistsError(f"{out_path}: already exists (use --force to overwrite)")
-    cap = read_capture(folder, patch=patch)
-    ck_path = checkpoint_path(out_path) if (out_path is not None and checkpoint) else None
-    if out_path is not None:
-        refuse_overlap(cap, [ck_path] if ck_path is not None else [],
-                       [out_path, bad_list_path(out_path)])
-    enc = cap.settings.get("encoding")
-    albedo = float(white_albedo if white_albedo is not None else cap.settings.get("white_albedo", 1.0))
+    # one run at a time on an output: a second one would delete this one's checkpoint
+    with output_lock(out_path) if out_path is not None else contextlib.nullcontext():
+        cap = read_capture(folder, patch=patch)
+        ck_path = checkpoint_path(out_path) if (out_path is not None and checkpoint) else None
+        if out_path is not None:
+            refuse_overlap(cap, [ck_path] if ck_path is not None else [],
+                           [out_path, bad_list_path(out_path)])
+        enc = cap.settings.get("encoding")
+        albedo = float(white_albedo if white_albedo is not None else cap.settings.get("white_albedo", 1.0))
 
-    # which rows are read
-    needed: list[int] = []
-    for i, r in enumerate(cap.rows):
-        if r.kind == "sample" and cap.hidden[cap.sample_index[i]]:
-            continue
-        needed.append(i)
-    try:
-        root = cap.folder.resolve()
-    except (OSError, RuntimeError):
-        root = cap.folder.absolute()
-    paths = {i: root / cap.rows[i].file for i in needed}
-    stats, bad = preflight(cap, needed, paths, patch)
-    if bad and not skip_bad:
-        refuse_bad(cap, bad, paths, out_path, during=False)
+        # which rows are read
+        needed: list[int] = []
+        for i, r in enumerate(cap.rows):
+            if r.kind == "sample" and cap.hidden[cap.sample_index[i]]:
+                continue
+            needed.append(i)
+        try:
+            root = cap.folder.resolve()
+        except (OSError, RuntimeError):
+            root = cap.folder.absolute()
+        paths = {i: root / cap.rows[i].file for i in needed}
+        stats, bad = preflight(cap, needed, paths, patch)
+        if bad and not skip_bad:
+            refuse_bad(cap, bad, paths, out_path, during=False)
 
-    def lin(r: CaptureRow) -> bool:
-        if r.linear is not None:
-            return r.linear
-        if enc is not None:
-            return enc == "linear"
-        return bool(linear)
+        def lin(r: CaptureRow) -> bool:
+            if r.linear is not None:
+                return r.linear
+            if enc is not None:
+                return enc == "linear"
+            return bool(linear)
 
-    key_doc: dict[str, Any] = {"capture": cap.digest, "patch": patch, "linear": bool(linear),
-                               "needed": len(needed)}
-    key = hashlib.sha256(json.dumps(key_doc, sort_keys=True).encode()).hexdigest()
-    # checkpoints of earlier versions also hashed skip_bad (which does not change what is read)
-    legacy = hashlib.sha256(json.dumps({**key_doc, "skip_bad": bool(skip_bad)}, sort_keys=True).encode()
-                            ).hexdigest()
-    client, own_client = _open_client(scheduler)  # an unreachable scheduler: before the checkpoint exists
-    try:
-        ck = Checkpoint(ck_path, key, legacy_keys=(legacy,), patch=patch)
-    except BaseException:
-        if own_client:
-            client.close()
-        raise
-    try:
-        results, failed, resumed = _run(cap, needed, bad, stats, paths, ck, lin, patch=patch,
-                                        batch_size=batch_size, scheduler=scheduler, client=client,
-                                        num_workers=num_workers, progress=progress,
-                                        interrupt_after=_interrupt_after)
-    except BaseException:
-        ck.discard_if_empty()  # made by this run and nothing saved: leave nothing behind
-        raise
-    finally:
-        if own_client:
-            client.close()
-    if failed and not skip_bad:
-        refuse_bad(cap, failed, paths, out_path, during=True)
+        key_doc: dict[str, Any] = {"capture": cap.digest, "patch": patch, "linear": bool(linear),
+                                   "needed": len(needed)}
+        key = hashlib.sha256(json.dumps(key_doc, sort_keys=True).encode()).hexdigest()
+        # checkpoints of earlier versions also hashed skip_bad (which does not change what is read)
+        legacy = hashlib.sha256(json.dumps({**key_doc, "skip_bad": bool(skip_bad)}, sort_keys=True).encode()
+                                ).hexdigest()
+        client, own_client = _open_client(scheduler)  # an unreachable scheduler: before the checkpoint exists
+        try:
+            ck = Checkpoint(ck_path, key, legacy_keys=(legacy,), patch=patch)
+        except BaseException:
+            if own_client:
+                client.close()
+            raise
+        try:
+            results, failed, resumed = _run(cap, needed, bad, stats, paths, ck, lin, patch=patch,
+                                            batch_size=batch_size, scheduler=scheduler, client=client,
+                                            num_workers=num_workers, progress=progress,
+                                            interrupt_after=_interrupt_after)
+        except BaseException:
+            ck.discard_if_empty()  # made by this run and nothing saved: leave nothing behind
+            raise
+        finally:
+            if own_client:
+                client.close()
+        if failed and not skip_bad:
+            refuse_bad(cap, failed, paths, out_path, during=True)
 
-    table, report = assemble(cap, results, albedo=albedo, patch=int(patch), linear=bool(linear),
-                             material=material, fill_method=fill)
-    report.n_images_resumed = resumed
-    if out_path is not None:
-        table.save(out_path)
-        ck.remove()
-        remove_bad_list(out_path)
-    return table, report
+        table, report = assemble(cap, results, albedo=albedo, patch=int(patch), linear=bool(linear),
+                                 material=material, fill_method=fill)
+        report.n_images_resumed = resumed
+        if out_path is not None:
+            table.save(out_path)
+            ck.remove()
+            remove_bad_list(out_path)
+        return table, report

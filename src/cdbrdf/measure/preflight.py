@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import CaptureError
-from ..fsutil import atomic_path, same_file
+from ..fsutil import atomic_path, find_overlap
 from ..images import ImageError, ImageInfo, image_format, read_window
 from .capture import CAPTURE_FILE, STAND_FILE, Capture
 from .patch import patch_window
@@ -247,61 +247,24 @@ def refuse_overlap(cap: Capture, folders: list[Path], files: list[Path]) -> None
     """Refuse outputs that are (or, for folders, contain) an input of the run.
 
     ``files`` are written, ``folders`` created and deleted. Inputs: ``capture.csv``,
-    ``stands.json`` and the file of every row (hidden rows too). The same
-    file is recognised through symbolic and hard links (device and inode),
-    and by resolved path for inputs that do not exist yet.
+    ``stands.json`` and the file of every row (hidden rows too). The rule is
+    the one of every command (:func:`cdbrdf.fsutil.find_overlap`: the same
+    file is recognised through symbolic and hard links, and by resolved path
+    for inputs that do not exist yet); the message names the capture's line.
     """
     inputs = [cap.folder / CAPTURE_FILE, cap.folder / STAND_FILE] + [cap.folder / r.file for r in cap.rows]
+    hit = find_overlap([(t, False) for t in files] + [(t, True) for t in folders], inputs)
+    if hit is None:
+        return
+    target, inp, relation = hit
     line_of: dict[Path, str] = {cap.folder / CAPTURE_FILE: "the capture table",
                                 cap.folder / STAND_FILE: "the stand file"}
     for r in cap.rows:
         line_of.setdefault(cap.folder / r.file, f"a photograph (capture.csv line {r.line})")
-    parents: dict[Path, Path] = {}
-
-    def resolved(p: Path) -> Path:
-        if p.parent not in parents:
-            try:
-                parents[p.parent] = p.parent.resolve()
-            except (OSError, RuntimeError):
-                parents[p.parent] = p.parent.absolute()
-        return parents[p.parent] / p.name
-
-    by_inode: dict[tuple[int, int], Path] = {}
-    by_path: dict[Path, Path] = {}
-    for p in inputs:
-        by_path.setdefault(resolved(p), p)
-        try:
-            st = os.stat(p)
-        except (OSError, ValueError):
-            continue
-        by_inode.setdefault((st.st_dev, st.st_ino), p)
-    input_dirs = set(parents.values())
-
-    def clash(target: Path, folder: bool) -> Path | None:
-        t = resolved(target)
-        if t in by_path:
-            return by_path[t]
-        try:
-            st = os.stat(target)
-        except (OSError, ValueError):
-            st = None
-        if st is not None and (st.st_dev, st.st_ino) in by_inode:
-            return by_inode[(st.st_dev, st.st_ino)]
-        if folder:
-            for d in input_dirs:
-                if d == t or t in d.parents:
-                    return next(p for p in inputs if resolved(p).parent == d)
-        return None
-
-    for target, folder in [(t, False) for t in files] + [(t, True) for t in folders]:
-        hit = clash(target, folder)
-        if hit is not None:
-            what = line_of.get(hit, "an input")
-            rel = "holds" if folder and not same_file(target, hit) else "is"
-            raise CaptureError(
-                f"{target}: {rel} {hit}, {what} of the capture; the output must not replace an input "
-                f"(--force does not change that); choose another output name"
-            )
+    raise CaptureError(
+        f"{target}: {relation} {inp}, {line_of.get(inp, 'an input')} of the capture; the output must not "
+        "replace an input (--force does not change that); choose another output name"
+    )
 
 
 def remove_bad_list(output: str | PathLike[str]) -> None:

@@ -180,7 +180,24 @@ def register() -> None:
         # The variant may have been set without set_variant(): check the
         # libLLVM Dr.Jit loaded before anything is compiled with it.
         check_llvm()
-    mi.register_bsdf(PLUGIN_NAME, lambda props: cls(props))
+    mi.register_bsdf(PLUGIN_NAME, _factory(cls))
+
+
+def _factory(cls: type) -> Callable[[Any], Any]:
+    """The plug-in's constructor for Mitsuba, raising its own errors without the frames inside it.
+
+    Mitsuba (nanobind) prefixes the error of a Python plug-in with the Python
+    frames of the call; :func:`load_dict` and :func:`load_file` give the
+    one-line message alone (:class:`~cdbrdf.errors.SceneError`).
+    """
+
+    def make(props: Any) -> Any:
+        try:
+            return cls(props)
+        except (ValueError, OSError) as exc:  # cdbrdf's errors (ValueError) and a missing file
+            raise exc.with_traceback(None) from None
+
+    return make
 
 
 def make_bsdf(
@@ -241,12 +258,19 @@ def load_dict(scene: dict, *, check: bool = True) -> Any:
     """:func:`mitsuba.load_dict` that accepts ``"table": CDBRDF`` and checks the result.
 
     ``{"type": "cdbrdf", "table": t, ...}`` entries become plug-in instances;
-    with ``check`` the loaded scene goes through :func:`check_scene`.
+    with ``check`` the loaded scene goes through :func:`check_scene`. An
+    object that cannot be made (a missing table, a damaged environment map)
+    is one :class:`~cdbrdf.errors.SceneError` line.
     """
     import mitsuba as mi
 
+    from .scenefile import _message
+
     register()
-    obj = mi.load_dict(_replace_tables(scene))
+    try:
+        obj = mi.load_dict(_replace_tables(scene))
+    except RuntimeError as exc:  # a plug-in's error, Mitsuba's: one line, without Mitsuba's traceback
+        raise SceneError(_message(exc)) from None
     if check and isinstance(obj, mi.Scene):
         check_scene(obj)
     return obj

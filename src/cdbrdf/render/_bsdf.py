@@ -378,12 +378,22 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             k = si.shape.eval_attribute_1(st.curvature_attribute, si, active)
             return k * st.curvature_scale if st.curvature_scale != 1.0 else k
 
+        def _clamped(self, kappa: Any) -> Any:
+            """Any curvature as the lookup takes it: NaN (a damaged attribute) as 0, else clamped to the axis.
+
+            The table's rule clamps too; clamping here first keeps every
+            value the kernels see (lookup and sampler) a finite number
+            inside the axis, whatever a mesh, a scale or a unit made of it.
+            """
+            k = dr.select(dr.isnan(kappa), 0.0, kappa)
+            return dr.clip(k, float(self.grid.kappa[0]), float(self.grid.kappa[-1]))
+
         def _front(self, si: Any, active: Any) -> tuple[Any, Any, Any]:
             """The view direction in the front frame (turned about x on the back side), the side's sign, kappa."""
             back = mi.Frame3f.cos_theta(si.wi) < 0.0
             sign = dr.select(back, -1.0, 1.0)
             wi = mi.Vector3f(si.wi.x, sign * si.wi.y, sign * si.wi.z)
-            return wi, sign, sign * self._kappa(si, active)
+            return wi, sign, self._clamped(sign * self._kappa(si, active))
 
         def _scale(self, si: Any, active: Any) -> Any:
             if self.scale_texture is not None:
@@ -501,6 +511,8 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             ok = active & (wi.z > 0.0)
             if not self._table_sampling(q):
                 wl = mi.warp.square_to_cosine_hemisphere(sample2)
+            elif scalar and not ok:  # a view below the surface or not a direction (NaN): nothing to sample
+                wl = mi.Vector3f(0.0, 0.0, 1.0)
             elif scalar:
                 tables = cast(_sampling.SamplerTables, self.sampler_tables)
                 d, _ = _sampling.sample(tables, float(tv), float(pv), float(kappa), float(sample1),
@@ -530,7 +542,7 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
         def eval_diffuse_reflectance(self, si: Any, active: Any = True) -> Any:
             # Albedo-like estimate for AOVs: the table at normal incidence times pi.
             back = mi.Frame3f.cos_theta(si.wi) < 0.0
-            kappa = dr.select(back, -1.0, 1.0) * self._kappa(si, active)
+            kappa = self._clamped(dr.select(back, -1.0, 1.0) * self._kappa(si, active))
             zero = mi.Float(0.0)
             return self._f(si, zero, zero, zero, zero, kappa, active) * math.pi
 

@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 from ..colour import LUMINANCE_WEIGHTS
 from ..errors import TableError
 from ..interp import LookupGrid, snap_tolerance
+from ..table import MAX_ABS_VALUE as TABLE_MAX_ABS_VALUE
 
 __all__ = [
     "LAYOUTS",
@@ -59,9 +60,11 @@ __all__ = [
     "records",
 ]
 
-#: Largest table value (in magnitude) the renderer accepts: its arithmetic is
-#: float32 (largest 3.4e38), with headroom for the weighted sums and ``scale``.
-MAX_ABS_VALUE = 1e30
+#: Largest table value (in magnitude) the renderer accepts: the table's own bound
+#: (:data:`cdbrdf.table.MAX_ABS_VALUE`); its arithmetic is float32 (largest 3.4e38),
+#: with headroom for the weighted sums and ``scale``. Checked again on values given
+#: through ``mi.traverse``.
+MAX_ABS_VALUE = TABLE_MAX_ABS_VALUE
 
 #: Bits per channel of the packed RGB table (3 x 21 bits in one 64-bit word).
 PACK_BITS = 21

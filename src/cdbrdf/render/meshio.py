@@ -135,6 +135,13 @@ def read_mesh(path: str | PathLike[str]) -> Mesh:
 
 
 def _read_bytes(p: Path) -> bytes:
+    from ..fsutil import check_regular
+
+    try:
+        check_regular(p)  # a FIFO would block the read, /dev/zero never end it
+    except OSError as exc:
+        detail = str(exc).removeprefix(f"{p}: ")
+        raise MeshError(f"{p}: cannot be read ({detail})") from None
     try:
         return p.read_bytes()
     except OSError as exc:
@@ -213,12 +220,29 @@ def _count_obj_faces(data: bytes) -> int:
     return data.count(b"\nf ") + data.count(b"\nf\t") + int(data.startswith(b"f "))
 
 
+_OBJ_ZERO = re.compile(rb"(?m)^[ \t]*f[ \t][^\n]*?(?<=[ \t/])-?0+(?=[/ \t\r\n]|$)")
+
+
+def _check_obj_indices(p: Path, data: bytes) -> None:
+    """Refuse an OBJ face with index 0: OBJ indices count from 1 (negative ones from the end); 0 names nothing.
+
+    Readers disagree on it (trimesh took it as the last vertex): a file
+    that means nothing in OBJ is refused, with its line.
+    """
+    m = _OBJ_ZERO.search(data)
+    if m is not None:
+        line = data.count(b"\n", 0, m.start()) + 1
+        raise MeshError(f"{p}: line {line}: a face refers to index 0, which names no vertex (OBJ indices count "
+                        "from 1, negative ones from the end)")
+
+
 def _read_trimesh(p: Path, fmt: str) -> Mesh:
     import trimesh
 
     data = _read_bytes(p)
     if fmt == "obj":
         check("mesh_faces", _count_obj_faces(data), what=f"{p}: OBJ faces")
+        _check_obj_indices(p, data)
     elif fmt == "stl" and len(data) >= 84 and not data[:5].lower() == b"solid":
         check("mesh_faces", int.from_bytes(data[80:84], "little"), what=f"{p}: STL triangles")
     try:

@@ -25,6 +25,15 @@ Mitsuba instantiates the objects:
   warning (the plug-in is two-sided by itself and turns kappa's sign on the
   back, which the wrapper would not).
 
+- **files and limits**: every file the scene names (``filename`` of
+  meshes, textures, environment maps, tables, and ``<include>`` files,
+  before Mitsuba parses them) must be a regular file: a FIFO would hang the
+  load and ``/dev/zero`` fill the memory
+  (:func:`cdbrdf.fsutil.check_regular`); every film must have a size of at
+  least 1 x 1 within the ``render_pixels`` limit and every sampler at most
+  :data:`cdbrdf.limits.MAX_SPP` samples per pixel, checked on the
+  values the ``$name`` parameters give, before anything is allocated.
+
 After instantiation :func:`cdbrdf.render.check_scene` runs (meshes need UVs
 and the curvature attribute the BSDF reads).
 """
@@ -42,6 +51,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SceneError
+from ..fsutil import check_regular, read_regular
 from ._bsdf import PLUGIN_NAME
 
 __all__ = ["LoadReport", "load_file", "ply_unit_mm", "uniform_scale"]
@@ -54,6 +64,16 @@ _UNIT_COMMENT = re.compile(r"^comment\s+cdbrdf\s+units\s+(.+)$")
 #: Relative tolerance on the singular values of a "uniform" scale.
 _UNIFORM_RTOL = 1e-5
 
+#: Bytes of a PLY header read for its unit comment at most.
+_HEADER_BYTES = 65536
+
+#: Largest XML file read for its ``<include>`` elements, and how deep includes nest at most.
+_MAX_XML_BYTES = 256 * 1024 * 1024
+_MAX_INCLUDE_DEPTH = 16
+
+#: Mitsuba's default film size (``hdrfilm`` without ``width`` or ``height``).
+_DEFAULT_FILM = (768, 576)
+
 
 @dataclass
 class LoadReport:
@@ -65,10 +85,15 @@ class LoadReport:
         ``(shape, factor)`` for shapes whose curvature attribute is rescaled.
     unwrapped
         Shapes whose ``twosided`` wrapper around the plug-in was removed.
+    files
+        Every file the scene reads: the scene file, its includes and the
+        files its objects name (resolved), for the output rule of
+        :func:`cdbrdf.fsutil.check_not_input`.
     """
 
     curvature_scales: list[tuple[str, float]] = field(default_factory=list)
     unwrapped: list[str] = field(default_factory=list)
+    files: list[Path] = field(default_factory=list)
 
 
 def uniform_scale(matrix: Any, *, what: str = "to_world") -> float:
@@ -97,20 +122,105 @@ def ply_unit_mm(path: str | PathLike[str]) -> float | None:
     from ..errors import MeshError
 
     try:
-        with open(path, "rb") as fh:
-            for _ in range(256):
-                line = fh.readline()
-                if not line:
-                    break
-                text = line.decode("ascii", "replace").strip()
-                if text == "end_header":
-                    break
-                m = _UNIT_COMMENT.match(text)
-                if m:
-                    return float(parse_units(m.group(1).strip()).mm_per_unit)
-    except (OSError, MeshError):
+        head = read_regular(path, max_bytes=_HEADER_BYTES)  # never a FIFO or /dev/zero; the header only
+    except OSError:
         return None
+    for line in head[:_HEADER_BYTES].split(b"\n")[:256]:
+        text = line.decode("ascii", "replace").strip()
+        if text == "end_header":
+            break
+        m = _UNIT_COMMENT.match(text)
+        if m:
+            try:
+                return float(parse_units(m.group(1).strip()).mm_per_unit)
+            except MeshError:
+                return None
     return None
+
+
+def _regular(path: Path, where: str) -> Path | None:
+    """``path`` if it is a regular file, None if it does not exist (its reader says so), else a SceneError line.
+
+    :func:`cdbrdf.fsutil.check_regular`: a FIFO or a device is never opened.
+    """
+    try:
+        return check_regular(path)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise SceneError(f"{where}: {exc}") from None
+
+
+def _substitute(text: str, values: dict[str, str]) -> str:
+    return re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", lambda m: values.get(m.group(1), m.group(0)), text)
+
+
+def _check_includes(path: Path, params: dict[str, str], files: list[Path], depth: int = 0) -> None:
+    """Check the files ``<include>`` elements name (recursively) before Mitsuba's parser opens them.
+
+    A file that is not XML is left to Mitsuba's parser, which reports it.
+    """
+    import xml.etree.ElementTree as ET
+
+    try:
+        data = read_regular(path, max_bytes=_MAX_XML_BYTES)
+        root = ET.fromstring(data[:_MAX_XML_BYTES])
+    except (OSError, ET.ParseError, ValueError):
+        return
+    values = dict(params)
+    for el in root.iter("default"):
+        if el.get("name") and el.get("value") is not None:
+            values.setdefault(str(el.get("name")), str(el.get("value")))
+    for el in root.iter("include"):
+        name = el.get("filename")
+        if not name:
+            continue
+        inc = Path(_substitute(name, values))
+        if not inc.is_absolute():
+            inc = path.parent / inc
+        if _regular(inc, f"{path}: <include filename={name!r}>") is None:
+            continue  # Mitsuba's parser names the missing file
+        files.append(inc)
+        if depth >= _MAX_INCLUDE_DEPTH:
+            raise SceneError(f"{path}: includes nest deeper than {_MAX_INCLUDE_DEPTH} levels")
+        _check_includes(inc, params, files, depth + 1)
+
+
+def _check_nodes(state: Any, *, mi: Any) -> list[Path]:
+    """The files a parsed scene names, each a regular file; its films and samplers within the limits.
+
+    Returns the resolved files. Runs before Mitsuba instantiates anything,
+    so neither a FIFO, nor ``/dev/zero``, nor a 20000 x 20000 film is ever
+    opened or allocated.
+    """
+    import mitsuba.parser as mp
+
+    from .. import limits
+    from ..limits import MAX_SPP
+
+    files: list[Path] = []
+    for node in state.nodes:
+        props = node.props
+        if props is None:
+            continue
+        where = f"{mp.file_location(state, node)}: {props.plugin_name()}"
+        for key in props.keys():
+            if props.type(key) == mi.Properties.Type.String and (key == "filename" or key.endswith("_filename")):
+                name = str(props[key])
+                found = _regular(Path(str(mi.file_resolver().resolve(name))), f"{where} {key}={name!r}")
+                if found is not None:
+                    files.append(found)
+        if node.type == mi.ObjectType.Film:
+            w = int(props["width"]) if "width" in props else _DEFAULT_FILM[0]
+            h = int(props["height"]) if "height" in props else _DEFAULT_FILM[1]
+            if w < 1 or h < 1:
+                raise SceneError(f"{where}: film size {w} x {h}; a film needs at least 1 x 1 pixels")
+            limits.check("render_pixels", w * h, what=f"{where}: {w} x {h} film")
+        if node.type == mi.ObjectType.Sampler and "sample_count" in props:
+            n = int(props["sample_count"])
+            if not 1 <= n <= MAX_SPP:
+                raise SceneError(f"{where}: sample_count {n:,}; a render takes 1 to {MAX_SPP:,} samples per pixel")
+    return files
 
 
 def _references(props: Any, mi: Any) -> list[tuple[str, int]]:
@@ -214,7 +324,12 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
     ------
     SceneError
         For a missing or invalid file, an unused or undefined parameter, a
-        non-uniform ``to_world`` on a shape with the plug-in, or a failed check.
+        non-uniform ``to_world`` on a shape with the plug-in, a file named by
+        the scene that is not a regular file, a film of size 0 or a sampler
+        of more than :data:`cdbrdf.limits.MAX_SPP` samples, or a
+        failed check.
+    LimitError
+        For a film larger than the ``render_pixels`` limit.
     """
     import mitsuba
     import mitsuba.parser as mp
@@ -223,8 +338,12 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
 
     mi: Any = mitsuba
     p = Path(path)
-    if not p.is_file():
-        raise SceneError(f"{p}: no such scene file")
+    try:
+        check_regular(p)
+    except FileNotFoundError:
+        raise SceneError(f"{p}: no such scene file") from None
+    except OSError as exc:
+        raise SceneError(f"scene file {exc}") from None
     if not (math.isfinite(unit_mm) and unit_mm > 0):
         raise SceneError(f"unit_mm: must be a positive number of millimetres per scene unit, got {unit_mm}")
     register()
@@ -237,12 +356,15 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
     fs.prepend(str(p.parent.resolve()))
     mi.set_file_resolver(fs)
     try:
+        files = [p]
+        _check_includes(p, params, files)
         try:
             state = mp.parse_file(config, str(p), **params)
             mp.transform_upgrade(config, state)
             mp.transform_resolve(config, state)
         except RuntimeError as exc:
             raise SceneError(f"{p}: {_message(exc)}") from None
+        files += _check_nodes(state, mi=mi)
         rep = _prepare(state, unit_mm=float(unit_mm), mi=mi)
         try:
             if optimize:
@@ -256,6 +378,7 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
     if report is not None:
         report.curvature_scales.extend(rep.curvature_scales)
         report.unwrapped.extend(rep.unwrapped)
+        report.files.extend(files)
     if check and isinstance(obj, mi.Scene):
         check_scene(obj)
     return obj

@@ -65,8 +65,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..curvature import sine_sheet_curvature, sine_sheet_height
-from ..errors import MeshError, OptionError
+from ..errors import MeshError, OptionError, SceneError
 from ..frames import direction_from_angles
+from ..limits import MAX_SPP
 from .meshio import Mesh, read_mesh, write_ply
 
 __all__ = [
@@ -263,7 +264,8 @@ def prepare_mesh(
     ------
     MeshError
         For a file that cannot be read, a mesh with nothing to render, an
-        unknown unit or frame.
+        unknown unit or frame, a mesh more than
+        :data:`cdbrdf.curvature.MAX_SIZE_MM` across.
 
     Notes
     -----
@@ -276,6 +278,7 @@ def prepare_mesh(
         DEFAULT_NEIGHBOURHOOD_MM,
         check_kappa_range,
         check_neighbourhood,
+        check_size,
         neighbourhood_from_table,
         parse_units,
         surface_curvature,
@@ -298,6 +301,7 @@ def prepare_mesh(
     else:
         u = parse_units("mm")
         units_note = "units: mm (none given or recorded; give the mesh's unit if it is not mm)"
+    check_size(mesh.vertices, u, name=name)  # a vertex 1e10 mm away would leave the object invisible
     if neighbourhood_mm is not None:
         nb, nb_note = check_neighbourhood(neighbourhood_mm), "given"
     elif table is not None:
@@ -696,13 +700,49 @@ def mesh_scene(
         if isinstance(light, str):
             raise OptionError(f"light: expected (theta, phi, irradiance), 'auto' or None, got {light!r}")
         lights.append(directional_light(*light))
-    env: Any = envmap
+    env: Any = None if envmap is None else _environment_map(envmap)
     hide = False
     if lighting == "studio" and envmap is None:
         env, hide = studio_environment(), True
     return _build(world, table, mode=mode, scale=scale, size=size, spp=spp, lights=lights, envmap=env,
                   hide_env=hide, max_depth=max_depth, elevation_deg=elevation_deg, azimuth_deg=azimuth_deg,
                   fov_deg=fov_deg, curvature_mode=curvature_mode, fill=fill)
+
+
+def _environment_map(path: str | PathLike[str]) -> NDArray[np.float32]:
+    """The pixels of an environment map file (linear RGB), read by cdbrdf's image reader or Mitsuba's.
+
+    OpenEXR goes through :func:`cdbrdf.images.read_image` (its checks, one
+    :class:`~cdbrdf.errors.ImageError` line for a damaged file); other
+    formats (Radiance ``.hdr``) through Mitsuba's bitmap reader, its errors
+    as one :class:`~cdbrdf.errors.SceneError` line naming the file.
+    """
+    import mitsuba as mi
+
+    from ..fsutil import check_regular
+    from ..images import read_image
+
+    p = Path(path)
+    try:
+        check_regular(p)
+    except OSError as exc:
+        raise SceneError(f"environment map {exc}") from None
+    if p.suffix.lower() == ".exr":
+        px = np.asarray(read_image(p)[0], dtype=np.float32)
+    else:
+        try:
+            px = np.array(mi.Bitmap(str(p)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False),
+                          dtype=np.float32)
+        except (RuntimeError, ValueError, OSError) as exc:  # Mitsuba's reader: std::exception subclasses
+            from .scenefile import _message
+
+            raise SceneError(f"{p}: cannot be read as an environment map ({_message(exc)})") from None
+    px = px[..., None] if px.ndim == 2 else px
+    if px.shape[-1] == 1:
+        px = np.repeat(px, 3, axis=-1)
+    if not np.all(np.isfinite(px[..., :3])):
+        raise SceneError(f"{p}: the environment map holds NaN or infinite pixels")
+    return np.ascontiguousarray(px[..., :3])
 
 
 def render_scene(
@@ -729,13 +769,33 @@ def render_scene(
     alpha
         Also return the coverage (1 where the object is seen; with the
         studio lighting's hidden sky, 0 on the background), as a 4th channel.
+
+    Raises
+    ------
+    OptionError
+        For ``spp`` (given, or the sensor's) outside 1 to :data:`cdbrdf.limits.MAX_SPP`.
+    SceneError
+        For a scene without integrator or sensor, or a film of size 0.
+    LimitError
+        For a film of more pixels than the ``render_pixels`` limit: checked on
+        what is rendered, whatever made the scene.
     """
     import mitsuba as mi
 
+    from .. import limits
+
+    if scene.integrator() is None:
+        raise SceneError("the scene has no integrator (add one, e.g. <integrator type=\"path\"/>)")
+    if not scene.sensors():
+        raise SceneError("the scene has no sensor to render from")
     sensor = scene.sensors()[0]
     total = int(spp if spp is not None else sensor.sampler().sample_count())
-    if total < 1:
-        raise OptionError(f"spp: must be >= 1, got {total}")
+    if not 1 <= total <= MAX_SPP:
+        raise OptionError(f"spp: {total:,} samples per pixel; a render takes 1 to {MAX_SPP:,}")
+    w, h = (int(x) for x in sensor.film().crop_size())
+    if w < 1 or h < 1:
+        raise SceneError(f"the film's size is {w} x {h}; a render needs at least 1 x 1 pixels")
+    limits.check("render_pixels", w * h, what=f"a {w} x {h} render")
     n = passes if passes is not None else max(1, math.ceil(total / 16))
     n = min(n, total)
     chunks = [total // n + (1 if i < total % n else 0) for i in range(n)]

@@ -33,6 +33,8 @@ from ..errors import OptionError
 from .asset import Asset, mesh_asset, table_asset
 
 __all__ = [
+    "EXPORT_MAKER",
+    "EXPORT_SIGNATURE",
     "MAX_TABLES",
     "PAGE_FILES",
     "default_meshes",
@@ -42,6 +44,12 @@ __all__ = [
 ]
 
 _LOG = logging.getLogger(__name__)
+
+#: The maker an export's owner mark names (:func:`cdbrdf.fsutil.output_folder`): only an export replaces one.
+EXPORT_MAKER = "view --export"
+
+#: Files every export holds (an export marked before makers were recorded is recognised by them).
+EXPORT_SIGNATURE: tuple[str, ...] = ("index.html", "data.js")
 
 #: Tables the viewer shows side by side at most.
 MAX_TABLES = 2
@@ -154,7 +162,8 @@ def export_viewer(dest: str | PathLike[str], files: Mapping[str, bytes]) -> Path
     (:func:`cdbrdf.fsutil.output_folder`): an error leaves no half-written
     folder, an earlier export is replaced whole, and a folder cdbrdf did not
     write (or one with files added since) is refused with
-    :class:`FileExistsError`.
+    :class:`FileExistsError`, one that another command made (the demo's
+    output, a simulated capture) with :class:`~cdbrdf.errors.OutputError`.
 
     Returns
     -------
@@ -163,7 +172,7 @@ def export_viewer(dest: str | PathLike[str], files: Mapping[str, bytes]) -> Path
     """
     from ..fsutil import output_folder
 
-    with output_folder(dest) as tmp:
+    with output_folder(dest, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE) as tmp:
         write_viewer(tmp, files)
     _LOG.info("wrote the viewer to %s", dest)
     return Path(dest) / "index.html"

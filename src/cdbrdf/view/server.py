@@ -4,12 +4,26 @@
 (GET and HEAD; anything else is 404 or 405), never the file system. A free
 port is chosen unless one is given; a port in use is an
 :class:`~cdbrdf.errors.OptionError` naming it.
+
+Only the viewer's own page gets the user's table:
+
+- a request whose ``Host`` is not the address served (``127.0.0.1:PORT``
+  or ``localhost:PORT``) is refused (403): a page of another site whose
+  name resolves to 127.0.0.1 (DNS rebinding) reaches nothing;
+- every file but the page itself (``data.js`` holds the table) is refused
+  to a request from another origin, as its ``Origin``, ``Referer`` or
+  ``Sec-Fetch-Site`` header says (a ``<script src>`` on another site's page),
+  and every answer carries ``Cross-Origin-Resource-Policy: same-origin``,
+  which makes browsers refuse to hand it to another origin;
+- a client that goes away mid-answer (a reset, a closed tab) is logged on
+  one line (debug level), never with a traceback.
 """
 
 from __future__ import annotations
 
 import errno
 import logging
+import sys
 import threading
 from collections.abc import Mapping
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -35,28 +49,67 @@ CONTENT_TYPES: Mapping[str, str] = {
 }
 
 
+#: The page itself: the only file served to a navigation from another site (it holds no data).
+_PAGE = "index.html"
+
+#: Headers of every answer: no other origin gets it, no type sniffing, no framing, no caching.
+_HEADERS = {"Cross-Origin-Resource-Policy": "same-origin", "X-Content-Type-Options": "nosniff",
+            "X-Frame-Options": "DENY", "Cache-Control": "no-store"}
+
+
+def _origin(url: str) -> str:
+    """``scheme://host:port`` of a URL, lower case ("" when it has none)."""
+    parts = urlsplit(url.strip())
+    return f"{parts.scheme}://{parts.netloc}".lower() if parts.scheme and parts.netloc else ""
+
+
 def _handler(files: Mapping[str, bytes]) -> type[BaseHTTPRequestHandler]:
     class Handler(BaseHTTPRequestHandler):
         server_version = "cdbrdf-view"
 
-        def _lookup(self) -> tuple[bytes, str] | None:
-            path = unquote(urlsplit(self.path).path).lstrip("/") or "index.html"
+        def _lookup(self) -> tuple[str, bytes, str] | None:
+            path = unquote(urlsplit(self.path).path).lstrip("/") or _PAGE
             data = files.get(path)
             if data is None:
                 return None
             suffix = path[path.rfind("."):] if "." in path else ""
-            return data, CONTENT_TYPES.get(suffix, "application/octet-stream")
+            return path, data, CONTENT_TYPES.get(suffix, "application/octet-stream")
+
+        def _refusal(self, path: str) -> str | None:
+            """Why this request must not be answered (None: it may)."""
+            port = int(self.server.server_address[1])  # type: ignore[index]
+            hosts = {f"{HOST}:{port}", f"localhost:{port}"}
+            if (self.headers.get("Host") or "").strip().lower() not in hosts:
+                return f"this server answers requests for {HOST}:{port} only"
+            ours = {f"http://{h}" for h in hosts}
+            if path == _PAGE and self.headers.get("Sec-Fetch-Mode", "navigate") == "navigate":
+                return None  # opening the page itself: it holds nothing of the table
+            origin = self.headers.get("Origin")
+            if origin is not None and _origin(origin) not in ours:
+                return "not served to other origins"
+            referer = self.headers.get("Referer")
+            if referer is not None and _origin(referer) not in ours:
+                return "not served to other origins"
+            if self.headers.get("Sec-Fetch-Site", "same-origin") not in ("same-origin", "none"):
+                return "not served to other origins"
+            return None
 
         def _send(self, body: bool) -> None:
             found = self._lookup()
             if found is None:
                 self.send_error(404, "not part of the viewer")
                 return
-            data, ctype = found
+            path, data, ctype = found
+            why = self._refusal(path)
+            if why is not None:
+                _LOG.info("refused %s %s from %s: %s", self.command, path, self.address_string(), why)
+                self.send_error(403, why)
+                return
             self.send_response(200)
             self.send_header("Content-Type", ctype)
             self.send_header("Content-Length", str(len(data)))
-            self.send_header("Cache-Control", "no-store")
+            for k, v in _HEADERS.items():
+                self.send_header(k, v)
             self.end_headers()
             if body:
                 self.wfile.write(data)
@@ -71,6 +124,19 @@ def _handler(files: Mapping[str, bytes]) -> type[BaseHTTPRequestHandler]:
             _LOG.debug("%s " + format, self.address_string(), *args)
 
     return Handler
+
+
+class _Server(ThreadingHTTPServer):
+    """The HTTP server, whose errors while answering are one log line, not a traceback on stderr."""
+
+    daemon_threads = True
+
+    def handle_error(self, request: Any, client_address: Any) -> None:  # noqa: D102 - socketserver API
+        exc = sys.exc_info()[1]
+        if isinstance(exc, (ConnectionError, TimeoutError)):  # reset, broken pipe, aborted: the client left
+            _LOG.debug("client %s went away: %s", client_address[0], exc)
+        else:
+            _LOG.warning("answering %s failed: %s: %s", client_address[0], type(exc).__name__, exc)
 
 
 class ViewerServer:
@@ -93,13 +159,12 @@ class ViewerServer:
         if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
             raise OptionError(f"port: expected an integer in [0, 65535], got {port!r}")
         try:
-            self._httpd = ThreadingHTTPServer((HOST, port), _handler(dict(files)))
+            self._httpd = _Server((HOST, port), _handler(dict(files)))
         except OSError as exc:
             if exc.errno == errno.EADDRINUSE:
                 raise OptionError(f"port {port}: already in use on {HOST}; choose another --port "
                                   "or leave it out for a free one") from None
             raise OptionError(f"port {port}: cannot serve on {HOST} ({exc.strerror or exc})") from None
-        self._httpd.daemon_threads = True
         self._thread: threading.Thread | None = None
 
     @property
