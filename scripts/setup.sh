@@ -54,4 +54,6 @@ if [ "$(cat "$STAMP" 2>/dev/null)" != "$WANT" ] || ! .venv/bin/python -c 'import
   .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[test]"
   echo "$WANT" > "$STAMP"
 fi
+# the numba kernels into their on-disk cache (a few seconds once cached; about 25 s the first time)
+.venv/bin/python -m cdbrdf._precompile >&2
 log "ready: $ROOT/.venv"

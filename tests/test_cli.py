@@ -104,14 +104,15 @@ def test_negative_comma_lists_are_values():
     assert _join_negative_lists(["x", "-q", "-0.1,2"]) == ["x", "-q", "-0.1,2"]
 
 
-def test_version_is_fast_and_imports_no_command():
-    code = ("import sys, time; t = time.perf_counter(); from cdbrdf.cli import main\n"
+def test_version_imports_no_command_and_no_heavy_library():
+    code = ("import sys; from cdbrdf.cli import main\n"
             "try:\n    main(['--version'])\nexcept SystemExit as e:\n    assert e.code == 0\n"
-            "print(time.perf_counter() - t, any(m.startswith('cdbrdf.commands.') for m in sys.modules))")
+            "heavy = ('numba', 'mitsuba', 'drjit', 'h5py', 'matplotlib', 'dask', 'scipy', 'xarray')\n"
+            "print(sorted(m for m in sys.modules if m.startswith('cdbrdf.commands.') or m.split('.')[0] in heavy))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    first, seconds, imported = r.stdout.splitlines()[0], *r.stdout.split()[-2:]
+    first, imported = r.stdout.splitlines()
     assert first == f"cdbrdf {cdbrdf.__version__}"
-    assert imported == "False" and float(seconds) < 2.0
+    assert imported == "[]"
 
 
 def test_no_command_prints_help(capsys):

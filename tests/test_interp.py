@@ -173,3 +173,27 @@ def test_read_only_install_without_writable_home_compiles_in_memory(tmp_path):
         for p in [site, *site.rglob("*"), tmp_path / "home"]:
             p.chmod(0o755 if p.is_dir() else 0o644)
     assert r.returncode == 0 and r.stdout.strip().endswith("ok"), r.stderr[-3000:]
+
+
+def test_a_cache_write_that_fails_costs_only_the_cache(tmp_path):
+    """A full disk (here a 1-byte file size limit) while numba writes its cache: the lookup still answers."""
+    import os
+    import resource
+    import subprocess
+    import sys
+
+    def tiny_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (1, 1))
+
+    code = (
+        "import numpy as np, cdbrdf\n"
+        "g = cdbrdf.Grid(kappa=[0.0], theta_l=[0.0, 40.0], phi_l=[0.0, 180.0], theta_v=[0.0, 40.0], phi_v=[0.0, 180.0])\n"
+        "t = cdbrdf.CDBRDF(np.full(g.shape + (1,), 0.25), **g.axes())\n"
+        "assert np.allclose(t.evaluate(30.0, 10.0, 20.0, 10.0), 0.25)\n"
+        "print('ok')\n"
+    )
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONDONTWRITEBYTECODE="1")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=tmp_path,
+                       preexec_fn=tiny_files, timeout=600)
+    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
+    assert not any(p.stat().st_size > 1 for p in (tmp_path / "cache").rglob("*.nbc"))  # nothing was cached

@@ -193,7 +193,7 @@ def test_json_that_is_not_a_regular_file_is_refused_at_once(tmp_path, kind):
     with unblocking(p), pytest.raises(CaptureError, match=r"stands.json: not a regular file \(a (FIFO|character "
                                                            r"device|folder)\)"):
         load_json_object(p)
-    assert time.monotonic() - t0 < 2
+    assert time.monotonic() - t0 < 4.5  # refused before opening: a blocked reader is fed only after 5 s
 
 
 def test_json_is_read_with_a_bounded_read(tmp_path, monkeypatch):

@@ -57,14 +57,36 @@ def njit(*args: Any, **options: Any) -> Any:
         if not options.get("cache"):
             return numba.njit(**options)(func)
         try:
-            return numba.njit(**options)(func)
+            dispatcher = numba.njit(**options)(func)
         except RuntimeError as exc:
             if "cannot cache function" not in str(exc):
                 raise
             _log.debug("%s: no writable numba cache location, compiling in memory", func.__qualname__)
             return numba.njit(**dict(options, cache=False))(func)
+        _tolerate_failed_saves(dispatcher, func.__qualname__)
+        return dispatcher
 
     return decorate
+
+
+def _tolerate_failed_saves(dispatcher: Any, name: str) -> None:
+    """Make a failed write of the on-disk cache (a full disk, a file size limit) cost a recompile, not the run.
+
+    numba raises the ``OSError`` of the write from the call that compiled;
+    the compiled code is fine, only the cache copy is missing.
+    """
+    cache = getattr(dispatcher, "_cache", None)
+    save = getattr(cache, "save_overload", None)
+    if save is None:  # pragma: no cover - a numba without this internal: its own behaviour
+        return
+
+    def save_overload(sig: Any, data: Any) -> None:
+        try:
+            save(sig, data)
+        except OSError as exc:
+            _log.debug("%s: compiled code not cached (%s)", name, exc)
+
+    cache.save_overload = save_overload
 
 
 def cpu_count() -> int:
