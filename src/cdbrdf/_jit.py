@@ -75,7 +75,7 @@ def _tolerate_failed_saves(dispatcher: Any, name: str) -> None:
     numba raises the ``OSError`` of the write from the call that compiled;
     the compiled code is fine, only the cache copy is missing.
     """
-    cache = getattr(dispatcher, "_cache", None)
+    cache: Any = getattr(dispatcher, "_cache", None)
     save = getattr(cache, "save_overload", None)
     if save is None:  # pragma: no cover - a numba without this internal: its own behaviour
         return
