@@ -6,9 +6,10 @@ first use (nothing happens at import) and caches the machine code on disk.
 The kernels are serial over a range of queries and release the GIL;
 :func:`cdbrdf.interp.evaluate` runs ranges in threads over the CPUs. (numba's
 ``parallel=True`` took four times as long to compile, about 13 s a kernel,
-paid by every fresh install.) Each kernel is compiled once: it reads a
-:class:`cdbrdf.interp.KernelGrid`, whose types are the same for every table,
-and read-only float64 query arrays.
+paid by every fresh install.) Each kernel is compiled once per table dtype
+(float32, float64): it reads a :class:`cdbrdf.interp.KernelGrid`, whose
+other types are the same for every table, and read-only float64 query
+arrays.
 
 The kernels implement the rule stated in :mod:`cdbrdf.interp` (clamped
 curvature and elevations, periodic azimuth with an exact ``fmod`` wrap, the
