@@ -2,7 +2,7 @@
 
 Run: ``.venv/bin/python benchmarks/bench_curvature.py [--vertices 100000] [--large-faces 1000000] [--repeat 3]``
 
-The meshes: the generated garment (:func:`cdbrdf.render.meshes.skirt_mesh`:
+The meshes: the generated garment (:func:`cdbrdf.mesh.skirt_mesh`:
 two sewn panels with opposite winding, folds, a double-sided sash), in mm,
 at two resolutions, about ``--vertices`` vertices (edges of about 3 mm,
 coarser than the neighbourhood, as a garment from a CAD tool) and about
@@ -11,7 +11,7 @@ coarser than the neighbourhood, as a garment from a CAD tool) and about
 much finer than the neighbourhood: the thinned path). For each, timed in
 the same run:
 
-- :func:`cdbrdf.curvature.surface_curvature` (everything ``cdbrdf
+- :func:`cdbrdf.mesh.surface_curvature` (everything ``cdbrdf
   curvature`` does between reading and writing: repair, fit, frame) at the
   default neighbourhood (5 mm), at the denim's measured spot (1 mm) and at
   a large one (50 mm);
@@ -40,7 +40,7 @@ TARGET_LARGE_S = 60.0
 
 
 def _skirt(n_vertices: int):
-    from cdbrdf.render.meshes import Skirt, skirt_mesh
+    from cdbrdf.mesh import Skirt, skirt_mesh
 
     # two panels of around x down vertices: around = 1.6 down keeps the triangles near-square
     down = max(8, int(round(math.sqrt(n_vertices / (2 * 1.6)))))
@@ -50,7 +50,7 @@ def _skirt(n_vertices: int):
 def _scan(n_vertices: int):
     import numpy as np
 
-    from cdbrdf.render.meshio import Mesh
+    from cdbrdf.mesh import Mesh
 
     rng = np.random.default_rng(0)
     uv, f = jittered_triangulation(n_vertices, rng)
@@ -71,7 +71,7 @@ def main(argv=None) -> int:
 
     import igl
 
-    from cdbrdf.curvature import repair, surface_curvature
+    from cdbrdf.mesh import repair, surface_curvature
 
     ok = True
     print(f"cores: {os.cpu_count()}, threads: {cpu_count()}")

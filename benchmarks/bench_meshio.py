@@ -10,12 +10,12 @@ line), in a temporary folder. Timed in the same run, best of ``--repeat``
 after one untimed run (numba compilation, the file cache):
 
 1. **Line checks, before/after**: parsing the ASCII file's bytes with
-   cdbrdf's reader (:func:`cdbrdf.render._ply.parse_ply`: every record one
+   cdbrdf's reader (:func:`cdbrdf.mesh._ply.parse_ply`: every record one
    line with exactly its values) against the token-based reading it
    replaced (a copy below, ``token_based_parse``: the whole body as one
    stream of numbers, records taken from it in order), on the same bytes;
    the two results are checked to be equal.
-2. **Against trimesh**: :func:`cdbrdf.render.meshio.read_ply` against
+2. **Against trimesh**: :func:`cdbrdf.mesh.read_ply` against
    ``trimesh.load(path, process=False)`` on the same files, binary and
    ASCII.
 
@@ -42,7 +42,7 @@ TARGET_RATIO = 1.25
 
 
 def _mesh(n_vertices: int):
-    from cdbrdf.render.meshio import Mesh
+    from cdbrdf.mesh import Mesh
 
     rng = np.random.default_rng(0)
     uv, f = jittered_triangulation(n_vertices, rng)
@@ -103,7 +103,7 @@ def _scan_tokens():
 
 def token_based_parse(data: bytes, name: str, scan):
     """cdbrdf's ASCII PLY reading before the line checks: the body as one stream of numbers."""
-    from cdbrdf.render._ply import PlyData, _as_index, _fan, _list_items, ply_header
+    from cdbrdf.mesh._ply import PlyData, _as_index, _fan, _list_items, ply_header
 
     fmt, elements, comments, start = ply_header(data, name)
     text = data[start:].decode("ascii")
@@ -146,8 +146,8 @@ def main(argv=None) -> int:
 
     import trimesh
 
-    from cdbrdf.render._ply import parse_ply
-    from cdbrdf.render.meshio import read_ply, write_ply
+    from cdbrdf.mesh import read_ply, write_ply
+    from cdbrdf.mesh._ply import parse_ply
 
     print(f"cores: {os.cpu_count()}, load average: {os.getloadavg()[0]:.1f}")
     mesh = _mesh(args.vertices)

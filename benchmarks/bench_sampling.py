@@ -106,8 +106,8 @@ def sky(path: Path) -> None:
 def scene(mi, *, light: str, env: Path, size, bsdf) -> object:
     """The sine sheet with ``bsdf`` under the sky (z up) or the rectangle light."""
     import cdbrdf.render as cr
+    from cdbrdf.mesh import write_ply
     from cdbrdf.render import scenes
-    from cdbrdf.render.meshio import write_ply
 
     mesh = scenes.sine_sheet_mesh(scenes.SineSheet())
     T = mi.ScalarTransform4f

@@ -77,8 +77,7 @@ def hemisphere_quadrature(n=200):
 
 def sheet_scene_dict(tmp_path, bsdf, *, emitter, size=(16, 12), spp=16, max_depth=2, width_mm=20.0):
     """A small sine sheet (its curvature stored) seen from 40 degrees above -y, with ``bsdf`` and ``emitter``."""
-    from cdbrdf.render.meshio import write_ply
-    from cdbrdf.render.scenes import SineSheet, sine_sheet_mesh
+    from cdbrdf.mesh import SineSheet, sine_sheet_mesh, write_ply
 
     ply = tmp_path / "sheet.ply"
     write_ply(ply, sine_sheet_mesh(SineSheet(width_mm=width_mm, depth_mm=width_mm, vertices_per_wavelength=16)))

@@ -201,7 +201,7 @@ def test_curvature_cost_is_bounded_at_any_neighbourhood(tmp_path, monkeypatch):
 
     The work counted is what the kernels do: (vertices fitted or transferred) x (neighbours each looks at).
     """
-    from cdbrdf.curvature import _kernels
+    from cdbrdf.mesh import _kernels
 
     n = 30
     x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n), indexing="ij")

@@ -1,4 +1,4 @@
-"""Tests of cdbrdf.curvature: accuracy on irregular meshes, units, noise, repairs, frames, the directional mode.
+"""Tests of cdbrdf.mesh: accuracy on irregular meshes, units, noise, repairs, frames, the directional mode.
 
 Known answers: a cylinder of radius r has principal curvatures 1/r (across
 its axis) and 0; a sphere of radius R has 1/R everywhere; the sine sheet's
@@ -11,10 +11,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cdbrdf.curvature import (
+from cdbrdf.errors import MeshError
+from cdbrdf.mesh import (
     ATTRIBUTES,
     DEFAULT_NEIGHBOURHOOD_MM,
-    MeshError,
+    SineSheet,
+    Skirt,
     check_kappa_range,
     max_curvature,
     neighbourhood_from_table,
@@ -23,10 +25,10 @@ from cdbrdf.curvature import (
     repair,
     sine_sheet_curvature,
     sine_sheet_height,
+    sine_sheet_mesh,
+    skirt_mesh,
     surface_curvature,
 )
-from cdbrdf.render.meshes import Skirt, skirt_mesh
-from cdbrdf.render.scenes import SineSheet, sine_sheet_mesh
 
 from .mesh_helpers import R_CYL, cylinder_patch, jittered_uv, shared_mesh, sphere_mesh
 
@@ -386,7 +388,7 @@ def test_mesh_without_uvs_takes_the_principal_frame():
     assert s.frame == "principal" and any("no UV coordinates" in n for n in s.notes)
     assert s.uv is not None and s.source.size == 3 * s.faces.shape[0]  # per-face UVs, one vertex per corner
     # dP/du of each generated face is its bending direction: across the axis
-    from cdbrdf.curvature.frames import face_uv_tangents
+    from cdbrdf.mesh.frames import face_uv_tangents
 
     ft, ok = face_uv_tangents(v[s.source], s.faces, s.uv)
     assert ok.all() and np.median(np.abs(ft[:, 1])) < 0.05
@@ -425,7 +427,7 @@ def test_neighbourhood_from_the_tables_provenance():
 
 # -- the real meshes ------------------------------------------------------------------------
 def test_spot_uv_charts_are_reported_and_the_principal_frame_avoids_them():
-    from cdbrdf.render.meshio import read_mesh
+    from cdbrdf.mesh import read_mesh
 
     m = read_mesh(shared_mesh("spot.obj"))
     assert m.uv is not None
@@ -442,7 +444,7 @@ def test_spot_uv_charts_are_reported_and_the_principal_frame_avoids_them():
 
 
 def test_fandisk_cad_part_without_uvs():
-    from cdbrdf.render.meshio import read_mesh
+    from cdbrdf.mesh import read_mesh
 
     m = read_mesh(shared_mesh("fandisk.obj"))
     assert m.uv is None

@@ -108,7 +108,7 @@ def _read_special(rng: np.random.Generator, folder: Path) -> str:
     from cdbrdf.importers import read_source
     from cdbrdf.measure.capture import read_capture, read_plan
     from cdbrdf.measure.stands import read_stands
-    from cdbrdf.render.meshio import read_mesh
+    from cdbrdf.mesh import read_mesh
 
     kind = _KINDS[int(rng.integers(0, len(_KINDS)))]
     reader = str(rng.choice(["load", "source", "mesh", "image", "capture", "plan", "stands", "argument", "scene",

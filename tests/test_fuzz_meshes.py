@@ -34,7 +34,7 @@ def seed_files() -> tuple[bytes, ...]:
     """The seed files (deterministic)."""
     import trimesh
 
-    from cdbrdf.render.meshio import Mesh, write_ply
+    from cdbrdf.mesh import Mesh, write_ply
 
     v, f, uv, _ = cylinder_patch(R_CYL, n=7, seed=3)
     n = v * np.array([1.0, 0.0, 1.0])
@@ -70,7 +70,7 @@ def _suffix(data: bytes) -> str:
 
 def target(data: bytes, workdir: Path) -> str:
     """Prepare ``data`` as a mesh file for rendering; every warning is an error."""
-    from cdbrdf.render.scenes import prepare_mesh
+    from cdbrdf.mesh import prepare_mesh
 
     p = workdir / f"fuzzed{_suffix(data)}"
     p.write_bytes(data)

@@ -57,9 +57,7 @@ def silhouette(img):
 
 # -- the attributes of the plug-in --------------------------------------------------------------
 def test_written_properties_load_as_the_plugins_attributes(variant, tmp_path):
-    from cdbrdf.curvature import ATTRIBUTES
-    from cdbrdf.render.meshio import Mesh, write_ply
-    from cdbrdf.render.scenes import prepare_mesh
+    from cdbrdf.mesh import ATTRIBUTES, Mesh, prepare_mesh, write_ply
 
     v, f, uv, _ = cylinder_patch(R_CYL, n=12)
     m = prepare_mesh(Mesh(v, f, None, uv))
@@ -74,8 +72,8 @@ def test_written_properties_load_as_the_plugins_attributes(variant, tmp_path):
 
 def test_directional_mode_reads_the_curvature_along_x(variant):
     """A cylinder whose u runs along its axis: the maximum curvature is 1/r, the directional one 0."""
-    from cdbrdf.render.meshio import Mesh
-    from cdbrdf.render.scenes import mesh_scene, prepare_mesh, render_scene
+    from cdbrdf.mesh import Mesh, prepare_mesh
+    from cdbrdf.render.scenes import mesh_scene, render_scene
 
     radius = 1 / 0.13
     v, f, uv, _ = cylinder_patch(radius, n=30)
@@ -92,8 +90,8 @@ def test_directional_mode_reads_the_curvature_along_x(variant):
 
 def test_each_visible_side_of_the_garment_shows_its_sign(variant):
     """The skirt without folds is convex seen from outside, on both panels and both sides of the sash."""
-    from cdbrdf.render.meshes import Skirt, skirt_mesh
-    from cdbrdf.render.scenes import mesh_scene, prepare_mesh, render_scene
+    from cdbrdf.mesh import Skirt, prepare_mesh, skirt_mesh
+    from cdbrdf.render.scenes import mesh_scene, render_scene
 
     mesh = prepare_mesh(skirt_mesh(Skirt(fold_amplitude_mm=0.0, around=41, down=25)))
     curved = kappa_table(gain=30.0, kappa=(-0.01, 0.0, 0.01))  # 0.5 + 30 kappa: 0.7 at kappa = 1/150 mm
@@ -111,7 +109,8 @@ def test_each_visible_side_of_the_garment_shows_its_sign(variant):
 # -- the picture: up axis, framing, lighting, exposure -----------------------------------------
 def test_up_axis_is_detected_and_can_be_given(variant, tmp_path):
     """A tall post along y in an OBJ (Y-up by convention) stands up; told it is Z-up, it lies down."""
-    from cdbrdf.render.scenes import detect_up, mesh_scene, prepare_mesh, render_scene
+    from cdbrdf.mesh import detect_up, prepare_mesh
+    from cdbrdf.render.scenes import mesh_scene, render_scene
 
     v, f, uv, _ = cylinder_patch(10.0, n=12, angle=2 * np.pi * 0.999, length=120.0)
     path = write_obj(tmp_path / "post.obj", v, f, uv)
@@ -128,8 +127,8 @@ def test_up_axis_is_detected_and_can_be_given(variant, tmp_path):
 
 @pytest.mark.parametrize("which", ["spot", "skirt"])
 def test_the_object_fills_three_quarters_of_the_frame(variant, which):
-    from cdbrdf.render.meshes import Skirt, skirt_mesh
-    from cdbrdf.render.scenes import DEFAULT_MESH_VIEW, FRAME_FILL, mesh_scene, prepare_mesh, render_scene
+    from cdbrdf.mesh import Skirt, prepare_mesh, skirt_mesh
+    from cdbrdf.render.scenes import DEFAULT_MESH_VIEW, FRAME_FILL, mesh_scene, render_scene
 
     if which == "spot":
         mesh = prepare_mesh(shared_mesh("spot.obj"), units="m")
@@ -143,8 +142,8 @@ def test_the_object_fills_three_quarters_of_the_frame(variant, which):
 
 
 def test_studio_lighting_fills_the_shadows(variant):
-    from cdbrdf.render.meshes import Skirt, skirt_mesh
-    from cdbrdf.render.scenes import mesh_scene, prepare_mesh, render_scene
+    from cdbrdf.mesh import Skirt, prepare_mesh, skirt_mesh
+    from cdbrdf.render.scenes import mesh_scene, render_scene
 
     mesh = prepare_mesh(skirt_mesh(Skirt(around=41, down=25)))
     spread = {}
@@ -177,7 +176,7 @@ def test_exposure_from_the_render():
 # -- the commands -------------------------------------------------------------------------------
 def test_curvature_command_records_the_unit_and_render_uses_it(variant, tmp_path, capsys):
     from cdbrdf.cli import main
-    from cdbrdf.render.meshio import read_ply
+    from cdbrdf.mesh import read_ply
 
     v, f, uv, interior = cylinder_patch(R_CYL / 10.0, n=40)  # in cm
     f = f.copy()

@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cdbrdf.curvature import max_curvature
-from cdbrdf.render.meshes import DrapedCloth, draped_cloth_height, draped_cloth_mesh
+from cdbrdf.mesh import DrapedCloth, draped_cloth_height, draped_cloth_mesh, max_curvature
 
 
 def test_draped_cloth_has_uvs_and_both_curvature_signs():

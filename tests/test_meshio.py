@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 
 from cdbrdf.errors import CDBRDFError, LimitError, MeshError
-from cdbrdf.render.meshio import Mesh, read_mesh, read_obj, read_ply, write_ply
-from cdbrdf.render.scenes import SineSheet, prepare_mesh, sine_sheet_mesh
+from cdbrdf.mesh import Mesh, SineSheet, prepare_mesh, read_mesh, read_obj, read_ply, sine_sheet_mesh, write_ply
 
 from .mesh_helpers import R_CYL, cylinder_patch, shared_mesh, write_ascii_ply, write_obj
 
@@ -428,7 +427,7 @@ def test_valid_ascii_ply_reads_equal_to_the_binary_path(tmp_path, layout):
 
 def test_ascii_ply_values_are_the_correctly_rounded_doubles(tmp_path):
     """Every token reads bit for bit as Python's ``float`` reads it (the numba fast path and its fallback)."""
-    from cdbrdf.render._ply import parse_ply
+    from cdbrdf.mesh._ply import parse_ply
 
     rng = np.random.default_rng(7)
     x = rng.normal(size=4000) * 10.0 ** rng.integers(-30, 30, 4000)

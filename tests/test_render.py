@@ -115,7 +115,7 @@ def test_eval_matches_cdbrdf_evaluate(variant, dtype):
 @needs_llvm
 def test_eval_at_random_hit_points_uses_vertex_curvature(variant):
     """Rays hit the sine sheet; eval == CDBRDF.evaluate at the hit's frame and curvature."""
-    from cdbrdf.curvature import sine_sheet_curvature
+    from cdbrdf.mesh import sine_sheet_curvature
     from cdbrdf.render.scenes import sine_scene
 
     table = analytic_table()
@@ -290,7 +290,7 @@ def test_constant_table_equals_diffuse(variant):
 
 def cylinder_mesh(radius, convex, n=50):
     """Regular half-cylinder (axis y) with UVs, u across the axis; CCW seen from the lit side."""
-    from cdbrdf.render.meshio import Mesh
+    from cdbrdf.mesh import Mesh
 
     a = np.linspace(-np.pi / 2, np.pi / 2, n)
     y = np.linspace(-radius, radius, n // 2)
@@ -310,7 +310,7 @@ def cylinder_mesh(radius, convex, n=50):
 @pytest.mark.parametrize("convex", [True, False])
 def test_convex_and_concave_patches_pick_the_right_kappa(variant, tmp_path, convex):
     """A table whose value is 0.5 + kappa: the rendered apex shows the stand's kappa."""
-    from cdbrdf.render.meshio import write_ply
+    from cdbrdf.mesh import write_ply
     from cdbrdf.render.scenes import mesh_scene, render_scene
 
     radius = 1 / 0.13
@@ -326,8 +326,7 @@ def test_convex_and_concave_patches_pick_the_right_kappa(variant, tmp_path, conv
 
 @needs_llvm
 def test_mesh_without_uv_is_refused(variant, tmp_path):
-    from cdbrdf.render.meshio import write_ply
-    from cdbrdf.render.scenes import prepare_mesh
+    from cdbrdf.mesh import prepare_mesh, write_ply
 
     m = cylinder_mesh(5.0, True, n=10)
     m.uv = None
@@ -348,7 +347,7 @@ def test_mesh_without_uv_is_refused(variant, tmp_path):
 
 @needs_llvm
 def test_missing_curvature_attribute_is_refused(variant, tmp_path):
-    from cdbrdf.render.meshio import write_ply
+    from cdbrdf.mesh import write_ply
 
     path = tmp_path / "c.ply"
     write_ply(path, cylinder_mesh(5.0, True, n=10))
@@ -375,7 +374,7 @@ def test_plugin_loads_from_file_by_name(variant, tmp_path):
 
 @needs_llvm
 def test_ply_curvature_property_loads_as_vertex_curvature(variant, tmp_path):
-    from cdbrdf.render.meshio import write_ply
+    from cdbrdf.mesh import write_ply
 
     m = cylinder_mesh(5.0, True, n=10)
     m.attributes["curvature"] = np.linspace(-0.2, 0.2, m.n_vertices)
@@ -459,7 +458,7 @@ def test_scalar_variant_for_debugging(variant):
 @needs_llvm
 def test_mesh_scene_with_environment_map(variant, tmp_path):
     """A user mesh lit by a constant environment map alone (curvature computed)."""
-    from cdbrdf.render.meshio import write_ply
+    from cdbrdf.mesh import write_ply
     from cdbrdf.render.scenes import mesh_scene, render_scene
 
     env = tmp_path / "env.exr"

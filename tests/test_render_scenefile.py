@@ -38,7 +38,7 @@ def kappa_table():
 
 def cylinder(radius=1 / KAPPA, n=40, *, uv=True, directional=None):
     """Half cylinder (axis y) with u across the axis, its curvature stored (and a directional one if given)."""
-    from cdbrdf.render.meshio import Mesh
+    from cdbrdf.mesh import Mesh
 
     a = np.linspace(-np.pi / 2, np.pi / 2, n)
     y = np.linspace(-radius, radius, n // 2)
@@ -56,7 +56,7 @@ def cylinder(radius=1 / KAPPA, n=40, *, uv=True, directional=None):
 
 
 def write_scene(folder, *, shape_extra="", bsdf_extra="", unit_comment=None, wrap=False, mesh=None, name="s.xml"):
-    from cdbrdf.render.meshio import write_ply
+    from cdbrdf.mesh import write_ply
 
     folder.mkdir(parents=True, exist_ok=True)
     kappa_table().save(folder / "kappa.h5")

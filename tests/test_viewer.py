@@ -169,7 +169,7 @@ def test_parse_grid_refusals(text, msg):
 @pytest.fixture(scope="module")
 def user_ply(tmp_path_factory):
     """A user's mesh with per-vertex curvature, written by ``cdbrdf curvature``: a bump, convex on top."""
-    from cdbrdf.render.meshio import Mesh, write_ply
+    from cdbrdf.mesh import Mesh, write_ply
 
     d = tmp_path_factory.mktemp("mesh")
     n = 33
@@ -187,7 +187,7 @@ def user_ply(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def files(user_ply):
-    from cdbrdf.render.scenes import prepare_mesh
+    from cdbrdf.mesh import prepare_mesh
     from cdbrdf.view.export import default_meshes
 
     meshes = {"drape": ("draped cloth", default_meshes()["drape"]), "user": ("bump", prepare_mesh(user_ply))}
@@ -195,7 +195,7 @@ def files(user_ply):
 
 
 def test_user_mesh_asset(files, user_ply):
-    from cdbrdf.render.meshio import read_mesh
+    from cdbrdf.mesh import read_mesh
 
     h = json.loads(files["assets/mesh-user.json"])
     m = read_mesh(user_ply)

@@ -10,7 +10,7 @@ The public surface is small:
   the file and xarray layout), :mod:`cdbrdf.materials` (bundled fabrics),
   :mod:`cdbrdf.synth` (fabric model), :mod:`cdbrdf.rig` (simulated capture
   rig), :mod:`cdbrdf.importers` (RGL, MERL, UTIA files; stacking per-stand
-  files), :mod:`cdbrdf.measure` (photographs to a table), :mod:`cdbrdf.curvature`,
+  files), :mod:`cdbrdf.measure` (photographs to a table), :mod:`cdbrdf.mesh`,
   :mod:`cdbrdf.render` (Mitsuba 3 plug-in and scenes), :mod:`cdbrdf.plot`,
   :mod:`cdbrdf.report` and :mod:`cdbrdf.demo` (the paper end to end).
 """

@@ -42,8 +42,7 @@ def precompile() -> dict[str, float]:
             interp.evaluate(table, 10.0, 20.0, 30.0, 40.0, 0.05, kernel=kernel)
     seconds["lookup"] = time.perf_counter() - t
 
-    from .render.meshio import read_mesh
-    from .render.scenes import prepare_mesh
+    from .mesh import prepare_mesh, read_mesh
 
     t = time.perf_counter()
     n = 12

@@ -344,9 +344,9 @@ def _material(
     from .measure import measure
     from .measure.capture import write_plan
     from .measure.fill import refill
+    from .mesh import draped_cloth_mesh, prepare_mesh
     from .plot import plot_mosaic, plot_render_comparison
-    from .render.meshes import draped_cloth_mesh
-    from .render.scenes import mesh_scene, prepare_mesh, sine_scene
+    from .render.scenes import mesh_scene, sine_scene
     from .rig import simulate_capture
 
     truth = materials.load(name)
@@ -412,9 +412,8 @@ def _material(
 
 def _curvature_figure(path: Path) -> Any:
     """The two rendered surfaces coloured by their curvature; returns the prepared draped cloth (for the viewer)."""
+    from .mesh import DrapedCloth, SineSheet, draped_cloth_mesh, prepare_mesh, sine_sheet_mesh
     from .plot import plot_curvature_map
-    from .render.meshes import DrapedCloth, draped_cloth_mesh
-    from .render.scenes import SineSheet, prepare_mesh, sine_sheet_mesh
 
     sheet = sine_sheet_mesh(SineSheet(vertices_per_wavelength=16))
     drape = prepare_mesh(draped_cloth_mesh(DrapedCloth(resolution=81)))
@@ -548,7 +547,7 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
                  f"{config.render_size[1]} pixels, {config.render_spp} spp.")
         s.figure(m.figures["drape"], "A draped cloth",
                  "A generated cloth over a dome with radial folds, its curvature computed from the mesh "
-                 "(cdbrdf.curvature): the dome and the fold ridges are convex, the fold valleys concave.")
+                 "(cdbrdf.mesh): the dome and the fold ridges are convex, the fold valleys concave.")
         s.table("Overall error of the measured table against the ground truth",
                 ["quantity", "value"],
                 [["median relative error, measured samples", f"{100 * m.error['median_rel_error_measured']:.2f} %"],

@@ -624,7 +624,6 @@ def evaluate_reference(
     corners = [((ik, ipl, itl, ipv, itv), wk * wpl * wtl * wpv * wtv)
                for ik, wk in k_nodes for ipl, wpl in pl_nodes for itl, wtl in tl_nodes
                for ipv, wpv in pv_nodes for itv, wtv in tv_nodes]
-    index = tuple(np.array(axis) for axis in zip(*(c for c, _ in corners)))
     weights = np.array([w for _, w in corners])
-    v = lg.values[index].astype(np.float64)  # float32 tables: summed in float64
+    v = np.array([lg.values[c] for c, _ in corners], dtype=np.float64)  # float32 tables: summed in float64
     return np.sum(weights[:, None] * v, axis=0)

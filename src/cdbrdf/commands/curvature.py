@@ -26,7 +26,7 @@ LARGE_MESH_FACES = 100_000
 
 def mesh_options(p: argparse.ArgumentParser) -> None:
     """The options shared with ``cdbrdf render --mesh``: unit, neighbourhood, frame."""
-    from ..curvature import FRAMES, NEIGHBOURHOOD_RANGE_MM, UNITS_MM
+    from ..mesh import FRAMES, NEIGHBOURHOOD_RANGE_MM, UNITS_MM
     from ._args import finite_float, keyword
 
     lo, hi = NEIGHBOURHOOD_RANGE_MM
@@ -56,7 +56,7 @@ def print_mesh_report(label: str, mesh: object) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..render.meshio import MESH_FORMATS
+    from ..mesh import MESH_FORMATS
     from ._args import existing_file, output_file
 
     p = sub.add_parser(
@@ -81,8 +81,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..grid import PAPER_KAPPA
-    from ..render.meshio import read_mesh, write_ply
-    from ..render.scenes import prepare_mesh
+    from ..mesh import prepare_mesh, read_mesh, write_ply
     from ._progress import ProgressBars
 
     table = None

@@ -56,10 +56,9 @@ _SCENE_FILE_IGNORES = ("light", "irradiance", "no_light", "envmap", "amplitude",
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..curvature import CURVATURE_MODES
+    from ..mesh import CURVATURE_MODES, MESH_FORMATS, UP_AXES
     from ..render import VARIANTS
-    from ..render.meshio import MESH_FORMATS
-    from ..render.scenes import LIGHTINGS, UP_AXES
+    from ..render.scenes import LIGHTINGS
     from ._args import (
         existing_file,
         finite_float,
@@ -151,27 +150,21 @@ def _check_sheet(sheet) -> None:  # noqa: ANN001 - a SineSheet
     """Refuse a sine sheet whose tessellation would exceed the ``mesh_faces`` limit."""
     from ..limits import check
 
-    nx = round(sheet.width_mm / sheet.wavelength_mm * sheet.vertices_per_wavelength) + 1
-    dx = sheet.width_mm / max(nx - 1, 1)
-    ny = min(round(sheet.depth_mm / dx) + 1, 4 * nx)
-    check("mesh_faces", 2 * max(nx - 1, 1) * max(ny - 1, 1),
-          what=f"--wavelength {sheet.wavelength_mm:g} and --sheet-size "
+    check("mesh_faces", sheet.face_count, what=f"--wavelength {sheet.wavelength_mm:g} and --sheet-size "
           f"{sheet.width_mm:g}x{sheet.depth_mm:g}: sine sheet mesh")
 
 
 def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by step
     from .. import render as cr
+    from ..mesh import SineSheet, detect_up, prepare_mesh
     from ..plot import FIGURE_FORMATS, plot_render_comparison, save_figure
     from ..render.output import IMAGE_FORMATS, write_render
     from ..render.scenes import (
         DEFAULT_MESH_VIEW,
         DEFAULT_SINE_VIEW,
-        SineSheet,
         composite,
-        detect_up,
         exposure_from_render,
         mesh_scene,
-        prepare_mesh,
         render_scene,
         sine_scene,
     )
@@ -228,7 +221,7 @@ def run(args: argparse.Namespace) -> int:  # noqa: C901 - one command, step by s
         def build(mode: str) -> object:
             return sine_scene(table, mode=mode, sheet=sheet, light=light, **common)
     else:
-        from ..render.meshio import read_mesh
+        from ..mesh import read_mesh
 
         source = read_mesh(args.mesh)
         big = source.faces.shape[0] >= LARGE_MESH_FACES
@@ -278,8 +271,8 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .. import render as cr
-    from ..curvature import parse_units
     from ..errors import SceneError
+    from ..mesh import parse_units
     from ..render.output import IMAGE_FORMATS, write_render
     from ..render.scenes import exposure_from_render, render_scene
     from ._progress import ProgressBars

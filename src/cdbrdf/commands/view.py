@@ -23,8 +23,7 @@ def _grid(text: str) -> tuple[float, float, int | None]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..render.meshio import MESH_FORMATS
-    from ..render.scenes import UP_AXES
+    from ..mesh import MESH_FORMATS, UP_AXES
     from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
     from ._args import existing_file, int_range, keyword, output_folder
     from .curvature import mesh_options
@@ -78,8 +77,7 @@ def _browser_available() -> bool:
 
 def _user_mesh(args: argparse.Namespace, table: object) -> object:
     """``--mesh`` prepared as ``cdbrdf render`` prepares it, in the viewer's z-up frame; reported."""
-    from ..render.meshio import read_mesh
-    from ..render.scenes import prepare_mesh, z_up_mesh
+    from ..mesh import prepare_mesh, read_mesh, z_up_mesh
     from ._progress import ProgressBars
     from .curvature import LARGE_MESH_FACES, print_mesh_report
 

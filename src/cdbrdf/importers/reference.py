@@ -126,8 +126,8 @@ def scene_dict(name: str, bsdf: Any, *, size: int, spp: int, folder: Path, light
     import mitsuba as mi
 
     from ..frames import direction_from_angles
-    from ..render.meshio import write_ply
-    from ..render.scenes import directional_light, sine_sheet_mesh
+    from ..mesh import sine_sheet_mesh, write_ply
+    from ..render.scenes import directional_light
 
     if name == "sphere":
         obj: dict[str, Any] = {"type": "sphere", "radius": 1.0, "bsdf": bsdf}

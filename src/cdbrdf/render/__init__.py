@@ -267,8 +267,11 @@ def load_dict(scene: dict, *, check: bool = True) -> Any:
     from .scenefile import _message
 
     register()
+    spec = _replace_tables(scene)
+    if not isinstance(spec, dict):  # {"type": "cdbrdf", "table": ...} alone: the instance itself
+        return spec
     try:
-        obj = mi.load_dict(_replace_tables(scene))
+        obj = mi.load_dict(spec)
     except RuntimeError as exc:  # a plug-in's error, Mitsuba's: one line, without Mitsuba's traceback
         raise SceneError(_message(exc)) from None
     if check and isinstance(obj, mi.Scene):

@@ -25,9 +25,9 @@ from typing import Any, cast
 
 import numpy as np
 
-from ..curvature import ATTRIBUTES
 from ..errors import OptionError, TableError
 from ..interp import LookupGrid, prepare
+from ..mesh import ATTRIBUTES
 from . import _lookup_jit as lj
 from . import _sampling
 
@@ -57,7 +57,7 @@ SAMPLINGS: tuple[str, ...] = ("table", "cosine")
 
 #: ``curvature_mode`` -> the mesh attribute it reads (mm^-1, written by ``cdbrdf curvature``):
 #: ``max`` the principal curvature of larger magnitude, signed; ``directional`` the normal
-#: curvature along the material's x axis (owned by :data:`cdbrdf.curvature.ATTRIBUTES`).
+#: curvature along the material's x axis (owned by :data:`cdbrdf.mesh.ATTRIBUTES`).
 CURVATURE_MODES: Mapping[str, str] = MappingProxyType(dict(ATTRIBUTES))
 
 #: Valid values of ``storage``: how the table is held on the device (``auto``:

@@ -13,7 +13,7 @@ Mitsuba instantiates the objects:
   ``m_file / (s * unit_mm)``, with ``s`` the uniform scale of the shape's
   ``to_world``, ``unit_mm`` the scene's unit (mm per scene unit, default 1)
   and ``m_file`` the mesh file's unit (mm per file unit) when its PLY header
-  records one (``comment cdbrdf units cm``, as :func:`cdbrdf.render.meshio.write_ply`
+  records one (``comment cdbrdf units cm``, as :func:`cdbrdf.mesh.write_ply`
   writes it), else 1 (the project's convention: lengths in mm unless a unit
   is given). The factor is given to the
   shape's BSDF as ``curvature_scale`` (times any ``curvature_scale`` the
@@ -115,11 +115,11 @@ def uniform_scale(matrix: Any, *, what: str = "to_world") -> float:
 def ply_unit_mm(path: str | PathLike[str]) -> float | None:
     """The unit (mm per file unit) a PLY header records (``comment cdbrdf units ...``), or None.
 
-    Reads the header only; a unit :func:`cdbrdf.curvature.parse_units` does
+    Reads the header only; a unit :func:`cdbrdf.mesh.parse_units` does
     not accept counts as none recorded.
     """
-    from ..curvature import parse_units
     from ..errors import MeshError
+    from ..mesh import parse_units
 
     try:
         head = read_regular(path, max_bytes=_HEADER_BYTES)  # never a FIFO or /dev/zero; the header only

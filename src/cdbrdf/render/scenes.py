@@ -1,16 +1,8 @@
-"""Scenes for rendering a CDBRDF: the paper's sine sheet and any user mesh, framed and lit.
+"""Scenes for rendering a CDBRDF: the paper's sine sheet and any prepared mesh, framed and lit.
 
 World frame: z up, lengths in the mesh's unit (the curvature is in mm^-1
-whatever the unit: :func:`prepare_mesh`). A Y-up mesh (OBJ, glTF and the
-tools that write them) is turned into this frame by ``(x, y, z) -> (x, -z,
-y)``, so its front (+z) faces the default camera at azimuth -90 degrees.
-
-**Up axis** (:func:`detect_up`): the one the file records (a PLY written by
-cdbrdf; glTF is Y-up by its specification); else a flat object (its extent
-along y or z below a fifth of the other two) lies on that axis; else the
-format's convention: Y for OBJ, glTF and OFF, Z for PLY and STL (Blender's
-PLY and STL exporters and most CAD and 3-D printing tools). ``up="y"`` or
-``"z"`` overrides it.
+whatever the unit: :func:`cdbrdf.mesh.prepare_mesh`); a mesh is turned
+upright by :func:`cdbrdf.mesh.z_up_mesh`.
 
 **Camera** (:func:`frame_camera`): perspective, looking at the object from
 an elevation above the ground plane and an azimuth (from +x towards +y), at
@@ -42,21 +34,13 @@ display white (:func:`cdbrdf.colour.auto_exposure_ev`), but at most
 Lambertian surface facing a key light of the default irradiance pi is
 white), so that a dark fabric such as denim stays dark instead of being
 pushed to pastel.
-
-The sine sheet (the paper's test surface, Figs. 9-10) is
-``z = A sin(2 pi x / L)`` swept along y: the bending direction is x, which is
-also the direction of the UV coordinate u (so the material frame's x follows
-the bending, as on the measurement stands). Its curvature is analytic
-(:func:`cdbrdf.curvature.sine_sheet_curvature`) and stored per vertex.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-import tempfile
 from collections.abc import Callable
-from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -64,34 +48,26 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..curvature import sine_sheet_curvature, sine_sheet_height
 from ..errors import MeshError, OptionError, SceneError
 from ..frames import direction_from_angles
 from ..limits import MAX_SPP
-from .meshio import Mesh, read_mesh, write_ply
+from ..mesh import Mesh, SineSheet, check_up, prepare_mesh, sine_sheet_mesh, z_up_mesh
 
 __all__ = [
-    "UNITS_MM",
     "DEFAULT_IRRADIANCE",
     "LIGHTINGS",
-    "UP_AXES",
     "FRAME_FILL",
     "DEFAULT_MESH_VIEW",
     "DEFAULT_SINE_VIEW",
     "STUDIO_KEY",
     "BACKDROP",
     "MAX_AUTO_EV",
-    "SineSheet",
-    "sine_sheet_mesh",
-    "prepare_mesh",
-    "detect_up",
-    "to_z_up",
-    "z_up_mesh",
     "frame_camera",
     "directional_light",
     "studio_environment",
     "sine_scene",
     "mesh_scene",
+    "mitsuba_mesh",
     "render_scene",
     "exposure_from_render",
     "composite",
@@ -99,17 +75,11 @@ __all__ = [
 
 _LOG = logging.getLogger(__name__)
 
-#: Named length units accepted for meshes: millimetres per unit (a number is accepted too).
-UNITS_MM: dict[str, float] = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}
-
 #: Default irradiance of the directional light (W m^-2): white Lambertian -> radiance 1.
 DEFAULT_IRRADIANCE = math.pi
 
 #: Lighting set-ups of mesh scenes (see the module's description).
 LIGHTINGS: tuple[str, ...] = ("studio", "paper")
-
-#: Up axes: detected, or given.
-UP_AXES: tuple[str, ...] = ("auto", "y", "z")
 
 #: Share of the frame's limiting side that the framed object fills.
 FRAME_FILL = 0.75
@@ -134,289 +104,6 @@ MAX_AUTO_EV = 2.0
 
 #: Vertices used to frame the camera (a subsample of larger meshes).
 FRAME_POINTS = 20000
-
-_Y_TO_Z = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
-
-
-@dataclass(frozen=True)
-class SineSheet:
-    """Geometry of the sine sheet (mm).
-
-    Parameters
-    ----------
-    amplitude_mm, wavelength_mm
-        ``z = amplitude sin(2 pi x / wavelength)``; the crest curvature is
-        ``amplitude (2 pi / wavelength)^2`` (0.197 mm^-1 by default, inside
-        the paper's +-0.22 mm^-1).
-    width_mm, depth_mm
-        Extent across (x) and along (y) the sweep, centred on the origin.
-    vertices_per_wavelength
-        Tessellation across; along y the sheet is tessellated to keep
-        triangles near-square.
-    """
-
-    amplitude_mm: float = 2.0
-    wavelength_mm: float = 20.0
-    width_mm: float = 60.0
-    depth_mm: float = 60.0
-    vertices_per_wavelength: int = 64
-
-    def __post_init__(self) -> None:
-        for name in ("amplitude_mm", "wavelength_mm", "width_mm", "depth_mm"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise OptionError(f"{name}: must be a positive length in mm, got {v}")
-        if self.vertices_per_wavelength < 8:
-            raise OptionError("vertices_per_wavelength: at least 8 are needed")
-
-    @property
-    def crest_curvature_mm(self) -> float:
-        """Curvature at a crest (mm^-1)."""
-        return self.amplitude_mm * (2 * math.pi / self.wavelength_mm) ** 2
-
-
-def sine_sheet_mesh(sheet: SineSheet = SineSheet()) -> Mesh:
-    """The sine sheet as a mesh with UVs, analytic normals and curvature.
-
-    The mesh's attributes ``"curvature"`` and ``"curvature_dir"`` hold the
-    analytic signed curvature (mm^-1) of every vertex (x, the bending
-    direction, is a principal direction, so both modes agree); faces wind
-    counter-clockwise seen from +z.
-    """
-    nx = max(2, int(round(sheet.width_mm / sheet.wavelength_mm * sheet.vertices_per_wavelength)) + 1)
-    dx = sheet.width_mm / (nx - 1)
-    ny = max(2, int(round(sheet.depth_mm / dx)) + 1)
-    ny = min(ny, 4 * nx)
-    x = np.linspace(-sheet.width_mm / 2, sheet.width_mm / 2, nx)
-    y = np.linspace(-sheet.depth_mm / 2, sheet.depth_mm / 2, ny)
-    X, Y = np.meshgrid(x, y, indexing="ij")
-    A, L = sheet.amplitude_mm, sheet.wavelength_mm
-    Z = sine_sheet_height(X, amplitude_mm=A, wavelength_mm=L)
-    V = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
-    dz = A * 2 * np.pi / L * np.cos(2 * np.pi * X.ravel() / L)
-    N = np.stack([-dz, np.zeros_like(dz), np.ones_like(dz)], axis=1)
-    N /= np.linalg.norm(N, axis=1, keepdims=True)
-    U = np.stack([(X.ravel() + sheet.width_mm / 2) / sheet.width_mm,
-                  (Y.ravel() + sheet.depth_mm / 2) / sheet.depth_mm], axis=1)
-    i, j = np.meshgrid(np.arange(nx - 1), np.arange(ny - 1), indexing="ij")
-    a = (i * ny + j).ravel()
-    b = a + ny  # +x
-    c = b + 1   # +x +y
-    d = a + 1   # +y
-    F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
-    k = sine_sheet_curvature(X.ravel(), amplitude_mm=A, wavelength_mm=L)
-    # x (= dP/du) is the bending direction, a principal direction: the directional curvature is kappa
-    return Mesh(V, F.astype(np.int64), N, U, {"curvature": k, "curvature_dir": k.copy()},
-                metadata={"units": "mm", "up": "z", "curvature_units": "1/mm", "frame": "uv"})
-
-
-def prepare_mesh(
-    source: str | PathLike[str] | Mesh,
-    *,
-    units: str | float | None = None,
-    neighbourhood_mm: float | None = None,
-    frame: str | None = None,
-    table: Any = None,
-    kappa_range: tuple[float, float] | None = None,
-    recompute: bool = False,
-    progress: Callable[[int, int], None] | None = None,
-) -> Mesh:
-    """Read a user mesh for rendering: repair it, give it a frame and its curvatures in mm^-1.
-
-    Parameters
-    ----------
-    source
-        A mesh file (any of :data:`cdbrdf.render.meshio.MESH_FORMATS`) or a
-        :class:`~cdbrdf.render.meshio.Mesh` (not modified).
-    units
-        The mesh's length unit (``mm``, ``cm``, ``m``, ``in`` or mm per unit);
-        default: the one the file records (a PLY written by cdbrdf, glTF's
-        metre), else mm.
-    neighbourhood_mm
-        Diameter of the neighbourhood the curvature is fitted over, mm;
-        default: the table's measured patch when its provenance records it
-        (:func:`cdbrdf.curvature.neighbourhood_from_table`), else
-        :data:`cdbrdf.curvature.DEFAULT_NEIGHBOURHOOD_MM`.
-    frame
-        Source of the material's x axis (:data:`cdbrdf.curvature.FRAMES`,
-        default ``"auto"``).
-    table
-        The table to be rendered: its provenance gives the default
-        neighbourhood, its kappa range the check of the curvature (a warning
-        with the share of the surface outside it, and the likely unit).
-    kappa_range
-        Without a table: the kappa range to check the curvature against.
-    recompute
-        Compute the curvature even when the file has it.
-    progress
-        ``progress(done, total)`` while fitting, in vertices.
-
-    Returns
-    -------
-    Mesh
-        The renderable mesh: repaired faces, normals, UVs carrying the frame,
-        attributes ``"curvature"`` (maximum) and ``"curvature_dir"``
-        (directional) in mm^-1; its metadata says what was done
-        (``"repairs"``, ``"notes"``, ``"units"``, ``"neighbourhood_mm"``,
-        ``"frame"``, and with a table ``"outside_share"``).
-
-    Raises
-    ------
-    MeshError
-        For a file that cannot be read, a mesh with nothing to render, an
-        unknown unit or frame, a mesh more than
-        :data:`cdbrdf.curvature.MAX_SIZE_MM` across.
-
-    Notes
-    -----
-    The curvature of a file written by ``cdbrdf curvature`` is used as it
-    is when the file records its unit and was computed with the unit,
-    neighbourhood and frame asked for (or none is asked for); otherwise it
-    is computed again (a curvature of unknown unit is never used).
-    """
-    from ..curvature import (
-        DEFAULT_NEIGHBOURHOOD_MM,
-        check_kappa_range,
-        check_neighbourhood,
-        check_size,
-        neighbourhood_from_table,
-        parse_units,
-        surface_curvature,
-    )
-
-    if isinstance(source, Mesh):
-        mesh, name = source.copy(), str(source.metadata.get("source", "mesh"))
-    else:
-        mesh, name = read_mesh(source), str(source)
-    meta = mesh.metadata
-    notes: list[str] = list(meta.get("notes", []))
-    recorded_units = meta.get("units")
-    if units is not None:
-        u = parse_units(units)
-        units_note = f"units: {u} (given)"
-    elif recorded_units is not None:
-        u = parse_units(recorded_units)
-        units_note = f"units: {u} (recorded in the file)" if meta.get("format") == "ply" else \
-            f"units: {u} ({str(meta.get('format', '')).upper()}'s unit)"
-    else:
-        u = parse_units("mm")
-        units_note = "units: mm (none given or recorded; give the mesh's unit if it is not mm)"
-    check_size(mesh.vertices, u, name=name)  # a vertex 1e10 mm away would leave the object invisible
-    if neighbourhood_mm is not None:
-        nb, nb_note = check_neighbourhood(neighbourhood_mm), "given"
-    elif table is not None:
-        nb, nb_note = neighbourhood_from_table(getattr(table, "attrs", None))
-    else:
-        nb, nb_note = DEFAULT_NEIGHBOURHOOD_MM, "the default"
-    reuse = (not recompute and "curvature" in mesh.attributes and "curvature_dir" in mesh.attributes
-             and meta.get("curvature_units") == "1/mm" and recorded_units is not None
-             and mesh.uv is not None
-             and (units is None or parse_units(recorded_units) == u)
-             and (neighbourhood_mm is None or _same_number(meta.get("neighbourhood_mm"), nb))
-             and (frame is None or meta.get("frame") == frame))
-    if reuse:
-        repairs: list[str] = []
-        notes.append("curvature: as recorded in the file")
-        if _is_number(meta.get("neighbourhood_mm")):
-            nb, nb_note = float(meta["neighbourhood_mm"]), "recorded in the file"
-        out = mesh
-    else:
-        if "curvature" in mesh.attributes and not recompute:
-            notes.append("curvature: computed again (the file's has no recorded unit, or other settings)")
-        s = surface_curvature(mesh.vertices, mesh.faces, uv=mesh.uv, normals=mesh.normals, tangents=mesh.tangents,
-                              units=u, neighbourhood_mm=nb, frame=frame or "auto", name=name, progress=progress)
-        repairs = list(s.repairs)
-        notes.extend(s.notes)
-        attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in ("curvature", "curvature_dir")}
-        attrs["curvature"] = s.kappa
-        attrs["curvature_dir"] = s.directional
-        out = Mesh(mesh.vertices[s.source], s.faces, s.normals, s.uv, attrs,
-                   None if mesh.tangents is None else mesh.tangents[s.source], dict(meta))
-        out.metadata.update({"curvature_units": "1/mm", "neighbourhood_mm": nb, "frame": s.frame})
-    out.metadata["units"] = u.name
-    out.metadata["repairs"] = repairs
-    out.metadata["neighbourhood_note"] = f"neighbourhood: {nb:g} mm ({nb_note})"
-    out.metadata["units_note"] = units_note
-    if table is not None:
-        kappa = np.asarray(table.kappa, dtype=np.float64)
-        kappa_range = (float(kappa.min()), float(kappa.max()))
-    if kappa_range is not None:
-        areas = _vertex_areas(out.vertices, out.faces)
-        diag = float(np.linalg.norm(out.vertices.max(0) - out.vertices.min(0)))
-        chk = check_kappa_range(out.attributes["curvature"], areas, kappa_range, units=u, size_units=diag)
-        out.metadata["outside_share"] = chk.outside_share
-        if chk.message:
-            _LOG.warning("%s: %s", name, chk.message)
-    out.metadata["notes"] = notes
-    return out
-
-
-def _is_number(x: Any) -> bool:
-    try:
-        return math.isfinite(float(x))
-    except (TypeError, ValueError):
-        return False
-
-
-def _same_number(a: Any, b: float) -> bool:
-    return _is_number(a) and math.isclose(float(a), b, rel_tol=1e-6)
-
-
-def _vertex_areas(v: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
-    p = v[f]
-    a = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
-    return np.bincount(f.reshape(-1), weights=np.repeat(a / 3.0, 3), minlength=v.shape[0]).astype(np.float64)
-
-
-def detect_up(mesh: Mesh) -> tuple[str, str]:
-    """The up axis of a mesh (``"y"`` or ``"z"``) and why (see the module's description)."""
-    rec = mesh.metadata.get("up")
-    if rec in ("y", "z"):
-        why = "glTF's convention" if mesh.metadata.get("format") in ("gltf", "glb") else "recorded in the file"
-        return str(rec), why
-    e = mesh.vertices.max(0) - mesh.vertices.min(0) if mesh.n_vertices else np.ones(3)
-    if e[2] < 0.2 * min(e[0], e[1]):
-        return "z", "the object is flat along z"
-    if e[1] < 0.2 * min(e[0], e[2]):
-        return "y", "the object is flat along y"
-    fmt = str(mesh.metadata.get("format", "ply"))
-    if fmt in ("obj", "gltf", "glb", "off"):
-        return "y", f"{fmt.upper()}'s usual convention"
-    return "z", f"{fmt.upper()}'s usual convention"
-
-
-def to_z_up(points: NDArray[np.float64], up: str) -> NDArray[np.float64]:
-    """Points (or normals) of a ``up``-up mesh in the z-up world frame."""
-    if up == "z":
-        return points
-    if up == "y":
-        return points @ _Y_TO_Z.T
-    raise MeshError(f"up: {up!r} is not one of y, z")
-
-
-def _check_up(up: object) -> None:
-    if up not in UP_AXES:
-        raise OptionError(f"up: {up!r:.40} is not one of {', '.join(UP_AXES)}")
-
-
-def z_up_mesh(mesh: Mesh, up: str = "auto") -> tuple[Mesh, str, str]:
-    """A copy of ``mesh`` in the z-up world frame, the up axis it had and why.
-
-    ``up``: ``"auto"`` (:func:`detect_up`), ``"y"`` or ``"z"``. Vertices,
-    normals and tangents are turned (:func:`to_z_up`) and the copy records
-    ``up = "z"``; the returned reason is ``"given"`` for an explicit axis.
-    """
-    _check_up(up)
-    axis, why = detect_up(mesh) if up == "auto" else (up, "given")
-    world = mesh.copy()
-    world.vertices = to_z_up(mesh.vertices, axis)
-    if mesh.normals is not None:
-        world.normals = to_z_up(mesh.normals, axis)
-    if mesh.tangents is not None:
-        world.tangents = to_z_up(mesh.tangents, axis)
-    world.metadata["up"] = "z"
-    return world, axis, why
-
 
 def frame_camera(
     points: NDArray[np.float64], *, width: int, height: int, elevation_deg: float, azimuth_deg: float,
@@ -523,7 +210,7 @@ def _camera(mi: Any, points: NDArray[np.float64], width: int, height: int, *, el
 
 
 def _bsdf_entry(table: Any, mode: str, scale: float, curvature_mode: str = "max") -> dict:
-    from ..curvature import ATTRIBUTES, CURVATURE_MODES
+    from ..mesh import ATTRIBUTES, CURVATURE_MODES
 
     if curvature_mode not in ATTRIBUTES:
         raise OptionError(f"curvature mode: {curvature_mode!r} is not one of {', '.join(CURVATURE_MODES)}")
@@ -550,27 +237,54 @@ def _build(mesh: Mesh, table: Any, *, mode: str, scale: float, size: tuple[int, 
         bsdf = _bsdf_entry(table, mode, scale, curvature_mode)
     if not lights and envmap is None:
         raise OptionError("the scene needs a light: give a directional light or an environment map")
-    with tempfile.TemporaryDirectory(prefix="cdbrdf-") as tmp:
-        ply = Path(tmp) / "object.ply"
-        write_ply(ply, mesh)
-        d: dict[str, Any] = {
-            "type": "scene",
-            "integrator": {"type": "path", "max_depth": int(max_depth), "hide_emitters": bool(hide_env)},
-            "sensor": _camera(mi, _subsample(mesh.vertices), size[0], size[1], elevation_deg=elevation_deg,
-                              azimuth_deg=azimuth_deg, fov_deg=fov_deg, spp=spp, fill=fill),
-            "object": {"type": "ply", "filename": str(ply), "bsdf": bsdf},
-        }
-        if envmap is not None:
-            if isinstance(envmap, np.ndarray):
-                env_path = Path(tmp) / "studio.exr"
-                mi.Bitmap(envmap).write(str(env_path))
-                envmap = env_path
-            # the map's up (+y) is the world's up (+z)
-            d["envmap"] = {"type": "envmap", "filename": str(envmap),
-                           "to_world": mi.ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0)}
-        for i, light in enumerate(lights):
-            d[f"light{i}"] = light
-        return load_dict(d)
+    d: dict[str, Any] = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": int(max_depth), "hide_emitters": bool(hide_env)},
+        "sensor": _camera(mi, _subsample(mesh.vertices), size[0], size[1], elevation_deg=elevation_deg,
+                          azimuth_deg=azimuth_deg, fov_deg=fov_deg, spp=spp, fill=fill),
+        "object": mitsuba_mesh(mesh, bsdf=load_dict(bsdf, check=False) if isinstance(bsdf, dict) else bsdf),
+    }
+    if envmap is not None:
+        # the map's up (+y) is the world's up (+z)
+        d["envmap"] = {"type": "envmap", "bitmap": mi.Bitmap(np.ascontiguousarray(envmap, dtype=np.float32)),
+                       "to_world": mi.ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0)}
+    for i, light in enumerate(lights):
+        d[f"light{i}"] = light
+    return load_dict(d)
+
+
+def mitsuba_mesh(mesh: Mesh, *, bsdf: Any = None, name: str = "object") -> Any:
+    """A Mitsuba mesh built in memory from a :class:`~cdbrdf.mesh.Mesh` (the active variant's).
+
+    Positions, faces, UVs and normals (computed by Mitsuba, smooth, where the
+    mesh has none), and every per-vertex attribute ``NAME`` as the
+    one-channel mesh attribute ``vertex_NAME`` (the curvatures: what the
+    ``cdbrdf`` BSDF reads, :data:`cdbrdf.mesh.ATTRIBUTES`). Nothing is
+    written to a file.
+    """
+    import mitsuba as mi
+
+    n, m = mesh.n_vertices, int(mesh.faces.shape[0])
+    if n == 0 or m == 0:
+        raise MeshError("mesh: no triangles to render")
+    out = mi.Mesh(name, vertex_count=n, face_count=m, has_vertex_normals=True,
+                  has_vertex_texcoords=mesh.uv is not None)
+    params = mi.traverse(out)
+    params["vertex_positions"] = np.ascontiguousarray(mesh.vertices, dtype=np.float32).ravel()
+    params["faces"] = np.ascontiguousarray(mesh.faces, dtype=np.uint32).ravel()
+    if mesh.uv is not None:
+        params["vertex_texcoords"] = np.ascontiguousarray(mesh.uv, dtype=np.float32).ravel()
+    if mesh.normals is not None:
+        params["vertex_normals"] = np.ascontiguousarray(mesh.normals, dtype=np.float32).ravel()
+    params.update()
+    if mesh.normals is None:
+        out.recompute_vertex_normals()
+    for key, values in mesh.attributes.items():
+        data: Any = np.ascontiguousarray(values, dtype=np.float32)
+        out.add_attribute(f"vertex_{key}", 1, data)
+    if bsdf is not None:
+        out.set_bsdf(bsdf)
+    return out
 
 
 def sine_scene(
@@ -680,8 +394,8 @@ def mesh_scene(
     """
     if lighting not in LIGHTINGS:
         raise OptionError(f"lighting: {lighting!r} is not one of {', '.join(LIGHTINGS)}")
-    _check_up(up)
-    from ..curvature import MESH_ATTRIBUTES
+    check_up(up)
+    from ..mesh import MESH_ATTRIBUTES
 
     if curvature_mode not in MESH_ATTRIBUTES:
         raise OptionError(f"curvature mode: {curvature_mode!r} is not one of {', '.join(MESH_ATTRIBUTES)}")

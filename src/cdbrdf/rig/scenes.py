@@ -33,17 +33,13 @@ STAND_REFLECTANCE = 0.8
 
 
 def _mi_mesh(mi, name: str, m: dict[str, NDArray], bsdf: Any):  # noqa: ANN001, ANN202
-    """A Mitsuba mesh from a mesh of :func:`~cdbrdf.rig.stands.stand_meshes`, with ``bsdf``."""
-    mesh = mi.Mesh(name, vertex_count=m["positions"].shape[0], face_count=m["faces"].shape[0],
-                   has_vertex_normals=True, has_vertex_texcoords=True)
-    params = mi.traverse(mesh)
-    params["vertex_positions"] = m["positions"].astype(np.float32).ravel()
-    params["vertex_normals"] = m["normals"].astype(np.float32).ravel()
-    params["vertex_texcoords"] = m["uv"].astype(np.float32).ravel()
-    params["faces"] = m["faces"].ravel()
-    params.update()
-    mesh.set_bsdf(bsdf)
-    return mesh
+    """A Mitsuba mesh of a part of :func:`~cdbrdf.rig.stands.stand_meshes`, with ``bsdf``."""
+    from ..mesh import Mesh
+    from ..render.scenes import mitsuba_mesh
+
+    part = Mesh(np.asarray(m["positions"], dtype=np.float64), np.asarray(m["faces"], dtype=np.int64),
+                normals=np.asarray(m["normals"], dtype=np.float64), uv=np.asarray(m["uv"], dtype=np.float64))
+    return mitsuba_mesh(part, bsdf=bsdf, name=name)
 
 
 def _scene(mi, cr, parts: dict[str, Any], *, views: Sequence[NDArray], size: int, field_mm: float,  # noqa: ANN001, ANN202

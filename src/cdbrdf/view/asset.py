@@ -328,14 +328,14 @@ def mesh_asset(mesh: Any, *, name: str) -> Asset:
     Parameters
     ----------
     mesh
-        A :class:`~cdbrdf.render.meshio.Mesh` prepared by
-        :func:`cdbrdf.render.scenes.prepare_mesh` (normals, UVs and the
+        A :class:`~cdbrdf.mesh.Mesh` prepared by
+        :func:`cdbrdf.mesh.prepare_mesh` (normals, UVs and the
         attribute ``"curvature"`` in mm^-1, lengths in mm).
     name
         Its label in the viewer.
     """
-    from ..curvature.frames import face_uv_tangents, vertex_tangents
-    from ..curvature.units import parse_units
+    from ..mesh.frames import face_uv_tangents, vertex_tangents
+    from ..mesh.units import parse_units
 
     scale = float(parse_units(mesh.metadata.get("units", "mm")).mm_per_unit)
     v = np.asarray(mesh.vertices, dtype=np.float64) * scale

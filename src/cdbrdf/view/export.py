@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import OptionError
+from ..mesh import SineSheet
 from .asset import Asset, mesh_asset, table_asset
 
 __all__ = [
@@ -68,11 +69,10 @@ def default_meshes(*, drape: Any = None) -> dict[str, Any]:
     ----------
     drape
         An already prepared draped-cloth mesh (the demo has one), else it is
-        built and prepared here (:func:`cdbrdf.render.scenes.prepare_mesh`).
+        built and prepared here (:func:`cdbrdf.mesh.prepare_mesh`).
     """
     if drape is None:
-        from ..render.meshes import DrapedCloth, draped_cloth_mesh
-        from ..render.scenes import prepare_mesh
+        from ..mesh import DrapedCloth, draped_cloth_mesh, prepare_mesh
 
         drape = prepare_mesh(draped_cloth_mesh(DrapedCloth(resolution=DRAPE_RESOLUTION)))
     return {"drape": drape}
@@ -127,9 +127,13 @@ def viewer_files(
     def entry(a: Asset) -> dict[str, Any]:
         return {"header": a.header, "data": base64.b64encode(a.blob).decode("ascii")}
 
+    sheet = SineSheet()
     data = {
         "tables": [entry(a) for _, a in assets],
         "meshes": {_label(k): entry(a) for k, a in mesh_assets},
+        # the surfaces the shader draws, with the sizes the renderer uses (cdbrdf.mesh)
+        "surfaces": {"sheet": {"amplitude_mm": sheet.amplitude_mm, "wavelength_mm": sheet.wavelength_mm,
+                               "width_mm": sheet.width_mm, "depth_mm": sheet.depth_mm}},
         "options": {} if exposure_ev is None else {"exposure_ev": float(exposure_ev)},
     }
     files["data.js"] = ("window.CDBRDF_VIEWER_DATA = " + json.dumps(data, separators=(",", ":"), allow_nan=False)

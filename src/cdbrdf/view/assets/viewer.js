@@ -271,7 +271,8 @@ void main() {
   const canvas = $('view');
   const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true });
   const state = {
-    surface: 'sheet', amplitude: 2.0, wavelength: 20.0, width: 60.0, depth: 60.0, standKappa: 0.13,
+    // the sine sheet's geometry comes from data.js (cdbrdf.mesh.SineSheet, mm), set in init()
+    surface: 'sheet', amplitude: NaN, wavelength: NaN, width: NaN, depth: NaN, standKappa: 0.13,
     lightTheta: 45.0, lightPhi: 0.0, env: false, exposure: 0.0, mode: 'cdbrdf', split: 0.5, overlay: false,
     side: false, cam: { elevation: 50.0, azimuth: -90.0, distance: 150.0 }, mosaicTable: 0, mosaicK: 0,
     pick: null, drawCalls: 0,
@@ -803,6 +804,11 @@ void main() {
     state.side = tables.length > 1;
     $('side').checked = state.side;
     if (tables.length < 2) $('sideLabel').style.display = 'none';
+    const sheet = (DATA.surfaces || {}).sheet;
+    if (!sheet) throw fail('no sine sheet geometry (data.js is from another version)');
+    state.amplitude = sheet.amplitude_mm; state.wavelength = sheet.wavelength_mm;
+    state.width = sheet.width_mm; state.depth = sheet.depth_mm;
+    $('bend').value = state.amplitude; $('wave').value = state.wavelength;
     const opt = DATA.options || {};
     state.exposure = Number.isFinite(opt.exposure_ev) ? opt.exposure_ev : tables[0].h.exposure_ev;
     $('expo').value = state.exposure;

@@ -2,7 +2,7 @@
 
 Reading (:func:`read_mesh`, chosen by the file's suffix):
 
-- **PLY** with cdbrdf's reader (:mod:`cdbrdf.render._ply`): ASCII and binary,
+- **PLY** with cdbrdf's reader (:mod:`cdbrdf.mesh._ply`): ASCII and binary,
   any scalar types, polygons of any size, triangle strips, per-corner
   ``texcoord`` lists, and the header's ``comment cdbrdf ...`` lines in which
   :func:`write_ply` records the mesh's unit, up axis and how its curvature
@@ -34,7 +34,6 @@ import logging
 import math
 import re
 import warnings
-from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -44,6 +43,7 @@ from numpy.typing import NDArray
 
 from ..errors import CDBRDFError, MeshError
 from ..limits import check
+from .core import Mesh
 
 __all__ = [
     "MESH_FORMATS",
@@ -69,49 +69,6 @@ _UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "
 _TANGENT_NAMES = (("tangent_x", "tangent_y", "tangent_z"), ("tx", "ty", "tz"))
 _KNOWN = {"x", "y", "z", "nx", "ny", "nz"} | {n for pair in _UV_NAMES for n in pair} | {
     n for tri in _TANGENT_NAMES for n in tri}
-
-
-@dataclass
-class Mesh:
-    """A triangle mesh with what the renderer needs.
-
-    Attributes
-    ----------
-    vertices
-        ``(n, 3)`` float64 positions, in the mesh's unit.
-    faces
-        ``(m, 3)`` int64 vertex indices (counter-clockwise = front).
-    normals, uv, tangents
-        Optional ``(n, 3)`` vertex normals, ``(n, 2)`` texture coordinates and
-        ``(n, 3)`` tangents.
-    attributes
-        Per-vertex scalar arrays by name (``"curvature"``, ``"curvature_dir"``
-        in mm^-1).
-    metadata
-        What is known about the mesh: ``"format"``, ``"units"`` (as given to
-        :func:`cdbrdf.curvature.parse_units`), ``"up"`` (``"y"`` or ``"z"``),
-        ``"curvature_units"`` (``"1/mm"`` when the curvature is in mm^-1),
-        ``"neighbourhood_mm"``, ``"frame"``, and after
-        :func:`cdbrdf.render.scenes.prepare_mesh` ``"repairs"`` and ``"notes"``.
-    """
-
-    vertices: NDArray[np.float64]
-    faces: NDArray[np.int64]
-    normals: NDArray[np.float64] | None = None
-    uv: NDArray[np.float64] | None = None
-    attributes: dict[str, NDArray[np.float64]] = field(default_factory=dict)
-    tangents: NDArray[np.float64] | None = None
-    metadata: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def n_vertices(self) -> int:
-        """Number of vertices."""
-        return int(self.vertices.shape[0])
-
-    def copy(self) -> Mesh:
-        """A copy whose arrays and dicts can be replaced without touching this mesh."""
-        return Mesh(self.vertices, self.faces, self.normals, self.uv, dict(self.attributes), self.tangents,
-                    dict(self.metadata))
 
 
 def read_mesh(path: str | PathLike[str]) -> Mesh:

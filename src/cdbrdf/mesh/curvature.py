@@ -1,20 +1,34 @@
-"""From a user's mesh to what the renderer needs: repaired faces, normals, frame and curvatures.
+"""The curvature of a mesh in mm^-1, for the CDBRDF lookup: repaired faces, normals, frame and curvatures.
 
-:func:`surface_curvature` runs the whole path: :func:`~cdbrdf.curvature.repair.repair`,
-the scale-aware fit (:func:`~cdbrdf.curvature.estimate.fit_curvatures`) in
-mm^-1 for the given unit and neighbourhood, the material's x axis
-(:mod:`cdbrdf.curvature.frames`) and the two curvatures the ``cdbrdf`` BSDF can
-read (:data:`~cdbrdf.curvature.CURVATURE_MODES`): the signed principal
-curvature of larger magnitude (the paper's) and the signed normal curvature
-along the material's x axis (the directional mode of the conventions).
+The CDBRDF is indexed by "the curvature" of a surface point: as in the paper,
+the principal curvature of larger magnitude, with its sign, in mm^-1
+(``docs/conventions.md``: positive where the surface is convex, bending away
+from its normal). Beside it, the *directional* mode: the signed normal
+curvature along the material's x axis (the stands bend the fabric along x).
+
+:func:`surface_curvature` runs the whole path: :func:`~cdbrdf.mesh.repair.repair`,
+the scale-aware fit (:func:`~cdbrdf.mesh.estimate.fit_curvatures`) in mm^-1
+for the given unit and neighbourhood, the material's x axis
+(:mod:`cdbrdf.mesh.frames`) and both curvatures (:data:`CURVATURE_MODES`).
+:func:`principal_curvatures` and :func:`max_curvature` give the same on
+arrays, one value per input vertex; :func:`neighbourhood_from_table` the
+default neighbourhood, the size of a table's measured patch.
+
+The per-vertex attributes the ``cdbrdf`` BSDF reads (:data:`ATTRIBUTES`) are
+written as PLY vertex properties (:data:`PLY_PROPERTIES`) that Mitsuba's PLY
+loader turns into exactly those mesh attributes (it keeps an unknown vertex
+property only when its name ends in a channel suffix, and strips it:
+``curvature_x`` -> ``vertex_curvature``); in memory the renderer sets them
+directly.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,7 +39,18 @@ from .frames import FRAMES, face_frame_uv, face_uv_tangents, project_tangents, s
 from .repair import RepairedMesh, repair
 from .units import Units, parse_units
 
-__all__ = ["CURVATURE_MODES", "SurfaceCurvature", "surface_curvature", "check_neighbourhood"]
+__all__ = [
+    "CURVATURE_MODES",
+    "ATTRIBUTES",
+    "PLY_PROPERTIES",
+    "MESH_ATTRIBUTES",
+    "SurfaceCurvature",
+    "surface_curvature",
+    "principal_curvatures",
+    "max_curvature",
+    "check_neighbourhood",
+    "neighbourhood_from_table",
+]
 
 _LOG = logging.getLogger(__name__)
 
@@ -163,18 +188,18 @@ def surface_curvature(  # noqa: C901 - the steps in order
     ----------
     vertices, faces
         ``(n, 3)`` positions in ``units`` and ``(m, 3)`` triangles (any
-        winding; see :mod:`cdbrdf.curvature.repair`).
+        winding; see :mod:`cdbrdf.mesh.repair`).
     uv, normals, tangents
         Optional ``(n, 2)`` texture coordinates, ``(n, 3)`` vertex normals
         (the shading normals; they decide which side is the front) and
         ``(n, 3)`` tangents.
     units
         The vertices' length unit: ``"mm"``, ``"cm"``, ``"m"``, ``"in"`` or
-        millimetres per unit (:func:`~cdbrdf.curvature.units.parse_units`).
+        millimetres per unit (:func:`~cdbrdf.mesh.units.parse_units`).
     neighbourhood_mm
         Diameter of the surface patch each vertex's curvature is fitted over, mm.
     frame
-        Source of the material's x axis, one of :data:`~cdbrdf.curvature.frames.FRAMES`;
+        Source of the material's x axis, one of :data:`~cdbrdf.mesh.frames.FRAMES`;
         None for none (no UVs are generated; ``directional`` is NaN).
     name
         For messages (the file's name).
@@ -294,3 +319,105 @@ def surface_curvature(  # noqa: C901 - the steps in order
     return SurfaceCurvature(src, out_faces, normals_o, uv_o, pc.kappa, directional, pc.k1, pc.k2, pc.d1, pc.d2,
                             side, tangent, frame or "none", u, nb, areas, rep.representative, rep.repairs,
                             tuple(notes))
+
+
+#: Mitsuba mesh attribute of each curvature mode (what the ``cdbrdf`` BSDF reads), mm^-1.
+ATTRIBUTES: Mapping[str, str] = {"max": "vertex_curvature", "directional": "vertex_curvature_dir"}
+
+#: PLY vertex property that Mitsuba loads as each attribute of :data:`ATTRIBUTES`.
+PLY_PROPERTIES: Mapping[str, str] = {"max": "curvature_x", "directional": "curvature_dir_x"}
+
+#: Name of each mode's per-vertex array in :attr:`cdbrdf.mesh.Mesh.attributes`.
+MESH_ATTRIBUTES: Mapping[str, str] = {"max": "curvature", "directional": "curvature_dir"}
+
+
+def neighbourhood_from_table(attrs: Mapping[str, Any] | None) -> tuple[float, str]:
+    """The default neighbourhood (mm) for a table, and where it comes from.
+
+    The size of the measured patch, when the table's provenance records it:
+    ``patch_mm`` (a measured table), ``patch_px`` x ``pixel_mm``, or the
+    cloth model's ``footprint_mm`` (a synthesised table's measured spot);
+    else :data:`DEFAULT_NEIGHBOURHOOD_MM`.
+
+    Parameters
+    ----------
+    attrs
+        The table's attributes (``table.attrs``), or None.
+    """
+    prov = attrs.get("provenance") if attrs else None
+    if isinstance(prov, Mapping):
+        candidates: list[tuple[Any, str]] = [(prov.get("patch_mm"), "the measured patch")]
+        if prov.get("patch_px") is not None and prov.get("pixel_mm") is not None:
+            try:
+                candidates.append((float(prov["patch_px"]) * float(prov["pixel_mm"]), "the measured patch"))
+            except (TypeError, ValueError):
+                pass
+        params = prov.get("parameters")
+        if isinstance(params, Mapping):
+            candidates.append((params.get("footprint_mm"), "the cloth model's measured spot"))
+        lo, hi = NEIGHBOURHOOD_RANGE_MM
+        for value, what in candidates:
+            try:
+                x = float(value)
+            except (TypeError, ValueError):
+                continue
+            if np.isfinite(x) and lo <= x <= hi:
+                return x, f"{what}, from the table's provenance"
+    return DEFAULT_NEIGHBOURHOOD_MM, "the default"
+
+
+def principal_curvatures(
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    *,
+    normals: ArrayLike | None = None,
+    units: str | float | Units = "mm",
+    neighbourhood_mm: float = DEFAULT_NEIGHBOURHOOD_MM,
+    progress: Callable[[int, int], None] | None = None,
+) -> PrincipalCurvatures:
+    """Per-vertex principal curvatures (mm^-1) and directions of a triangle mesh.
+
+    The mesh is repaired first (:func:`repair`): the sign is relative to the
+    repaired orientation, i.e. the given ``normals`` where there are any,
+    outward on a closed surface, else the winding of most of each
+    component. See :func:`surface_curvature` for the parameters.
+
+    Returns
+    -------
+    PrincipalCurvatures
+        One row per input vertex; a vertex the repair split (a double-sided
+        panel, a non-manifold edge) gets its front copy's values, a vertex
+        on no face 0.
+    """
+    s = surface_curvature(vertices, faces, normals=normals, units=units, neighbourhood_mm=neighbourhood_mm,
+                          frame=None, progress=progress)
+    n = np.asarray(vertices).shape[0]
+    k1, k2 = np.zeros(n), np.zeros(n)
+    d1, d2 = np.zeros((n, 3)), np.zeros((n, 3))
+    # the first output copy of each input vertex, front copies first
+    order = np.lexsort((np.arange(s.source.size), -s.side, s.source))
+    first = order[np.r_[True, s.source[order][1:] != s.source[order][:-1]]] if order.size else order
+    src = s.source[first]
+    k1[src], k2[src] = s.k1[first], s.k2[first]
+    d1[src], d2[src] = s.d1[first], s.d2[first]
+    # twins merged into one output vertex get its values
+    rep = s.representative
+    return PrincipalCurvatures(k1[rep], k2[rep], d1[rep], d2[rep])
+
+
+def max_curvature(
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    *,
+    normals: ArrayLike | None = None,
+    units: str | float | Units = "mm",
+    neighbourhood_mm: float = DEFAULT_NEIGHBOURHOOD_MM,
+) -> NDArray[np.float64]:
+    """Per-vertex signed principal curvature of larger magnitude (the paper's kappa), mm^-1.
+
+    A sphere of radius 10 mm gives 0.1 everywhere, a cylinder of radius r
+    gives 1/r across its axis (> 0 on the outside when its faces wind
+    outward). See :func:`principal_curvatures`.
+    """
+    return principal_curvatures(vertices, faces, normals=normals, units=units,
+                                neighbourhood_mm=neighbourhood_mm).kappa

@@ -1,4 +1,4 @@
-"""The PLY reader and writer of :mod:`cdbrdf.render.meshio` (private).
+"""The PLY reader and writer of :mod:`cdbrdf.mesh` (private).
 
 cdbrdf reads PLY itself rather than through trimesh, whose reader keeps extra
 vertex properties (the curvature ``curvature_x``, tangents) only in its

@@ -1,4 +1,10 @@
-"""Generated test meshes beyond the sine sheet, with UVs, in millimetres.
+"""The analytic surfaces the package renders, with their sizes defined here once, in millimetres.
+
+:class:`SineSheet` / :func:`sine_sheet_mesh` is the paper's test surface
+(Figs. 9-10): ``z = A sin(2 pi x / L)`` swept along y. The bending direction
+is x, which is also the direction of the UV coordinate u (so the material
+frame's x follows the bending, as on the measurement stands). Its curvature
+is analytic (:func:`sine_sheet_curvature`) and stored per vertex.
 
 :func:`draped_cloth_mesh` is a square cloth draped over a round object: a
 smooth convex dome in the middle and radial folds, alternately convex ridges
@@ -17,15 +23,120 @@ same triangles twice, once with each winding.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import OptionError
-from .meshio import Mesh
+from .core import Mesh
 
 __all__ = ["DrapedCloth", "draped_cloth_height", "draped_cloth_mesh", "Skirt", "skirt_mesh"]
+
+
+def sine_sheet_height(x_mm: ArrayLike, *, amplitude_mm: float, wavelength_mm: float) -> NDArray[np.float64]:
+    """Height ``z = A sin(2 pi x / L)`` of the sine sheet (mm)."""
+    x = np.asarray(x_mm, dtype=np.float64)
+    return amplitude_mm * np.sin(2.0 * np.pi * x / wavelength_mm)
+
+
+def sine_sheet_curvature(x_mm: ArrayLike, *, amplitude_mm: float, wavelength_mm: float) -> NDArray[np.float64]:
+    """Signed curvature (mm^-1) of the sine sheet seen from +z.
+
+    For ``z = A sin(k x)``, ``k = 2 pi / L``, with the normal towards +z the
+    curvature across the sheet is ``-z'' / (1 + z'^2)^(3/2)`` (> 0 at crests,
+    convex; < 0 in troughs); along the sweep it is 0, so this is also the
+    principal curvature of larger magnitude.
+    """
+    x = np.asarray(x_mm, dtype=np.float64)
+    k = 2.0 * np.pi / wavelength_mm
+    d1 = amplitude_mm * k * np.cos(k * x)
+    d2 = -amplitude_mm * k * k * np.sin(k * x)
+    return -d2 / (1.0 + d1 * d1) ** 1.5
+
+
+@dataclass(frozen=True)
+class SineSheet:
+    """Geometry of the sine sheet (mm).
+
+    Parameters
+    ----------
+    amplitude_mm, wavelength_mm
+        ``z = amplitude sin(2 pi x / wavelength)``; the crest curvature is
+        ``amplitude (2 pi / wavelength)^2`` (0.197 mm^-1 by default, inside
+        the paper's +-0.22 mm^-1).
+    width_mm, depth_mm
+        Extent across (x) and along (y) the sweep, centred on the origin.
+    vertices_per_wavelength
+        Tessellation across; along y the sheet is tessellated to keep
+        triangles near-square.
+    """
+
+    amplitude_mm: float = 2.0
+    wavelength_mm: float = 20.0
+    width_mm: float = 60.0
+    depth_mm: float = 60.0
+    vertices_per_wavelength: int = 64
+
+    def __post_init__(self) -> None:
+        for name in ("amplitude_mm", "wavelength_mm", "width_mm", "depth_mm"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise OptionError(f"{name}: must be a positive length in mm, got {v}")
+        if self.vertices_per_wavelength < 8:
+            raise OptionError("vertices_per_wavelength: at least 8 are needed")
+
+    @property
+    def crest_curvature_mm(self) -> float:
+        """Curvature at a crest (mm^-1)."""
+        return self.amplitude_mm * (2 * math.pi / self.wavelength_mm) ** 2
+
+    @property
+    def grid_shape(self) -> tuple[int, int]:
+        """Vertices across (x) and along (y) the sweep of :func:`sine_sheet_mesh`."""
+        nx = max(2, int(round(self.width_mm / self.wavelength_mm * self.vertices_per_wavelength)) + 1)
+        dx = self.width_mm / (nx - 1)
+        ny = max(2, int(round(self.depth_mm / dx)) + 1)
+        return nx, min(ny, 4 * nx)
+
+    @property
+    def face_count(self) -> int:
+        """Triangles of :func:`sine_sheet_mesh` (known before the mesh is built, for the size limits)."""
+        nx, ny = self.grid_shape
+        return 2 * (nx - 1) * (ny - 1)
+
+
+def sine_sheet_mesh(sheet: SineSheet = SineSheet()) -> Mesh:
+    """The sine sheet as a mesh with UVs, analytic normals and curvature.
+
+    The mesh's attributes ``"curvature"`` and ``"curvature_dir"`` hold the
+    analytic signed curvature (mm^-1) of every vertex (x, the bending
+    direction, is a principal direction, so both modes agree); faces wind
+    counter-clockwise seen from +z.
+    """
+    nx, ny = sheet.grid_shape
+    x = np.linspace(-sheet.width_mm / 2, sheet.width_mm / 2, nx)
+    y = np.linspace(-sheet.depth_mm / 2, sheet.depth_mm / 2, ny)
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    A, L = sheet.amplitude_mm, sheet.wavelength_mm
+    Z = sine_sheet_height(X, amplitude_mm=A, wavelength_mm=L)
+    V = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
+    dz = A * 2 * np.pi / L * np.cos(2 * np.pi * X.ravel() / L)
+    N = np.stack([-dz, np.zeros_like(dz), np.ones_like(dz)], axis=1)
+    N /= np.linalg.norm(N, axis=1, keepdims=True)
+    U = np.stack([(X.ravel() + sheet.width_mm / 2) / sheet.width_mm,
+                  (Y.ravel() + sheet.depth_mm / 2) / sheet.depth_mm], axis=1)
+    i, j = np.meshgrid(np.arange(nx - 1), np.arange(ny - 1), indexing="ij")
+    a = (i * ny + j).ravel()
+    b = a + ny  # +x
+    c = b + 1   # +x +y
+    d = a + 1   # +y
+    F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    k = sine_sheet_curvature(X.ravel(), amplitude_mm=A, wavelength_mm=L)
+    # x (= dP/du) is the bending direction, a principal direction: the directional curvature is kappa
+    return Mesh(V, F.astype(np.int64), N, U, {"curvature": k, "curvature_dir": k.copy()},
+                metadata={"units": "mm", "up": "z", "curvature_units": "1/mm", "frame": "uv"})
 
 
 @dataclass(frozen=True)
@@ -84,7 +195,7 @@ def draped_cloth_mesh(cloth: DrapedCloth = DrapedCloth()) -> Mesh:
     Faces wind counter-clockwise seen from above (+z): the outward normal
     points up, so the dome is convex (kappa > 0) and the fold valleys are
     concave (kappa < 0). Curvature is not stored: the renderer computes it
-    from the mesh (:func:`cdbrdf.curvature.max_curvature`), as for a user's
+    from the mesh (:func:`cdbrdf.mesh.max_curvature`), as for a user's
     mesh.
     """
     n = int(cloth.resolution)

@@ -23,7 +23,7 @@ given in mm and converted to the mesh's unit, whatever the tessellation:
    the ball;
 3. a weighted (Gaussian, sigma = radius / 2) robust fit (Tukey's biweight)
    of a height quadric, then of the normal-section model, which is exact for
-   spheres at any radius (:func:`cdbrdf.curvature._kernels.fit_vertices`).
+   spheres at any radius (:func:`cdbrdf.mesh._kernels.fit_vertices`).
 
 Measured (``tests/test_curvature.py``, ``docs/rendering.md``): a cylinder
 of radius 1/0.22 mm at the default 5 mm neighbourhood is within 0.86 %

@@ -1,6 +1,6 @@
 """numba loops of the curvature package: face orientation, the per-vertex surface fit, corner normals.
 
-Private: :mod:`cdbrdf.curvature.repair` and :mod:`cdbrdf.curvature.estimate`
+Private: :mod:`cdbrdf.mesh.repair` and :mod:`cdbrdf.mesh.estimate`
 wrap them with checked arrays. Compiled on first use (cached on disk where
 possible, :mod:`cdbrdf._jit`).
 """

@@ -1,0 +1,104 @@
+"""Meshes: files in and out, repair, units, up axis, the material frame, curvature, analytic surfaces.
+
+Everything the package does with triangle meshes lives here, below the
+renderer and the viewer, which use it:
+
+- :class:`Mesh` (:mod:`~cdbrdf.mesh.core`), read and written by
+  :func:`read_mesh` / :func:`write_ply` (:mod:`~cdbrdf.mesh.io`: PLY by
+  cdbrdf's reader, OBJ, glTF/GLB, STL and OFF through trimesh);
+- :func:`repair` (:mod:`~cdbrdf.mesh.repair`), units and the check against a
+  table's kappa range (:mod:`~cdbrdf.mesh.units`), the material's x axis
+  (:mod:`~cdbrdf.mesh.frames`);
+- the curvature in mm^-1 (:mod:`~cdbrdf.mesh.curvature`, the fit in
+  :mod:`~cdbrdf.mesh.estimate`): as in the paper, the principal curvature of
+  larger magnitude with its sign (> 0 convex, bending away from the normal;
+  ``docs/conventions.md``), and the directional mode, the normal curvature
+  along the material's x axis;
+- :func:`prepare_mesh` (:mod:`~cdbrdf.mesh.prepare`): a user's mesh made
+  ready to render, and its up axis (:func:`detect_up`, :func:`z_up_mesh`);
+- the analytic surfaces with their sizes (:mod:`~cdbrdf.mesh.surfaces`): the
+  paper's sine sheet, a draped cloth, a skirt.
+"""
+
+from __future__ import annotations
+
+from .core import Mesh
+from .curvature import (
+    ATTRIBUTES,
+    CURVATURE_MODES,
+    MESH_ATTRIBUTES,
+    PLY_PROPERTIES,
+    SurfaceCurvature,
+    check_neighbourhood,
+    max_curvature,
+    neighbourhood_from_table,
+    principal_curvatures,
+    surface_curvature,
+)
+from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, PrincipalCurvatures
+from .frames import FRAMES
+from .io import CURVATURE_PLY_PROPERTY, MESH_FORMATS, read_mesh, read_obj, read_ply, write_ply
+from .prepare import UP_AXES, check_up, detect_up, prepare_mesh, to_z_up, z_up_mesh
+from .repair import WELD_TOLERANCE, RepairedMesh, repair, weld
+from .surfaces import (
+    DrapedCloth,
+    SineSheet,
+    Skirt,
+    draped_cloth_height,
+    draped_cloth_mesh,
+    sine_sheet_curvature,
+    sine_sheet_height,
+    sine_sheet_mesh,
+    skirt_mesh,
+)
+from .units import MAX_SIZE_MM, UNITS_MM, KappaRangeCheck, Units, check_kappa_range, check_size, parse_units
+
+__all__ = [
+    "Mesh",
+    "MESH_FORMATS",
+    "CURVATURE_PLY_PROPERTY",
+    "read_mesh",
+    "read_ply",
+    "read_obj",
+    "write_ply",
+    "ATTRIBUTES",
+    "PLY_PROPERTIES",
+    "MESH_ATTRIBUTES",
+    "CURVATURE_MODES",
+    "FRAMES",
+    "UNITS_MM",
+    "UP_AXES",
+    "DEFAULT_NEIGHBOURHOOD_MM",
+    "NEIGHBOURHOOD_RANGE_MM",
+    "WELD_TOLERANCE",
+    "MAX_SIZE_MM",
+    "Units",
+    "parse_units",
+    "KappaRangeCheck",
+    "check_kappa_range",
+    "check_size",
+    "PrincipalCurvatures",
+    "SurfaceCurvature",
+    "RepairedMesh",
+    "surface_curvature",
+    "principal_curvatures",
+    "max_curvature",
+    "repair",
+    "weld",
+    "check_neighbourhood",
+    "neighbourhood_from_table",
+    "prepare_mesh",
+    "detect_up",
+    "to_z_up",
+    "z_up_mesh",
+    "check_up",
+    "SineSheet",
+    "sine_sheet_mesh",
+    "sine_sheet_height",
+    "sine_sheet_curvature",
+    "DrapedCloth",
+    "draped_cloth_height",
+    "draped_cloth_mesh",
+    "Skirt",
+    "skirt_mesh",
+]
