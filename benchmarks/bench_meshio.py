@@ -103,7 +103,8 @@ def _scan_tokens():
 
 def token_based_parse(data: bytes, name: str, scan):
     """cdbrdf's ASCII PLY reading before the line checks: the body as one stream of numbers."""
-    from cdbrdf.mesh._ply import PlyData, _as_index, _fan, _list_items, ply_header
+    from cdbrdf.mesh._ply import PlyData, _as_index, _fan
+    from cdbrdf.mesh._ply_format import _list_items, ply_header
 
     fmt, elements, comments, start = ply_header(data, name)
     text = data[start:].decode("ascii")

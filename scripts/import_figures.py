@@ -35,7 +35,8 @@ def main(argv=None) -> int:
     from cdbrdf.colour import tonemap_srgb8
     from cdbrdf.importers import import_brdf
     from cdbrdf.plot import plot_mosaic
-    from cdbrdf.render.scenes import render_scene, sine_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import sine_scene
 
     cr.set_variant("llvm_ad_rgb")
     tables = {"denim (bundled)": materials.load("denim"), "shot (bundled)": materials.load("shot")}

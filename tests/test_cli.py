@@ -177,7 +177,7 @@ def _run(argv):
 
 def _aliased_cases(tmp_path, table_file):
     """For every command that reads and writes files: its argv with an output that is (or holds) an input."""
-    from cdbrdf.fsutil import output_folder
+    from cdbrdf.outputs import output_folder
 
     p, t = table_file
     one = tmp_path / "flat.h5"
@@ -227,7 +227,7 @@ def test_an_output_that_is_or_holds_an_input_is_refused_by_every_command(tmp_pat
 
 
 def _holder(path):
-    code = ("import sys, time\nfrom cdbrdf.fsutil import output_lock\n"
+    code = ("import sys, time\nfrom cdbrdf.outputs import output_lock\n"
             "with output_lock(sys.argv[1]):\n    print('held', flush=True)\n    time.sleep(60)\n")
     p = subprocess.Popen([sys.executable, "-c", code, str(path)], stdout=subprocess.PIPE, text=True)
     assert p.stdout.readline().strip() == "held"

@@ -162,7 +162,10 @@ def test_arguments_that_were_valid_still_are(files):
     p = build_parser()
     a = p.parse_args(["render", str(d / "t.h5"), "--scene", "sine", "-o", str(o / "a.png"),
                       "--view=-10,-90", "--light", "45,0", "--size", "24x16", "--seed", "7"])
-    assert a.size == (24, 16) and a.view == [-10.0, -90.0] and a.seed == 7 and a.sheet_size == [60, 60]
+    assert a.size == (24, 16) and a.view == [-10.0, -90.0] and a.seed == 7
+    assert a.sheet_size is None  # not given: the sine sheet's own size (cdbrdf.mesh.SineSheet) applies
+    assert p.parse_args(["render", str(d / "t.h5"), "--scene", "sine", "-o", str(o / "a.png"), "--sheet-size",
+                         "30x40"]).sheet_size == [30, 40]
     a = p.parse_args(["plan", "-o", str(o), "--kappa=-0.22,0.22", "--theta-step", "60"])
     assert a.kappa == [-0.22, 0.22] and a.theta_step == 60.0
     a = p.parse_args(["simulate-capture", "denim", "-o", str(o), "--exposures", "1,0.25", "--noise", "none"])

@@ -272,7 +272,7 @@ def _must_not_run(*args, **kwargs):
 
 def test_cli_demo_into_the_current_folder_fails_at_once(tmp_path, monkeypatch, capsys):
     from cdbrdf.cli import main
-    from cdbrdf.fsutil import output_folder
+    from cdbrdf.outputs import output_folder
 
     with output_folder(tmp_path / "earlier") as tmp:
         (tmp / "report.html").write_text("old\n")
@@ -288,7 +288,7 @@ def test_cli_demo_into_the_current_folder_fails_at_once(tmp_path, monkeypatch, c
 def test_cli_demo_refuses_an_earlier_demo_folder_holding_added_files(tmp_path, capsys, monkeypatch):
     """Re-running the demo into its earlier folder deleted files the user had added there."""
     from cdbrdf.cli import main
-    from cdbrdf.fsutil import output_folder
+    from cdbrdf.outputs import output_folder
 
     with output_folder(tmp_path / "earlier") as tmp:
         (tmp / "report.html").write_text("old\n")

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from cdbrdf import fsutil
+from cdbrdf import fsutil, outputs
 from cdbrdf.errors import OutputError
-from cdbrdf.fsutil import output_folder
+from cdbrdf.outputs import output_folder
 
 
 def _dead_pid() -> int:
@@ -83,11 +83,11 @@ def test_remove_owned_refuses_foreign_folders(tmp_path):
     d.mkdir()
     (d / "precious.txt").write_text("keep")
     with pytest.raises(FileExistsError, match="not made by cdbrdf"):
-        fsutil.remove_owned(d)
+        outputs.remove_owned(d)
     assert (d / "precious.txt").read_text() == "keep"
-    fsutil.mark_owned(d, "checkpoint")
-    assert fsutil.is_owned(d, "checkpoint") and not fsutil.is_owned(d, "output")
-    fsutil.remove_owned(d, "checkpoint")
+    outputs.mark_owned(d, "checkpoint")
+    assert outputs.is_owned(d, "checkpoint") and not outputs.is_owned(d, "output")
+    outputs.remove_owned(d, "checkpoint")
     assert not d.exists()
     assert list(tmp_path.iterdir()) == []
 
@@ -132,7 +132,8 @@ def test_output_folder_sweeps_a_killed_runs_partial_folder(tmp_path):
     import subprocess
     import sys
 
-    from cdbrdf.fsutil import mark_owned, temp_sibling
+    from cdbrdf.fsutil import temp_sibling
+    from cdbrdf.outputs import mark_owned
 
     out = tmp_path / "out"
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
@@ -162,7 +163,7 @@ def test_output_folder_interrupt_leaves_nothing(tmp_path):
 
 
 def test_check_output_folder_refuses_up_front(tmp_path, monkeypatch):
-    from cdbrdf.fsutil import check_output_folder
+    from cdbrdf.outputs import check_output_folder
 
     (tmp_path / "f.txt").write_text("x")
     with pytest.raises(FileExistsError, match="not a folder"):
@@ -270,7 +271,7 @@ def test_output_folder_records_what_the_run_wrote(tmp_path):
         (d / "sub").mkdir()
         (d / "sub" / "b.png").write_bytes(b"2")
         (d / "link").symlink_to("a.txt")
-    info = json.loads((dest / fsutil.OWNER_MARK).read_text())
+    info = json.loads((dest / outputs.OWNER_MARK).read_text())
     assert info["kind"] == "output" and info["files"] == ["a.txt", "link", "sub/", "sub/b.png"]
     with output_folder(dest) as d:  # nothing added: replaced whole
         (d / "c.txt").write_text("3")
@@ -283,7 +284,7 @@ def test_output_folder_records_what_the_run_wrote(tmp_path):
     (["a1", "a2", "a3", "a4", "a5"], r"holds 5 files .* \(a1, a2, a3 and 2 more\)"),
 ])
 def test_output_folder_with_added_files_is_refused_up_front(tmp_path, added, shown):
-    from cdbrdf.fsutil import check_output_folder
+    from cdbrdf.outputs import check_output_folder
 
     dest = tmp_path / "out"
     with output_folder(dest) as d:
@@ -323,7 +324,7 @@ def test_output_folder_without_manifest_is_replaced_as_before(tmp_path):
         dest = tmp_path / mark
         dest.mkdir()
         if mark == "owner":
-            fsutil.mark_owned(dest, "output")
+            outputs.mark_owned(dest, "output")
         else:
             (dest / ".cdbrdf-output").write_text("written by cdbrdf\n")
         (dest / "extra.txt").write_text("x")
@@ -360,21 +361,21 @@ def test_find_overlap_sees_links_relative_names_and_folders(tmp_path, monkeypatc
     for out, folder, relation in [("a.h5", False, "is"), ("./a.h5", False, "is"), ("../in/a.h5", False, "is"),
                                   (tmp_path / "link.h5", False, "is"), (tmp_path / "hard.h5", False, "is"),
                                   (tmp_path / "in", True, "holds"), (tmp_path, True, "holds")]:
-        hit = fsutil.find_overlap([(out, folder)], inputs)
+        hit = outputs.find_overlap([(out, folder)], inputs)
         assert hit is not None and hit[1] == a and hit[2] == relation, (out, hit)
-    assert fsutil.find_overlap([("b.h5", False), (tmp_path / "other", True)], inputs) is None
+    assert outputs.find_overlap([("b.h5", False), (tmp_path / "other", True)], inputs) is None
     # a folder read whole: nothing may be written inside it
-    hit = fsutil.find_overlap([(tmp_path / "in" / "new.h5", False)], [tmp_path / "in"])
+    hit = outputs.find_overlap([(tmp_path / "in" / "new.h5", False)], [tmp_path / "in"])
     assert hit is not None and hit[2] == "is inside"
     with pytest.raises(OutputError, match=r"a\.h5: is the input .*a\.h5; writing it would replace what the run reads"):
-        fsutil.check_not_input([("a.h5", False)], inputs)
+        outputs.check_not_input([("a.h5", False)], inputs)
     with pytest.raises(OutputError, match=r"holds the input .*a\.h5"):
-        fsutil.check_not_input([(tmp_path, True)], inputs)
+        outputs.check_not_input([(tmp_path, True)], inputs)
 
 
 def _hold_lock(path, seconds=30.0):
     """A separate process holding the output lock of ``path`` (flock is per process here)."""
-    code = ("import sys, time\nfrom cdbrdf.fsutil import output_lock\n"
+    code = ("import sys, time\nfrom cdbrdf.outputs import output_lock\n"
             "with output_lock(sys.argv[1]):\n    print('held', flush=True)\n    time.sleep(float(sys.argv[2]))\n")
     p = subprocess.Popen([sys.executable, "-c", code, str(path), str(seconds)], stdout=subprocess.PIPE, text=True)
     assert p.stdout.readline().strip() == "held"
@@ -386,20 +387,20 @@ def test_output_lock_refuses_a_second_run_and_a_killed_holder_releases_it(tmp_pa
     holder = _hold_lock(out)
     try:
         with pytest.raises(OutputError, match=rf"out\.h5: another cdbrdf run \(process {holder.pid}\) is writing it"):
-            with fsutil.output_lock(out):
+            with outputs.output_lock(out):
                 pass
     finally:
         holder.kill()  # SIGKILL: the system releases the lock
         holder.wait()
         holder.stdout.close()
-    with fsutil.output_lock(out):
-        with fsutil.output_lock(out):  # nested in one process (a command and the library it calls)
+    with outputs.output_lock(out):
+        with outputs.output_lock(out):  # nested in one process (a command and the library it calls)
             pass
     assert list(tmp_path.iterdir()) == []  # the killed holder's lock file is gone with the next run
 
 
 def test_output_lock_leaves_no_lock_file(tmp_path):
-    with fsutil.output_lock(tmp_path / "x.png"):
+    with outputs.output_lock(tmp_path / "x.png"):
         assert (tmp_path / ".x.png.lock").read_text().strip() == str(__import__("os").getpid())
     assert list(tmp_path.iterdir()) == []
 
@@ -419,7 +420,7 @@ def test_atomic_path_keeps_the_mode_of_the_file_it_replaces(tmp_path):
     with fsutil.atomic_path(new) as tmp:
         os.chmod(tmp, 0o600)  # mkstemp-like: a new file gets the usual 0666 & ~umask instead
         tmp.write_bytes(b"x")
-    assert stat.S_IMODE(new.stat().st_mode) == 0o666 & ~fsutil._umask()
+    assert stat.S_IMODE(new.stat().st_mode) == 0o666 & ~fsutil.umask()
 
 
 def test_atomic_path_turns_a_full_disk_into_one_line_and_keeps_the_old_file(tmp_path):
@@ -439,7 +440,7 @@ def test_output_folders_are_replaced_only_by_the_command_that_made_them(tmp_path
     with output_folder(tmp_path / "demo", maker="demo") as d:
         (d / "report.html").write_text("r")
     with pytest.raises(OutputError, match=r"an output folder of `cdbrdf demo`, not of `cdbrdf view --export`"):
-        fsutil.check_output_folder(tmp_path / "demo", maker="view --export", signature=("index.html",))
+        outputs.check_output_folder(tmp_path / "demo", maker="view --export", signature=("index.html",))
     with pytest.raises(OutputError):
         with output_folder(tmp_path / "demo", maker="view --export"):
             pass
@@ -450,5 +451,5 @@ def test_output_folders_are_replaced_only_by_the_command_that_made_them(tmp_path
     with output_folder(tmp_path / "old") as d:
         (d / "capture.csv").write_text("c")
     with pytest.raises(OutputError, match=r"not by `cdbrdf view --export` \(it has no index\.html\)"):
-        fsutil.check_output_folder(tmp_path / "old", maker="view --export", signature=("index.html", "data.js"))
-    fsutil.check_output_folder(tmp_path / "old")  # the maker that records none (the simulated rig)
+        outputs.check_output_folder(tmp_path / "old", maker="view --export", signature=("index.html", "data.js"))
+    outputs.check_output_folder(tmp_path / "old")  # the maker that records none (the simulated rig)

@@ -144,7 +144,7 @@ def _read_special(rng: np.random.Generator, folder: Path) -> str:
         elif reader == "scene-file":
             calls["scene-file"] = lambda: cr.load_file(p)
         elif reader == "envmap":
-            from cdbrdf.render.scenes import _environment_map
+            from cdbrdf.render.lighting import environment_map as _environment_map
 
             calls["envmap"] = lambda: _environment_map(p)
         call = calls[reader]
@@ -190,7 +190,7 @@ def _scene_limits(rng: np.random.Generator, folder: Path) -> str:
     if not within:
         return "bad"
     if w * h <= 64 and spp <= 4:  # small enough to render here: what is rendered is what was checked
-        from cdbrdf.render.scenes import render_scene
+        from cdbrdf.render.picture import render_scene
 
         img = render_scene(scene)
         return "ok" if img.shape[:2] == (h, w) and np.all(np.isfinite(img)) else "bad"
@@ -206,7 +206,7 @@ def target_files(rng: np.random.Generator, workdir: Path) -> str:
 def _inputs(folder: Path) -> dict[str, Path]:
     """Small inputs of every kind the commands read."""
     import cdbrdf
-    from cdbrdf.fsutil import output_folder
+    from cdbrdf.outputs import output_folder
 
     g = cdbrdf.Grid(kappa=[0.0], theta_l=[0, 45], phi_l=[0, 180], theta_v=[0, 45], phi_v=[0, 180])
     t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), **g.axes())

@@ -159,7 +159,8 @@ def test_isotropic_stack_renders_with_the_plug_in(tmp_path):
 
     need_mitsuba()
     import cdbrdf.render as cr
-    from cdbrdf.render.scenes import render_scene, sine_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import sine_scene
 
     cr.set_variant("llvm_ad_rgb")
     g = Grid.regular(theta_step_deg=15, phi_step_deg=30, kappa=[-0.2, 0.2], symmetry="isotropic")

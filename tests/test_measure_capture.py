@@ -9,15 +9,8 @@ import pytest
 from cdbrdf import Grid
 from cdbrdf.cli import main
 from cdbrdf.measure import CaptureError, measure
-from cdbrdf.measure.capture import (
-    PLAN_COLUMNS,
-    bracket_rows,
-    plan_rows,
-    read_capture,
-    read_rows,
-    row_kind,
-    write_plan,
-)
+from cdbrdf.measure.capture import PLAN_COLUMNS, read_capture, read_rows, row_kind
+from cdbrdf.measure.plan import bracket_rows, plan_rows, write_plan
 from cdbrdf.measure.stands import Stand, hidden_mask, read_stands
 
 from .measure_helpers import (
@@ -344,7 +337,7 @@ def test_read_plan_of_a_good_plan(tmp_path):
 
 
 def test_write_rows_refuses_names_a_capture_cannot_have(tmp_path):
-    from cdbrdf.measure.capture import write_rows
+    from cdbrdf.measure.plan import write_rows
 
     good = dict(file="k0/a.png", kappa="0", theta_v="0", phi_v="0", theta_l="0", phi_l="0")
     for bad, msg in ((dict(good, file="../a.png"), "line 3: .*'..' component"),

@@ -122,7 +122,7 @@ def test_foreign_checkpoint_folder_is_never_deleted(tmp_path, capsys):
 
 
 def test_checkpoint_is_marked_and_removed(tmp_path):
-    from cdbrdf.fsutil import is_owned
+    from cdbrdf.outputs import is_owned
 
     out, ck = _interrupted(tmp_path)
     assert is_owned(ck, "checkpoint")
@@ -156,7 +156,8 @@ def test_half_removed_checkpoint_of_a_killed_run_is_swept(tmp_path):
     import subprocess
     import sys
 
-    from cdbrdf.fsutil import OWNER_MARK, temp_sibling
+    from cdbrdf.fsutil import temp_sibling
+    from cdbrdf.outputs import OWNER_MARK
 
     out, ck = _interrupted(tmp_path, after=16)
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
@@ -310,7 +311,7 @@ def test_killed_while_removing_the_checkpoint(tmp_path):
     """remove_owned renames first: the rerun is not blocked and the half-removed folder is swept."""
     import signal
 
-    from cdbrdf.fsutil import OWNER_MARK
+    from cdbrdf.outputs import OWNER_MARK
 
     make_capture(tmp_path / "cap", GRID, pixel, kind="png16", white=WHITE)
     out = tmp_path / "out.h5"

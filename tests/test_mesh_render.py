@@ -73,7 +73,8 @@ def test_written_properties_load_as_the_plugins_attributes(variant, tmp_path):
 def test_directional_mode_reads_the_curvature_along_x(variant):
     """A cylinder whose u runs along its axis: the maximum curvature is 1/r, the directional one 0."""
     from cdbrdf.mesh import Mesh, prepare_mesh
-    from cdbrdf.render.scenes import mesh_scene, render_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import mesh_scene
 
     radius = 1 / 0.13
     v, f, uv, _ = cylinder_patch(radius, n=30)
@@ -91,7 +92,8 @@ def test_directional_mode_reads_the_curvature_along_x(variant):
 def test_each_visible_side_of_the_garment_shows_its_sign(variant):
     """The skirt without folds is convex seen from outside, on both panels and both sides of the sash."""
     from cdbrdf.mesh import Skirt, prepare_mesh, skirt_mesh
-    from cdbrdf.render.scenes import mesh_scene, render_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import mesh_scene
 
     mesh = prepare_mesh(skirt_mesh(Skirt(fold_amplitude_mm=0.0, around=41, down=25)))
     curved = kappa_table(gain=30.0, kappa=(-0.01, 0.0, 0.01))  # 0.5 + 30 kappa: 0.7 at kappa = 1/150 mm
@@ -110,7 +112,8 @@ def test_each_visible_side_of_the_garment_shows_its_sign(variant):
 def test_up_axis_is_detected_and_can_be_given(variant, tmp_path):
     """A tall post along y in an OBJ (Y-up by convention) stands up; told it is Z-up, it lies down."""
     from cdbrdf.mesh import detect_up, prepare_mesh
-    from cdbrdf.render.scenes import mesh_scene, render_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import mesh_scene
 
     v, f, uv, _ = cylinder_patch(10.0, n=12, angle=2 * np.pi * 0.999, length=120.0)
     path = write_obj(tmp_path / "post.obj", v, f, uv)
@@ -128,7 +131,9 @@ def test_up_axis_is_detected_and_can_be_given(variant, tmp_path):
 @pytest.mark.parametrize("which", ["spot", "skirt"])
 def test_the_object_fills_three_quarters_of_the_frame(variant, which):
     from cdbrdf.mesh import Skirt, prepare_mesh, skirt_mesh
-    from cdbrdf.render.scenes import DEFAULT_MESH_VIEW, FRAME_FILL, mesh_scene, render_scene
+    from cdbrdf.render.camera import DEFAULT_MESH_VIEW, FRAME_FILL
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import mesh_scene
 
     if which == "spot":
         mesh = prepare_mesh(shared_mesh("spot.obj"), units="m")
@@ -143,7 +148,8 @@ def test_the_object_fills_three_quarters_of_the_frame(variant, which):
 
 def test_studio_lighting_fills_the_shadows(variant):
     from cdbrdf.mesh import Skirt, prepare_mesh, skirt_mesh
-    from cdbrdf.render.scenes import mesh_scene, render_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import mesh_scene
 
     mesh = prepare_mesh(skirt_mesh(Skirt(around=41, down=25)))
     spread = {}
@@ -159,7 +165,7 @@ def test_studio_lighting_fills_the_shadows(variant):
 
 
 def test_exposure_from_the_render():
-    from cdbrdf.render.scenes import MAX_AUTO_EV, composite, exposure_from_render
+    from cdbrdf.render.picture import MAX_AUTO_EV, composite, exposure_from_render
 
     img = np.zeros((10, 10, 4), np.float32)
     img[2:8, 2:8, :3] = 0.425

@@ -274,7 +274,8 @@ def test_chi2_sample_matches_pdf(variant, tmp_path, monkeypatch):
 @needs_llvm
 def test_constant_table_equals_diffuse(variant):
     """With cosine sampling a constant table renders as diffuse, sample for sample."""
-    from cdbrdf.render.scenes import render_scene, sine_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import sine_scene
 
     albedo = np.array([0.2, 0.5, 0.8])
     g = cdbrdf.Grid.paper()
@@ -311,7 +312,8 @@ def cylinder_mesh(radius, convex, n=50):
 def test_convex_and_concave_patches_pick_the_right_kappa(variant, tmp_path, convex):
     """A table whose value is 0.5 + kappa: the rendered apex shows the stand's kappa."""
     from cdbrdf.mesh import write_ply
-    from cdbrdf.render.scenes import mesh_scene, render_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import mesh_scene
 
     radius = 1 / 0.13
     path = tmp_path / "cyl.ply"
@@ -459,7 +461,8 @@ def test_scalar_variant_for_debugging(variant):
 def test_mesh_scene_with_environment_map(variant, tmp_path):
     """A user mesh lit by a constant environment map alone (curvature computed)."""
     from cdbrdf.mesh import write_ply
-    from cdbrdf.render.scenes import mesh_scene, render_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import mesh_scene
 
     env = tmp_path / "env.exr"
     mi.Bitmap(np.full((8, 16, 3), 1.0, dtype=np.float32)).write(str(env))
@@ -621,7 +624,7 @@ def test_values_beyond_float32_range_are_refused(variant, channels, peak):
 ])
 def test_directional_light_bad_values_are_option_errors(args, match):
     from cdbrdf.errors import OptionError
-    from cdbrdf.render.scenes import directional_light
+    from cdbrdf.render.lighting import directional_light
 
     with pytest.raises(OptionError, match=match):
         directional_light(*args)
@@ -647,3 +650,64 @@ def test_render_bad_light_is_the_only_line(tmp_path, capsys, extra, match):
     cap = capsys.readouterr()
     assert cap.out == "" and cap.err.count("\n") == 1 and cap.err.startswith("cdbrdf render: error: ")
     assert __import__("re").search(match, cap.err) and not out.exists()
+
+
+# -- render_table: the one entry point for a picture -----------------------------------------------
+@needs_llvm
+def test_render_table_compares_modes_at_one_exposure_and_restores_the_variant():
+    """Both modes rendered with the same exposure; the caller's variant is the same afterwards."""
+    from cdbrdf.render import render_table, set_variant
+
+    set_variant("scalar_rgb")
+    pic = render_table(analytic_table(), "sine", modes=("brdf", "cdbrdf"), size=(24, 16), spp=2)
+    assert mi.variant() == "scalar_rgb"  # render_table ran in llvm_ad_rgb and gave the variant back
+    assert set(pic.images) == {"brdf", "cdbrdf"} and pic.images["brdf"].shape == (16, 24, 4)
+    assert pic.surface == "sine sheet" and pic.lighting == "paper" and pic.light == (45.0, 0.0, np.pi)
+    assert pic.mesh is None and not pic.backdrop and pic.exposure_source == "auto"
+    # the curvature changes the crests, not the whole picture: the images differ, but not everywhere
+    a, b = pic.display("brdf"), pic.display("cdbrdf")
+    assert a.shape == (16, 24, 3) and np.abs(a - b).max() > 0 and np.isclose(a, b, rtol=1e-3).any()
+    given = render_table(analytic_table(), "sine", size=(24, 16), spp=1, exposure=-1.5)
+    assert given.exposure_ev == -1.5 and given.exposure_source == "given"
+
+
+@needs_llvm
+def test_render_table_of_a_mesh_reports_what_it_prepared(tmp_path, monkeypatch):
+    """A mesh file is read, prepared and framed in memory: nothing is written anywhere."""
+    import tempfile
+
+    from cdbrdf.mesh import write_ply
+    from cdbrdf.render import render_table
+
+    from .mesh_helpers import cylinder_patch
+
+    v, f, uv, _ = cylinder_patch(10.0, n=12)
+    path = tmp_path / "patch.ply"
+    write_ply(path, cdbrdf.mesh.Mesh(v, f, uv=uv))
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    monkeypatch.chdir(scratch)
+    pic = render_table(analytic_table(), path, size=(24, 16), spp=1, units="mm")
+    assert list(scratch.iterdir()) == []  # no temporary mesh or environment map
+    assert pic.surface == str(path) and pic.lighting == "studio" and pic.backdrop
+    assert pic.mesh is not None and "curvature" in pic.mesh.attributes and pic.up in ("y", "z")
+    assert pic.display().shape == (16, 24, 3)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"envmap": "sky.exr"}, "envmap: only for meshes"),
+    ({"lighting": "studio"}, "lighting 'studio': only for meshes"),
+    ({"light": None}, "the sine sheet needs a light"),
+    ({"modes": ("brdf", "brdf")}, "modes: .* must be distinct values of cdbrdf, brdf"),
+    ({"modes": ("plain",)}, "modes:"),
+    ({"lighting": "sunny"}, "lighting: 'sunny' is not one of studio, paper"),
+    ({"light": "noon"}, "light: expected"),
+    ({"exposure": "bright"}, "exposure: expected a finite number"),
+])
+def test_render_table_refuses_bad_options_before_rendering(kwargs, match):
+    from cdbrdf.errors import OptionError
+    from cdbrdf.render import render_table
+
+    with pytest.raises(OptionError, match=match):
+        render_table(analytic_table(), "sine", size=(8, 8), spp=1, **kwargs)

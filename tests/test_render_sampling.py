@@ -250,7 +250,7 @@ def test_importance_transport_samples_the_cosine(variant, glossy):
 @needs_llvm
 def test_table_sampling_renders_the_same_as_cosine(variant, tmp_path):
     """Same expected image with both samplers (equal up to noise), a glossy table under a sky."""
-    from cdbrdf.render.scenes import render_scene
+    from cdbrdf.render.picture import render_scene
 
     env = tmp_path / "sky.exr"
     sky = np.ones((16, 32, 3), dtype=np.float32)

@@ -68,7 +68,8 @@ def test_available_and_refused_variants(cr):
 
 @pytest.mark.parametrize("name", ["llvm_ad_spectral", "llvm_ad_mono"])
 def test_constant_table_equals_diffuse(cr, name):
-    from cdbrdf.render.scenes import render_scene, sine_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import sine_scene
 
     cr.set_variant(name)
     albedo = np.array([0.2, 0.5, 0.8])
@@ -134,7 +135,8 @@ def test_mono_is_luminance(cr):
 
 @pytest.mark.parametrize("name", ["llvm_ad_spectral", "llvm_ad_mono"])
 def test_table_sampling_in_every_variant(cr, name):
-    from cdbrdf.render.scenes import render_scene, sine_scene
+    from cdbrdf.render.picture import render_scene
+    from cdbrdf.render.scenes import sine_scene
 
     cr.set_variant(name)
     t = glossy_table(theta_step=15.0, phi_step=30.0, ks=0.3)

@@ -448,7 +448,7 @@ def test_simulate_capture_large_seed(tmp_path):
 # --------------------------------------------------------------------------- plans checked before rendering
 def _plan_with(tmp_path, edits):
     """A plan of 36 photographs + 6 white references; ``edits``: {line number: new line}."""
-    from cdbrdf.measure.capture import write_plan
+    from cdbrdf.measure.plan import write_plan
 
     write_plan(tmp_path / "plan", Grid(kappa=[0.0], theta_l=[0.0, 40.0], phi_l=[0.0, 120.0, 240.0],
                                        theta_v=[0.0, 40.0], phi_v=[0.0, 120.0, 240.0]), [Stand(0.0)])

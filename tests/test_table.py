@@ -21,6 +21,17 @@ def test_paper_grid_matches_the_paper():
     assert np.prod(g.shape) == 72 * 72 * 5
 
 
+def test_grid_axes_are_keywords_in_one_order():
+    """Grid(*g.axes().values()) used to swap theta and phi silently: axes are keywords, stored in the table's order."""
+    g = Grid(theta_v=[0, 40], phi_v=[0, 180], theta_l=[0, 30, 60], phi_l=[0, 120, 240], kappa=[0.0, 0.1])
+    assert list(g.axes()) == ["kappa", "phi_l", "theta_l", "phi_v", "theta_v"]
+    assert g.shape == (2, 3, 3, 2, 2) and Grid(**g.axes()) == g
+    with pytest.raises(TypeError):
+        Grid(*g.axes().values())  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        CDBRDF(np.zeros(g.shape + (3,)), *g.axes().values())  # type: ignore[misc]
+
+
 def test_properties_and_defaults(paper_table):
     t = paper_table
     assert t.shape == (5, 12, 6, 12, 6, 3)

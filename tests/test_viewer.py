@@ -328,7 +328,7 @@ def test_a_client_that_resets_mid_download_is_logged_without_a_traceback(files, 
 def test_export_never_replaces_a_folder_another_command_made(tmp_path, files):
     """--export onto a capture folder wiped 735 photographs; onto the demo's folder, its input tables."""
     from cdbrdf.errors import OutputError
-    from cdbrdf.fsutil import output_folder
+    from cdbrdf.outputs import output_folder
 
     with output_folder(tmp_path / "capture") as d:  # a simulated capture: no maker recorded
         (d / "capture.csv").write_text("file\n")

@@ -4,7 +4,7 @@ For each material (denim and shot fabric by default):
 
 1. **plan** the capture: every view x light direction of the grid on a stand
    of every curvature, marking the directions a concave stand hides
-   (:func:`cdbrdf.measure.capture.write_plan`);
+   (:func:`cdbrdf.measure.plan.write_plan`);
 2. **photograph** it with the simulated rig: Mitsuba 3 renders of the fabric on
    its stand, white walls and all, with sensor noise, as 16-bit PNG
    (:func:`cdbrdf.rig.simulate_capture`);
@@ -22,7 +22,7 @@ For each material (denim and shot fabric by default):
    into ``viewer/`` and write ``report.html`` beside the figures, linking to it.
 
 The output folder is built beside the destination and swapped in whole at
-the end (:func:`cdbrdf.fsutil.output_folder`), so results of different runs
+the end (:func:`cdbrdf.outputs.output_folder`), so results of different runs
 are never mixed and a failed run leaves the previous one intact. The
 intermediate files (capture plans, and the photographs unless kept) are
 written to a work folder inside that partial folder, so a killed run leaves
@@ -33,7 +33,6 @@ by the next run.
 from __future__ import annotations
 
 import json
-import math
 import shutil
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -57,7 +56,7 @@ __all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_trut
 #: The fill method the demo compares the default with (the paper's rule).
 COMPARED_FILL = "nearest"
 
-#: The maker the demo's output folder names in its owner mark (:func:`cdbrdf.fsutil.output_folder`).
+#: The maker the demo's output folder names in its owner mark (:func:`cdbrdf.outputs.output_folder`).
 DEMO_MAKER = "demo"
 
 #: Files every output folder of the demo holds.
@@ -263,9 +262,6 @@ def compare_with_truth(measured: CDBRDF, truth: CDBRDF) -> tuple[dict[str, float
 
 #: Renders are exposed at most this many stops above the physical exposure
 #: (a white Lambertian surface facing the light at display white), so that
-#: dark fabrics such as denim stay dark instead of being pushed to pastel.
-MAX_RENDER_EV = 2.0
-
 
 def _stage(progress: Progress | None, label: str) -> Callable[[int, int], None] | None:
     if progress is None:
@@ -317,17 +313,19 @@ def _rect(x: float, y: float, w: float, h: float) -> Any:
     return Rectangle((x, y), w, h, fill=False, edgecolor="red", linewidth=1.0)
 
 
-def _render_pair(table: CDBRDF, scene_fn: Callable[[str], Any], *, config: DemoConfig,
-                 progress: Progress | None, label: str) -> tuple[dict, float]:
-    from .render.scenes import render_scene
+def _render_pair(table: CDBRDF, surface: Any, *, config: DemoConfig, progress: Progress | None,
+                 label: str) -> tuple[Any, float]:
+    """The surface rendered with the plain BRDF and the CDBRDF under the paper's light; and the seconds."""
+    from .render import render_table
 
-    images = {}
+    def stage(what: str, done: int, total: int) -> None:
+        if progress is not None:
+            progress(f"{label} ({what.removeprefix('rendering ')})", done, total)
+
     t0 = time.perf_counter()
-    for mode in ("brdf", "cdbrdf"):
-        scene = scene_fn(mode)
-        cb = _stage(progress, f"{label} ({mode})")
-        images[mode] = render_scene(scene, spp=config.render_spp, seed=0, progress=cb)
-    return images, time.perf_counter() - t0
+    pic = render_table(table, surface, modes=("brdf", "cdbrdf"), size=config.render_size, spp=config.render_spp,
+                       lighting="paper", light=(45.0, 0.0), progress=stage)
+    return pic, time.perf_counter() - t0
 
 
 def _material(
@@ -342,11 +340,10 @@ def _material(
     """Photograph, measure, draw and render one material; ``discard(folder)`` deletes a folder in the background."""
     from . import materials
     from .measure import measure
-    from .measure.capture import write_plan
     from .measure.fill import refill
+    from .measure.plan import write_plan
     from .mesh import draped_cloth_mesh, prepare_mesh
     from .plot import plot_mosaic, plot_render_comparison
-    from .render.scenes import mesh_scene, sine_scene
     from .rig import simulate_capture
 
     truth = materials.load(name)
@@ -385,25 +382,17 @@ def _material(
     if not config.keep_capture:
         discard(capture)  # 26,000 files: deleted while the renders run
 
-    size = config.render_size
-    common: dict[str, Any] = dict(size=size, spp=config.render_spp, light=(45.0, 0.0, math.pi))
-    images, secs = _render_pair(measured, lambda mode: sine_scene(measured, mode=mode, **common),
-                                config=config, progress=progress, label=f"{name}: sine sheet")
-    res.seconds["render_sine"] = secs
-    ev = auto_exposure_ev(images["cdbrdf"], max_ev=MAX_RENDER_EV)
-    res.render_exposure_ev = ev
-    fig = plot_render_comparison(images["brdf"], images["cdbrdf"], exposure_ev=ev,
+    pic, res.seconds["render_sine"] = _render_pair(measured, "sine", config=config, progress=progress,
+                                                   label=f"{name}: sine sheet")
+    res.render_exposure_ev = pic.exposure_ev
+    fig = plot_render_comparison(pic.display("brdf"), pic.display("cdbrdf"), exposure_ev=pic.exposure_ev,
                                  title=f"{name}: sine sheet, light 45 deg from the bending direction")
     fig.savefig(folder / f"{name}-sine.png")
     res.figures["sine"] = f"{name}-sine.png"
 
-    mesh = prepare_mesh(draped_cloth_mesh())
-    images, secs = _render_pair(measured, lambda mode: mesh_scene(measured, mesh, mode=mode, lighting="paper",
-                                                                  **common),
-                                config=config, progress=progress, label=f"{name}: draped cloth")
-    res.seconds["render_drape"] = secs
-    fig = plot_render_comparison(images["brdf"], images["cdbrdf"],
-                                 exposure_ev=auto_exposure_ev(images["cdbrdf"], max_ev=MAX_RENDER_EV),
+    pic, res.seconds["render_drape"] = _render_pair(measured, prepare_mesh(draped_cloth_mesh()), config=config,
+                                                    progress=progress, label=f"{name}: draped cloth")
+    fig = plot_render_comparison(pic.display("brdf"), pic.display("cdbrdf"), exposure_ev=pic.exposure_ev,
                                  title=f"{name}: cloth draped over a dome (curvature from the mesh)")
     fig.savefig(folder / f"{name}-drape.png")
     res.figures["drape"] = f"{name}-drape.png"
@@ -452,6 +441,7 @@ def _stands_text(stands: Sequence[Stand]) -> str:
 
 def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialResult], seconds: float,
                   stands: Sequence[Stand]) -> Path:
+    from .render.picture import MAX_AUTO_EV
     from .report import Report, provenance_text
 
     g = config.grid
@@ -542,7 +532,7 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
                  "curvature taken at every point; (c) shows where they differ: along the crests "
                  "(convex) and troughs (concave), not on the flanks where the sheet is nearly flat. "
                  f"Exposure {m.render_exposure_ev:+.1f} EV (0 EV shows a white Lambertian surface facing "
-                 f"the light as white; at most +{MAX_RENDER_EV:g} EV, so dark fabrics stay dark); "
+                 f"the light as white; at most +{MAX_AUTO_EV:g} EV, so dark fabrics stay dark); "
                  f"{config.render_size[0]} x "
                  f"{config.render_size[1]} pixels, {config.render_spp} spp.")
         s.figure(m.figures["drape"], "A draped cloth",
@@ -583,7 +573,7 @@ def run_demo(
     output
         Output folder; replaced whole when it holds an earlier cdbrdf output,
         refused when it holds anything else (also files added to an earlier
-        output since it was written: :func:`cdbrdf.fsutil.output_folder`).
+        output since it was written: :func:`cdbrdf.outputs.output_folder`).
     quick
         Use :data:`CONFIGS` ``["quick"]`` (coarse grid, small images: a few
         minutes) instead of ``["full"]`` (the paper's grid).
@@ -600,8 +590,8 @@ def run_demo(
         ``progress(stage, done, total)`` callback.
     """
     from . import materials as mats
-    from .fsutil import check_output_folder, output_folder
-    from .render import set_variant
+    from .outputs import check_output_folder, output_folder
+    from .render import check_llvm
 
     cfg = config or CONFIGS["quick" if quick else "full"]
     from .errors import OptionError
@@ -616,7 +606,7 @@ def run_demo(
     kappas = [float(k) for k in cfg.grid.kappa]
     chosen = [default_stand(k) if stands is None else stand_for(stands, k) for k in kappas]
     check_output_folder(output, maker=DEMO_MAKER, signature=DEMO_SIGNATURE)  # fail now, not after the whole run
-    set_variant()  # checks libLLVM before anything long starts
+    check_llvm()  # before anything long starts
     t0 = time.perf_counter()
     results = []
     timings: dict[str, float] = {}

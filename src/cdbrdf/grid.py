@@ -141,6 +141,10 @@ def _check_phi(name: str, a: NDArray[np.float64]) -> None:
 class Grid:
     """The five sample axes of a table.
 
+    Given by keyword only, in any order; stored, listed (:meth:`axes`) and
+    indexed in one order, the table's: ``kappa, phi_l, theta_l, phi_v,
+    theta_v`` (``Grid(**g.axes())`` is ``g``).
+
     Parameters
     ----------
     kappa
@@ -166,19 +170,20 @@ class Grid:
     """
 
     kappa: NDArray[np.float64]
-    theta_l: NDArray[np.float64]
     phi_l: NDArray[np.float64]
-    theta_v: NDArray[np.float64]
+    theta_l: NDArray[np.float64]
     phi_v: NDArray[np.float64]
+    theta_v: NDArray[np.float64]
     symmetry: str = "anisotropic"
 
     def __init__(
         self,
+        *,
         kappa: ArrayLike,
-        theta_l: ArrayLike,
         phi_l: ArrayLike,
-        theta_v: ArrayLike,
+        theta_l: ArrayLike,
         phi_v: ArrayLike,
+        theta_v: ArrayLike,
         symmetry: str = "anisotropic",
     ) -> None:
         # the fields are the checked arrays (frozen: set once, here)

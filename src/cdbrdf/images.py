@@ -369,7 +369,7 @@ def write_png(path: str | PathLike[str], image: ArrayLike, *, level: int = 6, at
     atomic
         Write a temporary beside ``path`` and rename it
         (:func:`cdbrdf.fsutil.atomic_path`). False only for the many files
-        written into a partial folder of :func:`cdbrdf.fsutil.output_folder`,
+        written into a partial folder of :func:`cdbrdf.outputs.output_folder`,
         which is published whole once complete: written in place, without
         a temporary, a sweep of the folder or an fsync each (an existing file
         is refused: ``FileExistsError``).
@@ -473,7 +473,7 @@ def write_tiff(path: str | PathLike[str], image: ArrayLike, *, compression: str 
     atomic
         Write a temporary beside ``path`` and rename it
         (:func:`cdbrdf.fsutil.atomic_path`). False only for the many files
-        written into a partial folder of :func:`cdbrdf.fsutil.output_folder`,
+        written into a partial folder of :func:`cdbrdf.outputs.output_folder`,
         which is published whole once complete: written in place, without
         a temporary, a sweep of the folder or an fsync each (an existing file
         is refused: ``FileExistsError``).
@@ -535,7 +535,7 @@ def write_exr(path: str | PathLike[str], image: ArrayLike, *, atomic: bool = Tru
     atomic
         Write a temporary beside ``path`` and rename it
         (:func:`cdbrdf.fsutil.atomic_path`). False only for the many files
-        written into a partial folder of :func:`cdbrdf.fsutil.output_folder`,
+        written into a partial folder of :func:`cdbrdf.outputs.output_folder`,
         which is published whole once complete: written in place, without
         a temporary, a sweep of the folder or an fsync each (an existing file
         is refused: ``FileExistsError``).

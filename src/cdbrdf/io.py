@@ -26,14 +26,11 @@ references, chunk addresses) are in :mod:`cdbrdf._hdf5`.
 
 from __future__ import annotations
 
-import hashlib
 import io as _bytes_io
 import json
 import logging
 import math
 import re
-import subprocess
-import sys
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -41,6 +38,18 @@ from typing import Any
 import numpy as np
 
 from . import limits
+from ._fileattrs import (
+    as_str,
+    attrs_digest,
+    attrs_from_globals,
+    check_cf,
+    check_mirrors,
+    check_missing,
+    data_digest,
+    get_attr,
+    get_attr_str,
+    global_attrs,
+)
 from ._hdf5 import (
     Heaps,
     UnsureError,
@@ -58,7 +67,6 @@ from .schema import (
     AXES,
     CHANNEL,
     CHANNELS_ATTR,
-    CONVENTIONS,
     DATA_DIGEST_ATTR,
     DATA_VARIABLES,
     DIGEST_ATTR,
@@ -72,18 +80,13 @@ from .schema import (
     FORMAT_VERSION,
     MEASURED,
     MIRRORED_ATTRS,
-    MISSING_VALUE_ATTRS,
-    PACKING_ATTRS,
-    QUANTITIES,
     REFLECTANCE,
     REFLECTANCE_STD,
     REQUIRED_ATTRS,
     REQUIRED_VARIABLES,
     SAMPLE_AXES,
-    WRITER_ATTRS,
     TableParts,
     check_channel_names,
-    same_units,
     variable_attrs,
     with_channel_names,
 )
@@ -98,6 +101,8 @@ __all__ = [
     "read",
     "global_attrs",
     "attrs_from_globals",
+    "to_dataset",
+    "parts_from_dataset",
     "superblock_version",
     "atomic_path",
 ]
@@ -125,112 +130,12 @@ _FILE_KINDS = {
 MAX_FILL_SLOTS = 4096
 
 
-def _jsonable(name: str, value: Any) -> str:
-    try:
-        return json.dumps(value, sort_keys=True, allow_nan=False)
-    except (TypeError, ValueError) as exc:
-        raise TableError(f"attrs[{name!r}]: cannot be stored in the file ({exc})") from None
-
-
-def _digest(attrs_json: str, channels: list[str]) -> np.ndarray:
-    """SHA-256 over ``cdbrdf_attrs`` and the channel names, as 32 uint8."""
-    h = hashlib.sha256(b"cdbrdf-1.1\0")
-    h.update(attrs_json.encode("utf-8"))
-    for c in channels:
-        h.update(b"\0" + c.encode("utf-8"))
-    return np.frombuffer(h.digest(), dtype=np.uint8).copy()
-
-
-def _data_digest(arrays: list[tuple[str, np.ndarray]]) -> np.ndarray:
-    """SHA-256 over the axes and data variables as stored (name, little-endian dtype, shape, bytes), as 32 uint8.
-
-    Fletcher-32, the chunk checksum HDF5 offers, cannot see every change: a
-    16-bit word turned from 0x0000 to 0xFFFF (or back) keeps its sums (a
-    theta_l of 15 degrees read as 15.49999 in a checksummed 1.2 file). This
-    digest sees any change of any value.
-    """
-    h = hashlib.sha256(b"cdbrdf-data-1.3\0")
-    for name, a in arrays:
-        le = np.ascontiguousarray(a, dtype=np.asarray(a).dtype.newbyteorder("<"))
-        h.update(f"{name}\0{le.dtype.str}\0{le.shape}\0".encode())
-        h.update(le.reshape(-1).view(np.uint8).data)
-    return np.frombuffer(h.digest(), dtype=np.uint8).copy()
-
-
 def _stored_arrays(parts: TableParts) -> list[tuple[str, np.ndarray]]:
     """The axes and data variables of ``parts`` as the file stores them (dtypes of :data:`_FILE_DTYPES`)."""
     out = [(name, np.asarray(parts.axes[name], dtype=np.float64)) for name in SAMPLE_AXES]
     for name, data in parts.variables().items():
         out.append((name, np.asarray(data, dtype=_FILE_DTYPES.get(name))))
     return out
-
-
-def global_attrs(parts: TableParts) -> dict[str, Any]:
-    """The global attributes of a file of ``parts``, all netCDF-legal (strings, numbers, uint8 digests).
-
-    The format's own (``format``, ``format_version``, ``software``,
-    ``Conventions``), every table attribute mirrored (scalars as themselves,
-    the rest as JSON text), ``cdbrdf_attrs`` (all of them as one JSON object)
-    and ``cdbrdf_sha256`` (the digest of that text and the channel names).
-    The writer writes them, and :meth:`cdbrdf.CDBRDF.to_xarray` gives them
-    to its dataset, so that ``to_xarray().to_netcdf(f)`` writes a file
-    :func:`read` reads. The data digest (``cdbrdf_data_sha256``) is the
-    writer's alone: data edited in xarray are not damaged data.
-
-    Raises
-    ------
-    TableError
-        When an attribute cannot be stored (not JSON-serialisable).
-    """
-    from ._version import __version__
-
-    attrs = parts.attrs
-    attrs_json = _jsonable("*", attrs)
-    out: dict[str, Any] = {"format": FORMAT_NAME, "format_version": FORMAT_VERSION,
-                           "software": f"cdbrdf {__version__}", "Conventions": CONVENTIONS}
-    for key, value in attrs.items():
-        if key not in out:
-            out[key] = value if _native_mirror(value) else _jsonable(key, value)
-    out[ATTRS_JSON_ATTR] = attrs_json
-    out[DIGEST_ATTR] = _digest(attrs_json, parts.channels)
-    return out
-
-
-def attrs_from_globals(globals_: Any) -> dict[str, Any]:
-    """The table attributes of global attributes made by :func:`global_attrs` (an xarray dataset's ``attrs``).
-
-    ``cdbrdf_attrs`` is the source of truth when present; every global
-    attribute that mirrors one of its entries must agree with it, as in a
-    file. Without it the global attributes are taken as they are, but for
-    the format's own.
-
-    Raises
-    ------
-    TableError
-        When ``cdbrdf_attrs`` is not a JSON object or a mirror disagrees with it.
-    """
-    g = dict(globals_)
-    if ATTRS_JSON_ATTR not in g:
-        return {k: v for k, v in g.items() if k not in WRITER_ATTRS}
-    try:
-        attrs = json.loads(str(g[ATTRS_JSON_ATTR]))
-    except (ValueError, RecursionError) as exc:
-        raise TableError(f"attrs[{ATTRS_JSON_ATTR!r}]: not valid JSON ({one_line(exc)})") from None
-    if not isinstance(attrs, dict):
-        raise TableError(f"attrs[{ATTRS_JSON_ATTR!r}]: not a JSON object")
-    for key, value in attrs.items():
-        if key in WRITER_ATTRS or key not in g:
-            continue
-        stored = g[key]
-        if isinstance(stored, np.ndarray) and stored.size == 1:
-            stored = stored.reshape(()).item()
-        if isinstance(stored, np.generic):
-            stored = stored.item()
-        want = value if _native_mirror(value) else _jsonable(key, value)
-        if not (stored == want and type(stored) is type(want)):
-            raise TableError(f"attrs[{key!r}]: {stored!r:.60} disagrees with its entry in {ATTRS_JSON_ATTR!r} "
-                             f"({want!r:.60}); change both, or drop {ATTRS_JSON_ATTR!r}")
-    return attrs
 
 
 def save(table: Any, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
@@ -327,58 +232,15 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
             _set_attrs(var, variable_attrs(name, quantity))
         for key, value in gattrs.items():
             f.attrs[key] = value
-        f.attrs[DATA_DIGEST_ATTR] = _data_digest(_stored_arrays(parts))
+        f.attrs[DATA_DIGEST_ATTR] = data_digest(_stored_arrays(parts))
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
         fh.write(image.getbuffer())
     _LOG.debug("wrote %s (%s values)", path, "x".join(str(n) for n in shape))
 
 
-def _native_mirror(value: Any) -> bool:
-    """Whether a global attribute mirrors ``value`` as itself (else as its JSON text).
-
-    NetCDF-4 has no boolean attribute type and HDF5 no integer beyond 64 bits:
-    booleans and such integers are mirrored as JSON text (``true``, ``2**70``
-    in digits), like lists and mappings. ``cdbrdf_attrs`` keeps the value.
-    """
-    if isinstance(value, bool):
-        return False
-    if isinstance(value, int):
-        return -(2**63) <= value < 2**63
-    return isinstance(value, (str, float))
-
-
 def _set_attrs(var: Any, attrs: dict[str, Any]) -> None:
     for key, value in attrs.items():
         var.attrs[key] = value
-
-
-def _as_str(path: Path, what: str, v: Any) -> str:
-    """``v`` (str, UTF-8 bytes or a one-element array of them) as str; FormatError otherwise."""
-    if isinstance(v, np.ndarray) and v.size == 1 and v.dtype.kind in "OSU":
-        v = v.reshape(()).item()
-    if isinstance(v, (bytes, np.bytes_)):
-        try:
-            v = bytes(v).decode("utf-8")
-        except UnicodeDecodeError:
-            raise fail(path, f"{what} is not valid UTF-8 text") from None
-    if not isinstance(v, str):
-        raise fail(path, f"{what} is not a string (got {type(v).__name__})")
-    return v
-
-
-def _attr(path: Path, attrs: Any, name: str) -> Any:
-    try:
-        return attrs[name]
-    except UnicodeDecodeError:
-        raise fail(path, f"global attribute {name!r} is not valid UTF-8 text") from None
-    except (OSError, RuntimeError, KeyError, ValueError, TypeError) as exc:
-        raise fail(path, f"global attribute {name!r} cannot be read ({one_line(exc)}): the file is damaged") from None
-
-
-def _attr_str(path: Path, attrs: Any, name: str) -> str:
-    if name not in attrs:
-        raise fail(path, f"missing the global attribute {name!r}")
-    return _as_str(path, f"global attribute {name!r}", _attr(path, attrs, name))
 
 
 def _dims_of(ds: Any) -> tuple[str, ...]:
@@ -478,64 +340,6 @@ def _expect(path: Path, ds: Any, name: str, shape: tuple[int, ...], dims: tuple[
         raise fail(path, f"{name!r} has dtype {ds.dtype}, which the format does not allow")
 
 
-def _check_cf(path: Path, ds: Any, name: str, quantity: str) -> None:
-    """Refuse CF packing (``scale_factor``, ``add_offset``) and a ``units`` attribute naming another unit.
-
-    A reader that ignored them would read other values than xarray (half of
-    them with ``scale_factor = 2``, a negative reflectance with ``add_offset
-    = 1``), or values in another unit than the axis is (``1/m``): neither is
-    ever read as the table.
-    """
-    for attr in PACKING_ATTRS:
-        if attr in ds.attrs:
-            value = np.asarray(_attr(path, ds.attrs, attr)).reshape(-1)[:1].tolist()
-            raise fail(path, f"{name!r} is packed ({attr} = {value[0] if value else '?'!r:.40}); the format "
-                             "stores the values unpacked: unpack it (xarray's decoding) and save it again")
-    if "units" not in ds.attrs or quantity not in QUANTITIES:
-        return
-    expected = variable_attrs(name, quantity).get("units")
-    if expected is None:
-        return
-    given = _as_str(path, f"the units of {name!r}", _attr(path, ds.attrs, "units"))
-    if not same_units(given, expected):
-        raise fail(path, f"{name!r} is in {given!r:.40}, expected {expected!r}: values in another unit are not "
-                         "read as the table")
-
-
-def _check_missing(path: Path, ds: Any, name: str, a: np.ndarray) -> None:
-    """Refuse values a CF missing-value attribute marks missing (xarray reads them as NaN): a table has none."""
-    for attr in MISSING_VALUE_ATTRS:
-        if attr not in ds.attrs:
-            continue
-        marks = np.asarray(_attr(path, ds.attrs, attr)).reshape(-1)
-        if marks.dtype.kind not in "fiub":
-            raise fail(path, f"{name!r} has a {attr} that is not a number")
-        with np.errstate(invalid="ignore"):
-            hit = int(np.count_nonzero(np.isin(a, marks)))
-        if hit:
-            raise fail(path, f"{name!r} holds {hit} value(s) equal to its {attr} ({marks[0]!r}): missing values, "
-                             "which a table cannot have")
-
-
-def _check_mirrors(path: Path, f: Any, attrs: dict[str, Any]) -> None:
-    """The global attributes that mirror ``cdbrdf_attrs`` entries must agree with them."""
-    for key, value in attrs.items():
-        if key in WRITER_ATTRS or key not in f.attrs:
-            continue
-        stored = _attr(path, f.attrs, key)
-        if isinstance(value, str):
-            ok = _as_str(path, f"global attribute {key!r}", stored) == value
-        elif _native_mirror(value):
-            s = stored.reshape(()).item() if isinstance(stored, np.ndarray) and stored.size == 1 else stored
-            if isinstance(s, np.generic):
-                s = s.item()
-            ok = isinstance(s, (bool, int, float)) and type(s) is type(value) and s == value
-        else:
-            ok = _as_str(path, f"global attribute {key!r}", stored) == _jsonable(key, value)
-        if not ok:
-            raise fail(path, f"global attribute {key!r} disagrees with its entry in 'cdbrdf_attrs'")
-
-
 def _slot_shape(path: Path, ds: Any, name: str, grid_shape: tuple[int, ...]) -> tuple[int, ...]:
     """The shape a fill variable with source slots may have: the sample axes and 1 to MAX_FILL_SLOTS slots."""
     n_slot = ds.shape[-1] if ds.ndim == len(grid_shape) + 1 else 0
@@ -548,12 +352,12 @@ def _slot_shape(path: Path, ds: Any, name: str, grid_shape: tuple[int, ...]) -> 
 
 def _check_format(path: Path, f: Any) -> None:
     """The file says it is a CDBRDF file of a major version this reader reads."""
-    fmt = _attr_str(path, f.attrs, "format") if "format" in f.attrs else None
+    fmt = get_attr_str(path, f.attrs, "format") if "format" in f.attrs else None
     if fmt != FORMAT_NAME:
         raise fail(
             path, f"not a CDBRDF file (global attribute 'format' is {fmt!r}, expected {FORMAT_NAME!r})"
         )
-    version = _attr_str(path, f.attrs, "format_version")
+    version = get_attr_str(path, f.attrs, "format_version")
     m = re.fullmatch(r"(\d{1,6})\.(\d{1,6})", version)
     if m is None:
         raise fail(path, f"unreadable format_version {version!r} (expected MAJOR.MINOR)")
@@ -581,7 +385,7 @@ def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
     with f:
         file_size = path.stat().st_size
         _check_format(path, f)
-        gattrs = {name: _attr_str(path, f.attrs, name) for name in REQUIRED_ATTRS}
+        gattrs = {name: get_attr_str(path, f.attrs, name) for name in REQUIRED_ATTRS}
 
         # -- declared shapes, dims and dtypes of every variable, before reading any data
         axis_ds = {name: _dataset(path, f, name, required=True) for name in AXES}
@@ -612,21 +416,21 @@ def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
             check_storage(path, ds, name, file_size)
         quantity = gattrs["quantity"]
         for name in (*SAMPLE_AXES, *(n for n in DATA_VARIABLES if n in datasets)):
-            _check_cf(path, datasets[name], name, quantity)
+            check_cf(path, datasets[name], name, quantity)
 
         # -- metadata
         raw = {name: _read_ds(path, axis_ds[name], name) for name in SAMPLE_AXES}
         axes = {name: raw[name].astype(np.float64) for name in SAMPLE_AXES}
         if heaps is not None:
             check_vlen_refs(path, axis_ds[CHANNEL], CHANNEL, heaps)
-        channels = [_as_str(path, f"a {CHANNEL!r} name", c) for c in _read_ds(path, axis_ds[CHANNEL], CHANNEL)]
+        channels = [as_str(path, f"a {CHANNEL!r} name", c) for c in _read_ds(path, axis_ds[CHANNEL], CHANNEL)]
         text = gattrs[ATTRS_JSON_ATTR]
         limits.check("json_bytes", len(text.encode("utf-8")), what=f"{path}: attribute {ATTRS_JSON_ATTR!r}")
         if DIGEST_ATTR in f.attrs:
-            stored = np.asarray(_attr(path, f.attrs, DIGEST_ATTR))
+            stored = np.asarray(get_attr(path, f.attrs, DIGEST_ATTR))
             if stored.dtype != np.uint8 or stored.shape != (32,):
                 raise fail(path, f"global attribute {DIGEST_ATTR!r} is not 32 bytes")
-            if not np.array_equal(stored, _digest(text, channels)):
+            if not np.array_equal(stored, attrs_digest(text, channels)):
                 raise fail(path, f"checksum mismatch in {ATTRS_JSON_ATTR!r} or {CHANNEL!r}: the file is damaged")
         try:
             attrs = json.loads(text)
@@ -637,7 +441,7 @@ def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
         for key in MIRRORED_ATTRS:
             if attrs.get(key) != gattrs[key]:
                 raise fail(path, f"global attribute {key!r} disagrees with its entry in {ATTRS_JSON_ATTR!r}")
-        _check_mirrors(path, f, attrs)
+        check_mirrors(path, f, attrs)
         if CHANNELS_ATTR in attrs and attrs[CHANNELS_ATTR] != channels:
             raise fail(
                 path,
@@ -660,13 +464,13 @@ def _read_data(path: Path, f: Any, datasets: dict[str, Any], raw: dict[str, np.n
         if name in datasets:
             raw[name] = _read_ds(path, datasets[name], name)
     if DATA_DIGEST_ATTR in f.attrs:
-        stored = np.asarray(_attr(path, f.attrs, DATA_DIGEST_ATTR))
+        stored = np.asarray(get_attr(path, f.attrs, DATA_DIGEST_ATTR))
         if stored.dtype != np.uint8 or stored.shape != (32,):
             raise fail(path, f"global attribute {DATA_DIGEST_ATTR!r} is not 32 bytes")
-        if not np.array_equal(stored, _data_digest(list(raw.items()))):
+        if not np.array_equal(stored, data_digest(list(raw.items()))):
             raise fail(path, "checksum mismatch in the data (the axes or a variable): the file is damaged")
     for name, a in raw.items():
-        _check_missing(path, datasets[name], name, a)
+        check_missing(path, datasets[name], name, a)
     values = raw[REFLECTANCE]
     if not np.all(np.isfinite(values)):
         bad = int(np.count_nonzero(~np.isfinite(values)))
@@ -705,7 +509,7 @@ def _read_fill_parts(path: Path, raw: dict[str, np.ndarray]) -> dict[str, np.nda
     return out
 
 
-def _read_guarded(path: Path, heaps: Heaps | None = None) -> TableParts:
+def read_guarded(path: Path, heaps: Heaps | None = None) -> TableParts:
     """:func:`_read_parts`, with every unexpected exception turned into FormatError."""
     try:
         return _read_parts(path, heaps)
@@ -718,203 +522,6 @@ def _read_guarded(path: Path, heaps: Heaps | None = None) -> TableParts:
         if "checksum" in str(exc):
             raise fail(path, "metadata checksum mismatch: the file is damaged") from None
         raise fail(path, f"damaged or not a valid CDBRDF file ({one_line(exc)})") from None
-
-
-#: The child's program. It runs as ``python -I -S -c`` (no environment variables of Python, no user or
-#: site folder, no script folder or current folder on ``sys.path``), in a fresh private folder as its
-#: current folder, with a clean environment: only the standard library is importable until it puts
-#: the parent's own package folders on ``sys.path`` (argv[2]), so no file beside the table (a
-#: ``pickle.py`` in a downloaded dataset) can ever be imported. It dies with the parent: the kernel
-#: kills it when the parent dies (Linux, PR_SET_PDEATHSIG), a thread ends it when its stdin pipe closes
-#: (the parent gone, elsewhere) and a CPU-time limit ends it in any case. It answers on stdout:
-#: ``ready``, then ``ok`` and the parts as an .npz (no pickle), or ``error`` and one JSON line.
-_CHILD = r"""
-import sys
-
-
-def _die_with_parent(parent, cpu_s):
-    import os, resource, signal, threading
-    try:
-        import ctypes
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError, ImportError):
-        pass
-    if os.getppid() != parent:  # the parent died before that
-        os._exit(3)
-    try:
-        resource.setrlimit(resource.RLIMIT_CPU, (cpu_s, cpu_s + 1))
-    except (ValueError, OSError):
-        pass
-
-    def watch():
-        try:
-            while os.read(0, 4096):
-                pass
-        finally:
-            os._exit(4)
-
-    threading.Thread(target=watch, daemon=True).start()
-
-
-def main():
-    import json
-    parent, cpu_s, path_json, file = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], sys.argv[4]
-    _die_with_parent(parent, cpu_s)
-    sys.path[:0] = json.loads(path_json)
-    import io
-    from pathlib import Path
-
-    import h5py
-    import numpy as np
-    try:
-        h5py.h5pl.set_loading_state(0)  # no filter plug-in is loaded from anywhere
-    except (AttributeError, RuntimeError):
-        pass
-    from cdbrdf import io as cio
-    from cdbrdf.errors import FormatError, LimitError
-
-    out = sys.stdout.buffer
-    out.write(b"ready\n")
-    out.flush()
-    try:
-        parts = cio._read_guarded(Path(file))
-    except (FormatError, LimitError) as exc:
-        out.write(b"error\n" + json.dumps([type(exc).__name__, str(exc)]).encode() + b"\n")
-        out.flush()
-        return
-    arrays = {"values": parts.values, "attrs": np.array(json.dumps(parts.attrs))}
-    for name, a in parts.axes.items():
-        arrays["axis_" + name] = a
-    for name in ("measured", "fill_source", "std", "fill_method", "fill_sources", "fill_weights", "fill_std"):
-        a = getattr(parts, name)
-        if a is not None:
-            arrays[name] = a
-    buf = io.BytesIO()
-    np.savez(buf, **arrays)
-    out.write(b"ok\n" + buf.getvalue())
-    out.flush()
-
-
-main()
-sys.stdout.flush()
-import os
-os._exit(0)  # not a normal shutdown: the watching thread may be in a read
-"""
-
-
-def _child_path() -> list[str]:
-    """The folders the child imports from: this package's, then the parent's absolute ``sys.path``.
-
-    The parent's current folder (and relative entries, which name it) are
-    left out: only installed code is imported.
-    """
-    import os
-
-    cwd = os.path.realpath(os.getcwd())
-    out = [str(Path(__file__).resolve().parent.parent)]
-    for entry in sys.path:
-        if entry and os.path.isabs(entry) and os.path.realpath(entry) != cwd and entry not in out:
-            out.append(entry)
-    return out
-
-
-def _child_env() -> dict[str, str]:
-    """A clean environment for the child: the limits, HDF5's file locking and what starts Python, nothing else."""
-    import os
-
-    keep = {"PATH", "LD_LIBRARY_PATH", "DYLD_LIBRARY_PATH", "SYSTEMROOT", "HDF5_USE_FILE_LOCKING"}
-    return {k: v for k, v in os.environ.items() if k in keep or k.startswith("CDBRDF_MAX_")}
-
-
-def _parts_from_npz(path: Path, data: bytes) -> TableParts:
-    """The child's answer (an .npz, loaded without pickle) as parts."""
-    try:
-        with np.load(_bytes_io.BytesIO(data), allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-        attrs = json.loads(str(arrays.pop("attrs")))
-        axes = {name: arrays.pop("axis_" + name) for name in SAMPLE_AXES}
-    except (ValueError, KeyError, OSError, EOFError) as exc:  # pragma: no cover - the child writes it
-        raise fail(path, f"the reader's answer cannot be read ({one_line(exc)})") from None
-    return TableParts(values=arrays.pop("values"), axes=axes, attrs=attrs,
-                      **{k: arrays.get(k) for k in ("measured", "fill_source", "std", "fill_method",
-                                                    "fill_sources", "fill_weights", "fill_std")})
-
-
-def _read_in_child(path: Path) -> TableParts:
-    """:func:`_read_guarded` in an isolated child process stopped after a time limit.
-
-    For files without metadata checksums, where a damaged structure can make
-    the HDF5 library loop forever with the interpreter lock held. See
-    :data:`_CHILD` for the isolation; the limit (:data:`LEGACY_READ_TIMEOUT_S`
-    plus one second per 10 MB) counts from the moment the child has imported
-    its libraries. Ctrl-C in the parent stops the child too.
-    """
-    import os
-    import selectors
-    import shutil
-    import signal
-    import tempfile
-    import time
-
-    timeout = LEGACY_READ_TIMEOUT_S + path.stat().st_size / 10e6
-    start_s = LEGACY_START_TIMEOUT_S
-    folder = tempfile.mkdtemp(prefix="cdbrdf-read-")
-    cpu_s = int(start_s + timeout) + 5
-    cmd = [sys.executable, "-I", "-S", "-c", _CHILD, str(os.getpid()), str(cpu_s), json.dumps(_child_path()),
-           str(path.absolute())]
-    chunks: dict[str, list[bytes]] = {"out": [], "err": []}
-    proc = None
-    try:
-        proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                cwd=folder, env=_child_env(), start_new_session=False)
-        assert proc.stdout is not None and proc.stderr is not None
-        sel = selectors.DefaultSelector()
-        sel.register(proc.stdout, selectors.EVENT_READ, "out")
-        sel.register(proc.stderr, selectors.EVENT_READ, "err")
-        deadline = time.monotonic() + start_s
-        ready = False
-        open_streams = 2
-        while open_streams:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                if not ready:
-                    raise fail(path, f"the reader did not start within {start_s:.0f} s")
-                raise fail(path, f"reading it took longer than {timeout:.0f} s and was stopped: its HDF5 "
-                                 "structure is damaged")
-            for key, _ in sel.select(min(left, 0.5)):
-                data = os.read(key.fd, 1 << 20)
-                if not data:
-                    sel.unregister(key.fileobj)
-                    open_streams -= 1
-                    continue
-                chunks[key.data].append(data)
-                if not ready and b"\n" in b"".join(chunks["out"]):
-                    ready = True
-                    deadline = time.monotonic() + timeout
-        sel.close()
-        proc.wait(timeout=5)
-    finally:
-        if proc is not None:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-            for stream in (proc.stdin, proc.stdout, proc.stderr):
-                if stream is not None:
-                    stream.close()
-        shutil.rmtree(folder, ignore_errors=True)
-    out = b"".join(chunks["out"])
-    head, _, rest = out.partition(b"\n")
-    kind, _, payload = rest.partition(b"\n")
-    if head != b"ready" or kind not in (b"ok", b"error") or proc.returncode != 0:
-        err = b"".join(chunks["err"]).decode("utf-8", "replace").strip().splitlines()[-1:]
-        code = proc.returncode
-        why = err[0][:200] if err else (f"killed by signal {-code}" if code < 0 and -code in signal.valid_signals()
-                                         else f"exit status {code}")
-        raise fail(path, f"the reader stopped on it ({why}): the file is damaged")
-    if kind == b"error":
-        name, message = json.loads(payload.decode("utf-8"))
-        raise (LimitError if name == "LimitError" else FormatError)(message)
-    return _parts_from_npz(path, payload)
 
 
 def read(path: str | PathLike[str]) -> TableParts:
@@ -985,9 +592,55 @@ def read(path: str | PathLike[str]) -> TableParts:
     parts = None
     if heaps.status == "ok":
         try:
-            parts = _read_guarded(p, heaps)
+            parts = read_guarded(p, heaps)
         except UnsureError:
             pass
     if parts is None:
-        parts = _read_in_child(p)
+        from ._isolated_read import read_in_child
+
+        parts = read_in_child(p, timeout_s=LEGACY_READ_TIMEOUT_S, start_timeout_s=LEGACY_START_TIMEOUT_S)
     return parts
+
+
+def to_dataset(parts: TableParts) -> Any:
+    """The table of ``parts`` as an :class:`xarray.Dataset` laid out as the file (:meth:`cdbrdf.CDBRDF.to_xarray`)."""
+    import xarray as xr
+
+    q = parts.quantity
+    coords = {name: (name, axis, variable_attrs(name, q)) for name, axis in parts.axes.items()}
+    coords[CHANNEL] = (CHANNEL, np.array(parts.channels), variable_attrs(CHANNEL, q))
+    variables = parts.variables()
+    slots = np.shape(variables[FILL_SOURCES])[-1] if FILL_SOURCES in variables else 1
+    coords[FILL_SLOT] = (FILL_SLOT, np.arange(slots, dtype=np.int32),
+                         variable_attrs(FILL_SLOT, q))
+    data = {name: (DATA_VARIABLES[name], a, variable_attrs(name, q)) for name, a in variables.items()}
+    return xr.Dataset(data, coords=coords, attrs=global_attrs(parts))
+
+
+def parts_from_dataset(ds: Any) -> TableParts:
+    """The parts of a table from an :class:`xarray.Dataset` laid out as :func:`to_dataset` makes.
+
+    Dimensions are transposed into the table's order when needed. The table's
+    attributes are ``cdbrdf_attrs`` when the dataset has it (every attribute
+    mirroring one of its entries must agree with it,
+    :func:`~cdbrdf._fileattrs.attrs_from_globals`), else the dataset's
+    attributes but the format's own. Channel names that are not the
+    defaults become ``attrs["channels"]`` (unless the attrs name them).
+
+    Raises
+    ------
+    TableError
+        For a dataset without the reflectance or a sample axis.
+    """
+    for name in (REFLECTANCE, *SAMPLE_AXES):
+        if name not in ds.variables:
+            raise TableError(f"ds: the dataset has no variable {name!r}")
+    arrays = {name: ds[name].transpose(*dims).values for name, dims in DATA_VARIABLES.items() if name in ds}
+    attrs = attrs_from_globals(ds.attrs)
+    if CHANNEL in ds.coords:
+        attrs = with_channel_names(attrs, [str(c) for c in ds[CHANNEL].values])
+    return TableParts(values=arrays[REFLECTANCE], axes={name: ds[name].values for name in SAMPLE_AXES},
+                      measured=arrays.get(MEASURED), fill_source=arrays.get(FILL_SOURCE),
+                      std=arrays.get(REFLECTANCE_STD), attrs=attrs, fill_method=arrays.get(FILL_METHOD),
+                      fill_sources=arrays.get(FILL_SOURCES), fill_weights=arrays.get(FILL_WEIGHTS),
+                      fill_std=arrays.get(FILL_STD))

@@ -39,28 +39,21 @@ from . import io as _io
 from . import limits
 from .errors import FormatError, TableError
 from .grid import MAX_ABS_KAPPA, MIN_AXIS_STEP, PAPER_KAPPA, PAPER_PHI, PAPER_THETA, Grid, read_array
+from .provenance import (
+    check_fill_method_codes,
+    check_fill_source,
+    check_fill_sources,
+    check_measured,
+    read_fill_sources,
+)
 from .schema import (
     AXES,
-    CHANNEL,
-    DATA_VARIABLES,
-    FILL_METHOD,
     FILL_METHOD_CODES,
-    FILL_SLOT,
-    FILL_SOURCE,
-    FILL_SOURCES,
-    FILL_STD,
-    FILL_WEIGHTS,
-    MEASURED,
     QUANTITIES,
-    REFLECTANCE,
-    REFLECTANCE_STD,
-    SAMPLE_AXES,
     SYMMETRY_ATTR,
     TableParts,
     channel_names,
     check_symmetry,
-    variable_attrs,
-    with_channel_names,
 )
 
 if TYPE_CHECKING:
@@ -169,10 +162,10 @@ class CDBRDF:
         values: ArrayLike,
         *,
         kappa: ArrayLike,
-        theta_l: ArrayLike,
         phi_l: ArrayLike,
-        theta_v: ArrayLike,
+        theta_l: ArrayLike,
         phi_v: ArrayLike,
+        theta_v: ArrayLike,
         measured: ArrayLike | None = None,
         fill_source: ArrayLike | None = None,
         std: ArrayLike | None = None,
@@ -188,16 +181,16 @@ class CDBRDF:
         self._grid = grid
         self._values = self._check_values("values", values, grid)
         self._std = self._check_std("std", std, grid, self._values.shape)
-        self._measured = self._check_mask(measured, grid.shape)
-        sources = None if fill_sources is None else self._read_sources(fill_sources, self._measured)
+        self._measured = check_measured(measured, grid.shape)
+        sources = None if fill_sources is None else read_fill_sources(fill_sources, self._measured)
         if fill_source is None and sources is not None:
             first = sources[..., 0]
             fill_source = np.where(self._measured, -1, np.where(first >= 0, first, -2))
-        self._fill_source = self._check_fill(fill_source, self._measured)
-        self._fill_sources, self._fill_weights = self._check_sources(
+        self._fill_source = check_fill_source(fill_source, self._measured)
+        self._fill_sources, self._fill_weights = check_fill_sources(
             sources, fill_weights, self._fill_source, self._measured
         )
-        self._fill_method = self._check_method(fill_method, self._fill_source, self._measured)
+        self._fill_method = check_fill_method_codes(fill_method, self._fill_source, self._measured)
         self._fill_std = self._check_std("fill_std", fill_std, grid, self._values.shape)
         if self._fill_std is not None and np.any(self._fill_std[self._measured] != 0):
             raise TableError("fill_std: must be 0 wherever the sample is measured")
@@ -265,132 +258,6 @@ class CDBRDF:
         if np.any(s < 0):
             raise TableError(f"{name}: standard deviations must be non-negative")
         return s
-
-    @staticmethod
-    def _read_sources(sources: ArrayLike, measured: NDArray[np.bool_]) -> NDArray[np.int64]:
-        """``fill_sources`` as int64 of shape ``grid + (n_slot,)`` with valid indices (checked further later)."""
-        f = read_array("fill_sources", sources, kinds="iu", what="integers")
-        if f.ndim != measured.ndim + 1 or f.shape[:-1] != measured.shape or f.shape[-1] < 1:
-            raise TableError(
-                f"fill_sources: shape {f.shape} is not the sample grid {measured.shape} plus one slot axis"
-            )
-        if f.size and (f.min() < -1 or f.max() >= measured.size):
-            raise TableError(f"fill_sources: indices must be in [0, {measured.size}) (or -1 = unused slot)")
-        return f.astype(np.int64)
-
-    @staticmethod
-    def _check_sources(
-        sources: NDArray[np.int64] | None,
-        weights: ArrayLike | None,
-        fill: NDArray[np.int64],
-        measured: NDArray[np.bool_],
-    ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-        """All sources and their weights; slot 0 is ``fill_source`` (-1 there for -2)."""
-        if sources is None:
-            if weights is not None:
-                raise TableError("fill_weights: given without fill_sources")
-            sources = np.where(fill >= 0, fill, -1)[..., None].astype(np.int64)
-        else:
-            used = sources >= 0
-            if np.any(used[measured]):
-                raise TableError("fill_sources: must be -1 (unused) wherever the sample is measured")
-            if np.any(~used[..., :-1] & used[..., 1:]):
-                raise TableError("fill_sources: used slots must come first (-1 only after the last source)")
-            first = sources[..., 0]
-            if np.any((first != np.where(fill >= 0, fill, -1))[~measured]):
-                raise TableError("fill_sources: the first slot must be fill_source (-1 where that is -2)")
-            known = sources[used]
-            if known.size and not measured.reshape(-1)[known].all():
-                raise TableError("fill_sources: a filled sample points at a sample that is not measured")
-        used = sources >= 0
-        if weights is None:
-            if np.any(used[..., 1:]):
-                raise TableError("fill_weights: needed when a filled sample has more than one source")
-            w = used.astype(np.float64)
-        else:
-            w = read_array("fill_weights", weights, kinds="iuf", what="numbers").astype(np.float64)
-            if w.shape != sources.shape:
-                raise TableError(f"fill_weights: shape {w.shape} differs from fill_sources {sources.shape}")
-            if not np.all(np.isfinite(w)):
-                raise TableError("fill_weights: must be finite")
-            if np.any(w[~used] != 0):
-                raise TableError("fill_weights: must be 0 in unused slots")
-            w = w.copy()
-        sources = sources.copy()
-        sources.setflags(write=False)
-        w.setflags(write=False)
-        return sources, w
-
-    @staticmethod
-    def _check_method(
-        method: ArrayLike | None, fill: NDArray[np.int64], measured: NDArray[np.bool_]
-    ) -> NDArray[np.uint8]:
-        """Per-sample fill method codes: 0 exactly where measured."""
-        codes = FILL_METHOD_CODES
-        if method is None:
-            m = np.where(fill >= 0, codes["nearest"], codes["unknown"]).astype(np.uint8)
-            m[measured] = codes["measured"]
-        else:
-            a = read_array("fill_method", method, kinds="iu", what="integers")
-            if a.shape != measured.shape:
-                raise TableError(f"fill_method: shape {a.shape} differs from the sample grid {measured.shape}")
-            if not np.isin(a, list(codes.values())).all():
-                valid = ", ".join(f"{v} ({k})" for k, v in codes.items())
-                raise TableError(f"fill_method: codes must be one of {valid}")
-            m = a.astype(np.uint8)
-            if np.any((m == codes["measured"]) != measured):
-                raise TableError("fill_method: must be 0 (measured) exactly where the sample is measured")
-        m.setflags(write=False)
-        return m
-
-    @staticmethod
-    def _check_mask(measured: ArrayLike | None, shape: tuple[int, ...]) -> NDArray[np.bool_]:
-        if measured is None:
-            m = np.ones(shape, dtype=bool)
-        else:
-            m = read_array("measured", measured, kinds="biu", what="booleans")
-            if m.shape != shape:
-                raise TableError(f"measured: shape {m.shape} differs from the sample grid {shape}")
-            if m.dtype != bool:
-                if not np.isin(m, (0, 1)).all():
-                    raise TableError(f"measured: expected booleans (or 0/1), got other values of dtype {m.dtype}")
-                m = m.astype(bool)
-            m = m.copy()
-        m.setflags(write=False)
-        return m
-
-    @staticmethod
-    def _check_fill(fill: ArrayLike | None, measured: NDArray[np.bool_]) -> NDArray[np.int64]:
-        """Fill sources: -1 on measured samples; a measured sample's flat index or -2 on filled ones."""
-        if fill is None:
-            f = np.full(measured.shape, -1, dtype=np.int64)
-            # Unknown sources: mark with -2 ("filled, source not recorded").
-            f[~measured] = -2
-        else:
-            f = read_array("fill_source", fill, kinds="iu", what="integers")
-            if f.shape != measured.shape:
-                raise TableError(
-                    f"fill_source: shape {f.shape} differs from the sample grid {measured.shape}"
-                )
-            if f.size and (f.min() < -2 or f.max() >= measured.size):
-                raise TableError(
-                    f"fill_source: indices must be in [0, {measured.size}) (or -2 = unknown, -1 = measured)"
-                )
-            f = f.astype(np.int64)
-            if np.any(f[measured] != -1):
-                raise TableError("fill_source: must be -1 wherever the sample is measured")
-            src = f[~measured]
-            n_minus1 = int(np.count_nonzero(src == -1))
-            if n_minus1:
-                raise TableError(
-                    f"fill_source: {n_minus1} filled sample(s) have -1 (measured); give the flat index "
-                    "of the measured sample they were filled from, or -2 = unknown"
-                )
-            known = src[src >= 0]
-            if known.size and not measured.reshape(-1)[known].all():
-                raise TableError("fill_source: a filled sample points at a sample that is not measured")
-        f.setflags(write=False)
-        return f
 
     @staticmethod
     def _check_attrs(attrs: Mapping[str, Any] | None) -> dict[str, Any]:
@@ -691,16 +558,7 @@ class CDBRDF:
         ``to_xarray().to_netcdf(path)`` writes a file :func:`cdbrdf.load`
         reads back as this table. Needs xarray.
         """
-        import xarray as xr
-
-        parts = TableParts.of(self)
-        q = parts.quantity
-        coords = {name: (name, axis, variable_attrs(name, q)) for name, axis in parts.axes.items()}
-        coords[CHANNEL] = (CHANNEL, np.array(parts.channels), variable_attrs(CHANNEL, q))
-        coords[FILL_SLOT] = (FILL_SLOT, np.arange(self._fill_sources.shape[-1], dtype=np.int32),
-                             variable_attrs(FILL_SLOT, q))
-        data = {name: (DATA_VARIABLES[name], a, variable_attrs(name, q)) for name, a in parts.variables().items()}
-        return xr.Dataset(data, coords=coords, attrs=_io.global_attrs(parts))
+        return _io.to_dataset(TableParts.of(self))
 
     @classmethod
     def from_xarray(cls, ds: Any) -> CDBRDF:
@@ -714,25 +572,7 @@ class CDBRDF:
         attributes but the format's own. Channel names that are not the
         defaults become ``attrs["channels"]`` (unless the attrs name them).
         """
-        for name in (REFLECTANCE, *SAMPLE_AXES):
-            if name not in ds.variables:
-                raise TableError(f"ds: the dataset has no variable {name!r}")
-        arrays = {name: ds[name].transpose(*dims).values for name, dims in DATA_VARIABLES.items() if name in ds}
-        attrs = _io.attrs_from_globals(ds.attrs)
-        if CHANNEL in ds.coords:
-            attrs = with_channel_names(attrs, [str(c) for c in ds[CHANNEL].values])
-        parts = TableParts(
-            values=arrays[REFLECTANCE],
-            axes={name: ds[name].values for name in SAMPLE_AXES},
-            measured=arrays.get(MEASURED),
-            fill_source=arrays.get(FILL_SOURCE),
-            std=arrays.get(REFLECTANCE_STD),
-            attrs=attrs,
-            fill_method=arrays.get(FILL_METHOD),
-            fill_sources=arrays.get(FILL_SOURCES),
-            fill_weights=arrays.get(FILL_WEIGHTS),
-            fill_std=arrays.get(FILL_STD),
-        )
+        parts = _io.parts_from_dataset(ds)
         return cls(parts.values, **parts.table_kwargs())
 
     def with_attrs(self, **attrs: Any) -> CDBRDF:

@@ -378,13 +378,13 @@ def output_file(*kinds: str) -> _Type:
 
 
 def output_folder(*, maker: str | None = None, signature: tuple[str, ...] = (), replaced: bool = True) -> _Type:
-    """An output folder: one replaced whole (:func:`cdbrdf.fsutil.check_output_folder`), or written into.
+    """An output folder: one replaced whole (:func:`cdbrdf.outputs.check_output_folder`), or written into.
 
     Parameters
     ----------
     maker, signature
         The command that makes the folder and the files each of its folders
-        holds (:func:`cdbrdf.fsutil.output_folder`).
+        holds (:func:`cdbrdf.outputs.output_folder`).
     replaced
         False for a folder files are written into (``cdbrdf plan``): not checked here.
     """
@@ -392,7 +392,7 @@ def output_folder(*, maker: str | None = None, signature: tuple[str, ...] = (), 
     def parse(text: str) -> str:
         if replaced:
             from ..errors import OutputError
-            from ..fsutil import check_output_folder
+            from ..outputs import check_output_folder
 
             try:
                 check_output_folder(text, maker=maker, signature=signature)
@@ -418,8 +418,8 @@ def guarded(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Iterat
     The paths of ``args`` whose option types carry a role (:data:`ROLES`)
     are its inputs and outputs. Before the command runs, an output that is,
     holds or lies inside an input is refused
-    (:func:`cdbrdf.fsutil.check_not_input`); then the lock of every output
-    is held (:func:`cdbrdf.fsutil.output_lock`) until the command returns,
+    (:func:`cdbrdf.outputs.check_not_input`); then the lock of every output
+    is held (:func:`cdbrdf.outputs.output_lock`) until the command returns,
     so a second run on the same output is refused at once.
 
     Raises
@@ -427,7 +427,7 @@ def guarded(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Iterat
     cdbrdf.errors.OutputError
         One line naming the output and the input, or the run that holds it.
     """
-    from ..fsutil import check_not_input, output_lock
+    from ..outputs import check_not_input, output_lock
 
     inputs: list[str] = []
     outputs: list[tuple[str, bool]] = []

@@ -13,6 +13,7 @@ frame recorded in the header (``cdbrdf render`` reuses them).
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 import numpy as np
 
@@ -24,16 +25,20 @@ __all__ = ["register", "run", "LARGE_MESH_FACES", "mesh_options", "print_mesh_re
 LARGE_MESH_FACES = 100_000
 
 
-def mesh_options(p: argparse.ArgumentParser) -> None:
-    """The options shared with ``cdbrdf render --mesh``: unit, neighbourhood, frame."""
+def mesh_options(p: Any, *, units: bool = True) -> None:
+    """The options shared with ``cdbrdf render --mesh`` and ``cdbrdf view --mesh``: unit, neighbourhood, frame.
+
+    ``p`` is a parser or an argument group; ``units=False`` leaves ``--units`` to the caller.
+    """
     from ..mesh import FRAMES, NEIGHBOURHOOD_RANGE_MM, UNITS_MM
     from ._args import finite_float, keyword
 
     lo, hi = NEIGHBOURHOOD_RANGE_MM
-    p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
-                   default=None, metavar="UNIT",
-                   help="length unit of the mesh: mm, cm, m, in or a number of mm per model unit "
-                   "(default: the unit the file records, glTF's metre, else mm)")
+    if units:
+        p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
+                       default=None, metavar="UNIT",
+                       help="length unit of the mesh: mm, cm, m, in or a number of mm per model unit "
+                       "(default: the unit the file records, glTF's metre, else mm)")
     p.add_argument("--neighbourhood", type=finite_float(lo, hi, unit="mm"), default=None, metavar="MM",
                    help="diameter of the surface patch the curvature is fitted over, mm (default: the "
                    "table's measured patch if its provenance records it, else 5)")

@@ -42,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..demo import CONFIGS, DEMO_MAKER, DEMO_SIGNATURE, run_demo
-    from ..fsutil import check_output_folder
+    from ..outputs import check_output_folder
     from ._progress import ProgressBars
     from .plan import stands_from_args
 

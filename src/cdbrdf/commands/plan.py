@@ -100,7 +100,8 @@ def check_grid_rows(grid, *, white: bool = True, brackets: int = 1) -> None:  # 
 
 def run(args: argparse.Namespace) -> int:
     from ..fsutil import check_output_file
-    from ..measure.capture import CAPTURE_FILE, STAND_FILE, write_plan
+    from ..measure.capture import CAPTURE_FILE, STAND_FILE
+    from ..measure.plan import write_plan
     from ..measure.stands import hidden_mask
     from ..table import PAPER_KAPPA, Grid
 

@@ -102,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     if len(args.files) > MAX_TABLES:
         raise OptionError(f"FILE: the viewer shows at most {MAX_TABLES} tables side by side, got {len(args.files)}")
     if args.export:
-        from ..fsutil import check_output_folder
+        from ..outputs import check_output_folder
         from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
 
         check_output_folder(args.export, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE)  # before any work

@@ -33,21 +33,21 @@ def source(bsdf: Mapping[str, Any], *, isotropic: bool = True, material: str | N
     ValueError
         When Mitsuba refuses the dict.
     """
-    from .rgl import _ensure_variant
+    from .rgl import rgb_variant
 
     mi, _ = mitsuba()
-
-    _ensure_variant()
-    try:
-        obj = mi.load_dict(dict(bsdf))
-    except RuntimeError as exc:
-        raise ValueError(f"bsdf: Mitsuba refuses {dict(bsdf)!r} ({str(exc).splitlines()[-1][:200]})") from None
+    with rgb_variant():
+        try:
+            obj = mi.load_dict(dict(bsdf))
+        except RuntimeError as exc:
+            raise ValueError(f"bsdf: Mitsuba refuses {dict(bsdf)!r} ({str(exc).splitlines()[-1][:200]})") from None
     text = json.dumps(dict(bsdf), sort_keys=True, default=str)
 
     def evaluate(theta_v: NDArray[np.float64], phi_v: NDArray[np.float64], theta_l: NDArray[np.float64],
                  phi_l: NDArray[np.float64]) -> tuple[NDArray[np.float64], None]:
-        f, _, _ = mitsuba_brdf(obj, theta_v, phi_v, theta_l, phi_l)
-        return np.array(f, dtype=np.float64).T, None
+        with rgb_variant():  # the variant the BSDF was loaded in
+            f, _, _ = mitsuba_brdf(obj, theta_v, phi_v, theta_l, phi_l)
+            return np.array(f, dtype=np.float64).T, None
 
     return Source(
         path=Path(f"mitsuba:{bsdf.get('type', '?')}"), format="mitsuba",

@@ -127,7 +127,7 @@ def scene_dict(name: str, bsdf: Any, *, size: int, spp: int, folder: Path, light
 
     from ..frames import direction_from_angles
     from ..mesh import sine_sheet_mesh, write_ply
-    from ..render.scenes import directional_light
+    from ..render.lighting import directional_light
 
     if name == "sphere":
         obj: dict[str, Any] = {"type": "sphere", "radius": 1.0, "bsdf": bsdf}
@@ -175,7 +175,7 @@ def block_difference(test: NDArray[np.floating], ref: NDArray[np.floating], mask
 
 
 def _render(scene: Any, spp: int, seed: int) -> NDArray[np.float32]:
-    from ..render.scenes import render_scene
+    from ..render.picture import render_scene
 
     return render_scene(scene, spp=spp, seed=seed, passes=max(1, spp // 256))
 
@@ -227,11 +227,20 @@ def compare(
     -------
     list of Comparison
     """
+    from ..render import variant
+
+    with variant("llvm_ad_rgb"):
+        return _compare(table, reference, scenes=scenes, size=size, spp=spp, seed=seed, block=block, noise=noise,
+                        keep_images=keep_images, progress=progress)
+
+
+def _compare(table: Any, reference: Any, *, scenes: tuple[str, ...], size: int, spp: int, seed: int, block: int,
+             noise: bool, keep_images: bool, progress: Callable[[int, int], None] | None) -> list[Comparison]:
+    """:func:`compare` in the variant it set."""
     import mitsuba as mi
 
-    from ..render import load_dict, set_variant
+    from ..render import load_dict
 
-    set_variant("llvm_ad_rgb")
     if isinstance(reference, Mapping):
         ref_bsdf: Any = dict(reference)
     else:

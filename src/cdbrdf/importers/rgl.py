@@ -38,7 +38,8 @@ from __future__ import annotations
 import logging
 import struct
 import tempfile
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -290,13 +291,13 @@ def spectral_to_rgb_weights(wavelengths_nm: NDArray[np.floating]) -> NDArray[np.
     white balanced so that a flat spectrum of 1 gives exactly (1, 1, 1).
     """
     mi, _ = mitsuba()
-    _ensure_variant()
     wl = np.asarray(wavelengths_nm, dtype=np.float64)
     fine = np.arange(360.0, 831.0, 1.0)
     eye = np.eye(wl.size)
     hat = np.stack([np.interp(fine, wl, eye[i]) for i in range(wl.size)], axis=1)  # (n_fine, n)
-    xyz = np.array(mi.cie1931_xyz(mi.Float(fine.astype(np.float32))), dtype=np.float64)  # (3, n_fine)
-    d65 = np.array(mi.cie_d65(mi.Float(fine.astype(np.float32))), dtype=np.float64)
+    with rgb_variant():
+        xyz = np.array(mi.cie1931_xyz(mi.Float(fine.astype(np.float32))), dtype=np.float64)  # (3, n_fine)
+        d65 = np.array(mi.cie_d65(mi.Float(fine.astype(np.float32))), dtype=np.float64)
     w_xyz = (xyz * d65) @ hat / float(np.sum(xyz[1] * d65))
     m = np.array([[3.2404542, -1.5371385, -0.4985314],
                   [-0.9692660, 1.8760108, 0.0415560],
@@ -305,13 +306,17 @@ def spectral_to_rgb_weights(wavelengths_nm: NDArray[np.floating]) -> NDArray[np.
     return w / w.sum(axis=1, keepdims=True)
 
 
-def _ensure_variant() -> None:
-    """An RGB llvm variant of Mitsuba (set llvm_ad_rgb, with the libLLVM check, when another one is active)."""
+@contextmanager
+def rgb_variant() -> Iterator[None]:
+    """Mitsuba in an RGB variant for a ``with`` block: the active one if it is, else llvm_ad_rgb (then restored)."""
     mi, _ = mitsuba()
-    if mi.variant() not in ("llvm_ad_rgb", "cuda_ad_rgb"):
-        from ..render import set_variant
+    if mi.variant() in ("llvm_ad_rgb", "cuda_ad_rgb"):
+        yield
+        return
+    from ..render import variant
 
-        set_variant("llvm_ad_rgb")
+    with variant("llvm_ad_rgb"):
+        yield
 
 
 def _rgb_file(path: Path, fields: Mapping[str, Any], folder: Path) -> tuple[Path, dict[str, Any]]:
@@ -335,8 +340,11 @@ class _Evaluator:
     """Mitsuba's ``measured`` plug-in at arrays of directions, plus the measured share from the ``valid`` bits."""
 
     def __init__(self, path: Path, fields: Mapping[str, Any]) -> None:
+        with rgb_variant():
+            self._load(path, fields)
+
+    def _load(self, path: Path, fields: Mapping[str, Any]) -> None:
         mi, _ = mitsuba()
-        _ensure_variant()
         self._tmp = tempfile.TemporaryDirectory(prefix="cdbrdf-rgl-")
         rgb_path, self.conversion = _rgb_file(path, fields, Path(self._tmp.name))
         try:
@@ -380,6 +388,11 @@ class _Evaluator:
 
     def __call__(self, theta_v: NDArray[np.float64], phi_v: NDArray[np.float64], theta_l: NDArray[np.float64],
                  phi_l: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+        with rgb_variant():  # the variant the plug-in was loaded in
+            return self._evaluate(theta_v, phi_v, theta_l, phi_l)
+
+    def _evaluate(self, theta_v: NDArray[np.float64], phi_v: NDArray[np.float64], theta_l: NDArray[np.float64],
+                  phi_l: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
         _, dr = mitsuba()
         f, wi, wo = mitsuba_brdf(self.bsdf, theta_v, phi_v, theta_l, phi_l)
         if self.valid is None:

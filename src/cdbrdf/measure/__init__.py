@@ -21,8 +21,9 @@ from __future__ import annotations
 
 from ..errors import CaptureError
 from .calibrate import MeasureReport
-from .capture import read_capture, write_plan
+from .capture import read_capture
 from .pipeline import MeasurementInterrupted, measure
+from .plan import write_plan
 from .stands import Stand, hidden_mask
 
 __all__ = [

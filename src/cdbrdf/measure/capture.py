@@ -38,8 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import limits
-from ..errors import CaptureError, OptionError, TableError
-from ..fsutil import atomic_path, check_output_file
+from ..errors import CaptureError, TableError
 from ..images import FORMATS
 from ..table import Grid
 from .stands import (
@@ -50,7 +49,6 @@ from .stands import (
     parse_stands,
     read_input,
     read_json_object,
-    write_stands,
 )
 
 __all__ = [
@@ -68,12 +66,10 @@ __all__ = [
     "read_plan",
     "Plan",
     "file_key",
+    "check_file_name",
+    "check_duplicates",
     "read_rows",
     "row_kind",
-    "plan_rows",
-    "bracket_rows",
-    "write_rows",
-    "write_plan",
 ]
 
 #: Name of the capture table in a capture folder.
@@ -459,7 +455,7 @@ def _name(fname: str) -> str:
     return repr(fname if len(fname) <= 80 else f"{fname[:38]}...{fname[-38:]}")
 
 
-def _check_file_name(where: str, fname: str) -> None:
+def check_file_name(where: str, fname: str) -> None:
     """Refuse a ``file`` that is not a relative path inside the capture folder."""
     win = PureWindowsPath(fname)
     parts = re.split(r"[/\\]", fname)
@@ -482,7 +478,7 @@ def file_key(fname: str) -> str:
     return posixpath.normpath(fname.strip())
 
 
-def _check_duplicates(csv_path: Path, names: Sequence[tuple[int, str]]) -> None:
+def check_duplicates(csv_path: Path, names: Sequence[tuple[int, str]]) -> None:
     """Refuse two rows that name the same photograph (``names``: ``(line, file)`` in file order)."""
     seen: dict[str, int] = {}
     for line, fname in names:
@@ -511,7 +507,7 @@ def _parse_table(csv_path: Path, text: str) -> tuple[list[CaptureRow], list[str]
             records.append({k: v or "" for k, v in rec.items()})
     except csv.Error as exc:
         raise _csv_error(csv_path, reader, exc) from None
-    _check_duplicates(csv_path, [(r.line, r.file) for r in rows])
+    check_duplicates(csv_path, [(r.line, r.file) for r in rows])
     if not any(r.kind == "sample" for r in rows):
         raise CaptureError(f"{csv_path}: no sample rows")
     return rows, list(reader.fieldnames or ()), records
@@ -628,7 +624,7 @@ def _parse_row(csv_path: Path, line: int, rec: dict, extra_cols: list[str]) -> C
         raise CaptureError(f"{where}: column 'file' is empty")
     if not fname.isprintable():
         raise CaptureError(f"{where}: file {fname!r:.60} contains control characters")
-    _check_file_name(where, fname)
+    check_file_name(where, fname)
     if Path(fname).suffix.lower() not in FORMATS:
         raise CaptureError(
             f"{where}: {fname!r:.60} has an unsupported extension; valid: {', '.join(FORMATS)}"
@@ -675,131 +671,3 @@ def _parse_row(csv_path: Path, line: int, rec: dict, extra_cols: list[str]) -> C
         extra={c: rec.get(c, "") or "" for c in extra_cols},
         **ang,
     )
-
-
-# --------------------------------------------------------------------------- writing
-def _fmt(x: float) -> str:
-    return f"{x:g}"
-
-
-def plan_rows(
-    grid: Grid,
-    stands: Sequence[Stand],
-    *,
-    extension: str = "png",
-    white: bool = True,
-    pixel_mm: float = 0.0,
-    patch_px: int = 7,
-) -> list[dict[str, Any]]:
-    """The rows of a capture plan, in table order (kappa, phi_l, theta_l, phi_v, theta_v).
-
-    Each sample row names its photograph ``k<i>/l<theta_l>_<phi_l>_v<theta_v>_<phi_v>.<ext>``
-    and says in ``hidden`` whether (and how) its stand hides it. With
-    ``white`` one white-reference row per light direction follows, with the
-    camera along the normal (``white/l<theta_l>_<phi_l>.<ext>``, blank kappa).
-    """
-    ext = extension.lstrip(".").lower() if isinstance(extension, str) else ""
-    if f".{ext}" not in (".png", ".tif", ".tiff", ".exr"):
-        raise OptionError(f"extension: {extension!r:.40} is not one of png, tif, tiff, exr")
-    hid = hidden_mask(grid, stands, pixel_mm=pixel_mm, patch_px=patch_px)
-    rows: list[dict[str, Any]] = []
-    for k, kappa in enumerate(grid.kappa):
-        for a, pl in enumerate(grid.phi_l):
-            for b, tl in enumerate(grid.theta_l):
-                for c, pv in enumerate(grid.phi_v):
-                    for d, tv in enumerate(grid.theta_v):
-                        rows.append({
-                            "file": f"k{k}/l{_fmt(tl)}_{_fmt(pl)}_v{_fmt(tv)}_{_fmt(pv)}.{ext}",
-                            "kappa": _fmt(kappa),
-                            "theta_v": _fmt(tv), "phi_v": _fmt(pv),
-                            "theta_l": _fmt(tl), "phi_l": _fmt(pl),
-                            "exposure": "1", "kind": "sample",
-                            "hidden": HIDDEN_NAMES[int(hid[k, a, b, c, d])],
-                        })
-    if white:
-        for pl in grid.phi_l:
-            for tl in grid.theta_l:
-                rows.append({
-                    "file": f"white/l{_fmt(tl)}_{_fmt(pl)}.{ext}", "kappa": "",
-                    "theta_v": _fmt(grid.theta_v[0]), "phi_v": _fmt(grid.phi_v[0]),
-                    "theta_l": _fmt(tl), "phi_l": _fmt(pl),
-                    "exposure": "1", "kind": "white", "hidden": "",
-                })
-    return rows
-
-
-def bracket_rows(rows: Sequence[Mapping[str, Any]], exposures: Sequence[float]) -> list[dict[str, Any]]:
-    """Repeat every sample and white row once per exposure (``..._e<i>`` file names).
-
-    Row ``j`` of a bracket gets the file name ``<stem>_e<j>.<ext>`` and the
-    exposure ``exposures[j]``; other rows (dark frames) are kept as they are.
-    """
-    out = []
-    for r in rows:
-        if r["kind"] not in ("sample", "white"):
-            out.append(dict(r))
-            continue
-        stem, dot, ext = r["file"].rpartition(".")
-        for j, e in enumerate(exposures):
-            rr = dict(r)
-            rr["file"] = f"{stem}_e{j}.{ext}"
-            rr["exposure"] = f"{float(e):g}"
-            out.append(rr)
-    return out
-
-
-def write_rows(path: str | PathLike[str], rows: Sequence[Mapping[str, Any]],
-               columns: Sequence[str] = PLAN_COLUMNS) -> None:
-    """Write ``rows`` (dicts keyed by column) as a ``capture.csv`` with the header ``columns``.
-
-    Each row's ``file`` must be a relative path inside the capture folder,
-    and no two rows may name the same photograph (the rules of
-    :func:`read_capture`): :class:`CaptureError` naming the line otherwise,
-    before anything is written. The file is written atomically
-    (:func:`cdbrdf.fsutil.atomic_path`: never over a device or a FIFO).
-    """
-    names = []
-    for line, r in enumerate(rows, start=2):
-        fname = str(r.get("file") or "").strip()
-        where = f"{path}: line {line}"
-        if not fname:
-            raise CaptureError(f"{where}: column 'file' is empty")
-        _check_file_name(where, fname)
-        names.append((line, fname))
-    _check_duplicates(Path(path), names)
-    with atomic_path(path) as tmp, open(tmp, "w", newline="", encoding="utf-8") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(columns))
-        w.writeheader()
-        w.writerows(rows)
-
-
-def write_plan(
-    folder: str | PathLike[str],
-    grid: Grid,
-    stands: Sequence[Stand],
-    *,
-    extension: str = "png",
-    white: bool = True,
-    pixel_mm: float = 0.0,
-    patch_px: int = 7,
-    exposures: Sequence[float] = (1.0,),
-) -> list[dict[str, Any]]:
-    """Write ``capture.csv`` and ``stands.json`` into ``folder`` (created if needed).
-
-    ``pixel_mm`` (> 0) is written to ``stands.json`` and makes the hidden
-    marks cover the whole ``patch_px`` patch (:func:`hidden_mask`).
-    ``exposures`` other than the single exposure 1 make each sample and white
-    photograph a bracket (:func:`bracket_rows`). Returns the rows written.
-    """
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
-    for name in (CAPTURE_FILE, STAND_FILE):
-        check_output_file(out / name)  # before either is written
-    rows = plan_rows(grid, stands, extension=extension, white=white, pixel_mm=pixel_mm,
-                     patch_px=patch_px)
-    if len(exposures) != 1 or float(exposures[0]) != 1.0:
-        rows = bracket_rows(rows, exposures)
-    write_rows(out / CAPTURE_FILE, rows)
-    extra = {"pixel_mm": float(pixel_mm)} if pixel_mm else {}
-    write_stands(out / STAND_FILE, stands, **extra)
-    return rows

@@ -23,7 +23,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..fsutil import OWNER_MARK, atomic_path, is_owned, mark_owned, remove_owned, sweep_stale, temp_sibling
+from ..fsutil import atomic_path, sweep_stale, temp_sibling
+from ..outputs import OWNER_MARK, is_owned, mark_owned, remove_owned
 from .preflight import first_line
 
 __all__ = ["Checkpoint", "checkpoint_path", "CHECKPOINT_VERSION"]
@@ -58,7 +59,7 @@ def _read_key(folder: Path) -> object:
 class Checkpoint:
     """Results of finished images, one ``.npz`` file per batch (each written atomically).
 
-    The folder carries cdbrdf's owner mark (:func:`cdbrdf.fsutil.mark_owned`);
+    The folder carries cdbrdf's owner mark (:func:`cdbrdf.outputs.mark_owned`);
     a folder of that name without the mark is refused and never touched,
     whatever it holds (names like ``key.json`` or ``batch-*.npz`` prove
     nothing). An unreadable batch is ignored (its photographs are read
@@ -114,7 +115,7 @@ class Checkpoint:
     def _sweep_leftovers(self) -> None:
         """Remove what killed runs left: temporaries inside, half-removed checkpoints beside.
 
-        :func:`cdbrdf.fsutil.remove_owned` renames the folder to a temporary
+        :func:`cdbrdf.outputs.remove_owned` renames the folder to a temporary
         name (``.NAME.<pid>...old``) before deleting it; a run killed then
         leaves that folder, maybe without its marker, which
         :func:`cdbrdf.fsutil.sweep_stale` removes once its process is gone.

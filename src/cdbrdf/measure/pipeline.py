@@ -41,8 +41,9 @@ from typing import Any
 from numpy.typing import NDArray
 
 from ..errors import OptionError
-from ..fsutil import check_output_file, output_lock
+from ..fsutil import check_output_file
 from ..images import ImageError
+from ..outputs import output_lock
 from ..table import CDBRDF
 from .calibrate import MeasureReport, assemble
 from .capture import CaptureRow, read_capture
@@ -331,7 +332,7 @@ def measure(
         exists and is not a checkpoint cdbrdf made (all before any work).
     OutputError
         Another run is measuring into ``output`` (its lock,
-        :func:`cdbrdf.fsutil.output_lock`, is held while the run works).
+        :func:`cdbrdf.outputs.output_lock`, is held while the run works).
     OSError
         A scheduler address that cannot be reached (before the checkpoint
         is created).

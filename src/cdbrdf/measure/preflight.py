@@ -27,8 +27,9 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import CaptureError
-from ..fsutil import atomic_path, find_overlap
+from ..fsutil import atomic_path
 from ..images import ImageError, ImageInfo, image_format, read_window
+from ..outputs import find_overlap
 from .capture import CAPTURE_FILE, STAND_FILE, Capture
 from .patch import patch_window
 
@@ -248,7 +249,7 @@ def refuse_overlap(cap: Capture, folders: list[Path], files: list[Path]) -> None
 
     ``files`` are written, ``folders`` created and deleted. Inputs: ``capture.csv``,
     ``stands.json`` and the file of every row (hidden rows too). The rule is
-    the one of every command (:func:`cdbrdf.fsutil.find_overlap`: the same
+    the one of every command (:func:`cdbrdf.outputs.find_overlap`: the same
     file is recognised through symbolic and hard links, and by resolved path
     for inputs that do not exist yet); the message names the capture's line.
     """

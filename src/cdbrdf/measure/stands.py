@@ -34,7 +34,7 @@ The stands are written to and read from the ``stands`` list of the capture
 folder's ``stands.json`` (:func:`write_stands`, :func:`read_stands`,
 :func:`parse_stands`); the file's other keys are capture settings, read by
 :func:`cdbrdf.measure.capture.read_capture`. Both the planner
-(:func:`cdbrdf.measure.capture.write_plan`) and the simulated rig
+(:func:`cdbrdf.measure.plan.write_plan`) and the simulated rig
 (:mod:`cdbrdf.rig`) take their geometry from here.
 """
 

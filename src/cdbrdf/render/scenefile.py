@@ -53,6 +53,7 @@ import numpy as np
 from ..errors import SceneError
 from ..fsutil import check_regular, read_regular
 from ._bsdf import PLUGIN_NAME
+from .plugin import check_scene, mitsuba_message, register
 
 __all__ = ["LoadReport", "load_file", "ply_unit_mm", "uniform_scale"]
 
@@ -88,7 +89,7 @@ class LoadReport:
     files
         Every file the scene reads: the scene file, its includes and the
         files its objects name (resolved), for the output rule of
-        :func:`cdbrdf.fsutil.check_not_input`.
+        :func:`cdbrdf.outputs.check_not_input`.
     """
 
     curvature_scales: list[tuple[str, float]] = field(default_factory=list)
@@ -285,18 +286,6 @@ def _prepare(state: Any, *, unit_mm: float, mi: Any) -> LoadReport:
     return report
 
 
-def _message(exc: Exception) -> str:
-    """Mitsuba's message on one line, without its source-file prefixes (``[parser.cpp:111]``)."""
-    text = re.sub(r"\[[A-Za-z0-9_]+\.(?:cpp|h):\d+\]\s*", "", str(exc))
-    if "Traceback (most recent call last)" in text:
-        # a Python plug-in's exception as Mitsuba reports it: keep where, and the exception's own line
-        head, _, tail = text.partition("Traceback (most recent call last)")
-        last = [ln.strip() for ln in tail.splitlines() if ln.strip()][-1:]
-        text = head.rstrip(" :\n") + ": " + " ".join(last)
-    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
-    return " ".join(lines) if lines else type(exc).__name__
-
-
 def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = None, unit_mm: float = 1.0,
               check: bool = True, optimize: bool = True, report: LoadReport | None = None) -> Any:
     """Load a Mitsuba XML file (a scene or one object) with the ``cdbrdf`` plug-in.
@@ -334,7 +323,6 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
     import mitsuba
     import mitsuba.parser as mp
 
-    from . import check_scene, register
 
     mi: Any = mitsuba
     p = Path(path)
@@ -363,7 +351,7 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
             mp.transform_upgrade(config, state)
             mp.transform_resolve(config, state)
         except RuntimeError as exc:
-            raise SceneError(f"{p}: {_message(exc)}") from None
+            raise SceneError(f"{p}: {mitsuba_message(exc)}") from None
         files += _check_nodes(state, mi=mi)
         rep = _prepare(state, unit_mm=float(unit_mm), mi=mi)
         try:
@@ -372,7 +360,7 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
                 mp.transform_merge_meshes(config, state)
             obj = mp.instantiate(config, state)
         except RuntimeError as exc:
-            raise SceneError(f"{p}: {_message(exc)}") from None
+            raise SceneError(f"{p}: {mitsuba_message(exc)}") from None
     finally:
         mi.set_file_resolver(backup)
     if report is not None:

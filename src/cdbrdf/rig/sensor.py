@@ -119,7 +119,7 @@ def encode(x: NDArray[np.float64], kind: str) -> tuple[NDArray, int]:
 def write_photograph(path: Path, codes: NDArray, kind: str) -> None:
     """Write the codes of :func:`encode` as a new image of ``kind`` into an existing folder.
 
-    The rig writes into the partial folder that :func:`cdbrdf.fsutil.output_folder`
+    The rig writes into the partial folder that :func:`cdbrdf.outputs.output_folder`
     has just made, which is published whole once the capture is complete, so each
     photograph is written in place (``atomic=False``: no temporary, no sweep of a
     folder of 26,000 photographs, no fsync each). PNGs are stored without

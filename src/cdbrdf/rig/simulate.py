@@ -26,7 +26,8 @@ from numpy.typing import NDArray
 from ..errors import CaptureError, OptionError
 from ..frames import direction_from_angles
 from ..images import FORMATS
-from ..measure.capture import CAPTURE_FILE, STAND_FILE, CaptureRow, Plan, file_key, read_plan, write_plan, write_rows
+from ..measure.capture import CAPTURE_FILE, STAND_FILE, CaptureRow, Plan, file_key, read_plan
+from ..measure.plan import write_plan, write_rows
 from ..measure.stands import KAPPA_TOL_PER_MM, Stand, default_stand, stand_for, write_stands
 from ..table import CDBRDF, Grid
 from .camera import light_to_world
@@ -101,7 +102,7 @@ def simulate_capture(
         A :class:`CDBRDF`, a CDBRDF file, or a preset name.
     folder
         Output capture folder. It is built as a partial folder beside it and
-        swapped in whole once complete (:func:`cdbrdf.fsutil.output_folder`):
+        swapped in whole once complete (:func:`cdbrdf.outputs.output_folder`):
         an earlier capture written by cdbrdf is replaced, unless files were
         added to it since (a measured table, notes: refused, naming them); a
         non-empty folder cdbrdf did not make is refused, and an error or
@@ -153,13 +154,15 @@ def simulate_capture(
         if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) \
                 or not (math.isfinite(x) and x > 0):
             raise OptionError(f"{name}: expected a finite positive number, got {x!r:.40}")
-    from ..fsutil import check_output_folder, output_folder
+    from ..outputs import check_output_folder, output_folder
 
     final = check_output_folder(folder)  # refuse a foreign folder before any work
     # the plan is checked by the capture format's own parser before anything is rendered
     the_plan = read_plan(plan) if plan is not None else None
     table = load_material(material)
-    with output_folder(final) as partial:
+    from ..render import variant
+
+    with output_folder(final) as partial, variant():
         rep = _fill_capture(
             partial, table, plan=the_plan, grid=grid, stands=stands, size=size, field_mm=field_mm,
             spp=spp, noise=noise, gain=gain, exposures=exposures, image_kind=image_kind,
@@ -207,10 +210,9 @@ def _fill_capture(
                  material=str(table.attrs.get("material", "unknown")), simulated=True,
                  pixel_mm=field_mm / size, **extra)
 
-    import cdbrdf.render as cr
-
-    cr.set_variant()
     import mitsuba as mi
+
+    import cdbrdf.render as cr
 
     rep = SimulationReport(out)
     t0 = time.perf_counter()

@@ -12,7 +12,7 @@
   tools; the page does not read them.
 
 :func:`export_viewer` writes them as an owned output folder, atomically
-(:func:`cdbrdf.fsutil.output_folder`: built beside the destination and
+(:func:`cdbrdf.outputs.output_folder`: built beside the destination and
 swapped in whole; a user's folder is refused); :func:`write_viewer` writes
 them into a folder being built (the demo's).
 """
@@ -46,7 +46,7 @@ __all__ = [
 
 _LOG = logging.getLogger(__name__)
 
-#: The maker an export's owner mark names (:func:`cdbrdf.fsutil.output_folder`): only an export replaces one.
+#: The maker an export's owner mark names (:func:`cdbrdf.outputs.output_folder`): only an export replaces one.
 EXPORT_MAKER = "view --export"
 
 #: Files every export holds (an export marked before makers were recorded is recognised by them).
@@ -163,7 +163,7 @@ def export_viewer(dest: str | PathLike[str], files: Mapping[str, bytes]) -> Path
     """Write the viewer as a self-contained static folder, atomically.
 
     The folder is built beside ``dest`` and swapped in only when complete
-    (:func:`cdbrdf.fsutil.output_folder`): an error leaves no half-written
+    (:func:`cdbrdf.outputs.output_folder`): an error leaves no half-written
     folder, an earlier export is replaced whole, and a folder cdbrdf did not
     write (or one with files added since) is refused with
     :class:`FileExistsError`, one that another command made (the demo's
@@ -174,7 +174,7 @@ def export_viewer(dest: str | PathLike[str], files: Mapping[str, bytes]) -> Path
     pathlib.Path
         ``dest/index.html``.
     """
-    from ..fsutil import output_folder
+    from ..outputs import output_folder
 
     with output_folder(dest, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE) as tmp:
         write_viewer(tmp, files)

@@ -1,0 +1,126 @@
+"""The light of a rendered surface: the paper's directional light, a studio set-up, environment maps.
+
+**Lighting** (:data:`LIGHTINGS`):
+
+``"paper"``
+    one directional light (Mitsuba's ``directional``), given by the direction
+    *towards* it as elevation ``theta`` from the up axis and azimuth ``phi``
+    from +x towards +y (degrees) and its irradiance (W m^-2 on a surface
+    facing it); plus the user's environment map if any. The default
+    irradiance is pi, so a white Lambertian surface (f = 1/pi) facing the
+    light has radiance 1: with an exposure of 0 EV it is just white.
+``"studio"``
+    a key light (the same ``directional`` light; by default from 45 degrees
+    above and 45 degrees to the camera's left) and an environment: the
+    user's map, or a soft studio sky (:func:`studio_environment`: radiance
+    0.35 at the zenith falling to 0.25 at the horizon and 0.12 below it,
+    relative to the key's pi), which fills the shadows as a photo studio's
+    walls do. The built-in sky is not seen by the camera: the picture's
+    background is a neutral backdrop (:func:`cdbrdf.render.picture.composite`).
+"""
+
+from __future__ import annotations
+
+import math
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import OptionError, SceneError
+from ..frames import direction_from_angles
+
+__all__ = ["DEFAULT_IRRADIANCE", "LIGHTINGS", "STUDIO_KEY", "STUDIO_SKY", "directional_light",
+           "studio_environment", "environment_map"]
+
+#: Default irradiance of the directional light (W m^-2): white Lambertian -> radiance 1.
+DEFAULT_IRRADIANCE = math.pi
+
+#: Lighting set-ups of mesh scenes (see the module's description).
+LIGHTINGS: tuple[str, ...] = ("studio", "paper")
+
+#: The studio key light: elevation from the up axis, azimuth relative to the camera's, degrees.
+STUDIO_KEY: tuple[float, float] = (45.0, -45.0)
+
+#: Studio sky radiance at the zenith, at the horizon and below it, for a key of irradiance pi.
+STUDIO_SKY: tuple[float, float, float] = (0.35, 0.25, 0.12)
+
+
+def directional_light(theta_deg: float = 45.0, phi_deg: float = 0.0, irradiance: float = DEFAULT_IRRADIANCE) -> dict:
+    """Mitsuba ``directional`` emitter dict for the direction towards the light (z-up world).
+
+    Raises
+    ------
+    OptionError
+        When ``theta_deg`` is not in [0, 90) degrees, ``phi_deg`` is not a
+        finite number or ``irradiance`` is not a finite positive number.
+    """
+    def number(name: str, v: Any) -> float:
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not math.isfinite(v):
+            raise OptionError(f"{name}: expected a finite number, got {v!r:.40}")
+        return float(v)
+
+    theta_deg = number("light theta", theta_deg)
+    phi_deg = number("light phi", phi_deg)
+    irradiance = number("irradiance", irradiance)
+    if not (0.0 <= theta_deg < 90.0):
+        raise OptionError(f"light theta: elevation must lie in [0, 90) degrees, got {theta_deg:g}")
+    if not irradiance > 0:
+        raise OptionError(f"irradiance: must be positive, got {irradiance:g}")
+    # The world frame (z up) is the local frame of a horizontal surface: theta from +z, phi from +x towards +y.
+    to_light = direction_from_angles(theta_deg, phi_deg).tolist()
+    return {"type": "directional", "direction": [-c for c in to_light],
+            "irradiance": {"type": "rgb", "value": float(irradiance)}}
+
+
+def studio_environment(*, width: int = 64, scale: float = 1.0) -> NDArray[np.float32]:
+    """The studio sky as a latitude-longitude map (rows from the zenith down), radiance per :data:`STUDIO_SKY`.
+
+    Radiance ``zenith`` at the top falling as ``horizon + (zenith - horizon)
+    sin(elevation)`` to the horizon, ``ground`` below it; times ``scale``.
+    """
+    top, horizon, ground = STUDIO_SKY
+    h = width // 2
+    elev = 90.0 - (np.arange(h) + 0.5) * 180.0 / h  # degrees above the horizon, row centres
+    row = np.where(elev > 0, horizon + (top - horizon) * np.sin(np.radians(np.maximum(elev, 0))), ground)
+    img = np.broadcast_to((row * scale)[:, None, None], (h, width, 3))
+    return np.ascontiguousarray(img, dtype=np.float32)
+
+
+def environment_map(path: str | PathLike[str]) -> NDArray[np.float32]:
+    """The pixels of an environment map file (linear RGB), read by cdbrdf's image reader or Mitsuba's.
+
+    OpenEXR goes through :func:`cdbrdf.images.read_image` (its checks, one
+    :class:`~cdbrdf.errors.ImageError` line for a damaged file); other
+    formats (Radiance ``.hdr``) through Mitsuba's bitmap reader, its errors
+    as one :class:`~cdbrdf.errors.SceneError` line naming the file.
+    """
+    import mitsuba as mi
+
+    from ..fsutil import check_regular
+    from ..images import read_image
+
+    p = Path(path)
+    try:
+        check_regular(p)
+    except OSError as exc:
+        raise SceneError(f"environment map {exc}") from None
+    if p.suffix.lower() == ".exr":
+        px = np.asarray(read_image(p)[0], dtype=np.float32)
+    else:
+        try:
+            px = np.array(mi.Bitmap(str(p)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False),
+                          dtype=np.float32)
+        except (RuntimeError, ValueError, OSError) as exc:  # Mitsuba's reader: std::exception subclasses
+            from .plugin import mitsuba_message
+
+            raise SceneError(f"{p}: cannot be read as an environment map ({mitsuba_message(exc)})") from None
+    px = px[..., None] if px.ndim == 2 else px
+    if px.shape[-1] == 1:
+        px = np.repeat(px, 3, axis=-1)
+    if not np.all(np.isfinite(px[..., :3])):
+        raise SceneError(f"{p}: the environment map holds NaN or infinite pixels")
+    return np.ascontiguousarray(px[..., :3])

@@ -1,0 +1,404 @@
+"""Pictures of a table: renders in passes, their exposure, the backdrop, and :func:`render_table`.
+
+**Exposure** (:func:`exposure_from_render`): the exposure (EV) that maps the
+99th percentile of the object's luminance (pixels it covers) to 0.85 of
+display white (:func:`cdbrdf.colour.auto_exposure_ev`), but at most
+:data:`MAX_AUTO_EV` stops above the physical exposure (at which a white
+Lambertian surface facing a key light of the default irradiance pi is
+white), so that a dark fabric such as denim stays dark instead of being
+pushed to pastel.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from os import PathLike
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import OptionError, SceneError
+from ..limits import MAX_SPP
+from .lighting import DEFAULT_IRRADIANCE
+
+__all__ = [
+    "BACKDROP",
+    "MAX_AUTO_EV",
+    "DEFAULT_SIZE",
+    "DEFAULT_SPP",
+    "RENDER_MODES",
+    "Picture",
+    "render_table",
+    "render_scene",
+    "render",
+    "exposure_from_render",
+    "composite",
+]
+
+#: Display value (linear, before encoding) of the backdrop behind a studio render.
+BACKDROP = 0.5
+
+#: Largest automatic exposure, in stops above the physical one (see the module's description).
+MAX_AUTO_EV = 2.0
+
+
+def render_scene(
+    scene: Any,
+    *,
+    spp: int | None = None,
+    seed: int = 0,
+    passes: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    alpha: bool = False,
+) -> NDArray[np.float32]:
+    """Render ``scene`` in passes; returns linear RGB ``(H, W, 3)`` float32 (RGBA with ``alpha``).
+
+    Parameters
+    ----------
+    spp
+        Samples per pixel (default: the sensor's).
+    seed
+        Seed of the first pass (pass ``i`` uses ``seed + i``).
+    passes
+        Number of passes (default: about 16 spp each); the image is their mean.
+    progress
+        Called as ``progress(samples_done, samples_total)`` after each pass.
+    alpha
+        Also return the coverage (1 where the object is seen; with the
+        studio lighting's hidden sky, 0 on the background), as a 4th channel.
+
+    Raises
+    ------
+    OptionError
+        For ``spp`` (given, or the sensor's) outside 1 to :data:`cdbrdf.limits.MAX_SPP`.
+    SceneError
+        For a scene without integrator or sensor, or a film of size 0.
+    LimitError
+        For a film of more pixels than the ``render_pixels`` limit: checked on
+        what is rendered, whatever made the scene.
+    """
+    import mitsuba as mi
+
+    from .. import limits
+
+    if scene.integrator() is None:
+        raise SceneError("the scene has no integrator (add one, e.g. <integrator type=\"path\"/>)")
+    if not scene.sensors():
+        raise SceneError("the scene has no sensor to render from")
+    sensor = scene.sensors()[0]
+    total = int(spp if spp is not None else sensor.sampler().sample_count())
+    if not 1 <= total <= MAX_SPP:
+        raise OptionError(f"spp: {total:,} samples per pixel; a render takes 1 to {MAX_SPP:,}")
+    w, h = (int(x) for x in sensor.film().crop_size())
+    if w < 1 or h < 1:
+        raise SceneError(f"the film's size is {w} x {h}; a render needs at least 1 x 1 pixels")
+    limits.check("render_pixels", w * h, what=f"a {w} x {h} render")
+    n = passes if passes is not None else max(1, math.ceil(total / 16))
+    n = min(n, total)
+    chunks = [total // n + (1 if i < total % n else 0) for i in range(n)]
+    acc = None
+    done = 0
+    for i, c in enumerate(chunks):
+        img = np.asarray(mi.render(scene, spp=c, seed=seed + i), dtype=np.float64)  # type: ignore[arg-type]
+        acc = img * c if acc is None else acc + img * c
+        done += c
+        if progress is not None:
+            progress(done, total)
+    assert acc is not None
+    out = (acc / total).astype(np.float32)
+    if alpha:
+        if out.shape[-1] >= 4:
+            return out[..., :4]
+        return np.concatenate([out[..., :3], np.ones(out.shape[:-1] + (1,), np.float32)], axis=-1)
+    return out[..., :3]
+
+
+def exposure_from_render(image: NDArray[np.floating], *, irradiance: float = DEFAULT_IRRADIANCE) -> float:
+    """The exposure (EV) of a render: its object's 99th luminance percentile to 0.85 of white.
+
+    ``image`` is RGB or RGBA; with alpha only the pixels the object covers
+    (alpha >= 0.5) count. At most :data:`MAX_AUTO_EV` stops above the
+    physical exposure for a key light of ``irradiance`` (``log2(pi /
+    irradiance)``). See :func:`cdbrdf.colour.auto_exposure_ev`.
+    """
+    from ..colour import auto_exposure_ev
+
+    if not (math.isfinite(irradiance) and irradiance > 0):
+        raise OptionError(f"irradiance: must be positive, got {irradiance}")
+    top = MAX_AUTO_EV + math.log2(DEFAULT_IRRADIANCE / irradiance)
+    img = np.asarray(image, dtype=np.float64)
+    if img.shape[-1] >= 4:
+        cover = img[..., 3] >= 0.5
+        if cover.any():
+            return auto_exposure_ev(img[cover][:, :3], max_ev=top)
+    return auto_exposure_ev(img[..., :3], max_ev=top)
+
+
+def composite(image: NDArray[np.floating], *, exposure_ev: float, backdrop: float = BACKDROP) -> NDArray[np.float32]:
+    """An RGBA render over a uniform backdrop that shows as ``backdrop`` (display value) at ``exposure_ev``.
+
+    Returns linear RGB ``rgb + (1 - alpha) * backdrop * 2**-exposure_ev``; an
+    RGB image is returned as it is.
+    """
+    img = np.asarray(image, dtype=np.float64)
+    if img.shape[-1] < 4:
+        return img.astype(np.float32)
+    a = np.clip(img[..., 3:4], 0.0, 1.0)
+    return (img[..., :3] + (1.0 - a) * backdrop * 2.0 ** (-exposure_ev)).astype(np.float32)
+
+
+def render(scene: Any, *, spp: int | None = None, seed: int = 0,
+           progress: Callable[[int, int], None] | None = None) -> Any:
+    """Render a scene after :func:`cdbrdf.render.check_scene`; returns a float32 (H, W, C) NumPy image.
+
+    ``progress`` is an optional callable ``progress(done, total)`` called per pass.
+    """
+    from .plugin import check_scene
+
+    check_scene(scene)
+    return render_scene(scene, spp=spp, seed=seed, progress=progress)
+
+
+# -- one picture of a table ----------------------------------------------------------------------
+#: Default film size of :func:`render_table`, pixels.
+DEFAULT_SIZE: tuple[int, int] = (512, 384)
+
+#: Default samples per pixel of :func:`render_table`.
+DEFAULT_SPP = 64
+
+#: Render modes: the CDBRDF (curvature looked up) and the plain BRDF (the kappa = 0 slice).
+RENDER_MODES: tuple[str, ...] = ("cdbrdf", "brdf")
+
+
+@dataclass(frozen=True)
+class Picture:
+    """What :func:`render_table` made.
+
+    Attributes
+    ----------
+    images
+        By mode (``"cdbrdf"``, ``"brdf"``): linear RGBA, float32 ``(H, W, 4)``
+        (alpha: where the surface is seen).
+    exposure_ev
+        The exposure to show them at (the same for every mode).
+    exposure_source
+        ``"auto"`` (:func:`exposure_from_render` of the CDBRDF image) or ``"given"``.
+    surface
+        What was rendered: ``"sine sheet"`` or the mesh's name.
+    lighting
+        ``"paper"`` or ``"studio"``.
+    light
+        ``(theta_deg, phi_deg, irradiance)`` of the directional light, or None.
+    backdrop
+        Whether the background is the studio's hidden sky, shown as a uniform
+        backdrop (:meth:`display`).
+    mesh
+        The prepared mesh (its metadata says what was repaired, its unit,
+        neighbourhood and frame), or None for the sine sheet.
+    up, up_reason
+        The mesh's up axis and why (None for the sine sheet).
+    """
+
+    images: Mapping[str, NDArray[np.float32]]
+    exposure_ev: float
+    exposure_source: str
+    surface: str
+    lighting: str
+    light: tuple[float, float, float] | None
+    backdrop: bool
+    mesh: Any = None
+    up: str | None = None
+    up_reason: str | None = None
+
+    def display(self, mode: str = "cdbrdf") -> NDArray[np.float32]:
+        """Linear RGB of ``mode`` as shown: over the backdrop where the studio's sky is hidden."""
+        img = self.images[mode]
+        return composite(img, exposure_ev=self.exposure_ev) if self.backdrop else img[..., :3]
+
+
+def _light_of(light: Any, irradiance: float, lighting: str, azimuth_deg: float) -> tuple[float, float, float] | None:
+    """The directional light ``(theta, phi, irradiance)`` of :func:`render_table`'s ``light`` argument."""
+    from .lighting import STUDIO_KEY
+
+    if light is None:
+        return None
+    if isinstance(light, str):
+        if light != "auto":
+            raise OptionError(f"light: expected (theta, phi), 'auto' or None, got {light!r:.40}")
+        if lighting == "paper":
+            return (45.0, 0.0, float(irradiance))
+        return (STUDIO_KEY[0], azimuth_deg + STUDIO_KEY[1], float(irradiance))
+    try:
+        theta, phi = (float(x) for x in light)
+    except (TypeError, ValueError):
+        raise OptionError(f"light: expected (theta, phi) in degrees, 'auto' or None, got {light!r:.40}") from None
+    return (theta, phi, float(irradiance))
+
+
+def render_table(
+    table: Any,
+    surface: str | PathLike[str] | Any = "sine",
+    *,
+    modes: Sequence[str] = ("cdbrdf",),
+    size: tuple[int, int] = DEFAULT_SIZE,
+    spp: int = DEFAULT_SPP,
+    seed: int = 0,
+    max_depth: int = 3,
+    lighting: str | None = None,
+    light: Any = "auto",
+    irradiance: float = DEFAULT_IRRADIANCE,
+    envmap: str | PathLike[str] | None = None,
+    view: tuple[float, float] | None = None,
+    units: str | float | None = None,
+    neighbourhood_mm: float | None = None,
+    frame: str | None = None,
+    up: str = "auto",
+    curvature_mode: str = "max",
+    exposure: float | str = "auto",
+    variant: str | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
+) -> Picture:
+    """Render a table on the paper's sine sheet or on a mesh, with the CDBRDF and/or the plain BRDF.
+
+    The one entry point for a picture of a table: ``cdbrdf render``, the demo
+    and user scripts call it. It prepares the surface (a mesh is read,
+    repaired, given its curvature in mm^-1 and turned upright:
+    :func:`cdbrdf.mesh.prepare_mesh`), builds the scene in memory
+    (:mod:`cdbrdf.render.scenes`), renders every mode with the same seed and
+    picks one exposure for all, under a Mitsuba variant that is restored
+    afterwards (:func:`cdbrdf.render.variant`).
+
+    Parameters
+    ----------
+    table
+        A :class:`~cdbrdf.CDBRDF` or a CDBRDF file.
+    surface
+        ``"sine"`` (the paper's sine sheet, :class:`cdbrdf.mesh.SineSheet`
+        defaults), a :class:`~cdbrdf.mesh.SineSheet`, a
+        :class:`~cdbrdf.mesh.Mesh` or a mesh file.
+    modes
+        Any of :data:`RENDER_MODES`: ``("brdf", "cdbrdf")`` for the paper's
+        comparison (Figs. 9-10).
+    size, spp, seed, max_depth
+        Film ``(width, height)``, samples per pixel, seed of the first pass,
+        Mitsuba path length (2 = direct light only).
+    lighting
+        ``"paper"`` (one directional light) or ``"studio"`` (a key light and
+        a soft sky; meshes only); default: paper for the sheet, studio for a
+        mesh (:mod:`cdbrdf.render.lighting`).
+    light
+        ``(theta_deg, phi_deg)``: direction towards the directional (key)
+        light (elevation from the up axis, azimuth from +x); ``"auto"``: the
+        lighting's default; None: no directional light (a mesh with an
+        environment).
+    irradiance
+        Of the directional light, W m^-2 (pi: a white Lambertian surface
+        facing it is just white at 0 EV).
+    envmap
+        An environment map file (.exr, .hdr), meshes only.
+    view
+        Camera ``(elevation_deg, azimuth_deg)`` above the ground plane;
+        default :data:`cdbrdf.render.camera.DEFAULT_SINE_VIEW` or
+        ``DEFAULT_MESH_VIEW``.
+    units, neighbourhood_mm, frame, up
+        For a mesh: its length unit, the curvature's neighbourhood (mm), the
+        source of the material's x axis, its up axis
+        (:func:`cdbrdf.mesh.prepare_mesh`, :func:`cdbrdf.mesh.detect_up`).
+    curvature_mode
+        ``"max"`` (the paper's) or ``"directional"``.
+    exposure
+        EV, or ``"auto"`` (:func:`exposure_from_render` of the CDBRDF image,
+        else the first mode's).
+    variant
+        Mitsuba variant (default :data:`cdbrdf.render.DEFAULT_VARIANT`).
+    progress
+        ``progress(stage, done, total)``: ``"curvature"`` (vertices) while a
+        mesh is prepared, ``"rendering MODE"`` (samples per pixel).
+
+    Returns
+    -------
+    Picture
+
+    Raises
+    ------
+    OptionError
+        For an invalid option or combination (no light at all; the studio
+        lighting or an environment map on the sine sheet).
+    MeshError, LimitError, SceneError
+        For a mesh that cannot be used, a render too large, a damaged
+        environment map.
+    """
+    from ..limits import check as check_limit
+    from ..mesh import Mesh, SineSheet, detect_up, prepare_mesh, read_mesh
+    from ..table import CDBRDF
+    from ..table import load as load_table
+    from .camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW
+    from .lighting import LIGHTINGS
+    from .plugin import DEFAULT_VARIANT
+    from .plugin import variant as variant_context
+    from .scenes import mesh_scene, sine_scene
+
+    modes = tuple(modes)
+    if not modes or any(m not in RENDER_MODES for m in modes) or len(set(modes)) != len(modes):
+        raise OptionError(f"modes: {modes!r:.60} must be distinct values of {', '.join(RENDER_MODES)}")
+    if lighting is not None and lighting not in LIGHTINGS:
+        raise OptionError(f"lighting: {lighting!r:.40} is not one of {', '.join(LIGHTINGS)}")
+    if not (isinstance(exposure, str) and exposure == "auto"):
+        if isinstance(exposure, str) or not math.isfinite(float(exposure)):
+            raise OptionError(f"exposure: expected a finite number of stops or 'auto', got {exposure!r:.40}")
+    w, h = (int(x) for x in size)
+    check_limit("render_pixels", w * h, what=f"a {w} x {h} render")
+    tbl = table if isinstance(table, CDBRDF) else load_table(table)
+    is_sheet = isinstance(surface, SineSheet) or (isinstance(surface, str) and surface == "sine")
+    lighting = lighting or ("paper" if is_sheet else "studio")
+    elevation, azimuth = view if view is not None else (DEFAULT_SINE_VIEW if is_sheet else DEFAULT_MESH_VIEW)
+    sun = _light_of(light, irradiance, lighting, azimuth)
+    common: dict[str, Any] = {"size": (w, h), "spp": int(spp), "max_depth": int(max_depth),
+              "elevation_deg": float(elevation),
+              "azimuth_deg": float(azimuth), "curvature_mode": curvature_mode}
+    mesh: Any = None
+    up_axis = why = None
+    if is_sheet:
+        sheet = surface if isinstance(surface, SineSheet) else SineSheet()
+        if envmap is not None:
+            raise OptionError("envmap: only for meshes (the sine sheet is the paper's set-up)")
+        if lighting == "studio":
+            raise OptionError("lighting 'studio': only for meshes (the sine sheet is the paper's set-up)")
+        if sun is None:
+            raise OptionError("light: the sine sheet needs a light (the paper's directional light)")
+        check_limit("mesh_faces", sheet.face_count, what=f"a sine sheet of wavelength {sheet.wavelength_mm:g} mm "
+                    f"over {sheet.width_mm:g} x {sheet.depth_mm:g} mm")
+        name = "sine sheet"
+    else:
+        if sun is None and envmap is None and lighting == "paper":
+            raise OptionError("light: the scene needs a light; give an environment map or use the studio lighting")
+        if isinstance(surface, Mesh):
+            source, name = surface, str(surface.metadata.get("source", "mesh"))
+        else:
+            source, name = read_mesh(surface), str(surface)
+        cb = None if progress is None else (lambda done, total: progress("curvature", done, total))
+        mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=tbl,
+                            progress=cb)
+        up_axis, why = (up, "given") if up != "auto" else detect_up(mesh)
+    images: dict[str, NDArray[np.float32]] = {}
+    with variant_context(variant or DEFAULT_VARIANT):
+        for mode in modes:
+            if is_sheet:
+                scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, **common)
+            else:
+                scene = mesh_scene(tbl, mesh, mode=mode, lighting=lighting, light=sun, envmap=envmap,
+                                   up=str(up_axis), **common)
+            cb = None if progress is None else (lambda done, total, m=mode: progress(f"rendering {m}", done, total))
+            images[mode] = render_scene(scene, spp=int(spp), seed=seed, alpha=True, progress=cb)
+            del scene
+    shown = images["cdbrdf" if "cdbrdf" in images else modes[0]]
+    if exposure == "auto":
+        ev, how = exposure_from_render(shown, irradiance=irradiance), "auto"
+    else:
+        ev, how = float(exposure), "given"
+    return Picture(images=images, exposure_ev=ev, exposure_source=how, surface=name, lighting=lighting,
+                   light=sun, backdrop=not is_sheet and lighting == "studio" and envmap is None, mesh=mesh,
+                   up=up_axis, up_reason=why)

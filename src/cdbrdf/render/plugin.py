@@ -1,0 +1,392 @@
+"""The ``cdbrdf`` BSDF plug-in for Mitsuba 3: variants, registration, instances, scene checks.
+
+Importing this module does nothing heavy: it neither imports Mitsuba nor sets
+a variant. The plug-in is registered with Mitsuba by :func:`register` (for the
+variant that is active), by :func:`set_variant` (an application choosing its
+variant: checks libLLVM, sets it, registers) or by :func:`variant` (library
+code: the same for a ``with`` block, the caller's variant restored after it);
+every helper here that builds or renders a scene calls :func:`register`
+itself.
+
+.. code-block:: python
+
+    import cdbrdf.render as cr
+    cr.set_variant()                      # llvm_ad_rgb, after checking libLLVM 19
+    import mitsuba as mi
+    scene = cr.load_dict({
+        "type": "scene",
+        "sheet": {"type": "ply", "filename": "sheet.ply",
+                  "bsdf": {"type": "cdbrdf", "filename": "denim.h5"}},
+        ...
+    })
+
+Plug-in ``cdbrdf`` parameters
+-----------------------------
+
+===================  ================  ================================================
+Parameter            Type              Description
+===================  ================  ================================================
+``filename``         string            A CDBRDF file (HDF5), found through Mitsuba's
+                                       file resolver (relative to the scene file).
+                                       Instead, a table object: ``"table": table`` in a
+                                       dict passed to :func:`load_dict`, or
+                                       :func:`make_bsdf`.
+``mode``             string            ``"cdbrdf"`` (default): 5-D lookup with the
+                                       curvature; ``"brdf"``: the plain BRDF (kappa = 0).
+``curvature``        string or float   Mesh attribute holding the curvature (mm^-1), or a
+                                       constant in mm^-1.
+``curvature_mode``   string            ``"max"`` (default, attribute ``vertex_curvature``)
+                                       or ``"directional"`` (``vertex_curvature_dir``).
+``curvature_scale``  float             Factor on the attribute (to_world scale and scene
+                                       unit; set by :func:`load_file`).
+``scale``            float or texture  Factor on the reflectance (default 1); any Mitsuba
+                                       texture multiplies it per channel.
+``sampling``         string            ``"table"`` (default): importance sampling from
+                                       the table; ``"cosine"``: cosine-weighted.
+``cosine_weight``    float             Share of cosine sampling in the table sampler
+                                       (default 0.1).
+``storage``          string            ``"auto"`` (default), ``"packed"`` (21-bit RGB) or
+                                       ``"float"`` (float32 packets, differentiable).
+===================  ================  ================================================
+
+The BSDF is diffuse-like (non-delta) and two-sided: seen from the back, the
+local frame is turned 180 degrees about x (normal and y flip) and the curvature
+changes sign (a crest seen from below is a trough); Mitsuba's ``twosided``
+wrapper would not do that, so :func:`check_scene` refuses it and
+:func:`load_file` removes it. ``eval`` returns ``f * cos(theta_l)``. With
+``sampling="table"``, ``sample`` draws the light direction from the table
+times the cosine, conditioned on curvature and view
+(:mod:`cdbrdf.render._sampling`), mixed with cosine sampling; ``pdf`` is the
+matching density. The view direction is Mitsuba's ``si.wi`` and the light
+direction ``wo`` in radiance transport (swapped in importance transport,
+where sampling is cosine). The local x axis is ``si.sh_frame.s`` (dP/du):
+meshes must have UVs; :func:`check_scene` refuses meshes without them or
+without the curvature attribute (Mitsuba's analytic shapes have their own UV
+parametrisation and are accepted, with a constant curvature). Spectral
+variants blend the spectra of the table samples (Mitsuba's sRGB upsampling of
+pi f), mono variants use the luminance. ``mi.traverse`` exposes ``values``
+(the table) and ``scale``; see ``docs/rendering.md``.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+from ..errors import OptionError, SceneError
+from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
+from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
+
+__all__ = [
+    "CURVATURE_MODES",
+    "DEFAULT_VARIANT",
+    "MODES",
+    "PLUGIN_NAME",
+    "SAMPLINGS",
+    "STORAGES",
+    "SUPPORTED_VARIANTS",
+    "VARIANTS",
+    "INSTALL_HINT",
+    "LLVMError",
+    "LLVMInfo",
+    "REQUIRED_LLVM_MAJOR",
+    "available_variants",
+    "check_llvm",
+    "find_llvm",
+    "set_variant",
+    "variant",
+    "register",
+    "make_bsdf",
+    "load_dict",
+    "mitsuba_message",
+    "check_scene",
+    "cdbrdf_shapes",
+]
+
+_LOG = logging.getLogger(__name__)
+
+#: The variant for real renders (vectorised; the Python BSDF is traced once).
+DEFAULT_VARIANT = "llvm_ad_rgb"
+
+#: Variants :func:`set_variant` accepts (those of :data:`SUPPORTED_VARIANTS`
+#: that this project tests; ``scalar_*``: one Python call per ray, debugging only).
+VARIANTS: tuple[str, ...] = ("llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", "cuda_ad_rgb",
+                             "cuda_ad_spectral", "cuda_ad_mono", "scalar_rgb", "scalar_spectral", "scalar_mono")
+
+#: Keys of a ``{"type": "cdbrdf", "table": ...}`` dict entry.
+_DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_mode", "curvature_scale", "scale",
+                        "sampling", "cosine_weight", "storage"})
+
+
+def available_variants() -> tuple[str, ...]:
+    """The variants of :data:`VARIANTS` that the installed Mitsuba provides."""
+    import mitsuba as mi
+
+    have = set(mi.variants())
+    return tuple(v for v in VARIANTS if v in have)
+
+
+def set_variant(variant: str = DEFAULT_VARIANT) -> str:
+    """Check libLLVM (for llvm variants), set the Mitsuba variant, register the plug-in.
+
+    Parameters
+    ----------
+    variant
+        One of :data:`VARIANTS` that the installed Mitsuba has
+        (:func:`available_variants`); default ``"llvm_ad_rgb"``.
+
+    Raises
+    ------
+    LLVMError
+        For an llvm variant when Dr.Jit would not load libLLVM 19.
+    ValueError
+        For another variant.
+    """
+    if variant not in VARIANTS:
+        raise OptionError(f"variant: {variant!r} is not one of {', '.join(VARIANTS)}")
+    import mitsuba as mi
+
+    if variant not in mi.variants():
+        raise OptionError(f"variant: {variant!r} is not built into the installed Mitsuba; it has "
+                         f"{', '.join(available_variants())}")
+    if variant.startswith("llvm") and mi.variant() != variant:
+        check_llvm()
+    try:
+        mi.set_variant(variant)
+    except (ImportError, RuntimeError) as exc:  # e.g. a cuda variant without a GPU
+        why = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise OptionError(f"variant: {variant!r} cannot be used on this machine ({why})") from None
+    register()
+    return variant
+
+
+@contextmanager
+def variant(name: str = DEFAULT_VARIANT) -> Iterator[str]:
+    """Use a Mitsuba variant for a ``with`` block; the variant active before is restored after it.
+
+    What library code uses (:func:`cdbrdf.render.render_table`, the simulated
+    rig, the importers' checks against Mitsuba): it never leaves the caller's
+    variant changed. Checks and registers as :func:`set_variant` does.
+    """
+    import mitsuba as mi
+
+    before = mi.variant()
+    if before == name:
+        register()
+        yield name
+        return
+    set_variant(name)
+    try:
+        yield name
+    finally:
+        if before is not None and mi.variant() != before:
+            mi.set_variant(before)
+            register()
+
+
+def register() -> None:
+    """Register the ``cdbrdf`` BSDF with Mitsuba for the active variant.
+
+    Raises
+    ------
+    RuntimeError
+        When no Mitsuba variant is set (use :func:`set_variant`).
+    ValueError
+        For a variant the plug-in does not support (polarised ones).
+    LLVMError
+        For an llvm variant whose libLLVM is not version 19.
+    """
+    import mitsuba as mi
+
+    from ._bsdf import bsdf_class
+
+    cls = bsdf_class()
+    if str(mi.variant()).startswith("llvm"):
+        # The variant may have been set without set_variant(): check the
+        # libLLVM Dr.Jit loaded before anything is compiled with it.
+        check_llvm()
+    mi.register_bsdf(PLUGIN_NAME, _factory(cls))
+
+
+def _factory(cls: type) -> Callable[[Any], Any]:
+    """The plug-in's constructor for Mitsuba, raising its own errors without the frames inside it.
+
+    Mitsuba (nanobind) prefixes the error of a Python plug-in with the Python
+    frames of the call; :func:`load_dict` and :func:`load_file` give the
+    one-line message alone (:class:`~cdbrdf.errors.SceneError`).
+    """
+
+    def make(props: Any) -> Any:
+        try:
+            return cls(props)
+        except (ValueError, OSError) as exc:  # cdbrdf's errors (ValueError) and a missing file
+            raise exc.with_traceback(None) from None
+
+    return make
+
+
+def make_bsdf(
+    table: Any,
+    *,
+    mode: str = "cdbrdf",
+    curvature: str | float | None = None,
+    curvature_mode: str | None = None,
+    curvature_scale: float = 1.0,
+    scale: float | Any = 1.0,
+    sampling: str = "table",
+    cosine_weight: float | None = None,
+    storage: str = "auto",
+) -> Any:
+    """A ``cdbrdf`` BSDF instance from a table object (or file name).
+
+    The instance can be put into a scene dict in place of a BSDF dict
+    (``"bsdf": make_bsdf(table)``). Parameters as in the plug-in table above;
+    ``curvature=None`` with ``curvature_mode=None`` reads ``vertex_curvature``;
+    ``scale`` may be a float or a Mitsuba texture (an object or a dict).
+    """
+    import mitsuba as mi
+
+    from ._bsdf import bsdf_class
+
+    register()
+    props = mi.Properties(PLUGIN_NAME)
+    props["mode"] = str(mode)
+    if curvature is not None:
+        props["curvature"] = curvature if isinstance(curvature, str) else float(curvature)
+    if curvature_mode is not None:
+        props["curvature_mode"] = str(curvature_mode)
+    props["curvature_scale"] = float(curvature_scale)
+    if isinstance(scale, (int, float)):
+        props["scale"] = float(scale)
+    else:
+        props["scale"] = mi.load_dict(scale) if isinstance(scale, dict) else scale
+    props["sampling"] = str(sampling)
+    if cosine_weight is not None:
+        props["cosine_weight"] = float(cosine_weight)
+    props["storage"] = str(storage)
+    return bsdf_class()(props, table=table)
+
+
+def _replace_tables(d: Any) -> Any:
+    if isinstance(d, dict):
+        if d.get("type") == PLUGIN_NAME and "table" in d:
+            unknown = set(d) - _DICT_KEYS
+            if unknown:
+                raise OptionError(f"cdbrdf BSDF: unknown parameter(s) {sorted(unknown)}")
+            kw = {k: v for k, v in d.items() if k not in ("type", "table", "id")}
+            return make_bsdf(d["table"], **kw)
+        return {k: _replace_tables(v) for k, v in d.items()}
+    return d
+
+
+def load_dict(scene: dict, *, check: bool = True) -> Any:
+    """:func:`mitsuba.load_dict` that accepts ``"table": CDBRDF`` and checks the result.
+
+    ``{"type": "cdbrdf", "table": t, ...}`` entries become plug-in instances;
+    with ``check`` the loaded scene goes through :func:`check_scene`. An
+    object that cannot be made (a missing table, a damaged environment map)
+    is one :class:`~cdbrdf.errors.SceneError` line.
+    """
+    import mitsuba as mi
+
+    register()
+    spec = _replace_tables(scene)
+    if not isinstance(spec, dict):  # {"type": "cdbrdf", "table": ...} alone: the instance itself
+        return spec
+    try:
+        obj = mi.load_dict(spec)
+    except RuntimeError as exc:  # a plug-in's error, Mitsuba's: one line, without Mitsuba's traceback
+        raise SceneError(mitsuba_message(exc)) from None
+    if check and isinstance(obj, mi.Scene):
+        check_scene(obj)
+    return obj
+
+
+def mitsuba_message(exc: BaseException) -> str:
+    """Mitsuba's message on one line, without its source-file prefixes (``[parser.cpp:111]``)."""
+    text = re.sub(r"\[[A-Za-z0-9_]+\.(?:cpp|h):\d+\]\s*", "", str(exc))
+    if "Traceback (most recent call last)" in text:
+        # a Python plug-in's exception as Mitsuba reports it: keep where, and the exception's own line
+        head, _, tail = text.partition("Traceback (most recent call last)")
+        last = [ln.strip() for ln in tail.splitlines() if ln.strip()][-1:]
+        text = head.rstrip(" :\n") + ": " + " ".join(last)
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    return " ".join(lines) if lines else type(exc).__name__
+
+
+def _children(obj: Any) -> list[tuple[str, Any]]:
+    """The objects ``obj`` exposes to Mitsuba's traversal (e.g. the BSDFs inside ``twosided``)."""
+    import mitsuba as mi
+
+    found: list[tuple[str, Any]] = []
+
+    class _Collect(mi.TraversalCallback):
+        def put(self, name: str, value: Any, flags: Any) -> None:
+            if isinstance(value, mi.Object):
+                found.append((name, value))
+
+    obj.traverse(_Collect())
+    return found
+
+
+def cdbrdf_shapes(scene: Any) -> Iterator[tuple[Any, Any, Any]]:
+    """``(shape, bsdf, wrapper)`` for every shape whose BSDF is, or wraps, a ``cdbrdf`` BSDF.
+
+    ``wrapper`` is the shape's own BSDF when the plug-in sits inside another
+    BSDF (e.g. ``twosided``), else None.
+    """
+    from ._bsdf import bsdf_class
+
+    cls = bsdf_class()
+    for shape in scene.shapes():
+        bsdf = shape.bsdf()
+        if isinstance(bsdf, cls):
+            yield shape, bsdf, None
+        elif bsdf is not None:
+            for _, child in _children(bsdf):
+                if isinstance(child, cls):
+                    yield shape, child, bsdf
+                    break
+
+
+def check_scene(scene: Any) -> None:
+    """Refuse shapes with a ``cdbrdf`` BSDF that cannot define its frame or curvature.
+
+    Raises
+    ------
+    SceneError
+        (a ValueError) when such a shape is a mesh without UVs (no anisotropy
+        frame), when the BSDF reads a curvature attribute the shape does not
+        have (it would read as kappa = 0), or when the plug-in is wrapped in
+        Mitsuba's ``twosided`` (its back side would mirror z without the
+        curvature's change of sign; the plug-in is two-sided by itself).
+    """
+    import mitsuba as mi
+
+    for shape, bsdf, wrapper in cdbrdf_shapes(scene):
+        name = shape.id() or type(shape).__name__
+        if wrapper is not None:
+            raise SceneError(
+                f"shape {name!r}: the cdbrdf BSDF is wrapped in {wrapper.class_name()}; the plug-in is "
+                "two-sided by itself (seen from the back, kappa changes sign), while Mitsuba's twosided "
+                "mirrors z and keeps kappa: remove the wrapper (cdbrdf.render.load_file does so itself)"
+            )
+        # Analytic shapes (sphere, disk, ...) have a UV parametrisation; meshes need UVs.
+        if isinstance(shape, mi.Mesh) and not shape.has_vertex_texcoords():
+            raise SceneError(
+                f"shape {name!r}: the cdbrdf BSDF needs a mesh with UV coordinates, whose dP/du "
+                "is the material's reference direction x; this shape has none, so it has no "
+                "anisotropy frame (add UVs, e.g. along the bending direction)"
+            )
+        attr = bsdf.curvature_attribute
+        if attr is not None and not shape.has_attribute(attr):
+            hint = ("write it with `cdbrdf curvature`" if attr in (v for v in CURVATURE_MODES.values())
+                    else "check the attribute name")
+            raise SceneError(
+                f"shape {name!r}: the cdbrdf BSDF reads the curvature from mesh attribute "
+                f"{attr!r}, which the shape does not have ({hint}, or give the BSDF a constant "
+                "curvature); without it the curvature would read as 0"
+            )
