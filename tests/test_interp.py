@@ -99,7 +99,7 @@ def test_bad_query_types(paper_table):
 
 def test_prepared_grid_is_cached_by_the_table(paper_table):
     assert paper_table.lookup_grid() is paper_table.lookup_grid()
-    lg = prepare(paper_table)  # builds a new one, equal to the cached grid
+    lg = prepare(paper_table.grid, paper_table.values)  # builds a new one, equal to the cached grid
     assert lg is not paper_table.lookup_grid()
     np.testing.assert_array_equal(lg.values, paper_table.lookup_grid().values)
     assert lg.theta_l[0] == 0 and lg.phi_l_step == 30.0
@@ -107,7 +107,7 @@ def test_prepared_grid_is_cached_by_the_table(paper_table):
     assert lg.shape == (5, 12, 6, 12, 6, 3) and lg.flat.size == 5 * 12 * 6 * 12 * 6 * 4
     # the table's dtype is kept
     t32 = make_table(Grid.paper(kappa=[0.0]), dtype=np.float32)
-    assert prepare(t32).values.dtype == np.float32 and t32.lookup_grid().flat.dtype == np.float32
+    assert prepare(t32.grid, t32.values).values.dtype == np.float32 and t32.lookup_grid().flat.dtype == np.float32
 
 
 def test_prepared_grid_is_immutable(paper_table):

@@ -62,6 +62,7 @@ import numpy as np
 from numpy.typing import ArrayLike, DTypeLike, NDArray
 
 from .errors import QueryError
+from .grid import Grid
 
 __all__ = [
     "KERNELS",
@@ -74,6 +75,7 @@ __all__ = [
     "evaluate",
     "evaluate_reference",
     "prepare",
+    "apply_pole_rule",
     "snap_tolerance",
     "wrap_azimuth",
 ]
@@ -277,13 +279,7 @@ class LookupGrid(NamedTuple):
 
 
 class _Table(Protocol):
-    """What :func:`prepare` and :func:`evaluate` need of a table."""
-
-    @property
-    def values(self) -> NDArray[np.floating]: ...
-
-    @property
-    def grid(self) -> Any: ...
+    """What :func:`evaluate` needs of a table: its prepared grid (:meth:`cdbrdf.table.CDBRDF.lookup_grid`)."""
 
     def lookup_grid(self) -> LookupGrid: ...
 
@@ -340,28 +336,49 @@ def _kappa_slots(kappa: NDArray[np.float64]) -> tuple[tuple[float, ...], tuple[f
     return tuple(map(float, node)), tuple(map(float, scan)), tuple(map(float, inv))
 
 
-def prepare(table: _Table) -> LookupGrid:
-    """Build the :class:`LookupGrid` of a table (apply the pole rule, lay out every kernel's fields).
+def apply_pole_rule(
+    values: ArrayLike, theta_l: ArrayLike, theta_v: ArrayLike, *, isotropic: bool
+) -> tuple[NDArray[np.floating], NDArray[np.float64], NDArray[np.float64]]:
+    """The samples and elevation axes as the lookups hold them: the pole rule applied (module docstring).
+
+    ``values`` is ``(..., n_phi_l, n_theta_l, n_phi_v, n_theta_v, channel)``
+    in the table's layout (any leading axes). Node 0 of each returned
+    elevation axis is theta = 0 and holds the mean of the stored ring there
+    (a virtual pole node is added when the axis starts above 0); isotropic:
+    the light pole averages the azimuth difference axis. Returns new arrays.
+    """
+    v = np.asarray(values)
+    if v.ndim < 5:
+        raise QueryError(f"values: expected at least 5 axes (phi_l, theta_l, phi_v, theta_v, channel), got {v.ndim}")
+    off = v.ndim - 5  # leading axes before phi_l
+    # light pole: the mean over the light azimuth ring, or (isotropic) over the azimuth difference
+    v, thl = _pole(v, np.asarray(theta_l, dtype=np.float64), off + 1, off + 2 if isotropic else off)
+    v, thv = _pole(v, np.asarray(theta_v, dtype=np.float64), off + 3, off + 2)
+    return v, thl, thv
+
+
+def prepare(grid: Grid, values: NDArray[np.floating]) -> LookupGrid:
+    """Build the :class:`LookupGrid` of a table's samples (apply the pole rule, lay out every kernel's fields).
 
     Builds a new grid on every call; :meth:`cdbrdf.table.CDBRDF.lookup_grid`
     calls it once per table and keeps the result, and the lookups use that.
 
     Parameters
     ----------
-    table
-        A :class:`~cdbrdf.table.CDBRDF`.
+    grid
+        The sample axes.
+    values
+        ``grid.shape + (channels,)`` samples (float32 or float64).
 
     Returns
     -------
     LookupGrid
         The prepared grid (read-only arrays).
     """
-    g = table.grid
-    iso = bool(getattr(g, "isotropic", False))
-    # light pole: the mean over the light azimuth ring, or (isotropic) over the azimuth difference
-    v, thl = _pole(np.asarray(table.values), np.asarray(g.theta_l, dtype=np.float64), 2, 3 if iso else 1)
-    v, thv = _pole(v, np.asarray(g.theta_v, dtype=np.float64), 4, 3)
-    values = _frozen(v, v.dtype, copy=False)  # _pole made a new array
+    g = grid
+    iso = g.isotropic
+    v, thl, thv = apply_pole_rule(values, g.theta_l, g.theta_v, isotropic=iso)
+    values = _frozen(v, v.dtype, copy=False)  # apply_pole_rule made a new array
     nc = values.shape[-1]
     if nc == 3:
         padded = np.zeros(values.shape[:-1] + (4,), dtype=values.dtype)

@@ -418,7 +418,7 @@ class CDBRDF:
         if self._lookup is None:
             from .interp import prepare
 
-            self._lookup = prepare(self)
+            self._lookup = prepare(self._grid, self._values)
         return self._lookup
 
     def brdf(self, kappa: float = 0.0) -> CDBRDF:

@@ -26,6 +26,7 @@ from typing import Any, cast
 import numpy as np
 
 from ..errors import OptionError, TableError
+from ..grid import Grid
 from ..interp import LookupGrid, prepare
 from ..mesh import ATTRIBUTES
 from . import _lookup_jit as lj
@@ -208,10 +209,10 @@ def bsdf_class() -> type:
 class _Prepared:
     """A table's axes and current values, prepared for lookup (what :func:`cdbrdf.interp.evaluate` needs)."""
 
-    def __init__(self, grid: Any, values: np.ndarray) -> None:
+    def __init__(self, grid: Grid, values: np.ndarray) -> None:
         self.grid = grid
         self.values = values
-        self._lookup = prepare(SimpleNamespace(grid=grid, values=values))
+        self._lookup = prepare(grid, values)
 
     def lookup_grid(self) -> LookupGrid:
         return self._lookup

@@ -294,31 +294,25 @@ def _pole_pass(theta: NDArray[np.float64], n_phi: int, light: bool, isotropic: b
     n_theta * n_phi_v)`` on the (theta_l, phi_v) axes (its light pole averages
     the azimuth difference); view pass: ``(n_phi_v, n_theta_out, n_phi_v *
     n_theta)`` on (phi_v, theta_v). Obtained by running
-    :func:`cdbrdf.interp.prepare` on the identity, so it is the owner's rule
+    :func:`cdbrdf.interp.apply_pole_rule` on the identity, so it is the owner's rule
     by construction.
     """
-    from types import SimpleNamespace
-
-    from ..interp import prepare
+    from ..interp import apply_pole_rule
 
     n_theta = theta.size
     m = n_phi * n_theta
     other = np.array([45.0])  # the other elevation axis: one node above 0, untouched by this pass
     if light and isotropic:
         values = np.eye(m).reshape(n_theta, n_phi, m)[None, None, :, :, None, :]
-        grid = SimpleNamespace(kappa=np.array([0.0]), theta_l=theta, phi_l=np.zeros(1), theta_v=other,
-                               phi_v=np.zeros(n_phi), isotropic=True)
-        return np.asarray(prepare(SimpleNamespace(values=values, grid=grid)).values)[0, 0, :, :, -1, :]
+        return np.asarray(apply_pole_rule(values, theta, other, isotropic=True)[0][0, 0, :, :, -1, :], dtype=np.float64)
     eye = np.eye(m).reshape(n_phi, n_theta, m)
     if light:
         values = eye[None, :, :, None, None, :]
-        grid = SimpleNamespace(kappa=np.array([0.0]), theta_l=theta, phi_l=np.zeros(n_phi), theta_v=other,
-                               phi_v=np.zeros(1), isotropic=False)
-        return np.asarray(prepare(SimpleNamespace(values=values, grid=grid)).values)[0, :, :, 0, -1, :]
+        pole = apply_pole_rule(values, theta, other, isotropic=False)[0]
+        return np.asarray(pole[0, :, :, 0, -1, :], dtype=np.float64)
     values = eye[None, None, None, :, :, :]
-    grid = SimpleNamespace(kappa=np.array([0.0]), theta_l=other, phi_l=np.zeros(1), theta_v=theta,
-                           phi_v=np.zeros(n_phi), isotropic=isotropic)
-    return np.asarray(prepare(SimpleNamespace(values=values, grid=grid)).values)[0, 0, -1, :, :, :]
+    pole = apply_pole_rule(values, other, theta, isotropic=isotropic)[0]
+    return np.asarray(pole[0, 0, -1, :, :, :], dtype=np.float64)
 
 
 def _factor(dense: NDArray[np.float64]) -> tuple[Any, Any]:
