@@ -154,3 +154,40 @@ def test_import_is_numpy_only():
     code_ = "import sys, cdbrdf.colour\nassert 'matplotlib' not in sys.modules and 'scipy' not in sys.modules\n"
     r = subprocess.run([sys.executable, "-W", "error", "-c", code_], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
+
+
+# -- CIELAB and colour differences -------------------------------------------------------
+def test_lab_reference_values():
+    """CIE 1976 L*a*b* of known colours (D65, white = RGB 1).
+
+    The primaries' values are the published ones for sRGB (L*, a*, b* of
+    red 53.24, 80.09, 67.20; green 87.73, -86.18, 83.18; blue 32.30, 79.19,
+    -107.86); the tolerance 0.05 covers the 4-digit matrix of IEC 61966-2-1
+    that both use, rounded differently.
+    """
+    lab = colour.linear_to_lab(np.eye(3))
+    np.testing.assert_allclose(lab, [[53.24, 80.09, 67.20], [87.73, -86.18, 83.18], [32.30, 79.19, -107.86]],
+                               atol=0.05)
+    # White is L* 100 with no colour, black 0; the mid-grey L* = 50 has
+    # Y = ((50 + 16) / 116)^3 = 0.18419 (exact by the definition).
+    np.testing.assert_allclose(colour.linear_to_lab([1.0, 1.0, 1.0]), [100.0, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(colour.linear_to_lab([0.0, 0.0, 0.0]), [0.0, 0.0, 0.0], atol=1e-12)
+    y50 = ((50.0 + 16.0) / 116.0) ** 3
+    np.testing.assert_allclose(colour.linear_to_lab([y50] * 3), [50.0, 0.0, 0.0], atol=1e-12)
+    # Below the CIE's epsilon the linear segment: L* = kappa Y = 903.3 Y.
+    np.testing.assert_allclose(colour.linear_to_lab([0.001] * 3)[0], 24389.0 / 27.0 * 0.001, rtol=1e-12)
+    assert colour.D65_WHITE_XYZ[1] == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_array_equal(colour.RGB_TO_XYZ[1], LUMINANCE_WEIGHTS)
+
+
+def test_delta_e_chroma_hue():
+    assert colour.delta_e_ab([50.0, 0.0, 0.0], [53.0, 4.0, 0.0]) == pytest.approx(5.0)
+    d = colour.delta_e_ab(np.zeros((4, 3)), [[3.0, 4.0, 0.0]])
+    np.testing.assert_allclose(d, 5.0)
+    c, h = colour.lab_chroma_hue([[50.0, 0.0, 10.0], [50.0, -3.0, -4.0], [70.0, 10.0, 0.0]])
+    np.testing.assert_allclose(c, [10.0, 5.0, 10.0])
+    np.testing.assert_allclose(h, [90.0, np.degrees(np.arctan2(-4.0, -3.0)) + 360.0, 0.0])
+    with pytest.raises(ValueError, match="lab"):
+        colour.delta_e_ab([1.0, 2.0], [1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="rgb"):
+        colour.linear_to_lab([1.0, 2.0])

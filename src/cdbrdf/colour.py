@@ -16,7 +16,11 @@ exactly the same numbers:
   :func:`auto_exposure_ev` is the same rule in stops, clipped, for renders),
   named (:data:`EXPOSURE_MODES`, resolved by :func:`resolve_exposure`) or in
   stops (:func:`ev_to_factor`, :func:`factor_to_ev`);
-- 8-bit display encoding of linear radiance (:func:`tonemap_srgb8`).
+- 8-bit display encoding of linear radiance (:func:`tonemap_srgb8`);
+- colour differences: linear RGB to CIE XYZ (:data:`RGB_TO_XYZ`, D65) and
+  CIE 1976 L*a*b* (:func:`linear_to_lab`, :func:`xyz_to_lab`), chroma and
+  hue angle (:func:`lab_chroma_hue`), and the CIE 1976 colour difference
+  Delta E*ab (:func:`delta_e_ab`).
 
 Only numpy is imported; nothing happens at import time.
 
@@ -25,6 +29,8 @@ References
 IEC 61966-2-1:1999, Multimedia systems and equipment - Colour measurement and
 management - Default RGB colour space - sRGB.
 ITU-R BT.709-6, Parameter values for the HDTV standards, item 3.3 (luminance).
+CIE 15:2004, Colorimetry, 3rd edition, section 8.2.1 (CIE 1976 L*a*b*) and
+8.2.1.3 (Delta E*ab).
 """
 
 from __future__ import annotations
@@ -54,6 +60,13 @@ __all__ = [
     "ev_to_factor",
     "factor_to_ev",
     "tonemap_srgb8",
+    "RGB_TO_XYZ",
+    "D65_WHITE_XYZ",
+    "linear_to_xyz",
+    "xyz_to_lab",
+    "linear_to_lab",
+    "lab_chroma_hue",
+    "delta_e_ab",
 ]
 
 #: Rec. 709 / sRGB luminance weights of linear R, G, B (read-only).
@@ -279,3 +292,82 @@ def tonemap_srgb8(image: ArrayLike, *, exposure_ev: float = 0.0) -> NDArray[np.u
     x = np.asarray(image, dtype=np.float64) * ev_to_factor(exposure_ev)
     x = np.clip(np.nan_to_num(x, nan=0.0, posinf=1.0, neginf=0.0), 0.0, 1.0)
     return np.rint(srgb_encode(x) * 255.0).astype(np.uint8)
+
+
+# -- CIELAB and colour differences -------------------------------------------------------
+#: Linear Rec. 709 / sRGB RGB -> CIE 1931 XYZ, D65 white (IEC 61966-2-1), read-only. Its
+#: second row is :data:`LUMINANCE_WEIGHTS` to four digits.
+RGB_TO_XYZ: NDArray[np.float64] = np.array(
+    [
+        [0.4124, 0.3576, 0.1805],
+        [0.2126, 0.7152, 0.0722],
+        [0.0193, 0.1192, 0.9505],
+    ]
+)
+RGB_TO_XYZ.setflags(write=False)
+
+#: XYZ of the reference white: linear RGB (1, 1, 1), i.e. D65 with Y = 1 (read-only).
+D65_WHITE_XYZ: NDArray[np.float64] = RGB_TO_XYZ.sum(axis=1)
+D65_WHITE_XYZ.setflags(write=False)
+
+#: CIE constants of L*a*b*: epsilon = (6/29)^3 and kappa = (29/3)^3.
+_LAB_EPSILON = 216.0 / 24389.0
+_LAB_KAPPA = 24389.0 / 27.0
+
+
+def linear_to_xyz(rgb: ArrayLike) -> NDArray[np.float64]:
+    """CIE XYZ of linear Rec. 709 RGB ``(..., 3)`` (:data:`RGB_TO_XYZ`); white (1, 1, 1) has Y = 1."""
+    v = np.asarray(rgb, dtype=np.float64)
+    if v.ndim == 0 or v.shape[-1] != 3:
+        raise OptionError(f"rgb: expected linear RGB values (..., 3), got shape {v.shape}")
+    return v @ RGB_TO_XYZ.T
+
+
+def xyz_to_lab(xyz: ArrayLike, *, white: ArrayLike = D65_WHITE_XYZ) -> NDArray[np.float64]:
+    """CIE 1976 L*a*b* of XYZ ``(..., 3)`` relative to the reference ``white`` (CIE 15:2004).
+
+    ``L* = 116 f(Y/Yn) - 16``, ``a* = 500 (f(X/Xn) - f(Y/Yn))``,
+    ``b* = 200 (f(Y/Yn) - f(Z/Zn))`` with ``f(t) = t^(1/3)`` above
+    ``(6/29)^3`` and the CIE's linear segment below it (so negative values
+    give finite, negative L*).
+    """
+    v = np.asarray(xyz, dtype=np.float64)
+    if v.ndim == 0 or v.shape[-1] != 3:
+        raise OptionError(f"xyz: expected XYZ values (..., 3), got shape {v.shape}")
+    t = v / np.asarray(white, dtype=np.float64)
+    f = np.where(t > _LAB_EPSILON, np.cbrt(np.maximum(t, _LAB_EPSILON)), (_LAB_KAPPA * t + 16.0) / 116.0)
+    lab = np.empty_like(f)
+    lab[..., 0] = 116.0 * f[..., 1] - 16.0
+    lab[..., 1] = 500.0 * (f[..., 0] - f[..., 1])
+    lab[..., 2] = 200.0 * (f[..., 1] - f[..., 2])
+    return lab
+
+
+def linear_to_lab(rgb: ArrayLike) -> NDArray[np.float64]:
+    """CIE 1976 L*a*b* of linear Rec. 709 RGB ``(..., 3)``, white = RGB (1, 1, 1) (L* = 100).
+
+    Scale the values first so that 1 is the white they are seen against
+    (e.g. a BRDF times pi, or a render's display white).
+    """
+    return xyz_to_lab(linear_to_xyz(rgb))
+
+
+def lab_chroma_hue(lab: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Chroma ``C*ab = hypot(a*, b*)`` and hue angle ``h_ab`` in degrees, [0, 360), of L*a*b* ``(..., 3)``."""
+    v = np.asarray(lab, dtype=np.float64)
+    if v.ndim == 0 or v.shape[-1] != 3:
+        raise OptionError(f"lab: expected L*a*b* values (..., 3), got shape {v.shape}")
+    return np.hypot(v[..., 1], v[..., 2]), np.mod(np.degrees(np.arctan2(v[..., 2], v[..., 1])), 360.0)
+
+
+def delta_e_ab(lab1: ArrayLike, lab2: ArrayLike) -> NDArray[np.float64]:
+    """CIE 1976 colour difference Delta E*ab: the Euclidean distance of L*a*b* ``(..., 3)`` (broadcast).
+
+    About 1 is a just-noticeable difference between patches side by side,
+    about 2 the threshold of noticing in practice.
+    """
+    a = np.asarray(lab1, dtype=np.float64)
+    b = np.asarray(lab2, dtype=np.float64)
+    if a.ndim == 0 or b.ndim == 0 or a.shape[-1] != 3 or b.shape[-1] != 3:
+        raise OptionError(f"lab: expected L*a*b* values (..., 3), got shapes {a.shape} and {b.shape}")
+    return np.sqrt(np.sum((a - b) ** 2, axis=-1))
