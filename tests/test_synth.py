@@ -345,3 +345,23 @@ def test_cli_synth(tmp_path, capsys):
     with pytest.raises(SystemExit):
         cli_main(["synth", "velvet", "-o", str(tmp_path / "x.h5")])
 
+
+
+# -- bend contrast (the colour difference bending makes near the normal) ---------------------
+def test_bend_contrast_against_a_direct_computation():
+    """bend_contrast is the median Delta E*ab of the scaled evaluations; zero for the same curvature."""
+    import cdbrdf.materials
+    from cdbrdf.colour import delta_e_ab, linear_to_lab
+    from cdbrdf.synth.metrics import bend_contrast, near_normal_pairs
+
+    table = cdbrdf.materials.load("denim")
+    assert bend_contrast(table, 0.0).median_delta_e == 0.0
+    c = bend_contrast(table, 0.22, n_pairs=500, seed=3)
+    tv, pv, tl, pl = near_normal_pairs(500, seed=3)
+    assert np.all((tv <= 30.0) & (tl <= 30.0) & (tv >= 0.0))
+    bent, flat = table.evaluate(tv, pv, tl, pl, 0.22), table.evaluate(tv, pv, tl, pl, 0.0)
+    s = 0.3 / np.median(luminance(flat))
+    expected = np.median(delta_e_ab(linear_to_lab(bent * s), linear_to_lab(flat * s)))
+    assert c.median_delta_e == pytest.approx(expected, rel=1e-12)
+    with pytest.raises(ValueError, match="reference_luminance"):
+        bend_contrast(table, 0.1, reference_luminance=-1.0)

@@ -1,20 +1,51 @@
 """Summary numbers of a cloth's appearance, used by the presets' targets.
 
-All take a reflectance array whose last axis is linear Rec. 709 RGB.
-``REC709_Y`` and ``luminance`` are :data:`cdbrdf.colour.LUMINANCE_WEIGHTS`
+All take a reflectance array or a table whose last axis is linear Rec. 709
+RGB. ``REC709_Y`` and ``luminance`` are :data:`cdbrdf.colour.LUMINANCE_WEIGHTS`
 and :func:`cdbrdf.colour.luminance`, re-exported.
+
+:func:`bend_contrast` is how much a table's colour changes with the bend as
+the eye sees it: the median CIE 1976 colour difference Delta E*ab between two
+curvatures over random near-normal direction pairs, with the swatch colours
+(the mean colour at each curvature) to show side by side.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..colour import LUMINANCE_WEIGHTS as REC709_Y
-from ..colour import luminance
+from ..colour import delta_e_ab, lab_chroma_hue, linear_to_lab, luminance, tonemap_srgb8
+from ..errors import OptionError
 from ..table import CDBRDF
 
-__all__ = ["REC709_Y", "luminance", "chromaticity", "low_elevation_slice", "in_plane_luminance"]
+__all__ = [
+    "REC709_Y",
+    "luminance",
+    "chromaticity",
+    "low_elevation_slice",
+    "in_plane_luminance",
+    "NEAR_NORMAL_MAX_THETA_DEG",
+    "NEAR_NORMAL_PAIRS",
+    "NEAR_NORMAL_SEED",
+    "FLAT_MEDIAN_LUMINANCE",
+    "near_normal_pairs",
+    "BendContrast",
+    "bend_contrast",
+]
+
+#: Largest light and view elevation of the near-normal comparison, degrees.
+NEAR_NORMAL_MAX_THETA_DEG = 30.0
+#: Number of random direction pairs of the near-normal comparison.
+NEAR_NORMAL_PAIRS = 20_000
+#: Seed of the random direction pairs (the comparison is reproducible).
+NEAR_NORMAL_SEED = 0
+#: Median luminance the reference curvature's values are scaled to before
+#: CIELAB (white = 1): a mid-grey, L* = 61.7, where Delta E*ab is meaningful.
+FLAT_MEDIAN_LUMINANCE = 0.3
 
 
 def chromaticity(rgb: ArrayLike) -> NDArray[np.float64]:
@@ -40,3 +71,152 @@ def in_plane_luminance(table: CDBRDF, kappa: float, plane_phi_deg: float) -> flo
     iv = [int(np.flatnonzero(np.isclose(table.phi_v, a))[0]) for a in az]
     v = np.asarray(table.values[i], dtype=np.float64)[il][:, :, iv]
     return float(luminance(v).mean())
+
+
+def near_normal_pairs(
+    n: int = NEAR_NORMAL_PAIRS,
+    *,
+    max_theta_deg: float = NEAR_NORMAL_MAX_THETA_DEG,
+    seed: int = NEAR_NORMAL_SEED,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Random view and light directions near the normal, degrees.
+
+    Elevations uniform in ``[0, max_theta_deg]`` and azimuths uniform in
+    ``[0, 360)``, independently for the view and the light.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(theta_v, phi_v, theta_l, phi_l)``, each ``(n,)``.
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise OptionError(f"n: must be a positive integer, got {n!r}")
+    if not 0.0 < float(max_theta_deg) <= 90.0:
+        raise OptionError(f"max_theta_deg: must lie in (0, 90] degrees, got {max_theta_deg!r}")
+    rng = np.random.default_rng(seed)
+    t = rng.uniform(0.0, float(max_theta_deg), (2, int(n)))
+    p = rng.uniform(0.0, 360.0, (2, int(n)))
+    return t[0], p[0], t[1], p[1]
+
+
+@dataclass(frozen=True)
+class BendContrast:
+    """How a table's colour near the normal differs between two curvatures.
+
+    All colours are the table's linear RGB times :attr:`scale`, which brings
+    the median luminance at the reference curvature to
+    :data:`FLAT_MEDIAN_LUMINANCE` (white = 1).
+
+    Attributes
+    ----------
+    kappa, reference_kappa
+        The two curvatures, mm^-1.
+    median_delta_e
+        Median over the direction pairs of Delta E*ab between the two
+        curvatures, pair by pair.
+    scale
+        The factor applied to both.
+    rgb, reference_rgb
+        The swatch colours: mean linear RGB over the pairs at each curvature.
+    lab, reference_lab
+        Their CIE 1976 L*a*b*.
+    """
+
+    kappa: float
+    reference_kappa: float
+    median_delta_e: float
+    scale: float
+    rgb: NDArray[np.float64]
+    reference_rgb: NDArray[np.float64]
+    lab: NDArray[np.float64]
+    reference_lab: NDArray[np.float64]
+
+    @property
+    def swatch_delta_e(self) -> float:
+        """Delta E*ab between the two swatch colours."""
+        return float(delta_e_ab(self.lab, self.reference_lab))
+
+    @property
+    def lightness_change(self) -> float:
+        """L* of the swatch at :attr:`kappa` minus that at :attr:`reference_kappa`."""
+        return float(self.lab[0] - self.reference_lab[0])
+
+    def chroma_hue(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """``((C*, h) at kappa, (C*, h) at the reference)``, hue angles in degrees."""
+        c, h = lab_chroma_hue(np.stack([self.lab, self.reference_lab]))
+        return (float(c[0]), float(h[0])), (float(c[1]), float(h[1]))
+
+    def swatches_srgb8(self) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
+        """The two swatch colours as 8-bit sRGB ``(3,)`` each: ``(at kappa, at the reference)``."""
+        return tonemap_srgb8(self.rgb), tonemap_srgb8(self.reference_rgb)
+
+
+def bend_contrast(
+    table: CDBRDF,
+    kappa: float,
+    *,
+    reference_kappa: float = 0.0,
+    n_pairs: int = NEAR_NORMAL_PAIRS,
+    max_theta_deg: float = NEAR_NORMAL_MAX_THETA_DEG,
+    seed: int = NEAR_NORMAL_SEED,
+    reference_luminance: float = FLAT_MEDIAN_LUMINANCE,
+) -> BendContrast:
+    """The colour difference near the normal between curvature ``kappa`` and ``reference_kappa``.
+
+    The table is evaluated (:meth:`cdbrdf.CDBRDF.evaluate`, curvature clamped
+    to its range) at :func:`near_normal_pairs` at both curvatures; both are
+    scaled by one factor that brings the median luminance at the reference
+    to ``reference_luminance``; each pair's values are converted to CIE 1976
+    L*a*b* (:func:`cdbrdf.colour.linear_to_lab`) and compared
+    (:func:`cdbrdf.colour.delta_e_ab`).
+
+    Parameters
+    ----------
+    table
+        Any table (a bundled material, a measured or imported one).
+    kappa, reference_kappa
+        Curvatures compared, mm^-1.
+    n_pairs, max_theta_deg, seed
+        The direction pairs (:func:`near_normal_pairs`).
+    reference_luminance
+        Median luminance at the reference curvature after scaling.
+
+    Returns
+    -------
+    BendContrast
+
+    Raises
+    ------
+    OptionError
+        For an invalid option, or a table whose reference values are all black.
+
+    Examples
+    --------
+    >>> import cdbrdf.materials
+    >>> from cdbrdf.synth.metrics import bend_contrast
+    >>> c = bend_contrast(cdbrdf.materials.load("shot"), 0.13)   # doctest: +SKIP
+    >>> c.median_delta_e, c.swatches_srgb8()                      # doctest: +SKIP
+    """
+    if not np.isfinite(reference_luminance) or reference_luminance <= 0:
+        raise OptionError(f"reference_luminance: must be a positive number, got {reference_luminance!r}")
+    tv, pv, tl, pl = near_normal_pairs(n_pairs, max_theta_deg=max_theta_deg, seed=seed)
+    bent = table.evaluate(tv, pv, tl, pl, float(kappa))
+    ref = table.evaluate(tv, pv, tl, pl, float(reference_kappa))
+    median_y = float(np.median(luminance(ref)))
+    if not median_y > 0:
+        raise OptionError(f"table {table.attrs.get('material', '')!r}: black at kappa = {reference_kappa:g}; "
+                          "no colour to compare")
+    scale = reference_luminance / median_y
+    d = delta_e_ab(linear_to_lab(bent * scale), linear_to_lab(ref * scale))
+    rgb = bent.mean(axis=0) * scale
+    rgb_ref = ref.mean(axis=0) * scale
+    return BendContrast(
+        kappa=float(kappa),
+        reference_kappa=float(reference_kappa),
+        median_delta_e=float(np.median(d)),
+        scale=scale,
+        rgb=rgb,
+        reference_rgb=rgb_ref,
+        lab=linear_to_lab(rgb),
+        reference_lab=linear_to_lab(rgb_ref),
+    )
