@@ -51,6 +51,14 @@ def test_quick_demo_report_is_complete(quick_demo):
     results = json.loads((folder / "results.json").read_text())
     assert [m["name"] for m in results["materials"]] == ["denim", "shot"]
     assert "Filled samples against the ground truth" in page
+    assert "What bending does" in page
+    for m in results["materials"]:
+        # bending shows at the crests of the rendered sheet and not where it is flat (noise only)
+        sine = m["contrast"]["sine"]
+        assert sine["flat_delta_e"] < 1.0 < sine["crest_delta_e"], sine
+        assert set(sine["crest_srgb"]) == {"brdf", "cdbrdf"}
+        kappas = [row["kappa"] for row in m["contrast"]["table"]["measured"]]
+        assert kappas == [-0.22, -0.13, 0.13, 0.22]
     for m in results["materials"]:
         assert m["fill_method"] == "kappa-fit" and m["compared_fill"]["method"] == "nearest"
         for key in ("median_rel_error_filled", "p95_rel_error_filled", "fill_within_1_sigma"):

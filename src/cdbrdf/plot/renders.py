@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -26,6 +26,7 @@ def plot_render_comparison(
     title: str | None = None,
     labels: tuple[str, str] = ("(a) plain BRDF (kappa = 0)", "(b) CDBRDF"),
     width_in: float = 12.0,
+    swatches: Any = None,
     fig: Figure | None = None,
 ) -> Figure:
     """Two renders side by side and their difference (the paper's Figs. 9-10).
@@ -39,12 +40,24 @@ def plot_render_comparison(
         Exposure in stops applied to both before sRGB encoding.
     title
         Figure title.
+    labels
+        Titles of panels (a) and (b).
+    width_in
+        Figure width, inches.
+    swatches
+        A :class:`cdbrdf.render.CrestContrast` of the two renders: a row of
+        colour swatches under the panels, the mean colour of each render at
+        the convex crests and where the surface is flat, with the median
+        Delta E*ab of each region.
+    fig
+        Draw into this figure instead of a new one.
 
     Returns
     -------
     matplotlib.figure.Figure
         Panels (a) BRDF, (b) CDBRDF, (c) heat map of the RGB distance
-        ``|CDBRDF - BRDF|`` in linear radiance with a colour bar.
+        ``|CDBRDF - BRDF|`` in linear radiance with a colour bar; with
+        ``swatches``, the row of swatches under them.
     """
     a = np.asarray(brdf_image, dtype=np.float64)[..., :3]
     b = np.asarray(cdbrdf_image, dtype=np.float64)[..., :3]
@@ -55,9 +68,16 @@ def plot_render_comparison(
     diff = np.linalg.norm(np.nan_to_num(b - a), axis=-1)
     h, w = diff.shape
     panel_w = width_in / 3.2
-    fig = new_figure(fig, (width_in, panel_w * h / w + (1.0 if title else 0.7)), 150)
-    axes = fig.subplots(1, 3)
+    extra = 0.9 if swatches is not None else 0.0
+    fig = new_figure(fig, (width_in, panel_w * h / w + (1.0 if title else 0.7) + extra), 150)
     fig.set_layout_engine("constrained")
+    if swatches is not None:
+        subs: Any = fig.subfigures(2, 1, height_ratios=[panel_w * h / w + 0.5, extra])
+        top, bottom = subs[0], subs[1]
+        axes = top.subplots(1, 3)
+        _draw_swatches(bottom, swatches, labels)
+    else:
+        axes = fig.subplots(1, 3)
     axes[0].imshow(tonemap_srgb8(a, exposure_ev=exposure_ev))
     axes[0].set_title(labels[0])
     axes[1].imshow(tonemap_srgb8(b, exposure_ev=exposure_ev))
@@ -73,6 +93,27 @@ def plot_render_comparison(
     if title:
         fig.suptitle(title)
     return fig
+
+
+def _draw_swatches(fig: Any, contrast: Any, labels: tuple[str, str]) -> None:
+    """Crest and flat swatches, plain BRDF beside CDBRDF, with their Delta E*ab."""
+    regions = [("crest", contrast.crest_srgb, contrast.crest_delta_e,
+                f"convex crests (kappa >= {contrast.crest_fraction * contrast.kappa_max:.2g} / mm)"),
+               ("flat", contrast.flat_srgb, contrast.flat_delta_e,
+                f"flat (|kappa| <= {contrast.flat_fraction * contrast.kappa_max:.2g} / mm)")]
+    axes = fig.subplots(1, len(regions))
+    for ax, (_, colours, de, what) in zip(axes, regions, strict=True):
+        ax.set_xticks([])
+        ax.set_yticks([])
+        if not colours:
+            ax.set_axis_off()
+            continue
+        strip = np.array([[colours["brdf"], colours["cdbrdf"]]], dtype=np.float64)
+        ax.imshow(np.clip(strip, 0.0, 1.0), aspect="auto", extent=(0, 2, 0, 1))
+        for x, label in ((0.5, labels[0].split(" ")[0]), (1.5, labels[1].split(" ")[0])):
+            ax.text(x, 0.5, label, ha="center", va="center", fontsize=9,
+                    color="white" if float(np.mean(strip)) < 0.5 else "black")
+        ax.set_title(f"{what}: Delta E*ab {de:.1f}", fontsize=9)
 
 
 def plot_curvature_map(

@@ -14,7 +14,10 @@ too:
   to Mitsuba in memory (:func:`~cdbrdf.render.scenes.mitsuba_mesh`);
 - :mod:`~cdbrdf.render.camera`, :mod:`~cdbrdf.render.lighting`: framing and
   lights; :mod:`~cdbrdf.render.picture`: renders in passes, exposure,
-  :func:`render_table`; :mod:`~cdbrdf.render.output`: image files.
+  :func:`render_table`; :mod:`~cdbrdf.render.output`: image files;
+- :mod:`~cdbrdf.render.contrast`: the curvature seen in each pixel and the
+  colour difference of two renders at the crests and where the surface is
+  flat (:func:`crest_contrast`).
 
 .. code-block:: python
 
@@ -27,6 +30,7 @@ from __future__ import annotations
 
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
+from .contrast import CrestContrast, crest_contrast, curvature_image
 from .picture import (
     RENDER_MODES,
     Picture,
@@ -85,4 +89,7 @@ __all__ = [
     "mitsuba_mesh",
     "exposure_from_render",
     "composite",
+    "CrestContrast",
+    "crest_contrast",
+    "curvature_image",
 ]

@@ -200,6 +200,10 @@ class Picture:
         neighbourhood and frame), or None for the sine sheet.
     up, up_reason
         The mesh's up axis and why (None for the sine sheet).
+    curvature
+        With ``render_table(..., curvature=True)``: the curvature (mm^-1)
+        seen at each pixel centre, ``(H, W)`` float32, NaN where no surface
+        is seen (:func:`cdbrdf.render.contrast.curvature_image`); else None.
     """
 
     images: Mapping[str, NDArray[np.float32]]
@@ -212,6 +216,7 @@ class Picture:
     mesh: Any = None
     up: str | None = None
     up_reason: str | None = None
+    curvature: NDArray[np.float32] | None = None
 
     def display(self, mode: str = "cdbrdf") -> NDArray[np.float32]:
         """Linear RGB of ``mode`` as shown: over the backdrop where the studio's sky is hidden."""
@@ -259,6 +264,7 @@ def render_table(
     curvature_mode: str = "max",
     exposure: float | str = "auto",
     variant: str | None = None,
+    curvature: bool = False,
     progress: Callable[[str, int, int], None] | None = None,
 ) -> Picture:
     """Render a table on the paper's sine sheet or on a mesh, with the CDBRDF and/or the plain BRDF.
@@ -314,6 +320,9 @@ def render_table(
         else the first mode's).
     variant
         Mitsuba variant (default :data:`cdbrdf.render.DEFAULT_VARIANT`).
+    curvature
+        Also record the curvature seen at each pixel (:attr:`Picture.curvature`,
+        for :func:`cdbrdf.render.contrast.crest_contrast`).
     progress
         ``progress(stage, done, total)``: ``"curvature"`` (vertices) while a
         mesh is prepared, ``"rendering MODE"`` (samples per pixel).
@@ -332,10 +341,11 @@ def render_table(
         environment map.
     """
     from ..limits import check as check_limit
-    from ..mesh import Mesh, SineSheet, detect_up, prepare_mesh, read_mesh
+    from ..mesh import ATTRIBUTES, Mesh, SineSheet, detect_up, prepare_mesh, read_mesh
     from ..table import CDBRDF
     from ..table import load as load_table
     from .camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW
+    from .contrast import curvature_image
     from .lighting import LIGHTINGS
     from .plugin import DEFAULT_VARIANT
     from .plugin import variant as variant_context
@@ -384,6 +394,7 @@ def render_table(
                             progress=cb)
         up_axis, why = (up, "given") if up != "auto" else detect_up(mesh)
     images: dict[str, NDArray[np.float32]] = {}
+    kappa_image = None
     with variant_context(variant or DEFAULT_VARIANT):
         for mode in modes:
             if is_sheet:
@@ -393,6 +404,8 @@ def render_table(
                                    up=str(up_axis), **common)
             cb = None if progress is None else (lambda done, total, m=mode: progress(f"rendering {m}", done, total))
             images[mode] = render_scene(scene, spp=int(spp), seed=seed, alpha=True, progress=cb)
+            if curvature and kappa_image is None:
+                kappa_image = curvature_image(scene, attribute=ATTRIBUTES[curvature_mode])
             del scene
     shown = images["cdbrdf" if "cdbrdf" in images else modes[0]]
     if exposure == "auto":
@@ -401,4 +414,4 @@ def render_table(
         ev, how = float(exposure), "given"
     return Picture(images=images, exposure_ev=ev, exposure_source=how, surface=name, lighting=lighting,
                    light=sun, backdrop=not is_sheet and lighting == "studio" and envmap is None, mesh=mesh,
-                   up=up_axis, up_reason=why)
+                   up=up_axis, up_reason=why, curvature=kappa_image)
