@@ -329,26 +329,6 @@ def _render_pair(table: CDBRDF, surface: Any, *, config: DemoConfig, progress: P
     return pic, time.perf_counter() - t0
 
 
-def _bend_contrast(measured: CDBRDF, truth: CDBRDF) -> dict[str, Any]:
-    """What bending does near the normal: Delta E*ab and lightness change of each stand against the flat one."""
-    from .colour import lab_chroma_hue
-    from .synth.metrics import bend_contrast
-
-    out: dict[str, Any] = {}
-    for label, table in (("measured", measured), ("truth", truth)):
-        rows = []
-        for k in (float(x) for x in table.grid.kappa):
-            if k == 0.0:
-                continue
-            c = bend_contrast(table, k)
-            (_, hue), (_, hue0) = lab_chroma_hue(c.lab), lab_chroma_hue(c.reference_lab)
-            rows.append({"kappa": k, "median_delta_e": c.median_delta_e,
-                         "delta_lightness": float(c.lab[0] - c.reference_lab[0]),
-                         "hue_deg": float(hue), "flat_hue_deg": float(hue0)})
-        out[label] = rows
-    return out
-
-
 def _material(
     name: str,
     folder: Path,
@@ -367,6 +347,7 @@ def _material(
     from .plot import plot_mosaic, plot_render_comparison
     from .render import crest_contrast
     from .rig import simulate_capture
+    from .synth.metrics import bend_summary
 
     truth = materials.load(name)
     res = MaterialResult(name=name, truth_attrs=dict(truth.attrs), measured_path=folder / f"{name}-measured.h5",
@@ -404,7 +385,7 @@ def _material(
     if not config.keep_capture:
         discard(capture)  # 26,000 files: deleted while the renders run
 
-    res.contrast["table"] = _bend_contrast(measured, truth)
+    res.contrast["table"] = {"measured": bend_summary(measured), "truth": bend_summary(truth)}
     pic, res.seconds["render_sine"] = _render_pair(measured, "sine", config=config, progress=progress,
                                                    label=f"{name}: sine sheet", curvature=True)
     res.render_exposure_ev = pic.exposure_ev

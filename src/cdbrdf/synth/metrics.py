@@ -13,6 +13,7 @@ curvatures over random near-normal direction pairs, with the swatch colours
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,6 +36,7 @@ __all__ = [
     "near_normal_pairs",
     "BendContrast",
     "bend_contrast",
+    "bend_summary",
 ]
 
 #: Largest light and view elevation of the near-normal comparison, degrees.
@@ -220,3 +222,34 @@ def bend_contrast(
         lab=linear_to_lab(rgb),
         reference_lab=linear_to_lab(rgb_ref),
     )
+
+
+def bend_summary(table: CDBRDF, **options: Any) -> list[dict[str, float]]:
+    """:func:`bend_contrast` of every curvature of the table's grid against the flat one.
+
+    Parameters
+    ----------
+    table
+        A table whose grid holds kappa = 0.
+    **options
+        Passed to :func:`bend_contrast` (``n_pairs``, ``max_theta_deg``, ...).
+
+    Returns
+    -------
+    list of dict
+        One row per non-zero curvature: ``kappa`` (mm^-1), ``median_delta_e``,
+        ``delta_lightness`` (L* of the mean colour, bent minus flat: > 0 lighter
+        when bent), ``hue_deg`` and ``flat_hue_deg`` (CIE hue angles).
+    """
+    kappas = [float(k) for k in table.grid.kappa]
+    if 0.0 not in kappas:
+        raise OptionError(f"table {table.attrs.get('material', '')!r}: its grid has no flat curvature (kappa = 0)")
+    rows = []
+    for k in kappas:
+        if k == 0.0:
+            continue
+        c = bend_contrast(table, k, **options)
+        (_, hue), (_, hue0) = c.chroma_hue()
+        rows.append({"kappa": k, "median_delta_e": c.median_delta_e, "delta_lightness": c.lightness_change,
+                     "hue_deg": hue, "flat_hue_deg": hue0})
+    return rows
