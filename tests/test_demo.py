@@ -301,7 +301,7 @@ def test_cli_demo_refuses_an_earlier_demo_folder_holding_added_files(tmp_path, c
     assert (tmp_path / "earlier" / "report.html").read_text() == "old\n"
 
 
-@pytest.mark.parametrize("materials, match", [(["velvet"], r"materials: \['velvet'\] unknown; valid: denim, shot"),
+@pytest.mark.parametrize("materials, match", [(["felt"], r"materials: \['felt'\] unknown; valid: denim, shot, velvet, towel"),
                                               ([], "materials: give at least one")])
 def test_run_demo_bad_materials_are_option_errors(tmp_path, materials, match):
     from cdbrdf.errors import OptionError

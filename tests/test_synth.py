@@ -79,8 +79,8 @@ def test_parameter_validation():
         presets.params("denim", thicknes=1.0)
     with pytest.raises(ValueError, match="rays: must be an integer"):
         presets.params("shot", rays=2.5)
-    with pytest.raises(ValueError, match="unknown preset 'velvet'; valid presets: denim, shot"):
-        presets.model("velvet")
+    with pytest.raises(ValueError, match="unknown preset 'felt'; valid presets: denim, shot, towel, velvet"):
+        presets.model("felt")
     p = presets.params("denim", thickness_mm=0.7)
     assert p.thickness_mm == 0.7 and p.name == "denim"
     assert ClothParams.parse_value("warp_rgb", "0.1,0.2,0.3") == (0.1, 0.2, 0.3)
@@ -343,7 +343,7 @@ def test_cli_synth(tmp_path, capsys):
     assert "thickness_mm" in capsys.readouterr().err
     assert not (tmp_path / "x.h5").exists()
     with pytest.raises(SystemExit):
-        cli_main(["synth", "velvet", "-o", str(tmp_path / "x.h5")])
+        cli_main(["synth", "felt", "-o", str(tmp_path / "x.h5")])
 
 
 
