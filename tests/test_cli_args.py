@@ -118,7 +118,9 @@ BAD: list[tuple[list[str], list[str], str]] = [
     (SYNTH, ["--grid", "regular:0.01,0.01"], "CDBRDF_MAX_TABLE_SAMPLES"),
     (SYNTH, ["--kappa", "inf"], "--kappa"),
     (SYNTH, ["--set", "thickness_mm=nan"], "thickness_mm"),
-    (["demo", "-o", "{o}/demo", "--material", "velvet"], [], "--material"),
+    (["demo", "-o", "{o}/demo", "--fabrics", "velvet,felt"], [], "--fabrics: 'felt' unknown"),
+    (["demo", "-o", "{o}/demo", "--fabrics", "velvet,velvet"], [], "--fabrics: a fabric named twice"),
+    (["demo", "-o", "{o}/demo", "--fabrics", "denim,"], [], "--fabrics"),
     (["demo", "-o", "{o}/demo"], ["--wall-height", "-1"], "--wall-height"),
     (["demo", "-o", "{o}/demo"], ["--face-width", "100"], "must stay below 180"),
 ]

@@ -31,9 +31,9 @@ def test_quick_demo_report_is_complete(quick_demo):
     folder = quick_demo.folder
     page = (folder / "report.html").read_text()
     images = re.findall(r'<img src="([^"]+)"', page)
-    # the surfaces' curvature, then per material: photographs, measured mosaic,
-    # truth mosaic, sine sheet, draped cloth
-    assert len(images) == 1 + 5 * 2
+    # the surfaces' curvature, then per material (denim, shot, velvet): photographs,
+    # measured mosaic, truth mosaic, sine sheet, draped cloth
+    assert len(images) == 1 + 5 * 3
     for img in images:
         assert (folder / img).is_file() and (folder / img).stat().st_size > 10_000
         assert "/" not in img  # relative, beside the page
@@ -43,14 +43,21 @@ def test_quick_demo_report_is_complete(quick_demo):
     for f in ("index.html", "viewer.js", "data.js", "assets/table-0.json", "assets/table-1.json"):
         assert (folder / "viewer" / f).is_file(), f
     assert json.loads((folder / "viewer" / "assets" / "table-1.json").read_text())["name"] == "shot-measured.h5"
-    for name in ("denim", "shot"):
+    # the third material in a viewer of its own, beside its ground truth
+    assert 'href="viewer-velvet/index.html"' in page
+    assert json.loads((folder / "viewer-velvet" / "assets" / "table-1.json").read_text())["name"] == \
+        "velvet ground truth"
+    for name in ("denim", "shot", "velvet"):
         assert name in page
         t = cdbrdf.load(folder / f"{name}-measured.h5")
         assert t.attrs["material"] == name
         assert t.quantity == "brdf"
     results = json.loads((folder / "results.json").read_text())
-    assert [m["name"] for m in results["materials"]] == ["denim", "shot"]
-    assert "Filled samples against the ground truth" in page
+    assert [m["name"] for m in results["materials"]] == ["denim", "shot", "velvet"]
+    assert "Filled samples against the ground truth" in page and "What bending does" in page
+    bending = {m["name"]: {b["kappa"]: b["median_delta_e"] for b in m["bending"]} for m in results["materials"]}
+    assert sorted(bending["velvet"]) == [-0.22, -0.13, 0.13, 0.22]
+    assert bending["velvet"][0.22] > bending["denim"][0.22] > 0
     for m in results["materials"]:
         assert m["fill_method"] == "kappa-fit" and m["compared_fill"]["method"] == "nearest"
         for key in ("median_rel_error_filled", "p95_rel_error_filled", "fill_within_1_sigma"):
@@ -109,7 +116,7 @@ def test_report_opens_in_headless_chromium(quick_demo):
         finally:
             browser.close()
     assert not failed, failed
-    assert len(sizes) == 11
+    assert len(sizes) == 16
     # the viewer beside it opens from disk too, with no console message
     from .test_viewer import CHROMIUM_ARGS
 

@@ -13,6 +13,7 @@ curvatures over random near-normal direction pairs, with the swatch colours
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,6 +36,7 @@ __all__ = [
     "near_normal_pairs",
     "BendContrast",
     "bend_contrast",
+    "bend_summary",
 ]
 
 #: Largest light and view elevation of the near-normal comparison, degrees.
@@ -220,3 +222,34 @@ def bend_contrast(
         lab=linear_to_lab(rgb),
         reference_lab=linear_to_lab(rgb_ref),
     )
+
+
+def bend_summary(table: CDBRDF, **options: Any) -> list[dict[str, Any]]:
+    """What bending does near the normal: :func:`bend_contrast` of every bent curvature against the flat one.
+
+    Parameters
+    ----------
+    table
+        A table with ``kappa = 0`` among its curvatures (else the list is empty).
+    **options
+        Passed to :func:`bend_contrast`.
+
+    Returns
+    -------
+    list of dict
+        One per curvature ``!= 0``, JSON-friendly: ``kappa`` (mm^-1),
+        ``median_delta_e``, ``lightness_change``, ``chroma_change`` (of the
+        swatch colours), ``hue_change_deg`` (in [-180, 180)), ``srgb8`` and
+        ``flat_srgb8`` (the swatches, 8-bit sRGB).
+    """
+    if not np.any(table.kappa == 0.0):
+        return []
+    rows = []
+    for k in (float(x) for x in table.kappa if x != 0.0):
+        c = bend_contrast(table, k, **options)
+        (ch, h), (ch0, h0) = c.chroma_hue()
+        bent, flat = c.swatches_srgb8()
+        rows.append({"kappa": k, "median_delta_e": c.median_delta_e, "lightness_change": c.lightness_change,
+                     "chroma_change": ch - ch0, "hue_change_deg": (h - h0 + 180.0) % 360.0 - 180.0,
+                     "srgb8": bent.tolist(), "flat_srgb8": flat.tolist()})
+    return rows
