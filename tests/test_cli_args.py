@@ -107,7 +107,7 @@ BAD: list[tuple[list[str], list[str], str]] = [
     (SIM, ["--noise", "-5,3"], "--noise"),
     (SIM, ["--image", "jpg"], "--image"),
     (SIM, ["--plan", "{d}/missing.csv"], "--plan"),
-    (["simulate-capture", "velvet", "-o", "{o}/cap"], [], "velvet"),
+    (["simulate-capture", "felt", "-o", "{o}/cap"], [], "felt"),
     (CURV, ["--neighbourhood", "1e5"], "--neighbourhood"),
     (CURV, ["--neighbourhood", "0"], "--neighbourhood"),
     (CURV, ["--units", "furlong"], "--units"),

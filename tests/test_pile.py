@@ -11,7 +11,7 @@ import cdbrdf
 from cdbrdf import materials
 from cdbrdf.cli import main as cli_main
 from cdbrdf.errors import OptionError
-from cdbrdf.synth import presets
+from cdbrdf.synth import _pile, presets
 from cdbrdf.synth.metrics import bend_contrast, luminance
 from cdbrdf.synth.pile import PILE_KINDS, PileModel, PileParams
 
@@ -58,7 +58,7 @@ def test_fibre_normalised():
     from cdbrdf.synth.pile import _fibre_albedo
 
     m = PileModel(PileParams(fibre_rgb=(1.0, 1.0, 1.0), fibre_specular=1.0))
-    bare = _fibre_albedo(m._fibre, 0) * m._fibre[7]
+    bare = _fibre_albedo(m._fibre, 0) * m._fibre[_pile.F_K]
     assert bare.max() <= 1.0 and bare.max() >= 0.98
 
 
