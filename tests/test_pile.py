@@ -180,3 +180,18 @@ def test_cli_synth_pile(tmp_path):
     assert t.attrs["provenance"]["parameters"]["lean_deg"] == 15.0
     assert cli_main(["synth", "towel", "--set", "warp_rgb=0.1,0.1,0.1", "-o", str(tmp_path / "x.h5")]) == 2
     assert not (tmp_path / "x.h5").exists()
+
+
+def test_bend_summary_lists_every_bent_stand():
+    from cdbrdf.synth.metrics import bend_summary
+
+    t = materials.load("velvet")
+    rows = bend_summary(t, n_pairs=500)
+    assert [r["kappa"] for r in rows] == [-0.22, -0.13, 0.13, 0.22]
+    for r in rows:
+        c = bend_contrast(t, r["kappa"], n_pairs=500)
+        assert r["median_delta_e"] == c.median_delta_e and r["lightness_change"] == c.lightness_change
+        assert -180 <= r["hue_change_deg"] < 180 and len(r["srgb8"]) == 3
+    flat_only = cdbrdf.CDBRDF(t.values[1:2], kappa=[0.13], theta_l=t.theta_l, phi_l=t.phi_l,
+                              theta_v=t.theta_v, phi_v=t.phi_v)
+    assert bend_summary(flat_only) == []
