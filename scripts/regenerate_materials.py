@@ -3,7 +3,7 @@
 Run: ``.venv/bin/python scripts/regenerate_materials.py [NAME ...] [--out DIR]``
 
 Tabulates each preset of :mod:`cdbrdf.synth.presets` on the paper's grid
-with :func:`cdbrdf.materials.regenerate` (about 30 s for both on 2 cores) and
+with :func:`cdbrdf.materials.regenerate` (about 40 s for all four on 2 cores) and
 writes it into the package's ``data`` folder, or into ``--out``. The values
 come out identical on the same platform; ``tests/test_materials.py`` checks
 a recomputed sub-grid against the bundled files.

@@ -31,9 +31,9 @@ def test_quick_demo_report_is_complete(quick_demo):
     folder = quick_demo.folder
     page = (folder / "report.html").read_text()
     images = re.findall(r'<img src="([^"]+)"', page)
-    # the surfaces' curvature, then per material: photographs, measured mosaic,
-    # truth mosaic, sine sheet, draped cloth
-    assert len(images) == 1 + 5 * 2
+    # the surfaces' curvature, then per material (denim, shot, velvet): photographs,
+    # measured mosaic, truth mosaic, sine sheet, draped cloth
+    assert len(images) == 1 + 5 * 3
     for img in images:
         assert (folder / img).is_file() and (folder / img).stat().st_size > 10_000
         assert "/" not in img  # relative, beside the page
@@ -43,22 +43,27 @@ def test_quick_demo_report_is_complete(quick_demo):
     for f in ("index.html", "viewer.js", "data.js", "assets/table-0.json", "assets/table-1.json"):
         assert (folder / "viewer" / f).is_file(), f
     assert json.loads((folder / "viewer" / "assets" / "table-1.json").read_text())["name"] == "shot-measured.h5"
-    for name in ("denim", "shot"):
+    # the third material in a viewer of its own, beside its ground truth
+    assert 'href="viewer-velvet/index.html"' in page
+    assert json.loads((folder / "viewer-velvet" / "assets" / "table-1.json").read_text())["name"] == \
+        "velvet ground truth"
+    for name in ("denim", "shot", "velvet"):
         assert name in page
         t = cdbrdf.load(folder / f"{name}-measured.h5")
         assert t.attrs["material"] == name
         assert t.quantity == "brdf"
     results = json.loads((folder / "results.json").read_text())
-    assert [m["name"] for m in results["materials"]] == ["denim", "shot"]
-    assert "Filled samples against the ground truth" in page
-    assert "What bending does" in page
+    assert [m["name"] for m in results["materials"]] == ["denim", "shot", "velvet"]
+    assert "Filled samples against the ground truth" in page and "What bending does" in page
     for m in results["materials"]:
         # bending shows at the crests of the rendered sheet and not where it is flat (noise only)
         sine = m["contrast"]["sine"]
         assert sine["flat_delta_e"] < 1.0 < sine["crest_delta_e"], sine
         assert set(sine["crest_srgb"]) == {"brdf", "cdbrdf"}
-        kappas = [row["kappa"] for row in m["contrast"]["table"]["measured"]]
-        assert kappas == [-0.22, -0.13, 0.13, 0.22]
+    bending = {m["name"]: {b["kappa"]: b["median_delta_e"] for b in m["contrast"]["table"]["measured"]}
+               for m in results["materials"]}
+    assert sorted(bending["velvet"]) == [-0.22, -0.13, 0.13, 0.22]
+    assert bending["velvet"][0.22] > bending["denim"][0.22] > 0
     for m in results["materials"]:
         assert m["fill_method"] == "kappa-fit" and m["compared_fill"]["method"] == "nearest"
         for key in ("median_rel_error_filled", "p95_rel_error_filled", "fill_within_1_sigma"):
@@ -117,7 +122,7 @@ def test_report_opens_in_headless_chromium(quick_demo):
         finally:
             browser.close()
     assert not failed, failed
-    assert len(sizes) == 11
+    assert len(sizes) == 16
     # the viewer beside it opens from disk too, with no console message
     from .test_viewer import CHROMIUM_ARGS
 
@@ -309,7 +314,7 @@ def test_cli_demo_refuses_an_earlier_demo_folder_holding_added_files(tmp_path, c
     assert (tmp_path / "earlier" / "report.html").read_text() == "old\n"
 
 
-@pytest.mark.parametrize("materials, match", [(["velvet"], r"materials: \['velvet'\] unknown; valid: denim, shot"),
+@pytest.mark.parametrize("materials, match", [(["felt"], r"materials: \['felt'\] unknown; valid: denim, shot, velvet, towel"),
                                               ([], "materials: give at least one")])
 def test_run_demo_bad_materials_are_option_errors(tmp_path, materials, match):
     from cdbrdf.errors import OptionError

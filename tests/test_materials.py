@@ -19,15 +19,15 @@ def tables():
 def test_names_and_unknown():
     from cdbrdf.errors import OptionError
 
-    assert materials.names() == ["denim", "shot"]
-    for bad in ("velvet", None, 3, ["denim"]):
-        with pytest.raises(OptionError, match=r"material .*: unknown; valid names: denim, shot"):
+    assert materials.names() == ["denim", "shot", "velvet", "towel"]
+    for bad in ("felt", None, 3, ["denim"]):
+        with pytest.raises(OptionError, match=r"material .*: unknown; valid names: denim, shot, velvet, towel"):
             materials.load(bad)
         with pytest.raises(OptionError):
             materials.path(bad)
 
 
-@pytest.mark.parametrize("name", ["denim", "shot"])
+@pytest.mark.parametrize("name", ["denim", "shot", "velvet", "towel"])
 def test_bundled_table(tables, name):
     t = tables[name]
     assert t.grid == cdbrdf.Grid.paper()
@@ -39,7 +39,7 @@ def test_bundled_table(tables, name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["denim", "shot"])
+@pytest.mark.parametrize("name", ["denim", "shot", "velvet", "towel"])
 def test_regenerates_identically(tables, name):
     """A sub-grid recomputed from the preset equals the bundled values exactly."""
     t = tables[name]
@@ -89,4 +89,4 @@ def test_regenerate_writes_loadable_file(tmp_path, monkeypatch):
     t = cdbrdf.load(paths[0])
     assert t.grid == small and t.attrs["material"] == "shot"
     with pytest.raises(ValueError, match="valid names"):
-        materials.regenerate(["velvet"], out_dir=tmp_path)
+        materials.regenerate(["felt"], out_dir=tmp_path)

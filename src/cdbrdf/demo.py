@@ -1,6 +1,6 @@
 """The paper end to end, on the bundled fabrics: ``cdbrdf demo``.
 
-For each material (denim and shot fabric by default):
+For each material (:data:`DEFAULT_FABRICS` by default: denim, shot fabric and velvet):
 
 1. **plan** the capture: every view x light direction of the grid on a stand
    of every curvature, marking the directions a concave stand hides
@@ -18,8 +18,12 @@ For each material (denim and shot fabric by default):
 5. **draw** the Fig. 7 mosaics (filled samples marked, differences to kappa = 0);
 6. **render** the paper's sine sheet and a draped cloth under one directional
    light with the plain BRDF and with the CDBRDF (Figs. 9-10);
-7. export the interactive viewer (:mod:`cdbrdf.view`) of the measured tables
-   into ``viewer/`` and write ``report.html`` beside the figures, linking to it.
+7. say what bending does to it: the colour difference near the normal
+   between the bent stands and the flat one (:func:`cdbrdf.synth.metrics.bend_contrast`);
+8. export the interactive viewer (:mod:`cdbrdf.view`) of the measured tables,
+   two side by side (``viewer/``; with more than two materials the next pairs
+   in ``viewer-<name>-<name>/``), and write ``report.html`` beside the
+   figures, linking to them.
 
 The output folder is built beside the destination and swapped in whole at
 the end (:func:`cdbrdf.outputs.output_folder`), so results of different runs
@@ -51,7 +55,10 @@ if TYPE_CHECKING:
     from .measure.stands import Stand
 
 __all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_truth", "WORK_DIR", "COMPARED_FILL",
-           "VIEWER_DIR", "DEMO_MAKER", "DEMO_SIGNATURE"]
+           "VIEWER_DIR", "DEMO_MAKER", "DEMO_SIGNATURE", "DEFAULT_FABRICS"]
+
+#: The materials the demo runs by default: the paper's two woven fabrics and velvet.
+DEFAULT_FABRICS: tuple[str, ...] = ("denim", "shot", "velvet")
 
 #: The fill method the demo compares the default with (the paper's rule).
 COMPARED_FILL = "nearest"
@@ -423,17 +430,24 @@ def _curvature_figure(path: Path) -> Any:
     return drape
 
 
+def _viewer_dirs(results: Sequence[MaterialResult]) -> list[tuple[str, list[MaterialResult]]]:
+    """The viewers' folders and their materials: two side by side, the first pair in :data:`VIEWER_DIR`."""
+    pairs = [list(results[i:i + 2]) for i in range(0, len(results), 2)]
+    return [(VIEWER_DIR if i == 0 else "-".join([VIEWER_DIR] + [m.name for m in p]), p) for i, p in enumerate(pairs)]
+
+
 def _export_viewer(folder: Path, results: Sequence[MaterialResult], drape: Any) -> None:
-    """The interactive viewer of the measured tables (two side by side; one beside its ground truth)."""
+    """The interactive viewers of the measured tables (two side by side; one alone beside its ground truth)."""
     from . import materials as mats
     from .table import load
     from .view.export import viewer_files, write_viewer
 
-    tables = [(m.measured_path.name, load(m.measured_path)) for m in results[:2]]
-    if len(tables) == 1:
-        tables.append((f"{results[0].name} ground truth", mats.load(results[0].name)))
-    ev = results[0].render_exposure_ev if results else None
-    write_viewer(folder / VIEWER_DIR, viewer_files(tables, meshes={"drape": ("draped cloth", drape)}, exposure_ev=ev))
+    for sub, pair in _viewer_dirs(results):
+        tables = [(m.measured_path.name, load(m.measured_path)) for m in pair]
+        if len(tables) == 1:
+            tables.append((f"{pair[0].name} ground truth", mats.load(pair[0].name)))
+        write_viewer(folder / sub, viewer_files(tables, meshes={"drape": ("draped cloth", drape)},
+                                                exposure_ev=pair[0].render_exposure_ev))
 
 
 def _stands_text(stands: Sequence[Stand]) -> str:
@@ -469,13 +483,17 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
     )
     intro = r.section(
         "What this shows",
-        "Each fabric is a woven micro-structure model whose reflectance depends on how it is bent "
-        "(the ground truth). A simulated capture rig photographs it on five cylindrical stands, "
-        "convex and concave; cdbrdf measures the photographs into a CDBRDF table exactly as it "
-        "would a lab's, fills the directions a concave stand hides, and renders surfaces with the "
+        "Each fabric is a micro-structure model whose reflectance depends on how it is bent "
+        "(the ground truth): woven cloth (denim, shot fabric), whose gaps between the yarns open on a "
+        "convex bend, or pile (velvet, towelling), whose fibres or loops fan apart on a convex bend "
+        "and show the ground, and crowd on a concave one. A simulated capture rig photographs it on "
+        "five cylindrical stands, convex and concave; cdbrdf measures the photographs into a CDBRDF "
+        "table exactly as it would a lab's, fills the directions a concave stand hides, and renders surfaces with the "
         "table, taking the curvature at every point. Compare the CDBRDF renders with the plain "
         "BRDF (the flat stand's slice) at the crests and valleys, or bend the sheet yourself in the "
-        f'<a href="{VIEWER_DIR}/index.html">interactive viewer</a> (WebGL2; it opens from disk).',
+        "interactive viewer (WebGL2; it opens from disk): "
+        + ", ".join(f'<a href="{d}/index.html">{" and ".join(m.name for m in p)}</a>' for d, p in _viewer_dirs(results))
+        + ".",
     )
     intro.figure("surfaces-curvature.png", "Where the surfaces bend",
                  "The two rendered surfaces coloured by the curvature the renderer looks up at each "
@@ -511,18 +529,18 @@ def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialRe
          if s["filled"]],
     )
     intro.table(
-        "What bending does: the colour difference near the normal (light and view elevations up to 30 deg, "
-        "CIE 1976 Delta E*ab, median over 20,000 direction pairs, the flat table's median luminance scaled to "
-        "0.3) between each stand and the flat one, for the measured table and the ground truth, with the "
-        "change of lightness L* (positive: lighter when bent); and on the rendered sine sheet, the median "
-        "Delta E*ab between the plain BRDF and the CDBRDF at the crests and troughs and where the sheet is flat "
-        "(about 2 is the threshold of noticing; the flat pixels show the render's noise)",
-        ["material", "kappa (1/mm)", "Delta E*ab measured", "Delta L* measured", "Delta E*ab truth",
-         "Delta L* truth", "sine sheet crests", "sine sheet flat"],
-        [[m.name, f"{a['kappa']:+g}", f"{a['median_delta_e']:.1f}", f"{a['delta_lightness']:+.1f}",
-          f"{b['median_delta_e']:.1f}", f"{b['delta_lightness']:+.1f}",
-          f"{m.contrast['sine']['crest_delta_e']:.1f}" if i == 0 else "",
-          f"{m.contrast['sine']['flat_delta_e']:.1f}" if i == 0 else ""]
+        "What bending does: the median colour difference Delta E*ab near the normal (view and light "
+        "elevations up to 30 degrees, 20,000 direction pairs, the flat table's median luminance scaled to 0.3) "
+        "between each bent stand and the flat one, in the measured table and in the ground truth, and the "
+        "change of the measured mean colour's lightness L*, chroma C* and hue h; on the rendered sine sheet, the "
+        "median Delta E*ab between the plain BRDF and the CDBRDF at the crests and troughs and where the sheet "
+        "is flat (the eye notices Delta E*ab above about 2; the flat pixels show the render's noise)",
+        ["material", "kappa (1/mm)", "Delta E*ab measured", "Delta E*ab truth", "Delta L*", "Delta C*",
+         "Delta h (deg)", "colour bent / flat (sRGB)", "sine sheet crests / flat"],
+        [[m.name, f"{a['kappa']:+g}", f"{a['median_delta_e']:.1f}", f"{b['median_delta_e']:.1f}",
+          f"{a['lightness_change']:+.1f}", f"{a['chroma_change']:+.1f}", f"{a['hue_change_deg']:+.0f}",
+          "#{:02x}{:02x}{:02x} / #{:02x}{:02x}{:02x}".format(*a["srgb8"], *a["flat_srgb8"]),
+          f"{m.contrast['sine']['crest_delta_e']:.1f} / {m.contrast['sine']['flat_delta_e']:.1f}" if i == 0 else ""]
          for m in results if m.contrast
          for i, (a, b) in enumerate(zip(m.contrast["table"]["measured"], m.contrast["table"]["truth"],
                                         strict=True))],
@@ -589,7 +607,7 @@ def run_demo(
     output: str | PathLike[str],
     *,
     quick: bool = False,
-    materials: Sequence[str] = ("denim", "shot"),
+    materials: Sequence[str] = DEFAULT_FABRICS,
     config: DemoConfig | None = None,
     stands: Mapping[float, Stand] | Sequence[Stand] | None = None,
     progress: Progress | None = None,

@@ -1,4 +1,4 @@
-"""Ready-made materials shipped with the package: ``denim`` and ``shot``.
+"""Ready-made materials shipped with the package: ``denim``, ``shot``, ``velvet`` and ``towel``.
 
 Each is a table of the corresponding :mod:`cdbrdf.synth.presets` preset
 tabulated on the paper's grid (:meth:`cdbrdf.Grid.paper`, float32), stored in
@@ -14,7 +14,7 @@ Examples
 --------
 >>> import cdbrdf.materials
 >>> cdbrdf.materials.names()
-['denim', 'shot']
+['denim', 'shot', 'velvet', 'towel']
 >>> table = cdbrdf.materials.load("denim")   # doctest: +SKIP
 """
 
@@ -29,7 +29,7 @@ from .table import CDBRDF, Grid
 
 __all__ = ["names", "load", "path", "build", "regenerate"]
 
-_NAMES = ("denim", "shot")
+_NAMES = ("denim", "shot", "velvet", "towel")
 _DATA = Path(__file__).resolve().parent / "data"
 
 log = logging.getLogger(__name__)

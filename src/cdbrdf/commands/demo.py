@@ -1,4 +1,4 @@
-"""``cdbrdf demo -o DIR [--quick]``: the paper end to end on the bundled fabrics."""
+"""``cdbrdf demo -o DIR [--quick] [--fabrics LIST]``: the paper end to end on the bundled fabrics."""
 
 from __future__ import annotations
 
@@ -9,22 +9,29 @@ from ._text import say
 __all__ = ["register", "run"]
 
 
-def _material(text: str) -> str:
+def _fabrics(text: str) -> list[str]:
+    """A comma-separated list of bundled materials, each once."""
     from ..materials import names
 
-    if text not in names():
-        raise argparse.ArgumentTypeError(f"expected one of {', '.join(names())}, got {text!r}")
-    return text
+    items = [t.strip() for t in text.split(",")]
+    if not items or any(not t for t in items):
+        raise argparse.ArgumentTypeError(f"expected a comma-separated list of {', '.join(names())}, got {text!r}")
+    for t in items:
+        if t not in names():
+            raise argparse.ArgumentTypeError(f"{t!r:.40} unknown; expected some of {', '.join(names())}")
+    if len(set(items)) != len(items):
+        raise argparse.ArgumentTypeError(f"a fabric named twice in {text!r:.80}")
+    return items
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "demo",
         help="the paper end to end: plan, photograph (simulated), measure, mosaics, renders, report",
-        description="For denim and shot fabric: plan the paper's capture, photograph it with the "
-        "simulated rig, measure the photographs into a CDBRDF, compare with the ground truth, draw "
-        "the Fig. 7 mosaics and render the sine sheet and a draped cloth with the plain BRDF and "
-        "the CDBRDF; writes DIR/report.html.",
+        description="For each fabric (default: denim, shot and velvet): plan the paper's capture, "
+        "photograph it with the simulated rig, measure the photographs into a CDBRDF, compare with "
+        "the ground truth, draw the Fig. 7 mosaics and render the sine sheet and a draped cloth "
+        "with the plain BRDF and the CDBRDF; writes DIR/report.html.",
     )
     from ._args import output_folder
 
@@ -32,8 +39,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="output folder (replaced whole if it holds an earlier output of the demo and nothing "
                    "added to it since)")
     p.add_argument("--quick", action="store_true", help="coarse grid and small images: a few minutes")
-    p.add_argument("--material", action="append", dest="materials", metavar="NAME", type=_material,
-                   help="bundled material to run (repeatable; default: denim and shot)")
+    from ..demo import DEFAULT_FABRICS
+
+    p.add_argument("--fabrics", type=_fabrics, default=None, metavar="LIST",
+                   help=f"bundled fabrics to run, comma-separated (default: {','.join(DEFAULT_FABRICS)}; "
+                   "all: denim,shot,velvet,towel)")
     from .plan import stand_options
 
     stand_options(p)
@@ -41,7 +51,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..demo import CONFIGS, DEMO_MAKER, DEMO_SIGNATURE, run_demo
+    from ..demo import CONFIGS, DEFAULT_FABRICS, DEMO_MAKER, DEMO_SIGNATURE, run_demo
     from ..outputs import check_output_folder
     from ._progress import ProgressBars
     from .plan import stands_from_args
@@ -50,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     check_output_folder(args.output, maker=DEMO_MAKER, signature=DEMO_SIGNATURE)
     cfg = CONFIGS["quick" if args.quick else "full"]
     stands = stands_from_args(args, cfg.grid.kappa)
-    materials = args.materials or ["denim", "shot"]
+    materials = args.fabrics or list(DEFAULT_FABRICS)
     est = cfg.expected_seconds(len(materials))
     if not args.quiet:
         g = cfg.grid

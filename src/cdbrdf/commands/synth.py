@@ -1,4 +1,4 @@
-"""``cdbrdf synth denim|shot [--set name=value ...] [--grid ...] -o FILE``."""
+"""``cdbrdf synth denim|shot|velvet|towel [--set name=value ...] [--grid ...] -o FILE``."""
 
 from __future__ import annotations
 
@@ -48,8 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "synth",
-        help="tabulate a synthetic woven-cloth material (denim, shot) into a CDBRDF file",
-        description="Tabulate the woven-cloth model of a preset onto a grid and write "
+        help="tabulate a synthetic fabric (woven: denim, shot; pile: velvet, towel) into a CDBRDF file",
+        description="Tabulate the fabric model of a preset (woven cloth or pile) onto a grid and write "
         "the CDBRDF file. Parameters of the preset can be overridden with --set "
         "(see docs/fabric-model.md for their meaning).",
     )
@@ -73,21 +73,23 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def parse_sets(items: list[str]) -> dict:
+def parse_sets(items: list[str], *, preset: str = "denim") -> dict:
     """``["name=value", ...]`` -> typed overrides (validated names, finite numbers).
 
     Checked when the command runs, before anything is computed or written
-    (the values depend on the cloth model's parameter types).
+    (the values depend on the parameter types of the preset's model:
+    :func:`cdbrdf.synth.presets.params_class`).
     """
-    from ..synth.cloth import ClothParams
+    from ..synth.presets import params_class
 
+    cls = params_class(preset)
     out = {}
     for item in items:
         if "=" not in item:
             raise OptionError(f"--set: expected NAME=VALUE, got {item!r}")
         name, value = item.split("=", 1)
         name = name.strip()
-        parsed = ClothParams.parse_value(name, value)
+        parsed = cls.parse_value(name, value)
         numbers = parsed if isinstance(parsed, tuple) else (parsed,)
         if any(isinstance(x, float) and not math.isfinite(x) for x in numbers):
             raise OptionError(f"--set: {name}: expected finite numbers, got {value!r}")
@@ -136,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     from ..synth import presets
     from ._progress import ProgressBars
 
-    overrides = parse_sets(args.sets)
+    overrides = parse_sets(args.sets, preset=args.preset)
     model = presets.model(args.preset, **overrides)
     grid = parse_grid(args.grid, args.kappa)
     quiet = getattr(args, "quiet", False)

@@ -224,32 +224,32 @@ def bend_contrast(
     )
 
 
-def bend_summary(table: CDBRDF, **options: Any) -> list[dict[str, float]]:
-    """:func:`bend_contrast` of every curvature of the table's grid against the flat one.
+def bend_summary(table: CDBRDF, **options: Any) -> list[dict[str, Any]]:
+    """What bending does near the normal: :func:`bend_contrast` of every bent curvature against the flat one.
 
     Parameters
     ----------
     table
-        A table whose grid holds kappa = 0.
+        A table with ``kappa = 0`` among its curvatures (else the list is empty).
     **options
-        Passed to :func:`bend_contrast` (``n_pairs``, ``max_theta_deg``, ...).
+        Passed to :func:`bend_contrast`.
 
     Returns
     -------
     list of dict
-        One row per non-zero curvature: ``kappa`` (mm^-1), ``median_delta_e``,
-        ``delta_lightness`` (L* of the mean colour, bent minus flat: > 0 lighter
-        when bent), ``hue_deg`` and ``flat_hue_deg`` (CIE hue angles).
+        One per curvature ``!= 0``, JSON-friendly: ``kappa`` (mm^-1),
+        ``median_delta_e``, ``lightness_change``, ``chroma_change`` (of the
+        swatch colours), ``hue_change_deg`` (in [-180, 180)), ``srgb8`` and
+        ``flat_srgb8`` (the swatches, 8-bit sRGB).
     """
-    kappas = [float(k) for k in table.grid.kappa]
-    if 0.0 not in kappas:
-        raise OptionError(f"table {table.attrs.get('material', '')!r}: its grid has no flat curvature (kappa = 0)")
+    if not np.any(table.kappa == 0.0):
+        return []
     rows = []
-    for k in kappas:
-        if k == 0.0:
-            continue
+    for k in (float(x) for x in table.kappa if x != 0.0):
         c = bend_contrast(table, k, **options)
-        (_, hue), (_, hue0) = c.chroma_hue()
-        rows.append({"kappa": k, "median_delta_e": c.median_delta_e, "delta_lightness": c.lightness_change,
-                     "hue_deg": hue, "flat_hue_deg": hue0})
+        (ch, h), (ch0, h0) = c.chroma_hue()
+        bent, flat = c.swatches_srgb8()
+        rows.append({"kappa": k, "median_delta_e": c.median_delta_e, "lightness_change": c.lightness_change,
+                     "chroma_change": ch - ch0, "hue_change_deg": (h - h0 + 180.0) % 360.0 - 180.0,
+                     "srgb8": bent.tolist(), "flat_srgb8": flat.tolist()})
     return rows

@@ -2,7 +2,8 @@
 
 Each preset is a set of :class:`~cdbrdf.synth.cloth.ClothParams` values;
 :func:`params` returns them with user overrides applied (validated, unknown
-names rejected).
+names rejected). The pile presets ``velvet`` and ``towel`` are
+:class:`~cdbrdf.synth.pile.PileParams` values (:mod:`cdbrdf.synth.pile_presets`).
 
 - ``denim``: indigo-dyed cotton warp over a white (ecru) weft, 3/1
   warp-faced twill, coarse twisted cotton yarns: matte with a faint sheen.
@@ -23,10 +24,12 @@ from typing import Any
 
 from ..errors import OptionError
 from .cloth import ClothModel, ClothParams
+from .pile import PileModel, PileParams
+from .pile_presets import PILE_PRESETS
 
-__all__ = ["PRESETS", "names", "params", "model"]
+__all__ = ["PRESETS", "names", "params", "params_class", "model"]
 
-PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
+_WOVEN: Mapping[str, Mapping[str, Any]] = MappingProxyType(
     {
         "denim": MappingProxyType(
             {
@@ -91,26 +94,41 @@ PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
     }
 )
 
+#: Every preset: the woven ones above and the pile ones.
+PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType({**_WOVEN, **PILE_PRESETS})
+
 
 def names() -> list[str]:
     """Names of the presets."""
     return sorted(PRESETS)
 
 
-def params(name: str, **overrides: Any) -> ClothParams:
+def params_class(name: str) -> type[ClothParams] | type[PileParams]:
+    """The parameter class of a preset: :class:`ClothParams` (woven) or :class:`PileParams` (pile).
+
+    Raises
+    ------
+    OptionError
+        For an unknown preset (listing the valid ones).
+    """
+    if name not in PRESETS:
+        raise OptionError(f"unknown preset {name!r}; valid presets: {', '.join(names())}")
+    return PileParams if name in PILE_PRESETS else ClothParams
+
+
+def params(name: str, **overrides: Any) -> ClothParams | PileParams:
     """The parameters of a preset with ``overrides`` applied.
 
     Raises
     ------
-    ValueError
+    OptionError
         For an unknown preset or parameter name (listing the valid ones) or
         an invalid value.
     """
-    if name not in PRESETS:
-        raise OptionError(f"unknown preset {name!r}; valid presets: {', '.join(names())}")
-    return ClothParams().replace(**dict(PRESETS[name])).replace(**overrides)
+    return params_class(name)().replace(**dict(PRESETS[name])).replace(**overrides)
 
 
-def model(name: str, **overrides: Any) -> ClothModel:
-    """A :class:`ClothModel` of a preset (see :func:`params`)."""
-    return ClothModel(params(name, **overrides))
+def model(name: str, **overrides: Any) -> ClothModel | PileModel:
+    """The model of a preset (:class:`ClothModel` or :class:`PileModel`; see :func:`params`)."""
+    p = params(name, **overrides)
+    return PileModel(p) if isinstance(p, PileParams) else ClothModel(p)

@@ -1,0 +1,577 @@
+"""The curvature-dependent BRDF of a pile fabric (velvet, towelling) from its fibres.
+
+A pile fabric is a ground weave with fibres (velvet: short cut fibres
+standing near the normal) or yarn loops (terry towelling) standing on it.
+:class:`PileParams` describes one (pile height, fibre or yarn diameter,
+density, lean, orientation spread, colours, fibre gloss); :class:`PileModel`
+evaluates its reflectance ``f(theta_v, phi_v, theta_l, phi_l, kappa)`` (BRDF
+in sr^-1, cosine of the light direction not included, linear Rec. 709 RGB)
+and tabulates it onto any :class:`cdbrdf.Grid`.
+
+How a value is computed (``docs/fabric-model.md`` has the details):
+
+1. *Geometry.* The pile is a layer of height ``H`` cut into ``layers`` slabs;
+   a quadrature of fibre directions ``t_m`` (around the normal with a
+   Gaussian spread, tilted by the lean towards the brush azimuth; for loops,
+   the tangents along semi-elliptic arches in random vertical planes) gives,
+   per slab, the fibre length per unit volume of each direction.
+2. *Bending.* On a cylinder of curvature ``kappa`` the fibres stand along the
+   radii: at height ``z`` above the ground the same fibres spread over
+   ``1 + kappa z`` times the ground's length, so each slab's density is
+   divided by ``1 + kappa z`` (neighbouring tips separate by ``h kappa`` per
+   unit spacing on a convex bend, the ground shows; they crowd on a concave
+   one). In the local frame the fibres keep their directions.
+3. *Extinction.* A fibre of diameter ``d`` shadows ``d |w x t|`` per unit
+   length from direction ``w`` (Zhao et al. 2011's fibre medium, the
+   microflake model's projected area of Jakob et al. 2010).
+4. *Scattering.* Single scattering in the pile, each fibre a diffuse,
+   coloured cylinder plus the white specular ``R`` lobe of Marschner et al.
+   (2003) (:mod:`cdbrdf.synth._pile`), integrated over depth with the
+   transmissions towards the light and the viewer; the ground, a Lambertian
+   surface of its own colour, is seen through the pile.
+5. *Shadowing and masking.* The view and light paths through the pile are
+   correlated where they are closer than ``correlation_mm`` (the gaps between
+   tufts): their joint transmission is ``exp(-(max + (1 - c) min))`` of the
+   two optical depths, ``c = exp(-separation / correlation_mm)`` (the hot
+   spot of Kuusk 1991's canopy model).
+
+Energy: each fibre's albedo is at most 1 (numerically normalised) and only
+single scattering and one ground bounce are counted, so the directional
+albedo is at most 1 (tested numerically). Reciprocity: every term is
+symmetric in the view and the light, so the model is reciprocal to rounding.
+Multiple scattering between fibres is not included (the values are a lower
+bound for bright fibres).
+
+References
+----------
+J. Lu, J. J. Koenderink, A. M. L. Kappers, "Optical properties (bidirectional
+reflection distribution functions) of velvet", Applied Optics 37(25), 1998.
+S. Zhao, W. Jakob, S. Marschner, K. Bala, "Building volumetric appearance
+models of fabric using micro CT imaging", ACM Transactions on Graphics 30(4), 2011.
+Z. Velinov, M. B. Hullin, "An interactive appearance model for microscopic
+fiber surfaces", Vision, Modeling and Visualization, 2016.
+W. Jakob, A. Arbree, J. T. Moon, K. Bala, S. Marschner, "A radiative transfer
+framework for rendering materials with anisotropic structure", ACM
+Transactions on Graphics 29(4), 2010.
+S. R. Marschner, H. W. Jensen, M. Cammarano, S. Worley, P. Hanrahan, "Light
+scattering from human hair fibers", ACM Transactions on Graphics 22(3), 2003.
+A. Kuusk, "The hot spot effect in plant canopy reflectance", in Photon-Vegetation
+Interactions, Springer, 1991.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, fields
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._jit import run_split
+from ..errors import OptionError, QueryError
+from ..frames import direction_from_angles
+from ..table import CDBRDF, Grid
+from . import _pile
+
+__all__ = ["PILE_KINDS", "PileParams", "PileModel", "PILE_MODEL_NAME", "PILE_MODEL_VERSION"]
+
+log = logging.getLogger(__name__)
+
+PILE_MODEL_NAME = "cdbrdf.synth.pile"
+#: Bump when a change alters any computed value.
+PILE_MODEL_VERSION = "1.0"
+
+#: Kinds of pile: straight cut fibres (velvet, plush) or yarn loops (terry).
+PILE_KINDS: Mapping[str, str] = MappingProxyType({
+    "cut": "straight cut fibres rooted in the ground (velvet, velveteen, plush)",
+    "loop": "yarn loops, semi-elliptic arches in random vertical planes (terry towelling)",
+})
+
+#: Largest ``-kappa z`` a concave bend may reach at the pile's top (the pile
+#: would otherwise meet itself at the cylinder's axis).
+_MAX_CROWDING = 0.9
+_ALBEDO_THETAS = 46
+_ALBEDO_N_THETA = 90
+_ALBEDO_N_PHI = 180
+_NORM_MARGIN = 1.01
+
+RGB = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class PileParams:
+    """Parameters of a pile fabric. Lengths in mm, angles in degrees.
+
+    Attributes
+    ----------
+    name
+        Material name written into tables.
+    kind
+        ``"cut"`` or ``"loop"`` (:data:`PILE_KINDS`).
+    pile_height_mm
+        Fibre length (cut) or loop height (loop), ``h``.
+    strand_diameter_mm
+        Diameter ``d`` of the scattering cylinders: a fibre (cut) or the
+        loop yarn (loop).
+    strands_per_mm2
+        Fibres (cut) or loops (loop) per mm^2 of ground.
+    loop_width_mm
+        Base width of a loop (loop only).
+    lean_deg
+        Tilt of the whole pile from the normal, towards ``brush_deg``.
+    brush_deg
+        Azimuth the pile leans towards (the brush direction), from x.
+    spread_deg
+        Standard deviation of the fibres' (cut) or loop planes' (loop) tilt
+        around the lean.
+    fibre_rgb
+        Albedo of the fibres' diffuse scattering (linear Rec. 709, [0, 1]).
+    ground_rgb
+        Lambertian albedo of the ground weave.
+    fibre_specular
+        Weight ``w_s`` in [0, 1] of the fibres' white specular lobe (1 = Fresnel).
+    fibre_gloss_deg
+        Width ``beta`` of the specular lobe (fibre surface roughness).
+    ior
+        Refractive index of the fibres.
+    correlation_mm
+        Horizontal size of the gaps in the pile: the view and light paths see
+        the same gaps when closer than this (the hot spot).
+    layers
+        Slabs the pile is integrated over.
+    azimuths
+        Azimuthal samples of the orientation quadrature.
+    rings
+        Tilt samples of the orientation quadrature.
+    """
+
+    name: str = "pile"
+    kind: str = "cut"
+    pile_height_mm: float = 1.5
+    strand_diameter_mm: float = 0.015
+    strands_per_mm2: float = 300.0
+    loop_width_mm: float = 1.0
+    lean_deg: float = 0.0
+    brush_deg: float = 90.0
+    spread_deg: float = 10.0
+    fibre_rgb: RGB = (0.5, 0.5, 0.5)
+    ground_rgb: RGB = (0.5, 0.5, 0.5)
+    fibre_specular: float = 1.0
+    fibre_gloss_deg: float = 8.0
+    ior: float = 1.53
+    correlation_mm: float = 0.1
+    layers: int = 16
+    azimuths: int = 12
+    rings: int = 6
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise OptionError("name: must be a non-empty string")
+        if self.kind not in PILE_KINDS:
+            raise OptionError(f"kind: unknown pile kind {self.kind!r}; valid kinds: {', '.join(PILE_KINDS)}")
+        for f in ("fibre_rgb", "ground_rgb"):
+            v = getattr(self, f)
+            try:
+                a = np.asarray(v, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise OptionError(f"{f}: expected three numbers, got {v!r}") from None
+            if a.shape != (3,) or not np.all(np.isfinite(a)) or np.any(a < 0) or np.any(a > 1):
+                raise OptionError(f"{f}: expected three albedos in [0, 1], got {v!r}")
+            object.__setattr__(self, f, tuple(float(x) for x in a))
+        bounds = {
+            "pile_height_mm": (0.0, 50.0), "strand_diameter_mm": (0.0, 5.0), "strands_per_mm2": (0.0, 1e5),
+            "loop_width_mm": (0.0, 50.0), "fibre_gloss_deg": (0.0, 90.0), "correlation_mm": (0.0, 50.0),
+        }
+        for f, (lo, hi) in bounds.items():
+            v = getattr(self, f)
+            if not _is_real(v) or not lo < v <= hi:
+                raise OptionError(f"{f}: must be a number in ({lo:g}, {hi:g}], got {v!r}")
+            object.__setattr__(self, f, float(v))
+        for f, lo, hi in (("lean_deg", 0.0, 80.0), ("spread_deg", 0.0, 60.0), ("fibre_specular", 0.0, 1.0),
+                          ("brush_deg", -360.0, 360.0), ("ior", 1.0, 3.0)):
+            v = getattr(self, f)
+            if not _is_real(v) or not lo <= v <= hi:
+                raise OptionError(f"{f}: must lie in [{lo:g}, {hi:g}], got {v!r}")
+            object.__setattr__(self, f, float(v))
+        for f, lo, hi in (("layers", 2, 256), ("azimuths", 1, 256), ("rings", 1, 64)):
+            v = getattr(self, f)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
+                raise OptionError(f"{f}: must be an integer in [{lo}, {hi}], got {v!r}")
+            object.__setattr__(self, f, int(v))
+
+    @classmethod
+    def names(cls) -> list[str]:
+        """Valid parameter names."""
+        return [f.name for f in fields(cls)]
+
+    def replace(self, **changes: Any) -> PileParams:
+        """A copy with some parameters changed (validated).
+
+        Raises
+        ------
+        OptionError
+            For an unknown parameter name (the message lists the valid ones)
+            or an invalid value.
+        """
+        unknown = sorted(set(changes) - set(self.names()))
+        if unknown:
+            raise OptionError(
+                f"unknown pile parameter(s) {', '.join(map(repr, unknown))}; valid names: {', '.join(self.names())}"
+            )
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-friendly parameters (tuples become lists)."""
+        return {f.name: list(v) if isinstance(v := getattr(self, f.name), tuple) else v for f in fields(self)}
+
+    @classmethod
+    def parse_value(cls, name: str, text: str) -> Any:
+        """Convert a command-line value ``text`` for parameter ``name`` (colours as ``r,g,b``).
+
+        Raises
+        ------
+        OptionError
+            For an unknown name (listing the valid ones) or unreadable text.
+        """
+        if name not in cls.names():
+            raise OptionError(f"unknown pile parameter {name!r}; valid names: {', '.join(cls.names())}")
+        default = next(f.default for f in fields(cls) if f.name == name)
+        t = text.strip()
+        try:
+            if isinstance(default, tuple):
+                return tuple(float(x) for x in t.split(","))
+            if isinstance(default, int):
+                return int(t)
+            if isinstance(default, float):
+                return float(t)
+            return t
+        except ValueError:
+            raise OptionError(f"{name}: cannot read {text!r} as a value of this parameter") from None
+
+
+def _is_real(v: Any) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _lean_matrix(p: PileParams) -> NDArray[np.float64]:
+    """Rotation tilting z by ``lean_deg`` towards azimuth ``brush_deg``."""
+    a, b = math.radians(p.lean_deg), math.radians(p.brush_deg)
+    u = np.array([-math.sin(b), math.cos(b), 0.0])  # rotation axis, horizontal, normal to the brush
+    k = np.array([[0, -u[2], u[1]], [u[2], 0, -u[0]], [-u[1], u[0], 0]])
+    return np.eye(3) + math.sin(a) * k + (1 - math.cos(a)) * k @ k
+
+
+def _tilts(p: PileParams) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Tilt nodes (radians, midpoints over +-3 sigma or [0, 3 sigma]) and their weights."""
+    s = math.radians(p.spread_deg)
+    if s == 0.0:
+        return np.zeros(1), np.ones(1)
+    n = p.rings
+    if p.kind == "cut":  # polar angle of a 2-D Gaussian: weight exp(-a^2 / 2 s^2) sin a
+        a = (np.arange(n) + 0.5) / n * min(3.0 * s, math.radians(85.0))
+        w = np.exp(-0.5 * (a / s) ** 2) * np.sin(a)
+    else:  # signed tilt of a loop's plane about its base
+        a = ((np.arange(n) + 0.5) / n * 2.0 - 1.0) * min(3.0 * s, math.radians(85.0))
+        w = np.exp(-0.5 * (a / s) ** 2)
+    return a, w / w.sum()
+
+
+def _segments(p: PileParams) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+                                      NDArray[np.float64]]:
+    """Straight pieces of pile per mm^2 of flat ground.
+
+    Returns ``(tangent (M, 3), z_low (M,), z_high (M,), length (M,))``:
+    direction, heights of the ends (mm) and fibre length per mm^2 (mm).
+    """
+    tilt, tw = _tilts(p)
+    naz = p.azimuths
+    az = (np.arange(naz) + 0.5) / naz * 2.0 * math.pi
+    R = _lean_matrix(p)
+    if p.kind == "cut":
+        T, A = np.meshgrid(tilt, az, indexing="ij")
+        W = np.repeat(tw[:, None], naz, axis=1) / naz
+        t = np.stack([np.sin(T) * np.cos(A), np.sin(T) * np.sin(A), np.cos(T)], -1).reshape(-1, 3) @ R.T
+        w = W.reshape(-1)
+        keep = t[:, 2] > 0.05
+        t, w = t[keep], w[keep] / w[keep].sum()
+        h = p.pile_height_mm
+        return t, np.zeros(len(t)), h * t[:, 2], p.strands_per_mm2 * w * h
+    ns = 24
+    s = np.linspace(0.0, math.pi, ns + 1)
+    arch = np.stack([-0.5 * p.loop_width_mm * np.cos(s), np.zeros_like(s), p.pile_height_mm * np.sin(s)], -1)
+    tangents, zlo, zhi, length = [], [], [], []
+    for ti, wi in zip(tilt, tw):
+        ct, st = math.cos(ti), math.sin(ti)
+        rx = np.array([[1, 0, 0], [0, ct, -st], [0, st, ct]])
+        for a in az:
+            ca, sa = math.cos(a), math.sin(a)
+            rz = np.array([[ca, -sa, 0], [sa, ca, 0], [0, 0, 1]])
+            pts = arch @ (R @ rz @ rx).T
+            d = np.diff(pts, axis=0)
+            seg = np.linalg.norm(d, axis=1)
+            tangents.append(d / seg[:, None])
+            zlo.append(np.minimum(pts[:-1, 2], pts[1:, 2]))
+            zhi.append(np.maximum(pts[:-1, 2], pts[1:, 2]))
+            length.append(seg * wi / naz * p.strands_per_mm2)
+    zl = np.maximum(np.concatenate(zlo), 0.0)
+    return np.concatenate(tangents), zl, np.maximum(np.concatenate(zhi), zl), np.concatenate(length)
+
+
+def _layer_weights(p: PileParams) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+                                           NDArray[np.float64]]:
+    """The flat pile per slab.
+
+    Returns ``(tangents (M, 3), weights (L, M), caps (L, M), z_edges (L + 1,))``:
+    strand length per unit volume (mm / mm^3), area of cut ends per unit
+    volume (mm^2 / mm^3, cut pile only: one disc of the strand's section at
+    its top) and the slabs' boundaries (mm).
+    """
+    t, zlo, zhi, length = _segments(p)
+    top = float(zhi.max())
+    L = p.layers
+    edges = np.linspace(0.0, top, L + 1)
+    dz = top / L
+    lo, hi = edges[:-1, None], edges[1:, None]
+    span = zhi - zlo
+    flat = span < 1e-9 * top
+    overlap = np.clip(np.minimum(hi, zhi) - np.maximum(lo, zlo), 0.0, None)
+    frac = overlap / np.where(flat, 1.0, span)
+    # A horizontal piece lies wholly in the slab holding its height.
+    j = np.minimum((zlo / dz).astype(np.int64), L - 1)
+    frac[:, flat] = 0.0
+    frac[j[flat], np.flatnonzero(flat)] = 1.0
+    W = frac * length / dz
+    C = np.zeros_like(W)
+    if p.kind == "cut":
+        top_slab = np.minimum((zhi / dz).astype(np.int64), L - 1)
+        ends = length / p.pile_height_mm  # strands per mm^2 in each direction
+        C[top_slab, np.arange(len(t))] = ends * 0.25 * math.pi * p.strand_diameter_mm**2 / dz
+    return np.ascontiguousarray(t), np.ascontiguousarray(W), np.ascontiguousarray(C), edges
+
+
+class PileModel:
+    """Reflectance of a pile fabric as a function of directions and curvature.
+
+    Parameters
+    ----------
+    params
+        The fabric (:class:`PileParams`).
+
+    Examples
+    --------
+    >>> from cdbrdf.synth import presets
+    >>> m = presets.model("velvet")
+    >>> m.evaluate(30.0, 0.0, 30.0, 180.0, kappa=0.22).shape
+    (3,)
+    """
+
+    def __init__(self, params: PileParams) -> None:
+        if not isinstance(params, PileParams):
+            raise TypeError(f"params: expected PileParams, got {type(params).__name__}")
+        self.params = p = params
+        self._tangents, self._weights, self._caps, self._edges = _layer_weights(p)
+        row = np.zeros(_pile.N_FIBRE)
+        row[_pile.F_R:_pile.F_B + 1] = p.fibre_rgb
+        row[_pile.F_KD] = 1.0
+        row[_pile.F_WS] = p.fibre_specular
+        row[_pile.F_BETA] = math.radians(p.fibre_gloss_deg)
+        row[_pile.F_ETA] = p.ior
+        row[_pile.F_K] = 1.0 / (_fibre_albedo(row, 0).max() * _NORM_MARGIN)
+        probe = row.copy()
+        probe[_pile.F_KD] = max(p.fibre_rgb)
+        row[_pile.F_SCALE] = 1.0 / max(1.0, float(_fibre_albedo(probe, 1).max()) * _NORM_MARGIN)
+        row.setflags(write=False)
+        self._fibre = row
+        self._ground = np.asarray(p.ground_rgb, dtype=np.float64)
+
+    @property
+    def top_mm(self) -> float:
+        """Height of the pile's top above the ground, mm (flat cloth)."""
+        return float(self._edges[-1])
+
+    def layer_scale(self, kappa: float) -> NDArray[np.float64]:
+        """Density factor ``1 / (1 + kappa z)`` of each slab (mid-height ``z``) at curvature ``kappa``.
+
+        Raises
+        ------
+        OptionError
+            For a concave bend tighter than the pile allows
+            (``kappa * top < -0.9``).
+        """
+        k = float(kappa)
+        if k * self.top_mm < -_MAX_CROWDING:
+            raise OptionError(
+                f"kappa = {k:g} 1/mm: a concave bend tighter than this pile allows "
+                f"(pile top {self.top_mm:.3g} mm; kappa must be > {-_MAX_CROWDING / self.top_mm:.3g})"
+            )
+        z = 0.5 * (self._edges[:-1] + self._edges[1:])
+        return 1.0 / (1.0 + k * z)
+
+    def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
+        """Pile and ground BRDF ``(n, 6)`` for unit direction pairs at one curvature."""
+        out = np.zeros((v.shape[0], 6))
+        if v.shape[0] == 0:
+            return out
+        run_split(_pile.pile_pairs, v.shape[0], np.ascontiguousarray(v), np.ascontiguousarray(l),
+                  self._tangents, self._weights, self._caps, self._edges, self.layer_scale(kappa),
+                  self.params.strand_diameter_mm, self._fibre, self._ground, self.params.correlation_mm, out,
+                  grain=64)
+        return out
+
+    def evaluate_parts(
+        self,
+        theta_v: ArrayLike,
+        phi_v: ArrayLike,
+        theta_l: ArrayLike,
+        phi_l: ArrayLike,
+        kappa: ArrayLike = 0.0,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The BRDF split into the light scattered by the pile and by the ground.
+
+        Arguments as :meth:`evaluate`.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(pile, ground)``, each ``broadcast shape + (3,)``, sr^-1; their
+            sum is :meth:`evaluate`.
+        """
+        arrs = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (theta_v, phi_v, theta_l, phi_l, kappa)))
+        shape = arrs[0].shape
+        tv, pv, tl, pl, kk = (a.reshape(-1) for a in arrs)
+        for name, a in (("theta_v", tv), ("phi_v", pv), ("theta_l", tl), ("phi_l", pl), ("kappa", kk)):
+            if not np.all(np.isfinite(a)):
+                raise QueryError(f"{name}: must be finite")
+        for name, a in (("theta_v", tv), ("theta_l", tl)):
+            if np.any((a < 0) | (a > 90)):
+                raise QueryError(f"{name}: elevations must lie in [0, 90] degrees")
+        v = direction_from_angles(tv, np.mod(pv, 360.0))
+        l = direction_from_angles(tl, np.mod(pl, 360.0))
+        out = np.zeros((tv.size, 6))
+        for k in np.unique(kk):
+            sel = np.flatnonzero(kk == k)
+            out[sel] = self._pairs(v[sel], l[sel], float(k))
+        return out[:, :3].reshape(shape + (3,)), out[:, 3:].reshape(shape + (3,))
+
+    def evaluate(
+        self,
+        theta_v: ArrayLike,
+        phi_v: ArrayLike,
+        theta_l: ArrayLike,
+        phi_l: ArrayLike,
+        kappa: ArrayLike = 0.0,
+    ) -> NDArray[np.float64]:
+        """The BRDF (sr^-1, RGB) at any directions and curvatures.
+
+        Parameters
+        ----------
+        theta_v, phi_v, theta_l, phi_l
+            View and light elevation in [0, 90] and azimuth, degrees
+            (broadcast together).
+        kappa
+            Curvature in mm^-1 (> 0 convex).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``broadcast shape + (3,)``, float64, >= 0.
+
+        Raises
+        ------
+        QueryError
+            For an elevation outside [0, 90] degrees or a non-finite argument.
+        OptionError
+            For a concave bend tighter than the pile allows (:meth:`layer_scale`).
+        """
+        pile, ground = self.evaluate_parts(theta_v, phi_v, theta_l, phi_l, kappa)
+        return pile + ground
+
+    def tabulate(
+        self,
+        grid: Grid | None = None,
+        *,
+        progress: Callable[[int, int], None] | None = None,
+    ) -> CDBRDF:
+        """Sample the model on a grid into a :class:`cdbrdf.CDBRDF` (float32).
+
+        Parameters
+        ----------
+        grid
+            The sample axes; default :meth:`cdbrdf.Grid.paper`.
+        progress
+            Called as ``progress(done, total)`` after each curvature slice.
+
+        Returns
+        -------
+        CDBRDF
+            ``quantity = "brdf"``, every sample marked measured (computed),
+            attrs with the material name, the model and all its parameters.
+        """
+        g = Grid.paper() if grid is None else grid
+        if not isinstance(g, Grid):
+            raise TypeError(f"grid: expected cdbrdf.Grid, got {type(g).__name__}")
+        for k in g.kappa:
+            self.layer_scale(float(k))
+        PL, TL, PV, TV = np.meshgrid(g.phi_l, g.theta_l, g.phi_v, g.theta_v, indexing="ij")
+        v = direction_from_angles(TV.reshape(-1), PV.reshape(-1))
+        l = direction_from_angles(TL.reshape(-1), PL.reshape(-1))
+        values = np.empty(g.shape + (3,), dtype=np.float32)
+        for i, k in enumerate(g.kappa):
+            log.debug("%s: tabulating kappa = %g (%d samples)", self.params.name, k, v.shape[0])
+            parts = self._pairs(v, l, float(k))
+            values[i] = (parts[:, :3] + parts[:, 3:]).reshape(g.shape[1:] + (3,)).astype(np.float32)
+            if progress is not None:
+                progress(i + 1, g.kappa.size)
+        return CDBRDF(values, **g.axes(), attrs=self.attrs())
+
+    def attrs(self) -> dict[str, Any]:
+        """Table metadata: quantity, material, model and parameters (provenance)."""
+        return {
+            "quantity": "brdf",
+            "material": self.params.name,
+            "model": PILE_MODEL_NAME,
+            "model_version": PILE_MODEL_VERSION,
+            "provenance": {
+                "kind": "synthesised",
+                "model": PILE_MODEL_NAME,
+                "model_version": PILE_MODEL_VERSION,
+                "parameters": self.params.to_dict(),
+                "references": [
+                    "Lu, Koenderink & Kappers 1998, Optical properties (BRDFs) of velvet",
+                    "Zhao et al. 2011, Building volumetric appearance models of fabric using micro CT imaging",
+                    "Velinov & Hullin 2016, An interactive appearance model for microscopic fiber surfaces",
+                    "Marschner et al. 2003, Light scattering from human hair fibers",
+                ],
+            },
+        }
+
+    def albedo(
+        self,
+        theta_v: ArrayLike,
+        phi_v: ArrayLike,
+        kappa: float = 0.0,
+        *,
+        n_theta: int = 24,
+        n_phi: int = 48,
+    ) -> NDArray[np.float64]:
+        """Directional albedo ``int f cos(theta_l) dw_l`` (midpoint rule), RGB, ``(n_views, 3)``."""
+        tv, pv = np.broadcast_arrays(np.atleast_1d(np.asarray(theta_v, float)), np.atleast_1d(np.asarray(phi_v, float)))
+        dt = 90.0 / n_theta
+        dp = 360.0 / n_phi
+        TL, PL = np.meshgrid((np.arange(n_theta) + 0.5) * dt, (np.arange(n_phi) + 0.5) * dp, indexing="ij")
+        w = np.cos(np.radians(TL)) * np.sin(np.radians(TL)) * np.radians(dt) * np.radians(dp)
+        f = self.evaluate(tv[:, None, None], pv[:, None, None], TL[None], PL[None], kappa)
+        return np.sum(f * w[None, ..., None], axis=(1, 2))
+
+
+def _fibre_albedo(row: NDArray[np.float64], mode: int) -> NDArray[np.float64]:
+    """Fibre albedo over longitudinal light angles 0..89 degrees (:func:`_pile.fibre_albedo`)."""
+    th = np.radians(np.linspace(0.0, 89.0, _ALBEDO_THETAS))
+    out = np.zeros(th.size)
+    run_split(_pile.fibre_albedo, th.size, th, row, mode, _ALBEDO_N_THETA, _ALBEDO_N_PHI, out, grain=4)
+    return out

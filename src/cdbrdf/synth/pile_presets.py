@@ -1,0 +1,74 @@
+"""Pile-fabric presets: ``velvet`` and ``towel`` (:class:`~cdbrdf.synth.pile.PileParams` values).
+
+Registered with the woven ones in :mod:`cdbrdf.synth.presets`.
+
+- ``velvet``: a cut warp-pile velvet, crimson viscose pile on a gold ground
+  (a two-colour, "voided" velvet). Pile height 2.0 mm (velvet's pile is
+  under 1/8 in, 3.2 mm: Fairchild's Dictionary of Textiles); each strand is
+  one leg of a cut pile tuft, a 150 dtex viscose yarn (1.5 g/cm^3, packing
+  0.6: 0.15 mm across); 45 pile ends/cm x 40 picks/cm with a V-tuft every two
+  picks and two legs per tuft: 18 strands/mm^2; standing within a few
+  degrees of the normal (spread 6 degrees), the nap leaning 5 degrees
+  along y (the warp). Viscose's refractive index 1.53; fibre gloss 8
+  degrees (Marschner et al. 2003's longitudinal width for smooth fibres).
+  Gaps between tufts about one tuft across (0.15 mm).
+- ``towel``: terry towelling, ecru cotton loops on a blue ground: loop
+  height 3.5 mm and base 0.6 mm (three-pick terry), 20 pile ends/cm x
+  17 picks/cm / 3 picks per loop: 1.1 loops/mm^2; the loop yarn Ne 16/2
+  cotton (74 tex, 1.52 g/cm^3, packing 0.5: 0.35 mm across); loop planes
+  at random azimuths, tilted by 30 degrees (standard deviation); cotton's
+  rough, matte fibres (specular weight 0.3, width 15 degrees); gaps between
+  loops about 0.5 mm.
+
+The ground colours differ from the pile's so that the ground's share, which
+grows on a convex bend as the pile fans open, is visible as a colour change.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import Any
+
+__all__ = ["PILE_PRESETS"]
+
+PILE_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
+    {
+        "velvet": MappingProxyType(
+            {
+                "name": "velvet",
+                "kind": "cut",
+                "pile_height_mm": 2.0,
+                "strand_diameter_mm": 0.15,
+                "strands_per_mm2": 18.0,
+                "lean_deg": 5.0,
+                "brush_deg": 90.0,
+                "spread_deg": 6.0,
+                "fibre_rgb": (0.45, 0.03, 0.06),
+                "ground_rgb": (0.25, 0.20, 0.05),
+                "fibre_specular": 1.0,
+                "fibre_gloss_deg": 8.0,
+                "ior": 1.53,
+                "correlation_mm": 0.15,
+            }
+        ),
+        "towel": MappingProxyType(
+            {
+                "name": "towel",
+                "kind": "loop",
+                "pile_height_mm": 3.5,
+                "loop_width_mm": 0.6,
+                "strand_diameter_mm": 0.35,
+                "strands_per_mm2": 1.1,
+                "lean_deg": 0.0,
+                "spread_deg": 30.0,
+                "fibre_rgb": (0.75, 0.72, 0.66),
+                "ground_rgb": (0.08, 0.14, 0.40),
+                "fibre_specular": 0.3,
+                "fibre_gloss_deg": 15.0,
+                "ior": 1.53,
+                "correlation_mm": 0.5,
+            }
+        ),
+    }
+)
