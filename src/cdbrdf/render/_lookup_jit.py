@@ -438,7 +438,8 @@ def _array_x(mi: Any) -> Any:
 
 
 def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_v: Any,
-               theta_l: Any, phi_l: Any, kappa: Any, active: Any = True, wavelengths: Any = None) -> Any:
+               theta_l: Any, phi_l: Any, kappa: Any, active: Any = True, wavelengths: Any = None,
+               block: Any = None) -> Any:
     """Interpolate a prepared table in Dr.Jit (see the module docstring).
 
     Parameters
@@ -457,6 +458,10 @@ def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_
         Lanes to gather for (the others read nothing and give 0 * weight).
     wavelengths
         For ``"spectral"`` records: the lanes' wavelengths (nm, ``mi.Spectrum``).
+    block
+        For an upload of several tables of ``grid``'s shape one after the
+        other (the texels of a CD-BTF, :mod:`cdbrdf.render._btf_jit`): the
+        table each lane reads (``mi.UInt32``); None: the only one.
 
     Returns
     -------
@@ -490,6 +495,8 @@ def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_
     tl_nodes = [(itl, 1.0 - wtl), (itl + 1, wtl)] if ntl > 1 else [(itl, Float(1.0))]
     outer = []
     for ka, wa in k_nodes:
+        if block is not None:  # tables one after the other: table b starts at kappa node b * nk
+            ka = ka + block * nk
         for pb, wb in pl_nodes:
             wab = wa * wb
             base_b = (ka * npl + pb) * ntl

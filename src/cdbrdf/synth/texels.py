@@ -19,6 +19,7 @@ import logging
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..btf import CDBTF, DEFAULT_MAX_ERROR, MAX_RANK
 from ..errors import OptionError
@@ -27,7 +28,7 @@ from ..grid import Grid
 from ..limits import check
 from .cloth import RAYS_PER_TEXEL_SIDE, ClothModel
 
-__all__ = ["tabulate_btf", "MAX_TEXELS"]
+__all__ = ["tabulate_btf", "tabulate_texels", "MAX_TEXELS"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -50,16 +51,14 @@ def _texels(texels: int | tuple[int, int]) -> tuple[int, int]:
     return nu, nv
 
 
-def tabulate_btf(
+def tabulate_texels(
     model: ClothModel,
     grid: Grid | None = None,
     *,
     texels: int | tuple[int, int] = 32,
-    max_error: float = DEFAULT_MAX_ERROR,
-    max_rank: int = MAX_RANK,
     progress: Callable[[int, int], None] | None = None,
-) -> CDBTF:
-    """Sample the cloth model per texel of one repeat on a grid and compress it (:meth:`CDBTF.from_values`).
+) -> NDArray[np.float32]:
+    """The cloth model per texel of one repeat on a grid, uncompressed.
 
     Parameters
     ----------
@@ -69,16 +68,13 @@ def tabulate_btf(
         The sample axes; default :meth:`cdbrdf.Grid.paper`.
     texels
         Texels per repeat: ``n`` (n x n) or ``(n_u, n_v)``.
-    max_error, max_rank
-        The compression's target relative RMS error and most components.
     progress
         Called as ``progress(done, total)`` after each curvature slice.
 
     Returns
     -------
-    CDBTF
-        ``quantity = "brdf"``; the tile mean's attributes are the model's
-        (:meth:`ClothModel.attrs`) with ``btf_texels`` and ``btf_rays_per_texel``.
+    numpy.ndarray
+        ``(n_v, n_u) + grid.shape + (3,)`` float32, the BRDF in sr^-1.
     """
     g = Grid.paper() if grid is None else grid
     if not isinstance(g, Grid):
@@ -108,9 +104,39 @@ def tabulate_btf(
             progress(ik + 1, nk)
     # (kappa, phi_l, theta_l, phi_v * theta_v, v * u, c) -> (v, u, kappa, phi_l, theta_l, phi_v, theta_v, c)
     dense = np.moveaxis(values.reshape(nk, npl, ntl, npv, ntv, nv, nu, 3), (5, 6), (0, 1))
-    hf = model.heightfield(0.0)
+    return np.ascontiguousarray(dense)
+
+
+def tabulate_btf(
+    model: ClothModel,
+    grid: Grid | None = None,
+    *,
+    texels: int | tuple[int, int] = 32,
+    max_error: float = DEFAULT_MAX_ERROR,
+    max_rank: int = MAX_RANK,
+    progress: Callable[[int, int], None] | None = None,
+) -> CDBTF:
+    """Sample the cloth model per texel of one repeat (:func:`tabulate_texels`) and compress it.
+
+    Parameters
+    ----------
+    model, grid, texels, progress
+        As :func:`tabulate_texels`.
+    max_error, max_rank
+        The compression's target relative RMS error and most components
+        (:meth:`cdbrdf.CDBTF.from_values`).
+
+    Returns
+    -------
+    CDBTF
+        ``quantity = "brdf"``; the tile mean's attributes are the model's
+        (:meth:`ClothModel.attrs`) with ``btf_texels`` and ``btf_rays_per_texel``.
+    """
+    g = Grid.paper() if grid is None else grid
+    nu, nv = _texels(texels)
+    dense = tabulate_texels(model, g, texels=(nu, nv), progress=progress)
     attrs = model.attrs()
     attrs["btf_texels"] = [nu, nv]
     attrs["btf_rays_per_texel"] = RAYS_PER_TEXEL_SIDE ** 2
-    return CDBTF.from_values(np.ascontiguousarray(dense), g, repeat_mm=hf.size_mm, max_error=max_error,
+    return CDBTF.from_values(dense, g, repeat_mm=model.heightfield(0.0).size_mm, max_error=max_error,
                              max_rank=max_rank, attrs=attrs)
