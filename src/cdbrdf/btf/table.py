@@ -223,8 +223,12 @@ class CDBTF:
 
     def decode(self) -> NDArray[np.float32]:
         """The decoded texels at the grid's samples, ``(n_v, n_u) + grid.shape + (channels,)`` float32."""
-        dev = np.einsum("vur,...rc->vu...c", self._weights, self._basis, optimize=True)
-        return (dev + self._mean.values[None, None]).astype(np.float32)
+        nv, nu, r = self._weights.shape
+        m = self._mean.values.astype(np.float32)
+        basis = np.moveaxis(self._basis, -2, 0).reshape(r, -1)  # (rank, samples * channels)
+        out = (self._weights.reshape(nv * nu, r) @ basis).reshape((nv, nu) + m.shape)
+        out += m
+        return out
 
     def nbytes_ratio(self) -> float:
         """Raw float32 bytes of every texel's table over the float32 bytes of mean, basis and weights."""

@@ -118,7 +118,7 @@ VARIANTS: tuple[str, ...] = ("llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", 
 
 #: Keys of a ``{"type": "cdbrdf", "table": ...}`` dict entry.
 _DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_mode", "curvature_scale", "scale",
-                        "sampling", "cosine_weight", "storage"})
+                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter"})
 
 
 def available_variants() -> tuple[str, ...]:
