@@ -23,6 +23,7 @@ import json
 import time
 
 import numpy as np
+
 from _common import best_seconds
 
 
