@@ -61,12 +61,16 @@ def test_texels_option_is_validated(shot):
 
 
 @pytest.mark.slow
-def test_synth_command_writes_a_cdbtf_file(tmp_path):
+def test_synth_command_writes_a_cdbtf_file(tmp_path, capsys):
     out = tmp_path / "shot-btf.h5"
     assert cli_main(["--quiet", "synth", "shot", "--grid", "regular:30,90", "--kappa", "0", "--btf", "4",
                      "--max-error", "0.1", "-o", str(out)]) == 0
     btf = load(out)
     assert btf.texels == (4, 4) and btf.compression["max_error"] == 0.1
     assert cdbrdf.load(out) == btf.mean()
+    capsys.readouterr()
+    assert cli_main(["info", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "CD-BTF        4 x 4 texels" in text and f"rank {btf.rank}" in text
     assert cli_main(["synth", "shot", "--max-error", "0.1", "-o", str(tmp_path / "x.h5")]) == 2
     assert not (tmp_path / "x.h5").exists()
