@@ -64,10 +64,9 @@ def describe(table: CDBRDF) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..table import load
-
     from ..btf import is_btf
     from ..btf import load as load_btf
+    from ..table import load
 
     btf = load_btf(args.file) if is_btf(args.file) else None
     table = load(args.file) if btf is None else btf.mean()
