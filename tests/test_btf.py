@@ -172,3 +172,14 @@ def test_bad_shapes_are_refused():
     m = CDBRDF(np.ones(GRID.shape + (3,)), **GRID.axes())
     with pytest.raises(TableError, match="basis"):
         CDBTF(m, np.zeros((2, 2, 1)), np.zeros(GRID.shape + (2, 3)), repeat_mm=REPEAT)
+
+
+def test_uniform_texels_have_rank_zero_and_round_trip(tmp_path):
+    vals = np.broadcast_to(_dense(nv=1, nu=1)[0, 0], (3, 4) + GRID.shape + (3,))
+    btf = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, max_error=0.0)
+    assert btf.rank == 0 and btf.compression["relative_rms_error"] < 1e-9
+    np.testing.assert_allclose(btf.evaluate(0.3, 1.1, 30.0, 10.0, 45.0, 200.0, 0.1),
+                               btf.mean().evaluate(30.0, 10.0, 45.0, 200.0, 0.1), rtol=1e-6)
+    btf.save(tmp_path / "u.h5")
+    back = load(tmp_path / "u.h5")
+    assert back.rank == 0 and back.texels == (4, 3) and back.mean() == btf.mean()

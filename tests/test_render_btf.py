@@ -130,3 +130,19 @@ def test_file_and_options(cr, btf, tmp_path):
     with pytest.raises(OptionError, match="rgb and mono"):
         cr.make_bsdf(btf)
     assert dr is not None
+
+
+def test_render_table_with_a_cdbtf(cr, btf):
+    """Uniform texels render as their CDBRDF; varying texels average to it over the sheet."""
+    from cdbrdf.mesh import SineSheet
+    from cdbrdf.render import render_table
+
+    sheet = SineSheet(width_mm=20.0, depth_mm=20.0, vertices_per_wavelength=16)
+    kw = {"size": (32, 24), "spp": 64, "exposure": 0.0}
+    ref = render_table(btf.mean(), sheet, **kw).images["cdbrdf"][..., :3]
+    flat = CDBTF(btf.mean(), np.zeros((6, 8, 0)), np.zeros(btf.mean().shape[:-1] + (0, 3)), repeat_mm=REPEAT)
+    same = render_table(flat, sheet, **kw).images["cdbrdf"][..., :3]
+    np.testing.assert_allclose(same, ref, rtol=1e-4, atol=1e-5 * ref.max())
+    woven = render_table(btf, sheet, **kw).images["cdbrdf"][..., :3]
+    assert np.abs(woven - ref).max() > 0.05 * ref.max()  # the texels show
+    assert woven.mean() == pytest.approx(ref.mean(), rel=0.02)

@@ -30,6 +30,9 @@ _LOG = logging.getLogger(__name__)
 #: Columns per block of the Gram and projection products (float64 blocks of n_texels x this).
 _BLOCK = 8192
 
+#: Relative RMS errors this small are rounding (an error target of 0 keeps only what is really there).
+_ROUNDING = 1e-9
+
 
 class Factors(NamedTuple):
     """A factorised CD-BTF (private: :class:`cdbrdf.btf.CDBTF` holds it)."""
@@ -53,12 +56,14 @@ def factorise(dense: NDArray[np.floating], n_kappa: int, *, max_error: float, ma
     per_k = d // n_kappa
     gram = np.zeros((t, t))
     full_k = np.zeros(n_kappa)
+    dev_k = np.zeros(n_kappa)  # the deviations' energy per slice
     for c0 in range(0, d, _BLOCK):
         c1 = min(d, c0 + _BLOCK)
         x = dense[:, c0:c1].astype(np.float64) - mean[c0:c1]
         gram += x @ x.T
         full = np.einsum("ij,ij->j", dense[:, c0:c1], dense[:, c0:c1], dtype=np.float64)
         np.add.at(full_k, np.arange(c0, c1) // per_k, full)
+        np.add.at(dev_k, np.arange(c0, c1) // per_k, np.einsum("ij,ij->j", x, x))
     lam, u = np.linalg.eigh(gram)
     order = np.argsort(lam)[::-1]
     lam, u = np.maximum(lam[order], 0.0), u[:, order]
@@ -75,13 +80,13 @@ def factorise(dense: NDArray[np.floating], n_kappa: int, *, max_error: float, ma
         kk = np.arange(c0, c1) // per_k
         for k in np.unique(kk):
             energy_k[k] += np.einsum("ij,ij->i", p[:, kk == k], p[:, kk == k])
-    dev_k = full_k - t * np.add.reduceat(mean * mean, np.arange(0, d, per_k))  # deviations' energy per slice
     safe_k = np.where(full_k > 0, full_k, 1.0)
     cum = np.concatenate([np.zeros((n_kappa, 1)), np.cumsum(energy_k, axis=1)], axis=1)
     err_k = np.sqrt(np.maximum(dev_k[:, None] - cum, 0.0) / safe_k[:, None])  # (n_kappa, r_max + 1)
     total = float(full_k.sum()) or 1.0
     err = np.sqrt(np.maximum(dev_k.sum() - cum.sum(axis=0), 0.0) / total)
-    ok = np.flatnonzero((err <= max_error) & np.all(err_k <= max_error, axis=0))
+    # errors below _ROUNDING are the rounding of the mean and of the eigen-decomposition: no error
+    ok = np.flatnonzero((err <= max_error + _ROUNDING) & np.all(err_k <= max_error + _ROUNDING, axis=0))
     if ok.size:
         rank = int(ok[0])
     else:

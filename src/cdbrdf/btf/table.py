@@ -225,7 +225,7 @@ class CDBTF:
         """The decoded texels at the grid's samples, ``(n_v, n_u) + grid.shape + (channels,)`` float32."""
         nv, nu, r = self._weights.shape
         m = self._mean.values.astype(np.float32)
-        basis = np.moveaxis(self._basis, -2, 0).reshape(r, -1)  # (rank, samples * channels)
+        basis = np.moveaxis(self._basis, -2, 0).reshape(r, m.size)  # (rank, samples * channels)
         out = (self._weights.reshape(nv * nu, r) @ basis).reshape((nv, nu) + m.shape)
         out += m
         return out
