@@ -42,7 +42,7 @@ def test_round_trip_through_the_file_and_xarray(tmp_path):
     assert back == t
     np.testing.assert_array_equal(back.fill_weights, t.fill_weights)
     with xr.open_dataset(p, engine="h5netcdf") as ds:
-        assert ds.attrs["format_version"] == "1.3"
+        assert ds.attrs["format_version"] == "1.4"
         assert ds["fill_method"].attrs["flag_meanings"] == "measured unknown nearest nearest_stand kappa_fit"
         assert ds["fill_sources"].dims[-1] == "fill_slot" and ds.sizes["fill_slot"] == 2
         sel = dict(kappa=-0.22, phi_l=0.0, theta_l=0.0, phi_v=0.0, theta_v=60.0)

@@ -31,6 +31,7 @@ import json
 import logging
 import math
 import re
+from collections.abc import Callable
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -147,7 +148,8 @@ def save(table: Any, path: str | PathLike[str], *, compression: str | None = "gz
     write(TableParts.of(table), path, compression=compression)
 
 
-def write(parts: TableParts, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
+def write(parts: TableParts, path: str | PathLike[str], *, compression: str | None = "gzip",
+          extra: Callable[[Any, dict[str, Any]], None] | None = None) -> None:
     """Write a table given as parts to ``path`` (HDF5 / NetCDF-4), atomically.
 
     Parameters
@@ -162,6 +164,11 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
         ``"gzip"`` (default, with the shuffle filter) or ``None``. Every
         variable but ``channel`` is chunked and carries the Fletcher-32
         checksum either way.
+    extra
+        Called as ``extra(file, storage)`` with the open ``h5netcdf.File``
+        and the storage options of the data variables, after the table's
+        variables are written: adds the variables of a larger layout (the
+        CD-BTF's, :mod:`cdbrdf.btf.file`) to the same atomic write.
 
     Raises
     ------
@@ -230,6 +237,8 @@ def write(parts: TableParts, path: str | PathLike[str], *, compression: str | No
                 name, dims, _FILE_DTYPES.get(name, data.dtype), data=data, chunks=chunks, **comp
             )
             _set_attrs(var, variable_attrs(name, quantity))
+        if extra is not None:
+            extra(f, comp)
         for key, value in gattrs.items():
             f.attrs[key] = value
         f.attrs[DATA_DIGEST_ATTR] = data_digest(_stored_arrays(parts))

@@ -87,7 +87,7 @@ __all__ = [
 #: Value of the global attribute ``format``.
 FORMAT_NAME = "cdbrdf"
 #: ``MAJOR.MINOR`` of the layout: readers accept any minor version of their major version.
-FORMAT_VERSION = "1.3"
+FORMAT_VERSION = "1.4"
 
 # -- dimensions -------------------------------------------------------------------------
 #: Dimension names of the reflectance, in storage order (``docs/conventions.md``).

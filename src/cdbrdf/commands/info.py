@@ -64,10 +64,15 @@ def describe(table: CDBRDF) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..btf import is_btf
+    from ..btf import load as load_btf
     from ..table import load
 
-    table = load(args.file)
+    btf = load_btf(args.file) if is_btf(args.file) else None
+    table = load(args.file) if btf is None else btf.mean()
     info = describe(table)
+    if btf is not None:
+        info["btf"] = {"texels": list(btf.texels), "repeat_mm": list(btf.repeat_mm), **btf.compression}
     if args.json:
         say(json.dumps(info, indent=2, sort_keys=True))
         return 0
@@ -93,6 +98,15 @@ def run(args: argparse.Namespace) -> int:
         + ")",
         f"std           {'stored' if table.std is not None else 'none'}",
     ]
+    if btf is not None:
+        c = btf.compression
+        per_k = ", ".join(f"{100 * e:.2f}" for e in c.get("relative_rms_error_per_kappa", []))
+        err = c.get("relative_rms_error")
+        lines.append(f"CD-BTF        {btf.texels[0]} x {btf.texels[1]} texels over {btf.repeat_mm[0]:.4g} x "
+                     f"{btf.repeat_mm[1]:.4g} mm; values above are the tile mean")
+        lines.append(f"compression   {printable(str(c.get('method', '?')))} rank {btf.rank}, relative RMS error "
+                     + ("?" if err is None else f"{100 * err:.2f} %") + f" (per kappa {per_k} %), "
+                     f"{btf.nbytes_ratio():.1f}:1 against float32")
     for name, r in info["channels"].items():
         lines.append(f"channel {printable(name):5s} min {r['min']:.4g}  mean {r['mean']:.4g}  max {r['max']:.4g}")
     prov = info["provenance"]

@@ -1,4 +1,4 @@
-"""``cdbrdf synth denim|shot|velvet|towel [--set name=value ...] [--grid ...] -o FILE``."""
+"""``cdbrdf synth PRESET [--set name=value ...] [--grid ...] [--btf TEXELS [--max-error E]] -o FILE``."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import argparse
 import math
 import time
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -43,8 +44,10 @@ def _parse_grid_spec(spec: str) -> tuple[float, float] | None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ..btf import DEFAULT_MAX_ERROR
     from ..synth.presets import names
-    from ._args import float_list, output_file
+    from ..synth.texels import MAX_TEXELS
+    from ._args import finite_float, float_list, int_range, output_file
 
     p = sub.add_parser(
         "synth",
@@ -68,6 +71,19 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--kappa",
         type=float_list(-100, 100, unique=True, unit="1/mm"),
         help="curvatures in 1/mm, comma-separated (default the paper's -0.22,-0.13,0,0.13,0.22)",
+    )
+    p.add_argument(
+        "--btf",
+        type=int_range(1, MAX_TEXELS),
+        metavar="TEXELS",
+        help="tabulate per texel: a CD-BTF of TEXELS x TEXELS texels per weave repeat, compressed "
+        "(docs/btf.md); the file's reflectance is the tile mean",
+    )
+    p.add_argument(
+        "--max-error",
+        type=finite_float(0, 1, hi_open=True),
+        default=None,
+        help=f"with --btf: the compression's relative RMS error target (default {DEFAULT_MAX_ERROR:g})",
     )
     p.add_argument("-o", "--output", required=True, type=output_file(), help="output file (.h5)")
     p.set_defaults(func=run)
@@ -139,14 +155,39 @@ def run(args: argparse.Namespace) -> int:
     from ._progress import ProgressBars
 
     overrides = parse_sets(args.sets, preset=args.preset)
+    if args.max_error is not None and args.btf is None:
+        raise OptionError("--max-error: only with --btf (the compression of a CD-BTF)")
     model = presets.model(args.preset, **overrides)
     grid = parse_grid(args.grid, args.kappa)
     quiet = getattr(args, "quiet", False)
     t0 = time.perf_counter()
+    if args.btf is not None:
+        return _run_btf(args, model, grid, quiet, t0)
     with ProgressBars(quiet=quiet, unit="kappa") as bars:
         table = model.tabulate(grid, progress=bars.callback(f"synth {args.preset}"))
     table.save(args.output)
     if not quiet:
         say(f"wrote {args.output}: {args.preset}, shape {table.shape}, "
               f"{time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def _run_btf(args: argparse.Namespace, model: Any, grid: Any, quiet: bool, t0: float) -> int:
+    """``--btf``: tabulate per texel, compress, write the CD-BTF file."""
+    from ..btf import DEFAULT_MAX_ERROR
+    from ..synth.texels import tabulate_btf
+    from ._progress import ProgressBars
+
+    target = DEFAULT_MAX_ERROR if args.max_error is None else args.max_error
+    with ProgressBars(quiet=quiet, unit="kappa") as bars:
+        btf = tabulate_btf(model, grid, texels=args.btf, max_error=target,
+                           progress=bars.callback(f"synth {args.preset} --btf {args.btf}"))
+    btf.save(args.output)
+    if not quiet:
+        c = btf.compression
+        per_k = ", ".join(f"{100 * e:.2f}" for e in c["relative_rms_error_per_kappa"])
+        say(f"wrote {args.output}: {args.preset} CD-BTF, {args.btf} x {args.btf} texels over "
+            f"{btf.repeat_mm[0]:.3g} x {btf.repeat_mm[1]:.3g} mm, rank {btf.rank}, relative RMS error "
+            f"{100 * c['relative_rms_error']:.2f} % (per kappa {per_k} %), {c['compression_ratio']:.1f}:1, "
+            f"{time.perf_counter() - t0:.1f} s")
     return 0

@@ -82,17 +82,29 @@ _RAD2DEG = 180.0 / math.pi
 
 
 def load_table(source: Any) -> Any:
-    """A :class:`~cdbrdf.table.CDBRDF` from a table object or a file path."""
+    """A :class:`~cdbrdf.table.CDBRDF` from a table object or a file path (a CD-BTF gives its tile mean)."""
+    return load_source(source)[0]
+
+
+def load_source(source: Any) -> tuple[Any, Any]:
+    """``(table, btf)``: a CDBRDF and None, or a CD-BTF's tile mean and the :class:`~cdbrdf.CDBTF`."""
+    from ..btf import CDBTF, is_btf
+    from ..btf import load as load_btf
     from ..table import CDBRDF
 
     if isinstance(source, CDBRDF):
-        return source
+        return source, None
+    if isinstance(source, CDBTF):
+        return source.mean(), source
     if isinstance(source, (str, os.PathLike)):
         from ..table import load
 
-        return load(source)
+        if is_btf(source):
+            btf = load_btf(source)
+            return btf.mean(), btf
+        return load(source), None
     raise TypeError(
-        f"cdbrdf BSDF: expected a CDBRDF table or a file name, got {type(source).__name__}"
+        f"cdbrdf BSDF: expected a CDBRDF or CDBTF table or a file name, got {type(source).__name__}"
     )
 
 
@@ -257,10 +269,10 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                     raise FileNotFoundError(
                         f"cdbrdf BSDF: table file {name!r} not found (looked next to the scene file and in "
                         "the folders of Mitsuba's file resolver)")
-                table = load_table(str(path))
+                table, self.btf = load_source(str(path))
                 self.filename: str | None = str(path)
             else:
-                table = load_table(table)
+                table, self.btf = load_source(table)
                 self.filename = None
 
             def get(key: str, default: Any = None) -> Any:
@@ -295,6 +307,9 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             self.values = mi.TensorXf(np.ascontiguousarray(self._eval_table.values, dtype=np.float32))
             self._maps: Any = None
             self._upload(np.asarray(self._eval_table.values, dtype=np.float64), differentiable=False)
+            self.texels: Any = None
+            if self.btf is not None:
+                self._upload_btf(get("uv_scale", 1.0), get("texel_filter", "bilinear"))
             flags = (
                 mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
                 | mi.BSDFFlags.BackSide | mi.BSDFFlags.Anisotropic
@@ -353,6 +368,20 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
 
                 self.sampler = _sampling_jit.upload(mi, self.sampler_tables)
 
+        def _upload_btf(self, uv_scale: Any, texel_filter: Any) -> None:
+            """A CD-BTF: its texels on the device (:mod:`cdbrdf.render._btf_jit`); the tile mean samples."""
+            from . import _btf_jit
+
+            self.uv_scale = _btf_jit.as_pair("uv_scale", uv_scale)
+            self.texel_filter = _choice("texel_filter", texel_filter, _btf_jit.TEXEL_FILTERS)
+            if self.record == "spectral":
+                raise OptionError("cdbrdf BSDF: a CD-BTF renders in the rgb and mono variants (spectral "
+                                  "variants render its tile mean: cdbrdf.load(file) or btf.mean())")
+            if not scalar:
+                full = self.grid if self.settings.mode == "cdbrdf" else prepare(self.btf.grid, self.btf.mean().values)
+                self.texels = _btf_jit.upload(mi, self.btf, full, self.record, uv_scale=self.uv_scale,
+                                              texel_filter=self.texel_filter)
+
         def traverse(self, callback: Any) -> None:
             callback.put("values", self.values, mi.ParamFlags.Differentiable)
             if self.scale_texture is not None:
@@ -363,6 +392,8 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
         def parameters_changed(self, keys: Any = None) -> None:
             if keys and "values" not in keys:
                 return
+            if self.btf is not None:
+                raise OptionError("cdbrdf BSDF: the texels of a CD-BTF cannot be changed through 'values'")
             shape = tuple(self._eval_table.values.shape)
             if tuple(self.values.shape) != shape:
                 raise TableError(f"cdbrdf BSDF: 'values' must keep the table's shape {shape}, "
@@ -405,7 +436,12 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             """The table at view (tv, pv) and light (tl, pl) (front frame, degrees), as a spectrum."""
             if scalar:
                 return self._f_scalar(si, tv, pv, tl, pl, kappa, valid)
-            f = lj.lookup_jit(mi, self.grid, self.packed, tv, pv, tl, pl, kappa, valid, si.wavelengths)
+            if self.texels is not None:
+                from . import _btf_jit
+
+                f = _btf_jit.lookup(mi, self.texels, si.uv, tv, pv, tl, pl, kappa, valid, si.wavelengths)
+            else:
+                f = lj.lookup_jit(mi, self.grid, self.packed, tv, pv, tl, pl, kappa, valid, si.wavelengths)
             if self.record == "one":
                 f = mi.UnpolarizedSpectrum(f)
             return f * self._scale(si, valid)
@@ -423,13 +459,26 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                 v = evaluate_reference(lazy, *q)
                 f = mi.UnpolarizedSpectrum(*map(float, v))
             else:
-                v = evaluate(self.prepared, *q, on_invalid="nan")
+                if self.btf is not None:
+                    v = self._btf_scalar(si, q)
+                else:
+                    v = evaluate(self.prepared, *q, on_invalid="nan")
                 if self.record == "one":
                     y = float(v[0]) if v.size == 1 else float(v @ np.array([0.2126, 0.7152, 0.0722]))
                     f = mi.UnpolarizedSpectrum(y)
                 else:
                     f = mi.UnpolarizedSpectrum(*map(float, v))
             return f * self._scale(si, valid)
+
+        def _btf_scalar(self, si: Any, q: tuple[float, ...]) -> np.ndarray:
+            """The CD-BTF at one query (scalar variants): :meth:`cdbrdf.CDBTF.evaluate` at the UV in mm."""
+            u, v = float(si.uv.x) * self.uv_scale[0], float(si.uv.y) * self.uv_scale[1]
+            if self.texel_filter == "nearest":  # the centre of the texel
+                (nu, nv), (su, sv) = self.btf.texels, self.btf.repeat_mm
+                u = (math.floor(u / su * nu) + 0.5) * su / nu
+                v = (math.floor(v / sv * nv) + 0.5) * sv / nv
+            kappa = 0.0 if self.settings.mode == "brdf" else q[4]
+            return np.asarray(self.btf.evaluate(u, v, *q[:4], kappa)).reshape(-1)
 
         def _angles(self, d: Any) -> tuple[Any, Any]:
             return (dr.acos(dr.clip(d.z, -1.0, 1.0)) * _RAD2DEG, dr.atan2(d.y, d.x) * _RAD2DEG)
@@ -556,7 +605,9 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             return (
                 f"CDBRDFBSDF[material={self.table.attrs.get('material', '?')!r}, "
                 f"mode={st.mode!r}, curvature={k}, scale={scale}, sampling={st.sampling!r}, "
-                f"storage={getattr(self, 'packed', None) and self.packed.layout!r}, shape={self.table.shape}]"
+                f"storage={getattr(self, 'packed', None) and self.packed.layout!r}, shape={self.table.shape}"
+                + (f", btf={self.btf!r}, uv_scale={self.uv_scale}, texel_filter={self.texel_filter!r}]"
+                   if self.btf is not None else "]")
             )
 
     CDBRDFBSDF.__name__ = "CDBRDFBSDF"

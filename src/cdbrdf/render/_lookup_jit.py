@@ -69,6 +69,8 @@ MAX_ABS_VALUE = TABLE_MAX_ABS_VALUE
 #: Bits per channel of the packed RGB table (3 x 21 bits in one 64-bit word).
 PACK_BITS = 21
 _PACK_MAX = (1 << PACK_BITS) - 1
+#: Samples packed per block by :func:`pack_table`.
+_PACK_CHUNK = 1 << 18
 
 
 def _tolerance(dr: Any, Float: Any) -> float:
@@ -226,7 +228,7 @@ def pack_table(mi: Any, grid: LookupGrid, record: str | None = None) -> TableUpl
     -------
     TableUpload
     """
-    v = np.asarray(grid.values, dtype=np.float64)
+    v = np.asarray(grid.values)
     lo, hi = check_range(v)
     record = record or ("rgb" if v.shape[-1] == 3 else "one")
     if record not in ("rgb", "one"):
@@ -234,12 +236,15 @@ def pack_table(mi: Any, grid: LookupGrid, record: str | None = None) -> TableUpl
     if record == "one":
         return TableUpload("packed", "one", mi.Float(records(v, "one").reshape(-1)))
     step = (hi - lo) / _PACK_MAX if hi > lo else 1.0
-    q = np.rint((v - lo) / step).astype(np.uint64)
-    word = q[..., 0] | (q[..., 1] << np.uint64(PACK_BITS)) | (q[..., 2] << np.uint64(2 * PACK_BITS))
+    flat = v.reshape(-1, 3)
+    word = np.empty(flat.shape[0], dtype=np.uint64)
+    for s in range(0, flat.shape[0], _PACK_CHUNK):  # in float64 a block at a time (large uploads: the CD-BTF)
+        q = np.rint((flat[s : s + _PACK_CHUNK].astype(np.float64) - lo) / step).astype(np.uint64)
+        word[s : s + _PACK_CHUNK] = q[:, 0] | (q[:, 1] << np.uint64(PACK_BITS)) | (q[:, 2] << np.uint64(2 * PACK_BITS))
     import drjit as dr
 
     UInt64: Any = dr.uint64_array_t(mi.Float)
-    return TableUpload("packed", "rgb", UInt64(word.reshape(-1)), lo, step)
+    return TableUpload("packed", "rgb", UInt64(word), lo, step)
 
 
 def packet_index(shape5: tuple[int, ...], stride: int) -> NDArray[np.int64]:
@@ -438,7 +443,8 @@ def _array_x(mi: Any) -> Any:
 
 
 def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_v: Any,
-               theta_l: Any, phi_l: Any, kappa: Any, active: Any = True, wavelengths: Any = None) -> Any:
+               theta_l: Any, phi_l: Any, kappa: Any, active: Any = True, wavelengths: Any = None,
+               block: Any = None) -> Any:
     """Interpolate a prepared table in Dr.Jit (see the module docstring).
 
     Parameters
@@ -457,6 +463,10 @@ def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_
         Lanes to gather for (the others read nothing and give 0 * weight).
     wavelengths
         For ``"spectral"`` records: the lanes' wavelengths (nm, ``mi.Spectrum``).
+    block
+        For an upload of several tables of ``grid``'s shape one after the
+        other (the texels of a CD-BTF, :mod:`cdbrdf.render._btf_jit`): the
+        table each lane reads (``mi.UInt32``); None: the only one.
 
     Returns
     -------
@@ -490,6 +500,8 @@ def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_
     tl_nodes = [(itl, 1.0 - wtl), (itl + 1, wtl)] if ntl > 1 else [(itl, Float(1.0))]
     outer = []
     for ka, wa in k_nodes:
+        if block is not None:  # tables one after the other: table b starts at kappa node b * nk
+            ka = ka + block * nk
         for pb, wb in pl_nodes:
             wab = wa * wb
             base_b = (ka * npl + pb) * ntl

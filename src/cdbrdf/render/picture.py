@@ -266,6 +266,7 @@ def render_table(
     variant: str | None = None,
     curvature: bool = False,
     progress: Callable[[str, int, int], None] | None = None,
+    uv_scale: float | tuple[float, float] | None = None,
 ) -> Picture:
     """Render a table on the paper's sine sheet or on a mesh, with the CDBRDF and/or the plain BRDF.
 
@@ -280,7 +281,8 @@ def render_table(
     Parameters
     ----------
     table
-        A :class:`~cdbrdf.CDBRDF` or a CDBRDF file.
+        A :class:`~cdbrdf.CDBRDF` or a CDBRDF file, or a :class:`~cdbrdf.CDBTF`
+        or its file (each texel at the surface's UVs, ``docs/btf.md``).
     surface
         ``"sine"`` (the paper's sine sheet, :class:`cdbrdf.mesh.SineSheet`
         defaults), a :class:`~cdbrdf.mesh.SineSheet`, a
@@ -361,7 +363,8 @@ def render_table(
             raise OptionError(f"exposure: expected a finite number of stops or 'auto', got {exposure!r:.40}")
     w, h = (int(x) for x in size)
     check_limit("render_pixels", w * h, what=f"a {w} x {h} render")
-    tbl = table if isinstance(table, CDBRDF) else load_table(table)
+    btf = _as_btf(table)
+    tbl = btf.mean() if btf is not None else table if isinstance(table, CDBRDF) else load_table(table)
     is_sheet = isinstance(surface, SineSheet) or (isinstance(surface, str) and surface == "sine")
     lighting = lighting or ("paper" if is_sheet else "studio")
     elevation, azimuth = view if view is not None else (DEFAULT_SINE_VIEW if is_sheet else DEFAULT_MESH_VIEW)
@@ -395,13 +398,16 @@ def render_table(
         up_axis, why = (up, "given") if up != "auto" else detect_up(mesh)
     images: dict[str, NDArray[np.float32]] = {}
     kappa_image = None
+    if btf is not None and uv_scale is None:  # the sheet's UVs span it; a mesh's UVs are in mm
+        uv_scale = (sheet.width_mm, sheet.depth_mm) if is_sheet else 1.0
     with variant_context(variant or DEFAULT_VARIANT):
         for mode in modes:
+            bsdf = None if btf is None else _btf_entry(btf, mode, curvature_mode, uv_scale)
             if is_sheet:
-                scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, **common)
+                scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, bsdf=bsdf, **common)
             else:
                 scene = mesh_scene(tbl, mesh, mode=mode, lighting=lighting, light=sun, envmap=envmap,
-                                   up=str(up_axis), **common)
+                                   up=str(up_axis), bsdf=bsdf, **common)
             cb = None if progress is None else (lambda done, total, m=mode: progress(f"rendering {m}", done, total))
             images[mode] = render_scene(scene, spp=int(spp), seed=seed, alpha=True, progress=cb)
             if curvature and kappa_image is None:
@@ -415,3 +421,24 @@ def render_table(
     return Picture(images=images, exposure_ev=ev, exposure_source=how, surface=name, lighting=lighting,
                    light=sun, backdrop=not is_sheet and lighting == "studio" and envmap is None, mesh=mesh,
                    up=up_axis, up_reason=why, curvature=kappa_image)
+
+
+def _as_btf(table: Any) -> Any:
+    """The :class:`~cdbrdf.CDBTF` of ``table`` (an object or a CD-BTF file), or None."""
+    from ..btf import CDBTF, is_btf
+    from ..btf import load as load_btf
+
+    if isinstance(table, CDBTF):
+        return table
+    if isinstance(table, (str, PathLike)) and is_btf(table):
+        return load_btf(table)
+    return None
+
+
+def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: Any) -> dict[str, Any]:
+    """The plug-in's dict for a CD-BTF at ``uv_scale`` mm per UV unit."""
+    from ..mesh import ATTRIBUTES
+
+    su, sv = (uv_scale, uv_scale) if isinstance(uv_scale, (int, float)) else uv_scale
+    return {"type": "cdbrdf", "table": btf, "mode": mode, "curvature": ATTRIBUTES[curvature_mode],
+            "uv_scale": f"{float(su)!r}, {float(sv)!r}"}

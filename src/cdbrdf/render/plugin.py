@@ -118,7 +118,7 @@ VARIANTS: tuple[str, ...] = ("llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", 
 
 #: Keys of a ``{"type": "cdbrdf", "table": ...}`` dict entry.
 _DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_mode", "curvature_scale", "scale",
-                        "sampling", "cosine_weight", "storage"})
+                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter"})
 
 
 def available_variants() -> tuple[str, ...]:
@@ -239,6 +239,8 @@ def make_bsdf(
     sampling: str = "table",
     cosine_weight: float | None = None,
     storage: str = "auto",
+    uv_scale: float | str | tuple[float, float] | None = None,
+    texel_filter: str | None = None,
 ) -> Any:
     """A ``cdbrdf`` BSDF instance from a table object (or file name).
 
@@ -246,6 +248,9 @@ def make_bsdf(
     (``"bsdf": make_bsdf(table)``). Parameters as in the plug-in table above;
     ``curvature=None`` with ``curvature_mode=None`` reads ``vertex_curvature``;
     ``scale`` may be a float or a Mitsuba texture (an object or a dict).
+    ``table`` may be a :class:`cdbrdf.CDBTF` (or its file): ``uv_scale`` (mm
+    per UV unit, one number or ``(u, v)``; default 1: UVs in mm) and
+    ``texel_filter`` (``"bilinear"``, ``"nearest"``) place its texels.
     """
     import mitsuba as mi
 
@@ -267,6 +272,11 @@ def make_bsdf(
     if cosine_weight is not None:
         props["cosine_weight"] = float(cosine_weight)
     props["storage"] = str(storage)
+    if uv_scale is not None:
+        props["uv_scale"] = (float(uv_scale) if isinstance(uv_scale, (int, float))
+                             else uv_scale if isinstance(uv_scale, str) else ", ".join(map(str, uv_scale)))
+    if texel_filter is not None:
+        props["texel_filter"] = str(texel_filter)
     return bsdf_class()(props, table=table)
 
 

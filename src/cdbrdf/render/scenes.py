@@ -176,6 +176,7 @@ def mesh_scene(
     fov_deg: float = 30.0,
     up: str = "auto",
     fill: float = FRAME_FILL,
+    bsdf: Any = None,
 ) -> Any:
     """A user mesh with the CDBRDF, framed by the camera and lit (see the module's description).
 
@@ -208,6 +209,8 @@ def mesh_scene(
         the up axis.
     fill
         Share of the frame's limiting side the object fills.
+    bsdf
+        A BSDF dict or instance used instead of the plug-in of ``table``.
     """
     if lighting not in LIGHTINGS:
         raise OptionError(f"lighting: {lighting!r} is not one of {', '.join(LIGHTINGS)}")
@@ -237,6 +240,6 @@ def mesh_scene(
         env, hide = studio_environment(), True
     return _build(world, table, mode=mode, scale=scale, size=size, spp=spp, lights=lights, envmap=env,
                   hide_env=hide, max_depth=max_depth, elevation_deg=elevation_deg, azimuth_deg=azimuth_deg,
-                  fov_deg=fov_deg, curvature_mode=curvature_mode, fill=fill)
+                  fov_deg=fov_deg, bsdf=bsdf, curvature_mode=curvature_mode, fill=fill)
 
 

@@ -150,14 +150,20 @@ def shadow_maps(H, xs, xmap, dy, step, lights, needed, out, start, stop):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def integrate(pair_v, pair_l, views, lights, hits, shadow, shadow_row, normal, tangent, kind, params, out,
+def integrate(pair_v, pair_l, views, lights, hits, shadow, shadow_row, normal, tangent, kind, params, bins, out,
               start, stop):
     """Mean over the view rays of ``f_p(v, l) (n_p . l)+ V(p, l)`` per pair, for pairs ``start`` to ``stop``.
 
     ``pair_v``/``pair_l`` index ``views``/``lights``; ``shadow_row[l]`` is the
-    row of ``shadow`` for light ``l``. Writes ``out (n_pairs, 3)``.
+    row of ``shadow`` for light ``l``. Writes ``out (n_pairs, n_bins, 3)``:
+    with one bin, the mean over all rays (``bins`` is not read); with more,
+    the rays of view ``v`` are summed into bin ``bins[v, r]`` (the texel the
+    ray belongs to) and scaled by ``n_bins / n_rays`` (the mean of a bin when
+    every bin holds as many rays; the mean over the bins is the mean over the rays).
     """
     npt = hits.shape[1]
+    nbin = out.shape[1]
+    scale = nbin / npt
     for q in range(start, stop):
         iv = pair_v[q]
         il = pair_l[q]
@@ -182,9 +188,16 @@ def integrate(pair_v, pair_l, views, lights, hits, shadow, shadow_row, normal, t
             s, c = _terms(nx_, ny_, nz_, tangent[k, 0], tangent[k, 1], tangent[k, 2],
                           vx, vy, vz, lx, ly, lz, p)
             w = cl * p[P_INK]
-            r_acc += (s + c * p[P_R]) * w
-            g_acc += (s + c * p[P_G]) * w
-            b_acc += (s + c * p[P_B]) * w
-        out[q, 0] = r_acc / npt
-        out[q, 1] = g_acc / npt
-        out[q, 2] = b_acc / npt
+            if nbin == 1:
+                r_acc += (s + c * p[P_R]) * w
+                g_acc += (s + c * p[P_G]) * w
+                b_acc += (s + c * p[P_B]) * w
+            else:
+                b = bins[iv, r]
+                out[q, b, 0] += (s + c * p[P_R]) * w * scale
+                out[q, b, 1] += (s + c * p[P_G]) * w * scale
+                out[q, b, 2] += (s + c * p[P_B]) * w * scale
+        if nbin == 1:
+            out[q, 0, 0] = r_acc / npt
+            out[q, 0, 1] = g_acc / npt
+            out[q, 0, 2] = b_acc / npt

@@ -75,7 +75,7 @@ from .weave import (
     weave_matrix,
 )
 
-__all__ = ["ClothParams", "ClothModel", "MODEL_NAME", "MODEL_VERSION"]
+__all__ = ["ClothParams", "ClothModel", "MODEL_NAME", "MODEL_VERSION", "RAYS_PER_TEXEL_SIDE"]
 
 log = logging.getLogger(__name__)
 
@@ -85,6 +85,9 @@ MODEL_VERSION = "1.1"
 
 _LIGHT_CHUNK = 512
 _GOLDEN = 0.6180339887498949
+
+#: View rays per texel of a CD-BTF: this many squared, on a regular lattice (:meth:`ClothModel._texel_points`).
+RAYS_PER_TEXEL_SIDE = 2
 
 RGB = tuple[float, float, float]
 
@@ -402,11 +405,34 @@ class ClothModel:
         return kappa * x
 
     # -- evaluation -------------------------------------------------------------------
-    def _flat(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
-        """``mean_rays f_p (n_p . l)+ V``, i.e. f * cos(theta_l), flat frame; (n, 3)."""
-        out = np.zeros((v.shape[0], 3))
+    def _texel_points(self, hf: Heightfield, texels: tuple[int, int]) -> NDArray[np.float64]:
+        """A regular lattice of ``RAYS_PER_TEXEL_SIDE**2`` points per texel of a ``(n_u, n_v)`` grid over the repeat."""
+        s = RAYS_PER_TEXEL_SIDE
+        lx, ly = hf.size_mm
+        x = (np.arange(texels[0] * s) + 0.5) / (texels[0] * s) * lx
+        y = (np.arange(texels[1] * s) + 0.5) / (texels[1] * s) * ly
+        X, Y = np.meshgrid(x, y)
+        return np.stack([X.reshape(-1), Y.reshape(-1)], axis=-1)
+
+    @staticmethod
+    def _texel_bins(hf: Heightfield, points: NDArray[np.float64], views: NDArray[np.float64],
+                    texels: tuple[int, int]) -> NDArray[np.int64]:
+        """The texel ``v * n_u + u`` of each view ray: where it crosses the repeat's mean height (periodic)."""
+        lx, ly = hf.size_mm
+        drop = (float(hf.height.max()) + 1e-6 - float(hf.height.mean())) / np.maximum(views[:, 2], 1e-9)
+        x = points[None, :, 0] - drop[:, None] * views[:, None, 0]
+        y = points[None, :, 1] - drop[:, None] * views[:, None, 1]
+        iu = np.floor(np.mod(x / lx, 1.0) * texels[0]).astype(np.int64) % texels[0]
+        iv = np.floor(np.mod(y / ly, 1.0) * texels[1]).astype(np.int64) % texels[1]
+        return np.ascontiguousarray(iv * texels[0] + iu)
+
+    def _flat(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float,
+              texels: tuple[int, int] | None = None) -> NDArray[np.float64]:
+        """``mean_rays f_p (n_p . l)+ V``, i.e. f * cos(theta_l), flat frame; (n, 3), or per texel (n, n_texels, 3)."""
+        nbin = 1 if texels is None else texels[0] * texels[1]
+        out = np.zeros((v.shape[0], nbin, 3))
         if v.shape[0] == 0:
-            return out
+            return out if texels is not None else out[:, 0]
         hf = self.heightfield(kappa)
         ny, nx = hf.shape
         dy = hf.size_mm[1] / ny
@@ -420,7 +446,8 @@ class ClothModel:
         inv_v = inv_v.reshape(-1)
         inv_l = inv_l.reshape(-1)
         H = np.ascontiguousarray(hf.height)
-        points = self._points(hf)
+        points = self._points(hf) if texels is None else self._texel_points(hf, texels)
+        bins = np.zeros((1, 1), np.int64) if texels is None else self._texel_bins(hf, points, uv, texels)
         hits = np.empty((uv.shape[0], points.shape[0]), dtype=np.int64)
         run_split(_trace.trace_views, uv.shape[0], H, xmap, dy, step, np.ascontiguousarray(uv), points, hits)
         needed = np.zeros(ny * nx, dtype=np.uint8)
@@ -439,17 +466,18 @@ class ClothModel:
             sel = order[(inv_l[order] >= c0) & (inv_l[order] < c1)]
             if sel.size == 0:
                 continue
-            part = np.zeros((sel.size, 3))
+            part = np.zeros((sel.size, nbin, 3))
             run_split(_trace.integrate, sel.size, inv_v[sel].astype(np.int64), inv_l[sel].astype(np.int64), uv, ul,
-                      hits, sm, row, normal, tangent, kind, self._kernel_params, part, grain=16)
+                      hits, sm, row, normal, tangent, kind, self._kernel_params, bins, part, grain=16)
             out[sel] = part
-        return out
+        return out if texels is not None else out[:, 0]
 
-    def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
-        """BRDF (n, 3) for unit direction pairs at one curvature."""
+    def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float,
+               texels: tuple[int, int] | None = None) -> NDArray[np.float64]:
+        """BRDF (n, 3) for unit direction pairs at one curvature; per texel (n, n_texels, 3) with ``texels``."""
         tilts = self.tilts_rad(kappa)
         n = v.shape[0]
-        num = np.zeros((n, 3))
+        num = np.zeros((n, 3) if texels is None else (n, texels[0] * texels[1], 3))
         den = np.zeros(n)
         vs, ls, idx, wv = [], [], [], []
         for a in tilts:
@@ -464,15 +492,15 @@ class ClothModel:
             ls.append(lp[ok])
             idx.append(np.flatnonzero(ok))
             wv.append(cv[ok])
-        g = self._flat(np.concatenate(vs), np.concatenate(ls), kappa)
+        g = self._flat(np.concatenate(vs), np.concatenate(ls), kappa, texels)
         start = 0
         for i, w in zip(idx, wv):
-            num[i] += w[:, None] * g[start : start + i.size]
+            num[i] += w.reshape((-1,) + (1,) * (num.ndim - 1)) * g[start : start + i.size]
             start += i.size
         denom = den * l[:, 2]
         good = denom > 1e-12
-        out = np.zeros((n, 3))
-        out[good] = num[good] / denom[good, None]
+        out = np.zeros(num.shape)
+        out[good] = num[good] / denom[good].reshape((-1,) + (1,) * (num.ndim - 1))
         return out
 
     def evaluate(

@@ -1,0 +1,116 @@
+"""The CD-BTF of the presets: compression ratio and error, the tile mean against the CDBRDF of synth.
+
+Run: ``python benchmarks/bench_btf.py [--texels 32] [--grid paper|coarse] [--preset denim ...]``.
+
+For each preset: tabulate per texel (:func:`cdbrdf.synth.texels.tabulate_texels`),
+compress at ``--max-error`` (the rank, its recorded errors and ratio), the
+error at a 100:1 ratio, the relative RMS error of ``CDBTF.evaluate`` against
+the uncompressed texels looked up by the same rule on ``--queries`` random
+queries, and the median relative difference of the tile mean from
+``ClothModel.tabulate`` (``cdbrdf synth``). Prints one JSON object per preset.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+from cdbrdf import CDBTF, Grid
+from cdbrdf.interp import evaluate, prepare
+from cdbrdf.synth import presets
+from cdbrdf.synth.texels import tabulate_texels
+
+
+class _Dense:
+    """Every texel's table as the channels of one table: the uncompressed lookup."""
+
+    def __init__(self, dense: np.ndarray, grid: Grid) -> None:
+        nv, nu = dense.shape[:2]
+        self.nu, self.nv = nu, nv
+        self.lg = prepare(grid, np.ascontiguousarray(np.moveaxis(dense, (0, 1), (5, 6)).reshape(grid.shape + (-1,))))
+
+    def lookup_grid(self):
+        return self.lg
+
+
+def _dense_evaluate(d: _Dense, repeat, u, v, q, chunk=1024):
+    """Periodic bilinear over texel centres of the uncompressed texels' lookups."""
+    nu, nv = d.nu, d.nv
+    out = np.empty((u.size, 3))
+    for s in range(0, u.size, chunk):
+        e = min(u.size, s + chunk)
+        all_tex = evaluate(d, *(x[s:e] for x in q)).reshape(e - s, nv, nu, 3)  # channels: (v, u, c)
+        fu = np.mod(u[s:e], repeat[0]) / repeat[0] * nu - 0.5
+        fv = np.mod(v[s:e], repeat[1]) / repeat[1] * nv - 0.5
+        i0, j0 = np.floor(fu).astype(int), np.floor(fv).astype(int)
+        a, b = fu - i0, fv - j0
+        n = np.arange(e - s)
+        acc = 0.0
+        for dj, wj in ((0, 1 - b), (1, b)):
+            for di, wi in ((0, 1 - a), (1, a)):
+                acc = acc + (wj * wi)[:, None] * all_tex[n, (j0 + dj) % nv, (i0 + di) % nu]
+        out[s:e] = acc
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--preset", action="append", default=None)
+    ap.add_argument("--texels", type=int, default=32)
+    ap.add_argument("--grid", choices=("paper", "coarse"), default="paper")
+    ap.add_argument("--max-error", type=float, default=0.03)
+    ap.add_argument("--queries", type=int, default=100_000)
+    ap.add_argument("--save", default=None, help="folder to write PRESET-btf.h5 into")
+    a = ap.parse_args()
+    grid = Grid.paper() if a.grid == "paper" else Grid.regular(theta_step_deg=30, phi_step_deg=90,
+                                                               kappa=[-0.22, 0.0, 0.22])
+    rng = np.random.default_rng(0)
+    for name in a.preset or ["denim", "shot"]:
+        model = presets.model(name)
+        t0 = time.perf_counter()
+        dense = tabulate_texels(model, grid, texels=a.texels)
+        t_tex = time.perf_counter() - t0
+        repeat = model.heightfield(0.0).size_mm
+        t0 = time.perf_counter()
+        btf = CDBTF.from_values(dense, grid, repeat_mm=repeat, max_error=a.max_error, attrs=model.attrs())
+        t_comp = time.perf_counter() - t0
+        if a.save:
+            btf.save(f"{a.save}/{name}-btf.h5")
+        t = a.texels * a.texels
+        d = dense[0, 0].size
+        rank_100 = max(0, int((t * d / 100 - d) // (t + d)))  # largest rank at >= 100:1
+        at_100 = CDBTF.from_values(dense, grid, repeat_mm=repeat, max_error=0.0, max_rank=rank_100)
+        t0 = time.perf_counter()
+        ref = model.tabulate(grid)
+        t_ref = time.perf_counter() - t0
+        r, m = ref.values, btf.mean().values
+        rel = np.abs(m - r) / np.maximum(np.abs(r), 1e-3 * r.max())
+        n = a.queries
+        u, v = rng.uniform(0, 10 * repeat[0], n), rng.uniform(0, 10 * repeat[1], n)
+        q = (rng.uniform(0, 75, n), rng.uniform(0, 360, n), rng.uniform(0, 75, n), rng.uniform(0, 360, n),
+             rng.uniform(grid.kappa[0], grid.kappa[-1], n))
+        got = btf.evaluate(u, v, *q)
+        want = _dense_evaluate(_Dense(dense, grid), repeat, u, v, q)
+        q_err = float(np.sqrt(np.sum((got - want) ** 2) / np.sum(want ** 2)))
+        at100 = at_100.evaluate(u, v, *q)
+        q_err_100 = float(np.sqrt(np.sum((at100 - want) ** 2) / np.sum(want ** 2)))
+        c = btf.compression
+        print(json.dumps({
+            "preset": name, "texels": a.texels, "grid": a.grid, "rank": btf.rank,
+            "relative_rms_error": round(c["relative_rms_error"], 5),
+            "relative_rms_error_per_kappa": [round(e, 5) for e in c["relative_rms_error_per_kappa"]],
+            "compression_ratio": round(c["compression_ratio"], 2),
+            "query_relative_rms_error": round(q_err, 5),
+            "rank_at_100_to_1": rank_100, "error_at_100_to_1": round(at_100.compression["relative_rms_error"], 5),
+            "query_error_at_100_to_1": round(q_err_100, 5),
+            "tile_mean_vs_synth_median": round(float(np.median(rel)), 5),
+            "tile_mean_vs_synth_p90": round(float(np.percentile(rel, 90)), 5),
+            "seconds": {"texels": round(t_tex, 1), "compress": round(t_comp, 1), "synth_cdbrdf": round(t_ref, 1)},
+        }), flush=True)
+
+
+if __name__ == "__main__":
+    main()

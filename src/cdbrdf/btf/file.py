@@ -1,0 +1,211 @@
+"""The CD-BTF file: a CDBRDF file (format 1.4) holding the tile mean, plus the factorised texels.
+
+The file is a CDBRDF file whose ``reflectance`` is the tile mean, so every
+CDBRDF reader (:func:`cdbrdf.load`, xarray) reads it as the CDBRDF of the
+fabric; the CD-BTF adds (``docs/format.md``, "The CD-BTF variables"):
+
+- dimensions ``texel_v``, ``texel_u`` and ``component``, with coordinate
+  variables (texel centres in mm; component numbers);
+- ``btf_weights (texel_v, texel_u, component)`` and ``btf_basis (kappa, phi_l,
+  theta_l, phi_v, theta_v, component, channel)``, float32;
+- global attributes ``btf_repeat_mm`` (u, v), ``btf_method``, ``btf_rank``,
+  ``btf_max_error``, ``btf_relative_rms_error``,
+  ``btf_relative_rms_error_per_kappa``, ``btf_compression_ratio`` and
+  ``btf_sha256`` (the digest of the CD-BTF's variables as stored).
+
+Everything is written in the one atomic write of the CDBRDF file.
+"""
+
+from __future__ import annotations
+
+import math
+from os import PathLike
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, NamedTuple
+
+import numpy as np
+
+from .. import limits
+from .._fileattrs import data_digest, get_attr, get_attr_str
+from .._hdf5 import check_storage, fail, one_line
+from ..schema import SAMPLE_AXES
+
+if TYPE_CHECKING:
+    from ..table import CDBRDF
+
+__all__ = ["BTFParts", "write", "read", "is_btf", "TEXEL_U", "TEXEL_V", "COMPONENT", "WEIGHTS", "BASIS"]
+
+TEXEL_U, TEXEL_V, COMPONENT = "texel_u", "texel_v", "component"
+WEIGHTS, BASIS = "btf_weights", "btf_basis"
+_DIGEST = "btf_sha256"
+_DIMS = {WEIGHTS: (TEXEL_V, TEXEL_U, COMPONENT), BASIS: (*SAMPLE_AXES, COMPONENT, "channel")}
+
+
+class BTFParts(NamedTuple):
+    """A CD-BTF as the file holds it: what :func:`read` returns and :func:`write` takes."""
+
+    mean: CDBRDF
+    weights: np.ndarray  # (n_v, n_u, rank) float32
+    basis: np.ndarray  # grid shape + (rank, channel) float32
+    repeat_mm: tuple[float, float]
+    compression: dict[str, Any]
+
+    @property
+    def texels(self) -> tuple[int, int]:
+        return int(self.weights.shape[1]), int(self.weights.shape[0])
+
+    @property
+    def rank(self) -> int:
+        return int(self.weights.shape[2])
+
+    def texel_centres_mm(self) -> tuple[np.ndarray, np.ndarray]:
+        nu, nv = self.texels
+        return ((np.arange(nu) + 0.5) * self.repeat_mm[0] / nu, (np.arange(nv) + 0.5) * self.repeat_mm[1] / nv)
+
+
+def _stored(btf: BTFParts) -> list[tuple[str, np.ndarray]]:
+    cu, cv = btf.texel_centres_mm()
+    return [(TEXEL_U, cu), (TEXEL_V, cv), (WEIGHTS, np.asarray(btf.weights, "<f4")),
+            (BASIS, np.asarray(btf.basis, "<f4"))]
+
+
+def write(btf: BTFParts, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
+    """Write ``btf`` to ``path`` atomically: the tile mean as a CDBRDF file plus the CD-BTF variables.
+
+    Raises
+    ------
+    TableError, OSError
+        As :func:`cdbrdf.io.write`.
+    """
+    from ..io import write as write_table
+    from ..schema import TableParts
+
+    comp = btf.compression
+    nu, nv = btf.texels
+
+    def extra(f: Any, storage: dict[str, Any]) -> None:
+        for dim, size in ((TEXEL_U, nu), (TEXEL_V, nv), (COMPONENT, btf.rank)):
+            f.dimensions[dim] = size
+        cu, cv = btf.texel_centres_mm()
+        for name, axis in ((TEXEL_U, cu), (TEXEL_V, cv)):
+            var = f.create_variable(name, (name,), "f8", data=axis, chunks=(axis.size,), fletcher32=True,
+                                    track_times=False)
+            var.attrs.update({"units": "mm", "long_name": f"texel centre along {name[-1]} in the flat repeat"})
+        var = f.create_variable(COMPONENT, (COMPONENT,), "i4", data=np.arange(btf.rank, dtype=np.int32),
+                                track_times=False)
+        var.attrs["long_name"] = "component of the factorised texel deviations"
+        if btf.rank:
+            w = f.create_variable(WEIGHTS, _DIMS[WEIGHTS], "f4", data=btf.weights, chunks=btf.weights.shape,
+                                  **storage)
+            w.attrs["long_name"] = "weight of each component per texel"
+            chunks = (1, 1, *btf.basis.shape[2:])
+            b = f.create_variable(BASIS, _DIMS[BASIS], "f4", data=btf.basis, chunks=chunks, **storage)
+            b.attrs["long_name"] = "components of the texels' deviation from the tile mean"
+        f.attrs["btf_repeat_mm"] = np.array(btf.repeat_mm, dtype=np.float64)
+        f.attrs["btf_method"] = str(comp.get("method", "pca"))
+        f.attrs["btf_rank"] = np.int64(btf.rank)
+        for key in ("max_error", "relative_rms_error", "compression_ratio"):
+            if key in comp:
+                f.attrs[f"btf_{key}"] = float(comp[key])
+        if "relative_rms_error_per_kappa" in comp:
+            f.attrs["btf_relative_rms_error_per_kappa"] = np.array(comp["relative_rms_error_per_kappa"], float)
+        f.attrs[_DIGEST] = data_digest(_stored(btf))
+
+    write_table(TableParts.of(btf.mean), path, compression=compression, extra=extra)
+
+
+def is_btf(path: str | PathLike[str]) -> bool:
+    """Whether ``path`` is a CD-BTF file (a CDBRDF file with the CD-BTF attributes); False for other files."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            return "btf_repeat_mm" in f.attrs
+    except (OSError, ValueError):
+        return False
+
+
+def _array(path: Path, f: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
+    if name not in f:
+        raise fail(path, f"missing variable {name!r} of a CD-BTF file")
+    ds = f[name]
+    if tuple(ds.shape) != shape:
+        raise fail(path, f"{name!r} has shape {tuple(ds.shape)}, expected {shape}")
+    if ds.dtype.kind != "f":
+        raise fail(path, f"{name!r} has dtype {ds.dtype}, expected float")
+    check_storage(path, ds, name, path.stat().st_size)
+    try:
+        a = np.asarray(ds[()])
+    except (OSError, ValueError) as exc:
+        raise fail(path, f"{name!r} cannot be read ({one_line(exc)})") from None
+    if not np.all(np.isfinite(a)):
+        raise fail(path, f"{name!r} holds NaN or infinite values")
+    return a
+
+
+def _scalar(path: Path, attrs: Any, name: str) -> float:
+    a = np.asarray(get_attr(path, attrs, name)).reshape(-1)
+    if a.size != 1 or a.dtype.kind not in "iuf" or not np.isfinite(a[0]):
+        raise fail(path, f"global attribute {name!r} is not one finite number")
+    return float(a[0])
+
+
+def read(path: str | PathLike[str]) -> BTFParts:
+    """Read a CD-BTF file written by :meth:`cdbrdf.btf.CDBTF.save` (:func:`cdbrdf.btf.load` builds the object).
+
+    The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
+    the CDBRDF file), then the CD-BTF variables: shapes against the mean and
+    each other, finite values, the digest ``btf_sha256``.
+
+    Raises
+    ------
+    FileNotFoundError
+        When ``path`` does not exist.
+    FormatError
+        For a file that is not a CD-BTF file or is inconsistent or damaged
+        (the message starts with the path).
+    """
+    import h5py
+
+    from ..table import load as load_table
+
+    p = Path(path)
+    mean = load_table(p)
+    try:
+        f = h5py.File(p, "r")
+    except OSError as exc:
+        raise fail(p, f"cannot be opened as HDF5 ({one_line(exc)})") from None
+    with f:
+        if "btf_repeat_mm" not in f.attrs:
+            raise fail(p, "a CDBRDF file without the CD-BTF variables (no 'btf_repeat_mm'): read it with "
+                          "cdbrdf.load")
+        repeat = np.asarray(get_attr(p, f.attrs, "btf_repeat_mm"), dtype=np.float64).reshape(-1)
+        method = get_attr_str(p, f.attrs, "btf_method")
+        rank = int(_scalar(p, f.attrs, "btf_rank"))
+        nu, nv = (int(f[n].shape[0]) if n in f else -1 for n in (TEXEL_U, TEXEL_V))
+        if nu < 1 or nv < 1 or not 0 <= rank <= 4096:
+            raise fail(p, f"texel axes or rank missing or invalid (texels {nu} x {nv}, rank {rank})")
+        limits.check("table_samples", float(math.prod(mean.shape)) * (rank + 1) + nu * nv * rank,
+                     what=f"{p}: CD-BTF of rank {rank}")
+        if rank:
+            weights = _array(p, f, WEIGHTS, (nv, nu, rank))
+            basis = _array(p, f, BASIS, mean.shape[:-1] + (rank, mean.n_channels))
+        else:
+            weights = np.zeros((nv, nu, 0), np.float32)
+            basis = np.zeros(mean.shape[:-1] + (0, mean.n_channels), np.float32)
+        comp: dict[str, Any] = {"method": method, "rank": rank}
+        for key in ("max_error", "relative_rms_error", "compression_ratio"):
+            if f"btf_{key}" in f.attrs:
+                comp[key] = _scalar(p, f.attrs, f"btf_{key}")
+        if "btf_relative_rms_error_per_kappa" in f.attrs:
+            comp["relative_rms_error_per_kappa"] = [
+                float(x) for x in np.asarray(get_attr(p, f.attrs, "btf_relative_rms_error_per_kappa")).reshape(-1)]
+        stored = np.asarray(get_attr(p, f.attrs, _DIGEST)) if _DIGEST in f.attrs else None
+    if repeat.size != 2 or not np.all(np.isfinite(repeat)) or np.any(repeat <= 0):
+        raise fail(p, f"global attribute 'btf_repeat_mm' is not two positive sizes: {repeat!r}")
+    btf = BTFParts(mean, weights, basis, (float(repeat[0]), float(repeat[1])), comp)
+    if stored is None or stored.dtype != np.uint8 or stored.shape != (32,):
+        raise fail(p, f"global attribute {_DIGEST!r} is missing or not 32 bytes")
+    if not np.array_equal(stored, data_digest(_stored(btf))):
+        raise fail(p, f"checksum mismatch in the CD-BTF variables ({_DIGEST!r}): the file is damaged")
+    return btf

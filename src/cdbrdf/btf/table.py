@@ -1,0 +1,361 @@
+"""The curvature-dependent BTF: a CDBRDF per texel of one weave repeat, stored compressed.
+
+A :class:`CDBTF` holds reflectance over texel position ``(u, v)`` within one
+repeat of the fabric (periodic; ``u`` along the material's reference tangent
+x, ``v`` along y, both in mm of the flat fabric), the five axes of a
+:class:`~cdbrdf.grid.Grid` and the channels. It is stored as its tile mean (a
+:class:`~cdbrdf.CDBRDF`: what a patch larger than the repeat reflects) plus a
+rank-``r`` factorisation of the texels' deviations from it::
+
+    B(u, v, d) = mean(d) + sum_i w_i(u, v) basis_i(d)
+
+``d`` is (kappa, phi_l, theta_l, phi_v, theta_v, channel). The weights live on
+``n_v x n_u`` texel centres; between them they are interpolated bilinearly and
+periodically. The mean and the basis are looked up together as one table of
+``(1 + r) x channels`` channels by the rule of :mod:`cdbrdf.interp` (the pole
+rule and clamping are linear, so looking up the factors and combining them is
+looking up the decoded texels). A curved fabric's repeat is stretched on its
+face; the texel coordinates are fractions of the repeat at every curvature,
+measured in mm of the flat repeat.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping
+from os import PathLike
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import FormatError, QueryError, TableError
+from ..grid import Grid, read_array
+from ..table import CDBRDF
+
+if TYPE_CHECKING:
+    from ..interp import LookupGrid
+
+__all__ = ["CDBTF", "COMPRESSION_ATTRS", "DEFAULT_MAX_ERROR", "MAX_RANK", "load"]
+
+#: Relative RMS error the compression aims at unless told otherwise.
+DEFAULT_MAX_ERROR = 0.03
+
+#: Most components a factorisation may have.
+MAX_RANK = 256
+
+#: The entries of :attr:`CDBTF.compression`.
+COMPRESSION_ATTRS = ("method", "rank", "max_error", "relative_rms_error", "relative_rms_error_per_kappa",
+                     "compression_ratio")
+
+#: Queries looked up per chunk (bounds the memory of the ``(1 + rank) x channels`` lookups).
+_CHUNK = 1 << 15
+
+
+def _positive_pair(name: str, value: Any) -> tuple[float, float]:
+    a = read_array(name, value).astype(np.float64).reshape(-1)
+    if a.size != 2 or not np.all(np.isfinite(a)) or np.any(a <= 0):
+        raise TableError(f"{name}: expected two positive finite sizes (u, v) in mm, got {value!r}")
+    return float(a[0]), float(a[1])
+
+
+class CDBTF:
+    """A curvature-dependent BTF: tile mean plus factorised texel deviations.
+
+    Usually made by :meth:`from_values` (which compresses dense texels), by
+    :meth:`cdbrdf.synth.ClothModel.tabulate_btf` or read by :func:`cdbrdf.btf.load`.
+
+    Parameters
+    ----------
+    mean
+        The tile mean, a :class:`~cdbrdf.CDBRDF` (its grid is the BTF's).
+    weights
+        ``(n_v, n_u, rank)``: each texel's weight of each component.
+    basis
+        ``mean.shape[:-1] + (rank, n_channels)``: the components, in the
+        table's units.
+    repeat_mm
+        ``(size_u, size_v)``: the repeat's size on the flat fabric, mm.
+    compression
+        What the factorisation recorded (:data:`COMPRESSION_ATTRS`).
+
+    Raises
+    ------
+    TableError
+        When shapes disagree, values are not finite or sizes are not positive.
+    """
+
+    __slots__ = ("_mean", "_weights", "_basis", "_repeat", "_compression", "_lookup")
+
+    def __init__(self, mean: CDBRDF, weights: ArrayLike, basis: ArrayLike, *, repeat_mm: ArrayLike,
+                 compression: Mapping[str, Any] | None = None) -> None:
+        if not isinstance(mean, CDBRDF):
+            raise TableError(f"mean: expected a cdbrdf.CDBRDF, got {type(mean).__name__}")
+        w = read_array("weights", weights).astype(np.float32)
+        b = read_array("basis", basis).astype(np.float32)
+        if w.ndim != 3 or min(w.shape[:2]) < 1:
+            raise TableError(f"weights: expected (n_v, n_u, rank), got shape {w.shape}")
+        want = mean.shape[:-1] + (w.shape[2], mean.n_channels)
+        if b.shape != want:
+            raise TableError(f"basis: shape {b.shape} does not match the mean and weights {want}")
+        for name, a in (("weights", w), ("basis", b)):
+            if not np.all(np.isfinite(a)):
+                raise TableError(f"{name}: contains NaN or infinite values")
+            a.setflags(write=False)
+        self._mean = mean
+        self._weights = w
+        self._basis = b
+        self._repeat = _positive_pair("repeat_mm", repeat_mm)
+        self._compression = copy.deepcopy(dict(compression or {}))
+        self._lookup: LookupGrid | None = None
+
+    # -- construction from dense texels ---------------------------------------------
+    @classmethod
+    def from_values(cls, values: ArrayLike, grid: Grid, *, repeat_mm: ArrayLike,
+                    max_error: float = DEFAULT_MAX_ERROR, max_rank: int = MAX_RANK,
+                    attrs: Mapping[str, Any] | None = None) -> CDBTF:
+        """Compress dense texels: the tile mean and the smallest factorisation meeting ``max_error``.
+
+        Parameters
+        ----------
+        values
+            ``(n_v, n_u) + grid.shape + (n_channels,)``, per texel.
+        grid
+            The sample axes.
+        repeat_mm
+            ``(size_u, size_v)`` of the repeat, mm.
+        max_error
+            Target relative RMS error (a fraction, e.g. 0.03), met by the
+            whole table and by every curvature slice.
+        max_rank
+            Most components (a warning is logged when the target needs more).
+        attrs
+            The tile mean's attributes (material, provenance, quantity).
+
+        Returns
+        -------
+        CDBTF
+            With :attr:`compression` holding the rank, the errors and the ratio.
+        """
+        from ._factor import factorise
+
+        if not isinstance(grid, Grid):
+            raise TableError(f"grid: expected cdbrdf.Grid, got {type(grid).__name__}")
+        if isinstance(max_error, bool) or not isinstance(max_error, (int, float)) or not 0.0 <= max_error < 1.0:
+            raise TableError(f"max_error: expected a fraction in [0, 1), got {max_error!r}")
+        if isinstance(max_rank, bool) or not isinstance(max_rank, int) or not 0 <= max_rank <= MAX_RANK:
+            raise TableError(f"max_rank: expected an integer in [0, {MAX_RANK}], got {max_rank!r}")
+        v = read_array("values", values)
+        if v.ndim != 8 or v.shape[2:7] != grid.shape:
+            raise TableError(f"values: expected (n_v, n_u) + {grid.shape} + (channels,), got shape {v.shape}")
+        if not np.all(np.isfinite(v)):
+            raise TableError("values: contains NaN or infinite values")
+        nv, nu = v.shape[:2]
+        nc = v.shape[-1]
+        dense = v.reshape(nv * nu, -1)
+        f = factorise(dense, grid.shape[0], max_error=float(max_error), max_rank=max_rank)
+        mean = CDBRDF(f.mean.reshape(grid.shape + (nc,)).astype(np.float32), **grid.axes(), attrs=attrs,
+                      symmetry=grid.symmetry)
+        rank = f.weights.shape[1]
+        basis = np.moveaxis(f.basis.reshape((rank,) + grid.shape + (nc,)), 0, -2)
+        raw = dense.size * 4
+        stored = (f.mean.size + f.basis.size + f.weights.size) * 4
+        comp = {"method": "pca", "rank": rank, "max_error": float(max_error),
+                "relative_rms_error": f.error, "relative_rms_error_per_kappa": [float(e) for e in f.error_per_kappa],
+                "compression_ratio": raw / stored}
+        return cls(mean, f.weights.reshape(nv, nu, rank), basis, repeat_mm=repeat_mm, compression=comp)
+
+    # -- properties -------------------------------------------------------------------
+    @property
+    def grid(self) -> Grid:
+        """The sample axes of every texel."""
+        return self._mean.grid
+
+    @property
+    def weights(self) -> NDArray[np.float32]:
+        """Read-only ``(n_v, n_u, rank)`` component weights of the texels."""
+        return self._weights
+
+    @property
+    def basis(self) -> NDArray[np.float32]:
+        """Read-only ``(kappa, phi_l, theta_l, phi_v, theta_v, rank, channel)`` components."""
+        return self._basis
+
+    @property
+    def repeat_mm(self) -> tuple[float, float]:
+        """``(size_u, size_v)`` of the repeat on the flat fabric, mm."""
+        return self._repeat
+
+    @property
+    def texels(self) -> tuple[int, int]:
+        """``(n_u, n_v)`` texels per repeat."""
+        return int(self._weights.shape[1]), int(self._weights.shape[0])
+
+    @property
+    def rank(self) -> int:
+        """Number of components."""
+        return int(self._weights.shape[2])
+
+    @property
+    def n_channels(self) -> int:
+        """Number of channels (3 for RGB)."""
+        return self._mean.n_channels
+
+    @property
+    def attrs(self) -> dict[str, Any]:
+        """The tile mean's attributes (material, provenance, quantity)."""
+        return self._mean.attrs
+
+    @property
+    def compression(self) -> dict[str, Any]:
+        """The factorisation's record: :data:`COMPRESSION_ATTRS` (a copy)."""
+        return copy.deepcopy(self._compression)
+
+    def mean(self) -> CDBRDF:
+        """The tile mean, a :class:`~cdbrdf.CDBRDF`: what a patch of whole repeats reflects."""
+        return self._mean
+
+    def texel_centres_mm(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The texel centres along u and along v, mm."""
+        nu, nv = self.texels
+        su, sv = self._repeat
+        return (np.arange(nu) + 0.5) * su / nu, (np.arange(nv) + 0.5) * sv / nv
+
+    def decode(self) -> NDArray[np.float32]:
+        """The decoded texels at the grid's samples, ``(n_v, n_u) + grid.shape + (channels,)`` float32."""
+        nv, nu, r = self._weights.shape
+        m = self._mean.values.astype(np.float32)
+        basis = np.moveaxis(self._basis, -2, 0).reshape(r, m.size)  # (rank, samples * channels)
+        out = (self._weights.reshape(nv * nu, r) @ basis).reshape((nv, nu) + m.shape)
+        out += m
+        return out
+
+    def nbytes_ratio(self) -> float:
+        """Raw float32 bytes of every texel's table over the float32 bytes of mean, basis and weights."""
+        nu, nv = self.texels
+        raw = nu * nv * self._mean.values.size
+        return raw / (self._mean.values.size + self._basis.size + self._weights.size)
+
+    # -- lookup -----------------------------------------------------------------------
+    def lookup_grid(self) -> LookupGrid:
+        """The mean and the components as one table of ``(1 + rank) * channels`` channels, prepared for lookup.
+
+        Channel ``i * channels + c`` is component ``i`` (0: the mean) of channel ``c``.
+        """
+        if self._lookup is None:
+            from ..interp import prepare
+
+            m = self._mean.values.astype(np.float32)
+            stacked = np.concatenate([m[..., None, :], self._basis], axis=-2)
+            self._lookup = prepare(self.grid, stacked.reshape(stacked.shape[:-2] + (-1,)))
+        return self._lookup
+
+    def texel_weights(self, u_mm: ArrayLike, v_mm: ArrayLike) -> NDArray[np.float64]:
+        """The component weights at positions ``(u, v)`` (mm; periodic bilinear between texel centres).
+
+        Returns ``broadcast shape + (rank,)``; NaN rows where a position is not finite.
+        """
+        u, v = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (u_mm, v_mm)))
+        nu, nv = self.texels
+        su, sv = self._repeat
+        with np.errstate(invalid="ignore"):
+            fu = np.mod(u, su) / su * nu - 0.5
+            fv = np.mod(v, sv) / sv * nv - 0.5
+        bad = ~(np.isfinite(fu) & np.isfinite(fv))
+        fu, fv = np.where(bad, 0.0, fu), np.where(bad, 0.0, fv)
+        iu, iv = np.floor(fu), np.floor(fv)
+        tu, tv = (fu - iu)[..., None], (fv - iv)[..., None]
+        i0, j0 = iu.astype(np.int64) % nu, iv.astype(np.int64) % nv
+        i1, j1 = (i0 + 1) % nu, (j0 + 1) % nv
+        w = self._weights.astype(np.float64)
+        out = ((w[j0, i0] * (1 - tu) + w[j0, i1] * tu) * (1 - tv) + (w[j1, i0] * (1 - tu) + w[j1, i1] * tu) * tv)
+        out[bad] = np.nan
+        return out
+
+    def evaluate(self, u_mm: ArrayLike, v_mm: ArrayLike, theta_v: ArrayLike, phi_v: ArrayLike,
+                 theta_l: ArrayLike, phi_l: ArrayLike, kappa: ArrayLike = 0.0) -> NDArray[np.float64]:
+        """The reflectance at texel positions, directions (degrees) and curvatures (mm^-1).
+
+        Arguments broadcast together; periodic bilinear in ``(u, v)``, the rule
+        of :mod:`cdbrdf.interp` in the other five axes.
+
+        Parameters
+        ----------
+        u_mm, v_mm
+            Position on the fabric, mm (periodic over :attr:`repeat_mm`).
+        theta_v, phi_v, theta_l, phi_l
+            View and light elevation in [0, 90] and azimuth, degrees.
+        kappa
+            Curvature, mm^-1 (clamped to the grid).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``broadcast shape + (n_channels,)``, float64; NaN rows where an
+            input is not finite.
+
+        Raises
+        ------
+        QueryError
+            For an elevation outside [0, 90] degrees or arguments that do not broadcast.
+        """
+        from ..interp import evaluate as lookup
+
+        args = (u_mm, v_mm, theta_v, phi_v, theta_l, phi_l, kappa)
+        try:
+            qs = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in args))
+        except (TypeError, ValueError) as exc:
+            raise QueryError(f"u_mm, v_mm, theta_v, phi_v, theta_l, phi_l, kappa: {exc}") from None
+        shape = qs[0].shape
+        flat = [q.reshape(-1) for q in qs]
+        n = flat[0].size
+        nc, r = self.n_channels, self.rank
+        out = np.empty((n, nc))
+        for s in range(0, n, _CHUNK):
+            e = min(n, s + _CHUNK)
+            comps = lookup(self, *(q[s:e] for q in flat[2:])).reshape(e - s, 1 + r, nc)
+            w = self.texel_weights(flat[0][s:e], flat[1][s:e])
+            out[s:e] = comps[:, 0] + np.einsum("nr,nrc->nc", w, comps[:, 1:])
+        return out.reshape(shape + (nc,))
+
+    # -- file -------------------------------------------------------------------------
+    def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
+        """Write the BTF to an HDF5 file, atomically (``docs/format.md``, the CD-BTF variables)."""
+        from .file import BTFParts, write
+
+        write(BTFParts(self._mean, self._weights, self._basis, self._repeat, self.compression), path,
+              compression=compression)
+
+    def __repr__(self) -> str:
+        nu, nv = self.texels
+        err = self._compression.get("relative_rms_error")
+        e = "?" if err is None else f"{100 * err:.2f}%"
+        return (f"CDBTF(material={self.attrs.get('material', '?')!r}, texels={nu}x{nv}, "
+                f"repeat_mm=({self._repeat[0]:g}, {self._repeat[1]:g}), rank={self.rank}, error={e}, "
+                f"{self.grid!r})")
+
+
+def load(path: str | PathLike[str]) -> CDBTF:
+    """Read a CD-BTF file written by :meth:`CDBTF.save`.
+
+    The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
+    the CDBRDF file), then the CD-BTF variables: their shapes against the
+    mean and each other, finite values, the digest ``btf_sha256``.
+
+    Raises
+    ------
+    FileNotFoundError
+        When ``path`` does not exist.
+    FormatError
+        For a file that is not a CD-BTF file or is inconsistent or damaged
+        (the message starts with the path).
+    """
+    from pathlib import Path
+
+    from .file import read
+
+    p = read(path)
+    try:
+        return CDBTF(p.mean, p.weights, p.basis, repeat_mm=p.repeat_mm, compression=p.compression)
+    except TableError as exc:
+        raise FormatError(f"{Path(path)}: {exc}") from None

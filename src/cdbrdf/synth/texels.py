@@ -1,0 +1,142 @@
+"""The woven-cloth model per texel: a CD-BTF (:class:`cdbrdf.CDBTF`) of one repeat.
+
+The cloth model's reflectance is a mean over view rays spread over one weave
+repeat (:mod:`cdbrdf.synth.cloth`). Per texel, the rays are laid on a regular
+lattice of :data:`~cdbrdf.synth.cloth.RAYS_PER_TEXEL_SIDE` squared rays per
+texel and each ray belongs to the texel where it crosses the repeat's mean
+height (the plane a rectified photograph maps to the fabric): a texel's value
+is the mean over its rays, with the same footprint tilts, shadowing and
+normalisation as the CDBRDF. The mean over the texels is then the cloth's
+CDBRDF computed with those rays (it differs from :meth:`ClothModel.tabulate`,
+which uses :attr:`ClothParams.rays` rays, by the integration error only).
+The texel coordinates are fractions of the repeat at every curvature (the
+face stretches on a bent cloth), in mm of the flat repeat.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..btf import CDBTF, DEFAULT_MAX_ERROR, MAX_RANK
+from ..errors import OptionError
+from ..frames import direction_from_angles
+from ..grid import Grid
+from ..limits import check
+from .cloth import RAYS_PER_TEXEL_SIDE, ClothModel
+
+__all__ = ["tabulate_btf", "tabulate_texels", "MAX_TEXELS"]
+
+_LOG = logging.getLogger(__name__)
+
+#: Most texels along a side of the repeat.
+MAX_TEXELS = 256
+
+#: Per-texel values computed at once (bounds the memory of one chunk of light directions), float64 RGB.
+_CHUNK_VALUES = 1 << 23
+
+
+def _texels(texels: int | tuple[int, int]) -> tuple[int, int]:
+    t = (texels, texels) if isinstance(texels, (int, np.integer)) and not isinstance(texels, bool) else texels
+    try:
+        nu, nv = (int(x) for x in t)  # type: ignore[union-attr]
+        ok = all(isinstance(x, (int, np.integer)) and not isinstance(x, bool) for x in t)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        ok = False
+    if not ok or not (1 <= nu <= MAX_TEXELS and 1 <= nv <= MAX_TEXELS):
+        raise OptionError(f"texels: expected an integer or two in [1, {MAX_TEXELS}], got {texels!r}")
+    return nu, nv
+
+
+def tabulate_texels(
+    model: ClothModel,
+    grid: Grid | None = None,
+    *,
+    texels: int | tuple[int, int] = 32,
+    progress: Callable[[int, int], None] | None = None,
+) -> NDArray[np.float32]:
+    """The cloth model per texel of one repeat on a grid, uncompressed.
+
+    Parameters
+    ----------
+    model
+        The cloth.
+    grid
+        The sample axes; default :meth:`cdbrdf.Grid.paper`.
+    texels
+        Texels per repeat: ``n`` (n x n) or ``(n_u, n_v)``.
+    progress
+        Called as ``progress(done, total)`` after each curvature slice.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_v, n_u) + grid.shape + (3,)`` float32, the BRDF in sr^-1.
+    """
+    g = Grid.paper() if grid is None else grid
+    if not isinstance(g, Grid):
+        raise TypeError(f"grid: expected cdbrdf.Grid, got {type(g).__name__}")
+    nu, nv = _texels(texels)
+    n_tex = nu * nv
+    check("table_samples", float(np.prod(g.shape)) * n_tex * 3,
+          what=f"CD-BTF of {nu} x {nv} texels on a grid of shape {g.shape}")
+    nk, npl, ntl, npv, ntv = g.shape
+    values = np.empty((nk, npl, ntl, npv * ntv, n_tex, 3), dtype=np.float32)
+    PV, TV = np.meshgrid(g.phi_v, g.theta_v, indexing="ij")
+    v1 = direction_from_angles(TV.reshape(-1), PV.reshape(-1))
+    lights = [(i, j) for i in range(npl) for j in range(ntl)]
+    per_chunk = max(1, _CHUNK_VALUES // (v1.shape[0] * n_tex * 3))
+    for ik, k in enumerate(g.kappa):
+        _LOG.debug("%s: per-texel kappa = %g (%d x %d texels)", model.params.name, k, nu, nv)
+        for c0 in range(0, len(lights), per_chunk):
+            chunk = lights[c0 : c0 + per_chunk]
+            l_dirs = direction_from_angles(np.array([g.theta_l[j] for _, j in chunk]),
+                                           np.array([g.phi_l[i] for i, _ in chunk]))
+            v = np.tile(v1, (len(chunk), 1))
+            l = np.repeat(l_dirs, v1.shape[0], axis=0)
+            out = model._pairs(v, l, float(k), (nu, nv)).reshape(len(chunk), v1.shape[0], n_tex, 3)
+            for (i, j), block in zip(chunk, out):
+                values[ik, i, j] = block
+        if progress is not None:
+            progress(ik + 1, nk)
+    # (kappa, phi_l, theta_l, phi_v * theta_v, v * u, c) -> (v, u, kappa, phi_l, theta_l, phi_v, theta_v, c)
+    dense = np.moveaxis(values.reshape(nk, npl, ntl, npv, ntv, nv, nu, 3), (5, 6), (0, 1))
+    return np.ascontiguousarray(dense)
+
+
+def tabulate_btf(
+    model: ClothModel,
+    grid: Grid | None = None,
+    *,
+    texels: int | tuple[int, int] = 32,
+    max_error: float = DEFAULT_MAX_ERROR,
+    max_rank: int = MAX_RANK,
+    progress: Callable[[int, int], None] | None = None,
+) -> CDBTF:
+    """Sample the cloth model per texel of one repeat (:func:`tabulate_texels`) and compress it.
+
+    Parameters
+    ----------
+    model, grid, texels, progress
+        As :func:`tabulate_texels`.
+    max_error, max_rank
+        The compression's target relative RMS error and most components
+        (:meth:`cdbrdf.CDBTF.from_values`).
+
+    Returns
+    -------
+    CDBTF
+        ``quantity = "brdf"``; the tile mean's attributes are the model's
+        (:meth:`ClothModel.attrs`) with ``btf_texels`` and ``btf_rays_per_texel``.
+    """
+    g = Grid.paper() if grid is None else grid
+    nu, nv = _texels(texels)
+    dense = tabulate_texels(model, g, texels=(nu, nv), progress=progress)
+    attrs = model.attrs()
+    attrs["btf_texels"] = [nu, nv]
+    attrs["btf_rays_per_texel"] = RAYS_PER_TEXEL_SIDE ** 2
+    return CDBTF.from_values(dense, g, repeat_mm=model.heightfield(0.0).size_mm, max_error=max_error,
+                             max_rank=max_rank, attrs=attrs)

@@ -1,0 +1,185 @@
+"""The CD-BTF: texel lookup, compression to an error target, the file."""
+
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import pytest
+
+import cdbrdf
+from cdbrdf import CDBRDF, CDBTF, Grid
+from cdbrdf.btf import is_btf, load
+from cdbrdf.errors import FormatError, QueryError, TableError
+
+GRID = Grid.regular(theta_step_deg=30, phi_step_deg=90, kappa=[-0.2, 0.0, 0.2])
+REPEAT = (2.0, 1.5)
+
+
+def _dense(rank=2, noise=0.0, nv=6, nu=8, seed=1):
+    """Texels of an exact low rank (plus optional noise): (nv, nu) + grid + (3,)."""
+    rng = np.random.default_rng(seed)
+    base = 0.2 + rng.random(GRID.shape + (3,))
+    comps = rng.standard_normal((rank,) + GRID.shape + (3,))
+    w = rng.standard_normal((nv, nu, rank))
+    vals = base[None, None] + 0.1 * np.einsum("vur,r...->vu...", w, comps)
+    return vals + noise * rng.standard_normal(vals.shape)
+
+
+def _dense_lookup(vals, u, v, tv, pv, tl, pl, k):
+    """Reference: each texel's own CDBRDF looked up, combined by periodic bilinear weights written out."""
+    nv, nu = vals.shape[:2]
+    tables = [[CDBRDF(vals[j, i], **GRID.axes()) for i in range(nu)] for j in range(nv)]
+    fu = np.mod(u, REPEAT[0]) / REPEAT[0] * nu - 0.5
+    fv = np.mod(v, REPEAT[1]) / REPEAT[1] * nv - 0.5
+    i0, j0 = int(np.floor(fu)), int(np.floor(fv))
+    a, b = fu - i0, fv - j0
+    out = 0.0
+    for dj, wj in ((0, 1 - b), (1, b)):
+        for di, wi in ((0, 1 - a), (1, a)):
+            out = out + wj * wi * tables[(j0 + dj) % nv][(i0 + di) % nu].evaluate(tv, pv, tl, pl, k)
+    return out
+
+
+@pytest.fixture(scope="module")
+def exact():
+    vals = _dense()
+    return vals, CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, max_error=1e-4)
+
+
+def test_exact_rank_is_found_and_texels_are_reproduced(exact):
+    vals, btf = exact
+    assert btf.rank == 2
+    assert btf.texels == (8, 6) and btf.repeat_mm == REPEAT
+    np.testing.assert_allclose(btf.decode(), vals, rtol=1e-5, atol=1e-5)
+    assert btf.compression["relative_rms_error"] < 1e-5
+
+
+def test_evaluate_at_texel_centres_and_nodes_gives_the_samples(exact):
+    vals, btf = exact
+    cu, cv = btf.texel_centres_mm()
+    got = btf.evaluate(cu[3], cv[2], 30.0, 90.0, 60.0, 180.0, 0.2)
+    # values axes: (v, u, kappa, phi_l, theta_l, phi_v, theta_v, channel)
+    np.testing.assert_allclose(got, vals[2, 3, 2, 2, 2, 1, 1], rtol=1e-5)
+
+
+def test_evaluate_is_periodic_and_bilinear_between_centres(exact):
+    vals, btf = exact
+    cu, cv = btf.texel_centres_mm()
+    q = (30.0, 90.0, 60.0, 180.0, 0.0)
+    a = btf.evaluate(cu[0], cv[0], *q)
+    np.testing.assert_allclose(btf.evaluate(cu[0] + 3 * REPEAT[0], cv[0] - 2 * REPEAT[1], *q), a, rtol=1e-6)
+    # half way between the last and the first centre along u: across the seam of the repeat
+    mid = btf.evaluate(0.0, cv[0], *q)
+    np.testing.assert_allclose(mid, 0.5 * (vals[0, 0, 1, 2, 2, 1, 1] + vals[0, -1, 1, 2, 2, 1, 1]), rtol=1e-5)
+
+
+def test_evaluate_equals_each_texels_own_table_at_random_queries(exact):
+    vals, btf = exact
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        q = (rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(0, 90), rng.uniform(0, 360), rng.uniform(0, 90),
+             rng.uniform(0, 360), rng.uniform(-0.3, 0.3))
+        np.testing.assert_allclose(btf.evaluate(*q), _dense_lookup(vals, *q), rtol=1e-5, atol=1e-6)
+
+
+def test_evaluate_broadcasts_and_gives_nan_for_non_finite_positions(exact):
+    _, btf = exact
+    out = btf.evaluate(np.zeros((4, 1)), np.array([0.0, np.nan]), 30.0, 0.0, 30.0, 180.0)
+    assert out.shape == (4, 2, 3)
+    assert np.all(np.isfinite(out[:, 0])) and np.all(np.isnan(out[:, 1]))
+    with pytest.raises(QueryError, match="theta_v"):
+        btf.evaluate(0.0, 0.0, 95.0, 0.0, 30.0, 0.0)
+
+
+def test_mean_is_the_tile_average(exact):
+    vals, btf = exact
+    m = btf.mean()
+    assert isinstance(m, CDBRDF)
+    np.testing.assert_allclose(m.values, vals.mean(axis=(0, 1)), rtol=1e-5)
+    cu, cv = btf.texel_centres_mm()
+    U, V = np.meshgrid(cu, cv)
+    avg = btf.evaluate(U, V, 40.0, 100.0, 20.0, 250.0, 0.1).mean(axis=(0, 1))
+    np.testing.assert_allclose(avg, m.evaluate(40.0, 100.0, 20.0, 250.0, 0.1), rtol=1e-5)
+
+
+def test_rank_follows_the_error_target_and_the_recorded_errors_are_true():
+    vals = _dense(rank=6, noise=0.002)
+    ranks = []
+    for target in (0.2, 0.05, 0.01):
+        btf = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, max_error=target)
+        c = btf.compression
+        err = btf.decode() - vals
+        true = np.sqrt(np.sum(err ** 2) / np.sum(vals ** 2))
+        per_k = np.sqrt(np.sum(err ** 2, axis=(0, 1, 3, 4, 5, 6, 7)) / np.sum(vals ** 2, axis=(0, 1, 3, 4, 5, 6, 7)))
+        assert c["relative_rms_error"] == pytest.approx(true, rel=1e-3, abs=1e-6)
+        np.testing.assert_allclose(c["relative_rms_error_per_kappa"], per_k, rtol=1e-3, atol=1e-6)
+        assert true <= target and np.all(per_k <= target)
+        if btf.rank:  # the rank is the smallest that meets the target
+            less = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, max_error=target, max_rank=btf.rank - 1)
+            lc = less.compression
+            assert max(lc["relative_rms_error"], *lc["relative_rms_error_per_kappa"]) > target
+        ranks.append(btf.rank)
+        assert c["compression_ratio"] == pytest.approx(btf.nbytes_ratio())
+    assert ranks == sorted(ranks) and ranks[0] < ranks[-1]
+
+
+def test_file_round_trip_and_the_tile_mean_is_a_cdbrdf_file(exact, tmp_path):
+    _, btf = exact
+    path = tmp_path / "b.h5"
+    btf.save(path)
+    assert is_btf(path)
+    back = load(path)
+    np.testing.assert_array_equal(back.weights, btf.weights)
+    np.testing.assert_array_equal(back.basis, btf.basis)
+    assert back.mean() == btf.mean()
+    assert back.repeat_mm == btf.repeat_mm
+    assert back.compression == btf.compression
+    assert cdbrdf.load(path) == btf.mean()
+    with h5py.File(path, "r") as f:
+        assert f.attrs["format_version"] == "1.4"
+
+
+def test_damaged_or_plain_files_are_refused(exact, tmp_path):
+    _, btf = exact
+    plain = tmp_path / "plain.h5"
+    btf.mean().save(plain)
+    assert not is_btf(plain)
+    with pytest.raises(FormatError, match="without the CD-BTF variables"):
+        load(plain)
+    path = tmp_path / "b.h5"
+    btf.save(path)
+    with h5py.File(path, "r+") as f:
+        f["btf_weights"][0, 0, 0] = f["btf_weights"][0, 0, 0] + 1.0
+    with pytest.raises(FormatError, match="checksum mismatch"):
+        load(path)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"max_error": 1.5}, "max_error"),
+    ({"max_error": "0.1"}, "max_error"),
+    ({"max_rank": -1}, "max_rank"),
+    ({"repeat_mm": (1.0, 0.0)}, "repeat_mm"),
+])
+def test_bad_options_are_one_line_errors(kwargs, match):
+    args = {"repeat_mm": REPEAT, **kwargs}
+    with pytest.raises(TableError, match=match):
+        CDBTF.from_values(_dense(nv=2, nu=2), GRID, **args)
+
+
+def test_bad_shapes_are_refused():
+    with pytest.raises(TableError, match="values"):
+        CDBTF.from_values(np.zeros((2, 2) + GRID.shape), GRID, repeat_mm=REPEAT)
+    m = CDBRDF(np.ones(GRID.shape + (3,)), **GRID.axes())
+    with pytest.raises(TableError, match="basis"):
+        CDBTF(m, np.zeros((2, 2, 1)), np.zeros(GRID.shape + (2, 3)), repeat_mm=REPEAT)
+
+
+def test_uniform_texels_have_rank_zero_and_round_trip(tmp_path):
+    vals = np.broadcast_to(_dense(nv=1, nu=1)[0, 0], (3, 4) + GRID.shape + (3,))
+    btf = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, max_error=0.0)
+    assert btf.rank == 0 and btf.compression["relative_rms_error"] < 1e-9
+    np.testing.assert_allclose(btf.evaluate(0.3, 1.1, 30.0, 10.0, 45.0, 200.0, 0.1),
+                               btf.mean().evaluate(30.0, 10.0, 45.0, 200.0, 0.1), rtol=1e-6)
+    btf.save(tmp_path / "u.h5")
+    back = load(tmp_path / "u.h5")
+    assert back.rank == 0 and back.texels == (4, 3) and back.mean() == btf.mean()
