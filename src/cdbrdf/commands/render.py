@@ -129,7 +129,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "magnitude) or directional (normal curvature along the material's x axis) "
                        "(default: max)")
     table.add_argument("--up", choices=UP_AXES, default=None,
-                       help="up axis of --mesh (default auto: recorded in the file, else the format's usual one)")
+                       help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
     table.add_argument("--amplitude", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
                        help="sine sheet amplitude, mm (default: 2)")
     table.add_argument("--wavelength", type=finite_float(0.01, 1e5, unit="mm"), default=None,

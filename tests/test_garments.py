@@ -1,0 +1,84 @@
+"""Garments as their makers export them: the up axis from the geometry, units, the cloth's curvature.
+
+The meshes are made by :mod:`cdbrdf.mesh.garments` and written to OBJ / PLY
+files, so that the real readers run: a CAD garment (Z-up OBJ in mm, 9-14 mm
+edges, panels sewn along seams with coincident, unwelded vertices), the same
+garment as Blender exports it (Y-up OBJ in metres), and a scan-like Y-up bust
+(PLY, closed with a flat base, or open at the base).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+
+from cdbrdf.mesh import detect_up, read_mesh, z_up_mesh
+from cdbrdf.mesh.garments import Garment, bust_mesh, garment_mesh
+
+from .mesh_helpers import write_ascii_ply, write_obj
+
+
+def cad_garment(tmp_path, garment: Garment | None = None):
+    m = garment_mesh(garment or Garment())
+    return write_obj(tmp_path / "cad-top.obj", m.vertices, m.faces, m.uv)
+
+
+def blender_garment(tmp_path):
+    """The CAD garment as Blender's OBJ exporter writes it: Y-up (forward -z), metres."""
+    m = garment_mesh()
+    v = np.c_[m.vertices[:, 0], m.vertices[:, 2], -m.vertices[:, 1]] * 1e-3
+    return write_obj(tmp_path / "blender-top.obj", v, m.faces, m.uv)
+
+
+def scan_bust(tmp_path, base="closed"):
+    m = bust_mesh(base=base)
+    return write_ascii_ply(tmp_path / f"bust-{base}.ply", m.vertices, m.faces.tolist())
+
+
+def test_garment_is_made_of_sewn_panels():
+    m = garment_mesh()
+    e = np.linalg.norm(m.vertices[m.faces[:, [1, 2, 0]]] - m.vertices[m.faces], axis=2)
+    assert 9.0 <= np.median(e) <= 14.0
+    assert set(np.unique(m.metadata["panels"])) == {0, 1, 2, 3}
+    # the seams: vertices of different panels at the same place, not shared
+    _, inv, count = np.unique(m.vertices.round(6), axis=0, return_inverse=True, return_counts=True)
+    assert (count > 1).sum() > 100
+    assert all((np.bincount(m.faces[m.metadata["panels"] == p].ravel(), minlength=m.n_vertices) > 0).any()
+               for p in range(4))
+
+
+@pytest.mark.parametrize(("make", "axis", "reason"), [
+    (cad_garment, "z", "open boundaries"),
+    (blender_garment, "y", "open boundaries"),
+    (lambda p: scan_bust(p, "closed"), "y", "flat base"),
+    (lambda p: scan_bust(p, "open"), "y", "open boundaries"),
+])
+def test_up_axis_comes_from_the_geometry(tmp_path, caplog, make, axis, reason):
+    mesh = read_mesh(make(tmp_path))
+    with caplog.at_level(logging.WARNING, logger="cdbrdf.mesh.prepare"):
+        up, why = detect_up(mesh)
+    assert up == axis and reason in why
+    convention = "y" if mesh.metadata["format"] == "obj" else "z"
+    warned = any("the geometry says the up axis is" in r.getMessage() for r in caplog.records)
+    assert warned == (axis != convention)
+    world, was, _ = z_up_mesh(mesh)
+    assert was == axis
+    # upright: the world's z is the garment's height (the neck above the hem) or the bust's
+    ext = world.vertices.max(0) - world.vertices.min(0)
+    assert ext[2] > 1.5 * ext[1]
+
+
+def test_up_axis_given_overrides_the_geometry(tmp_path):
+    mesh = read_mesh(cad_garment(tmp_path))
+    assert z_up_mesh(mesh, "y")[1:] == ("y", "given")
+
+
+def test_convention_decides_when_the_geometry_does_not(tmp_path):
+    # a closed, round object: no openings, no base, no tall axis
+    from .mesh_helpers import sphere_mesh
+
+    v, f = sphere_mesh(10.0, n=400)
+    mesh = read_mesh(write_obj(tmp_path / "ball.obj", v, f))
+    assert detect_up(mesh) == ("y", "OBJ's usual convention (the geometry does not tell)")
