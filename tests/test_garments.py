@@ -82,3 +82,27 @@ def test_convention_decides_when_the_geometry_does_not(tmp_path):
     v, f = sphere_mesh(10.0, n=400)
     mesh = read_mesh(write_obj(tmp_path / "ball.obj", v, f))
     assert detect_up(mesh) == ("y", "OBJ's usual convention (the geometry does not tell)")
+
+
+# -- units ------------------------------------------------------------------------------------
+@pytest.mark.parametrize(("mm_per_unit", "size_units", "likely"), [
+    (1.0, 8.0, None),  # an 8 mm teapot in mm: small, but its bends are cloth's; no other unit
+    (1.0, 0.008, "m"),  # an 8 mm teapot in metres read as mm: bends a thousand times tighter than a yarn
+    (1000.0, 0.008, None),  # the same with its unit
+])
+def test_the_unit_is_suggested_only_when_the_surface_bends_tighter_than_a_yarn(mm_per_unit, size_units, likely):
+    from cdbrdf.mesh import Units, check_kappa_range
+    from cdbrdf.mesh.units import UNITS_MM
+
+    from .mesh_helpers import sphere_mesh
+
+    v, f = sphere_mesh(0.5 * size_units, n=400)
+    name = next(k for k, x in UNITS_MM.items() if x == mm_per_unit)
+    kappa_mm = np.full(len(v), 2.0 / (size_units * mm_per_unit))  # a sphere: 1 / its radius, mm^-1
+    chk = check_kappa_range(kappa_mm, np.ones(len(v)), (-0.22, 0.22), units=Units(mm_per_unit, name),
+                            size_units=size_units)
+    assert chk.outside_share == 1.0
+    assert (chk.likely_units[0] if chk.likely_units else None) == likely
+    assert ("--units m" in chk.message) == (likely == "m")
+    if likely is None:
+        assert "the unit is not the cause" in chk.message

@@ -8,7 +8,8 @@ found next to the scene, curvature units and the scene checks) with the
 ``mitsuba`` command's options: ``-D name=value`` for the scene's parameters,
 ``--spp`` (the sensor's count unless given), the variant, ``--seed``; the
 scene defines camera, film, lights and integrator. ``--units`` is the
-scene's unit there (mm per scene unit).
+scene's unit there (mm per scene unit; default the ``cdbrdf`` BSDF's
+``unit``, which ``-D`` can set through a ``$unit`` parameter, else mm).
 
 PNG output is tone-mapped by an exposure and sRGB-encoded:
 ``png = srgb(clip(radiance * 2**exposure, 0, 1))`` with ``--exposure`` in EV,
@@ -90,7 +91,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
                    default=None, metavar="UNIT",
                    help="length unit: of --mesh (mm, cm, m, in or mm per model unit; default: the one the "
-                   "file records, else mm), or of a scene file (mm per scene unit; default: mm)")
+                   "file records, else mm), or of a scene file (mm per scene unit; default: the cdbrdf BSDF's "
+                   "'unit', else mm)")
 
     scene_file = p.add_argument_group("a Mitsuba scene file (SCENE.xml)")
     scene_file.add_argument("-D", dest="define", action="append", default=None, type=key_value(),
@@ -245,7 +247,7 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if out.suffix.lower() not in IMAGE_FORMATS:
         raise OptionError(f"{out}: unknown image type {out.suffix.lower()!r}; use {' or '.join(IMAGE_FORMATS)}")
-    unit_mm = 1.0 if args.units is None else parse_units(args.units).mm_per_unit
+    unit_mm = None if args.units is None else parse_units(args.units).mm_per_unit
     cr.set_variant(args.variant)  # the command is the application: it chooses the variant
     import mitsuba as mi
 
@@ -253,7 +255,7 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     from ..render.scenefile import LoadReport
 
     report = LoadReport()
-    scene = cr.load_file(args.file, variables=dict(args.define or []), unit_mm=float(unit_mm), report=report)
+    scene = cr.load_file(args.file, variables=dict(args.define or []), unit_mm=unit_mm, report=report)
     check_not_input([(out, False)], report.files)  # e.g. -o over the scene's environment map
     if not isinstance(scene, mi.Scene):
         raise SceneError(f"{args.file}: holds a {type(scene).__name__}, not a scene")

@@ -31,6 +31,7 @@ from ..interp import LookupGrid, prepare
 from ..mesh import ATTRIBUTES
 from . import _lookup_jit as lj
 from . import _sampling
+from ._units import scene_units
 
 __all__ = [
     "CURVATURE_MODES",
@@ -266,6 +267,12 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             def get(key: str, default: Any = None) -> Any:
                 return props[key] if key in props else default
 
+            self.units = scene_units(get("unit", "mm"))
+            if "unit" in props and not bool(get("scene_scale_applied", False)):
+                _LOG.warning("cdbrdf BSDF: unit %s is applied with each shape's to_world scale by "
+                             "cdbrdf.render.load_file and load_dict (and cdbrdf render); Mitsuba's own loader "
+                             "gives the plug-in no shape, so the curvature attribute is used as it is (right when "
+                             "each to_world turns its mesh's unit into the scene's)", self.units)
             self.settings = Settings.parse(
                 mode=get("mode", "cdbrdf"), curvature=get("curvature"), curvature_mode=get("curvature_mode"),
                 curvature_scale=get("curvature_scale", 1.0), sampling=get("sampling", "table"),

@@ -71,14 +71,18 @@ pi f), mono variants use the luminance. ``mi.traverse`` exposes ``values``
 from __future__ import annotations
 
 import logging
+import math
 import re
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
+import numpy as np
+
 from ..errors import OptionError, SceneError
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
+from ._units import curvature_warning, ply_unit_mm, scene_factor, scene_units, uniform_scale
 
 __all__ = [
     "CURVATURE_MODES",
@@ -117,8 +121,11 @@ VARIANTS: tuple[str, ...] = ("llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", 
                              "cuda_ad_spectral", "cuda_ad_mono", "scalar_rgb", "scalar_spectral", "scalar_mono")
 
 #: Keys of a ``{"type": "cdbrdf", "table": ...}`` dict entry.
+#: The property cdbrdf's loaders set on a BSDF whose curvature factor they applied.
+_APPLIED = "scene_scale_applied"
+
 _DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_mode", "curvature_scale", "scale",
-                        "sampling", "cosine_weight", "storage"})
+                        "sampling", "cosine_weight", "storage", "unit", _APPLIED})
 
 
 def available_variants() -> tuple[str, ...]:
@@ -239,20 +246,36 @@ def make_bsdf(
     sampling: str = "table",
     cosine_weight: float | None = None,
     storage: str = "auto",
+    unit: str | float | None = None,
 ) -> Any:
     """A ``cdbrdf`` BSDF instance from a table object (or file name).
 
     The instance can be put into a scene dict in place of a BSDF dict
     (``"bsdf": make_bsdf(table)``). Parameters as in the plug-in table above;
     ``curvature=None`` with ``curvature_mode=None`` reads ``vertex_curvature``;
-    ``scale`` may be a float or a Mitsuba texture (an object or a dict).
+    ``scale`` may be a float or a Mitsuba texture (an object or a dict);
+    ``unit`` is the scene's unit (applied by :func:`load_dict` with the
+    shape's ``to_world``; see ``docs/rendering.md``, "Curvature units").
     """
+    return _make_bsdf(table, mode=mode, curvature=curvature, curvature_mode=curvature_mode,
+                      curvature_scale=curvature_scale, scale=scale, sampling=sampling, cosine_weight=cosine_weight,
+                      storage=storage, unit=unit)
+
+
+def _make_bsdf(table: Any, *, mode: str = "cdbrdf", curvature: str | float | None = None,
+               curvature_mode: str | None = None, curvature_scale: float = 1.0, scale: float | Any = 1.0,
+               sampling: str = "table", cosine_weight: float | None = None, storage: str = "auto",
+               unit: str | float | None = None, scene_scale_applied: bool = False) -> Any:
     import mitsuba as mi
 
     from ._bsdf import bsdf_class
 
     register()
     props = mi.Properties(PLUGIN_NAME)
+    if unit is not None:
+        props["unit"] = unit if isinstance(unit, str) else float(unit)
+    if scene_scale_applied:
+        props[_APPLIED] = True
     props["mode"] = str(mode)
     if curvature is not None:
         props["curvature"] = curvature if isinstance(curvature, str) else float(curvature)
@@ -277,22 +300,59 @@ def _replace_tables(d: Any) -> Any:
             if unknown:
                 raise OptionError(f"cdbrdf BSDF: unknown parameter(s) {sorted(unknown)}")
             kw = {k: v for k, v in d.items() if k not in ("type", "table", "id")}
-            return make_bsdf(d["table"], **kw)
+            return _make_bsdf(d["table"], **kw)
         return {k: _replace_tables(v) for k, v in d.items()}
     return d
 
 
-def load_dict(scene: dict, *, check: bool = True) -> Any:
-    """:func:`mitsuba.load_dict` that accepts ``"table": CDBRDF`` and checks the result.
+def _apply_units(scene: dict, unit_mm: float | None) -> dict:
+    """The scene dict with each shape's inline ``cdbrdf`` BSDF given its curvature factor (:mod:`._units`)."""
+    import mitsuba
 
-    ``{"type": "cdbrdf", "table": t, ...}`` entries become plug-in instances;
-    with ``check`` the loaded scene goes through :func:`check_scene`. An
-    object that cannot be made (a missing table, a damaged environment map)
-    is one :class:`~cdbrdf.errors.SceneError` line.
+    mi: Any = mitsuba
+    out = dict(scene)
+    for key, shape in scene.items():
+        if not isinstance(shape, dict):
+            continue
+        bsdf = shape.get("bsdf")
+        if not (isinstance(bsdf, dict) and bsdf.get("type") == PLUGIN_NAME):
+            continue
+        unit = scene_units(bsdf["unit"]) if "unit" in bsdf else None
+        u_mm = unit_mm if unit_mm is not None else unit.mm_per_unit if unit is not None else 1.0
+        s = 1.0
+        if "to_world" in shape:
+            tw = shape["to_world"]
+            s = uniform_scale(np.array(tw.matrix if hasattr(tw, "matrix") else tw), what=f"shape {key!r} to_world")
+        m_file = None
+        if shape.get("type") == "ply" and "filename" in shape:
+            m_file = ply_unit_mm(str(mi.file_resolver().resolve(str(shape["filename"]))))
+        factor = scene_factor(m_file=m_file, scale=s, unit_mm=u_mm)
+        b = dict(bsdf)
+        b["curvature_scale"] = float(b.get("curvature_scale", 1.0)) * factor
+        b["unit"] = float(u_mm)
+        b[_APPLIED] = True
+        out[key] = {**shape, "bsdf": b}
+    return out
+
+
+def load_dict(scene: dict, *, check: bool = True, unit_mm: float | None = None) -> Any:
+    """:func:`mitsuba.load_dict` that accepts ``"table": CDBRDF``, applies the scene's unit and checks the result.
+
+    ``{"type": "cdbrdf", "table": t, ...}`` entries become plug-in instances.
+    A shape's own ``cdbrdf`` BSDF dict gets the curvature factor of its
+    ``to_world`` scale and the scene's unit (``unit_mm``, mm per scene unit;
+    default: the BSDF's ``unit``, else mm; ``docs/rendering.md``, "Curvature
+    units"). With ``check`` the loaded scene goes through
+    :func:`check_scene`. An object that cannot be made (a missing table, a
+    damaged environment map) is one :class:`~cdbrdf.errors.SceneError` line.
     """
     import mitsuba as mi
 
     register()
+    if unit_mm is not None and not (math.isfinite(unit_mm) and unit_mm > 0):
+        raise SceneError(f"unit_mm: must be a positive number of millimetres per scene unit, got {unit_mm}")
+    if isinstance(scene, dict) and scene.get("type") == "scene":
+        scene = _apply_units(scene, unit_mm)
     spec = _replace_tables(scene)
     if not isinstance(spec, dict):  # {"type": "cdbrdf", "table": ...} alone: the instance itself
         return spec
@@ -390,3 +450,7 @@ def check_scene(scene: Any) -> None:
                 f"{attr!r}, which the shape does not have ({hint}, or give the BSDF a constant "
                 "curvature); without it the curvature would read as 0"
             )
+    shapes = [(shape, bsdf) for shape, bsdf, _ in cdbrdf_shapes(scene) if isinstance(shape, mi.Mesh)]
+    msg = curvature_warning(shapes)
+    if msg:
+        _LOG.warning("%s", msg)
