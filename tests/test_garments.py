@@ -106,3 +106,51 @@ def test_the_unit_is_suggested_only_when_the_surface_bends_tighter_than_a_yarn(m
     assert ("--units m" in chk.message) == (likely == "m")
     if likely is None:
         assert "the unit is not the cause" in chk.message
+
+
+# -- the cloth's curvature --------------------------------------------------------------------
+def sewn_cylinder(radius=40.0, height=200.0, edge=12.0, panels=2, seed=0):
+    """A cylinder of ``panels`` panels sewn along vertical seams (coincident, unwelded vertices), jittered."""
+    rng = np.random.default_rng(seed)
+    na, nz = round(2 * np.pi * radius / edge / panels), round(height / edge)
+    vs, fs, off = [], [], 0
+    for p in range(panels):
+        a = np.linspace(0, 2 * np.pi / panels, na + 1) + p * 2 * np.pi / panels
+        z = np.linspace(0, height, nz + 1)
+        A, Z = np.meshgrid(a, z, indexing="ij")
+        inner = (np.arange(na + 1) % na != 0)[:, None]  # the seams' columns stay where the other panel's are
+        A = A + inner * rng.uniform(-0.2, 0.2, A.shape) * (2 * np.pi / panels / na)
+        vs.append(np.stack([radius * np.cos(A), radius * np.sin(A), Z], -1).reshape(-1, 3))
+        i, j = np.meshgrid(np.arange(na), np.arange(nz), indexing="ij")
+        q = (i * (nz + 1) + j).ravel()
+        fs.append(np.concatenate([np.c_[q, q + nz + 1, q + nz + 2], np.c_[q, q + nz + 2, q + 1]]) + off)
+        off += vs[-1].shape[0]
+    return np.concatenate(vs), np.concatenate(fs)
+
+
+def test_seams_are_one_surface_and_boundaries_are_fitted_one_sided():
+    """A coarse (12 mm edges) cylinder of radius 40 mm in two sewn panels, open at both ends: 1/40 everywhere."""
+    from cdbrdf.mesh import surface_curvature
+    from cdbrdf.mesh.curvature import LOCATIONS
+
+    v, f = sewn_cylinder()
+    s = surface_curvature(v, f, units="mm", neighbourhood_mm=5.0, frame=None)
+    err = np.abs(s.kappa * 40.0 - 1.0)
+    where = {name: s.location == i for i, name in enumerate(LOCATIONS)}
+    assert where["seam"].sum() > 20 and where["boundary"].sum() > 20
+    assert np.median(err[where["seam"]]) < 0.02 and err[where["seam"]].max() < 0.05
+    assert np.median(err[where["boundary"]]) < 0.03 and err[where["boundary"]].max() < 0.05
+    assert any("coarser than the neighbourhood" in n for n in s.notes)
+
+
+def test_cad_garment_curvature_is_the_cloths(tmp_path):
+    """The CAD garment with default options: <= 1 % of the vertices outside the table's range, none at a
+    seam or an opening (the report by location)."""
+    from cdbrdf.mesh import prepare_mesh
+
+    mesh = prepare_mesh(cad_garment(tmp_path), kappa_range=(-0.22, 0.22))
+    by = mesh.metadata["outside_by_location"]
+    assert by["seam"][0] == 0 and by["boundary"][0] == 0
+    assert by["seam"][1] > 100 and by["boundary"][1] > 100
+    assert sum(o for o, _ in by.values()) <= 0.01 * mesh.n_vertices
+    assert any(n.startswith("curvature outside the table's range") for n in mesh.metadata["notes"])

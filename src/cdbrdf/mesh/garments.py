@@ -59,7 +59,7 @@ class Garment:
     neck_scale: float = 0.55
     sleeve_length_mm: float = 190.0
     cuff_radius_mm: float = 55.0
-    sleeve_drop_deg: float = 50.0
+    sleeve_drop_deg: float = 45.0
     folds: int = 14
     fold_amplitude_mm: float = 7.0
     edge_mm: float = 11.0
@@ -141,12 +141,14 @@ def garment_mesh(garment: Garment = Garment()) -> Mesh:
         centre = loop.mean(axis=0)
         d = np.array([sign * math.cos(drop), 0.0, -math.sin(drop)])
         e1 = np.array([0.0, 1.0, 0.0])
-        e2 = np.cross(d, e1)
+        e2 = np.array([0.0, 0.0, -1.0]) - (-d[2]) * d  # across the sleeve, towards the ground
+        e2 /= np.linalg.norm(e2)
         rel = loop - centre
-        # the cuff's angle of each loop vertex: by arc length from the armpit (psi = -90 degrees there)
+        # the cuff's angle of each loop vertex: by arc length from the armpit (at the cuff's lowest point,
+        # psi = 90 degrees), up the front edge (y < 0) first
         seg = np.linalg.norm(np.roll(loop, -1, axis=0) - loop, axis=1)
         arc = np.r_[0.0, np.cumsum(seg)[:-1]] / seg.sum()
-        psi = -0.5 * np.pi + 2 * np.pi * arc * sign
+        psi = 0.5 * np.pi + 2 * np.pi * arc
         ring = np.cos(psi)[:, None] * e1 + np.sin(psi)[:, None] * e2
         cuff = centre + g.sleeve_length_mm * d + g.cuff_radius_mm * ring
         n_r = max(3, round(g.sleeve_length_mm / e)) + 1

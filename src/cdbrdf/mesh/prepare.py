@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from ..errors import MeshError, OptionError
 from .core import Mesh
-from .curvature import check_neighbourhood, neighbourhood_from_table, surface_curvature
+from .curvature import check_neighbourhood, neighbourhood_from_table, outside_by_location, surface_curvature
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM
 from .io import read_mesh
 from .units import check_kappa_range, check_size, parse_units
@@ -104,7 +104,10 @@ def prepare_mesh(
         attributes ``"curvature"`` (maximum) and ``"curvature_dir"``
         (directional) in mm^-1; its metadata says what was done
         (``"repairs"``, ``"notes"``, ``"units"``, ``"neighbourhood_mm"``,
-        ``"frame"``, and with a table ``"outside_share"``).
+        ``"frame"``, ``"location"`` (:data:`cdbrdf.mesh.curvature.LOCATIONS`
+        index per vertex), and with a table ``"outside_share"`` and
+        ``"outside_by_location"``: per location the vertices outside the
+        table's kappa range and all of them).
 
     Raises
     ------
@@ -168,7 +171,8 @@ def prepare_mesh(
         attrs["curvature_dir"] = s.directional
         out = Mesh(mesh.vertices[s.source], s.faces, s.normals, s.uv, attrs,
                    None if mesh.tangents is None else mesh.tangents[s.source], dict(meta))
-        out.metadata.update({"curvature_units": "1/mm", "neighbourhood_mm": nb, "frame": s.frame})
+        out.metadata.update({"curvature_units": "1/mm", "neighbourhood_mm": nb, "frame": s.frame,
+                             "location": s.location})
     out.metadata["units"] = u.name
     out.metadata["repairs"] = repairs
     out.metadata["neighbourhood_note"] = f"neighbourhood: {nb:g} mm ({nb_note})"
@@ -183,6 +187,14 @@ def prepare_mesh(
         out.metadata["outside_share"] = chk.outside_share
         if chk.message:
             _LOG.warning("%s: %s", name, chk.message)
+        loc = out.metadata.get("location")
+        if isinstance(loc, np.ndarray) and loc.shape == (out.n_vertices,):
+            by = outside_by_location(out.attributes["curvature"], loc, kappa_range)
+            out.metadata["outside_by_location"] = by
+            n_out = sum(o for o, _ in by.values())
+            notes.append(f"curvature outside the table's range [{min(kappa_range):g}, {max(kappa_range):g}] 1/mm: "
+                         f"{n_out} of {out.n_vertices} vertices ({n_out / max(out.n_vertices, 1):.2%}; "
+                         + ", ".join(f"{k} {o} of {t}" for k, (o, t) in by.items()) + ")")
     out.metadata["notes"] = notes
     return out
 
