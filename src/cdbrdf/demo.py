@@ -324,7 +324,7 @@ def _render_pair(table: CDBRDF, surface: Any, *, config: DemoConfig, progress: P
 
     t0 = time.perf_counter()
     pic = render_table(table, surface, modes=("brdf", "cdbrdf"), size=config.render_size, spp=config.render_spp,
-                       lighting="paper", light=(45.0, 0.0), progress=stage)
+                       lighting="paper", light=(45.0, 0.0), exposure="auto", progress=stage)
     return pic, time.perf_counter() - t0
 
 

@@ -13,9 +13,12 @@ scene's unit there (mm per scene unit; default the ``cdbrdf`` BSDF's
 
 PNG output is tone-mapped by an exposure and sRGB-encoded:
 ``png = srgb(clip(radiance * 2**exposure, 0, 1))`` with ``--exposure`` in EV,
-by default chosen from the render (``auto``: the 99th percentile of the
-object's luminance maps to 0.85 of white,
-:func:`cdbrdf.render.picture.exposure_from_render`). With the default light
+or by default (``card``) the exposure at which an 18 % grey card facing the
+key light shows as mid-grey, so that every fabric shows at its own
+reflectance (:mod:`cdbrdf.render.picture`); ``auto`` chooses it from the
+render (the 99th percentile of the object's luminance maps to 0.85 of
+white, :func:`cdbrdf.render.picture.exposure_from_render`; the default for
+a scene file, whose lights cdbrdf does not know). With the default light
 irradiance (pi) a white Lambertian surface facing the light has radiance 1,
 i.e. just white at 0 EV. EXR output is the linear radiance (no exposure
 applied; black where the built-in studio sky is hidden); both are written by
@@ -72,8 +75,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Render a CDBRDF file with Mitsuba 3 (llvm_ad_rgb) on the paper's sine sheet or on "
         "a mesh (PLY, OBJ, glTF/GLB, STL, OFF; repaired, its curvature computed in 1/mm from --units "
         "unless the file has it), or render a Mitsuba XML scene that uses <bsdf type=\"cdbrdf\">. "
-        "PNG is sRGB-encoded after the exposure (radiance x 2^EV, clipped; default: chosen from the "
-        "render); EXR is linear.",
+        "PNG is sRGB-encoded after the exposure (radiance x 2^EV, clipped; default: an 18 %% grey card "
+        "facing the key light shows as mid-grey); EXR is linear.",
     )
     p.add_argument("file", type=input_path(),
                    help="a CDBRDF file (.h5), or a Mitsuba scene (.xml) using <bsdf type=\"cdbrdf\">")
@@ -81,8 +84,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="output .png or .exr (--compare: .png, .pdf or .svg)")
     p.add_argument("--spp", type=int_range(1, MAX_SPP), default=None,
                    help=f"samples per pixel, 1 to {MAX_SPP} (default: {DEFAULT_SPP}; a scene file: its sensor's)")
-    p.add_argument("--exposure", type=keyword(("auto",), finite_float(-64, 64, unit="EV")), default="auto",
-                   help="PNG exposure in EV, -64 to 64, or auto: from the render (default: auto)")
+    p.add_argument("--exposure", type=keyword(("card", "auto"), finite_float(-64, 64, unit="EV")), default=None,
+                   help="PNG exposure in EV, -64 to 64; card: an 18%% grey card facing the key light shows as "
+                   "mid-grey (default); auto: from the render (the default for a scene file)")
     p.add_argument("--seed", type=seed(_SEED_MAX), default=0,
                    help=f"random seed, 0 to {_SEED_MAX} (default: 0)")
     p.add_argument("--variant", choices=VARIANTS, default="llvm_ad_rgb",
@@ -209,7 +213,7 @@ def _run_table(args: argparse.Namespace) -> int:
             light=None if args.no_light else (args.light if args.light is not None else "auto"),
             irradiance=args.irradiance or DEFAULT_IRRADIANCE, envmap=args.envmap, view=args.view,
             units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame, up=args.up or "auto",
-            curvature_mode=args.curvature or "max", exposure=args.exposure, variant=args.variant,
+            curvature_mode=args.curvature or "max", exposure=args.exposure or "card", variant=args.variant,
             progress=progress)
     if pic.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), pic.mesh)
@@ -270,9 +274,10 @@ def _run_scene_file(args: argparse.Namespace) -> int:
         expo = ""
     else:
         rgb = np.repeat(image, 3, axis=-1) if image.shape[-1] == 1 else image[..., :3]
-        ev = exposure_from_render(rgb) if args.exposure == "auto" else float(args.exposure)
+        auto = args.exposure in (None, "auto")
+        ev = exposure_from_render(rgb) if auto else float(args.exposure)
         write_render(out, rgb, exposure_ev=ev)
-        expo = f", exposure {ev:+.2f} EV ({'auto' if args.exposure == 'auto' else 'given'})"
+        expo = f", exposure {ev:+.2f} EV ({'auto' if auto else 'given'})"
     if not args.quiet:
         h, w = image.shape[:2]
         say(f"{out}: written ({w}x{h}, {args.spp or scene.sensors()[0].sampler().sample_count()} spp, "
