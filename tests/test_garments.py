@@ -53,7 +53,7 @@ def test_garment_is_made_of_sewn_panels():
     (cad_garment, "z", "open boundaries"),
     (blender_garment, "y", "open boundaries"),
     (lambda p: scan_bust(p, "closed"), "y", "flat base"),
-    (lambda p: scan_bust(p, "open"), "y", "open boundaries"),
+    (lambda p: scan_bust(p, "open"), "y", "open boundary points"),
 ])
 def test_up_axis_comes_from_the_geometry(tmp_path, caplog, make, axis, reason):
     mesh = read_mesh(make(tmp_path))

@@ -306,7 +306,8 @@ def detect_up(mesh: Mesh) -> tuple[str, str]:
         yz = score[1:]
         if n_open and yz.max() > 0 and yz.max() >= OPENINGS_RATIO * yz.min() and yz.max() >= score[0]:
             axis = "yz"[int(np.argmax(yz))]
-            why = f"the open boundaries ({n_open}: neck, hem, sleeves, a cut base...) point mostly along {axis}"
+            why = (f"its {n_open} open boundar{'y points' if n_open == 1 else 'ies point'} mostly along {axis} "
+                   "(a garment's neck, hem and sleeves, a scan's cut base)")
         else:
             base = _base_axis(mesh)
             if base is not None and base[0] > 0:

@@ -412,8 +412,13 @@ def cdbrdf_shapes(scene: Any) -> Iterator[tuple[Any, Any, Any]]:
                     break
 
 
-def check_scene(scene: Any) -> None:
-    """Refuse shapes with a ``cdbrdf`` BSDF that cannot define its frame or curvature.
+def check_scene(scene: Any, *, curvature: bool = True) -> None:
+    """Refuse shapes with a ``cdbrdf`` BSDF that cannot define its frame or curvature; warn of an implausible one.
+
+    With ``curvature``, the curvature the renderer will see on those meshes
+    is checked against the tables' kappa range and a warning is logged once
+    when it is implausible, with the likely scene unit
+    (:func:`cdbrdf.render._units.curvature_warning`).
 
     Raises
     ------
@@ -450,6 +455,8 @@ def check_scene(scene: Any) -> None:
                 f"{attr!r}, which the shape does not have ({hint}, or give the BSDF a constant "
                 "curvature); without it the curvature would read as 0"
             )
+    if not curvature:
+        return
     shapes = [(shape, bsdf) for shape, bsdf, _ in cdbrdf_shapes(scene) if isinstance(shape, mi.Mesh)]
     msg = curvature_warning(shapes)
     if msg:
