@@ -134,6 +134,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="the curvature looked up: max (the paper's: principal curvature of larger "
                        "magnitude) or directional (normal curvature along the material's x axis) "
                        "(default: max)")
+    table.add_argument("--normal-map", metavar="FILE", type=existing_file(".png", ".tif", ".tiff", ".exr"),
+                       default=None, help="a tangent-space normal map of --mesh (OpenGL convention, green up): its "
+                       "curvature is added to the mesh's, baked per vertex (default: the OBJ's MTL 'norm' map)")
     table.add_argument("--up", choices=UP_AXES, default=None,
                        help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
     table.add_argument("--amplitude", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
@@ -154,8 +157,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 #: Options of the table form (default None: not given), each refused with a scene file.
 _TABLE_ONLY = ("scene", "mesh", "brdf", "compare", "size", "lighting", "light", "irradiance", "no_light", "envmap",
-               "neighbourhood", "frame", "curvature", "up", "amplitude", "wavelength", "sheet_size", "max_depth",
-               "view")
+               "neighbourhood", "frame", "curvature", "normal_map", "up", "amplitude", "wavelength", "sheet_size",
+               "max_depth", "view")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -213,6 +216,7 @@ def _run_table(args: argparse.Namespace) -> int:
             light=None if args.no_light else (args.light if args.light is not None else "auto"),
             irradiance=args.irradiance or DEFAULT_IRRADIANCE, envmap=args.envmap, view=args.view,
             units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame, up=args.up or "auto",
+            normal_map=args.normal_map,
             curvature_mode=args.curvature or "max", exposure=args.exposure or "card", variant=args.variant,
             progress=progress)
     if pic.mesh is not None and not args.quiet:

@@ -35,6 +35,7 @@ from .core import Mesh
 from .curvature import check_neighbourhood, neighbourhood_from_table, outside_by_location, surface_curvature
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM
 from .io import read_mesh
+from .normalmap import NormalMap, add_normal_map, read_normal_map
 from .units import check_kappa_range, check_size, parse_units
 
 __all__ = ["UP_AXES", "prepare_mesh", "detect_up", "to_z_up", "z_up_mesh", "check_up"]
@@ -65,6 +66,8 @@ def prepare_mesh(
     table: Any = None,
     kappa_range: tuple[float, float] | None = None,
     recompute: bool = False,
+    normal_map: str | PathLike[str] | NormalMap | None = None,
+    normal_map_convention: str = "opengl",
     progress: Callable[[int, int], None] | None = None,
 ) -> Mesh:
     """Read a user mesh for rendering: repair it, give it a frame and its curvatures in mm^-1.
@@ -94,6 +97,14 @@ def prepare_mesh(
         Without a table: the kappa range to check the curvature against.
     recompute
         Compute the curvature even when the file has it.
+    normal_map
+        A tangent-space normal map (a file, or a
+        :class:`~cdbrdf.mesh.normalmap.NormalMap`) whose curvature is added
+        to the mesh's, baked per vertex (:mod:`cdbrdf.mesh.normalmap`); the
+        mesh needs its UVs. Default: the map the file names (an OBJ's
+        ``norm`` in its MTL), if any.
+    normal_map_convention
+        ``"opengl"`` (green up; Blender, glTF) or ``"directx"``.
     progress
         ``progress(done, total)`` while fitting, in vertices.
 
@@ -169,6 +180,17 @@ def prepare_mesh(
         attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in ("curvature", "curvature_dir")}
         attrs["curvature"] = s.kappa
         attrs["curvature_dir"] = s.directional
+        nmap = normal_map if normal_map is not None else meta.get("normal_map")
+        if nmap is not None:
+            if s.uv is None or s.frame != "uv":
+                raise MeshError(f"{name}: a normal map needs the mesh's own UV coordinates (frame 'uv')")
+            nm = nmap if isinstance(nmap, NormalMap) else read_normal_map(nmap, convention=normal_map_convention)
+            arr, nm_notes = add_normal_map(nm, positions=mesh.vertices[s.source], faces=s.faces, uv=s.uv,
+                                           normals=s.normals, tangent=s.tangent, k1=s.k1, k2=s.k2, d1=s.d1,
+                                           d2=s.d2, mm_per_unit=u.mm_per_unit, neighbourhood_mm=nb)
+            attrs["curvature"] = arr["kappa"]
+            attrs["curvature_dir"] = arr["directional"]
+            notes.extend(nm_notes)
         out = Mesh(mesh.vertices[s.source], s.faces, s.normals, s.uv, attrs,
                    None if mesh.tangents is None else mesh.tangents[s.source], dict(meta))
         out.metadata.update({"curvature_units": "1/mm", "neighbourhood_mm": nb, "frame": s.frame,

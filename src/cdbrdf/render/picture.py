@@ -269,6 +269,7 @@ def render_table(
     neighbourhood_mm: float | None = None,
     frame: str | None = None,
     up: str = "auto",
+    normal_map: str | PathLike[str] | None = None,
     curvature_mode: str = "max",
     exposure: float | str = "card",
     variant: str | None = None,
@@ -320,6 +321,10 @@ def render_table(
         For a mesh: its length unit, the curvature's neighbourhood (mm), the
         source of the material's x axis, its up axis
         (:func:`cdbrdf.mesh.prepare_mesh`, :func:`cdbrdf.mesh.detect_up`).
+    normal_map
+        A tangent-space normal map of the mesh, whose curvature is added to
+        the mesh's (:mod:`cdbrdf.mesh.normalmap`); default: the one the mesh
+        file names, if any.
     curvature_mode
         ``"max"`` (the paper's) or ``"directional"``.
     exposure
@@ -381,6 +386,8 @@ def render_table(
         sheet = surface if isinstance(surface, SineSheet) else SineSheet()
         if envmap is not None:
             raise OptionError("envmap: only for meshes (the sine sheet is the paper's set-up)")
+        if normal_map is not None:
+            raise OptionError("normal_map: only for meshes (the sine sheet's folds are its geometry)")
         if lighting == "studio":
             raise OptionError("lighting 'studio': only for meshes (the sine sheet is the paper's set-up)")
         if sun is None:
@@ -397,7 +404,7 @@ def render_table(
             source, name = read_mesh(surface), str(surface)
         cb = None if progress is None else (lambda done, total: progress("curvature", done, total))
         mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=tbl,
-                            progress=cb)
+                            normal_map=normal_map, progress=cb)
         up_axis, why = (up, "given") if up != "auto" else detect_up(mesh)
     images: dict[str, NDArray[np.float32]] = {}
     with variant_context(variant or DEFAULT_VARIANT):
