@@ -96,3 +96,19 @@ def test_a_normal_map_needs_the_meshs_uvs(tmp_path):
     write_png(grey, np.zeros((4, 4), np.uint8))
     with pytest.raises(MeshError, match="RGB image"):
         read_normal_map(grey)
+
+
+def test_a_gltf_normal_texture_is_read(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    from PIL import Image
+
+    from cdbrdf.mesh import read_mesh
+
+    v0, f0, uv0 = sheet(n=61)
+    img = Image.fromarray(np.round((sine_normals(200) + 1) / 2 * 255).astype(np.uint8))
+    mat = trimesh.visual.material.PBRMaterial(normalTexture=img)
+    tm = trimesh.Trimesh(v0 / 1000.0, f0, visual=trimesh.visual.TextureVisuals(uv=uv0, material=mat), process=False)
+    tm.export(tmp_path / "cloth.glb")
+    mesh = prepare_mesh(read_mesh(tmp_path / "cloth.glb"), neighbourhood_mm=5.0)  # glTF: metres
+    assert np.abs(mesh.attributes["curvature"]).max() == pytest.approx(A * (2 * np.pi / L) ** 2, rel=0.15)
+    assert any("normalTexture" in n for n in mesh.metadata["notes"])

@@ -147,7 +147,8 @@ def test_a_scene_in_metres_renders_like_the_scene_in_mm_when_its_unit_is_given(c
     with caplog.at_level(logging.WARNING, logger="cdbrdf"):
         plain = np.array(mi.render(mi.load_file(str(in_bsdf)), spp=4))
     assert abs(plain.mean() / ref.mean() - 1) < 0.005
-    assert "Mitsuba's own loader gives the plug-in no shape" in caplog.text
+    assert "made by Mitsuba's own loader, which gives the plug-in no shape" in caplog.text
+    assert "its unit (m)" in caplog.text
 
 
 def test_dict_scenes_apply_the_unit_with_to_world(cr, tmp_path):
@@ -419,3 +420,15 @@ def test_plugin_errors_of_cdbrdf_load_dict_are_one_line(cr, tmp_path):
     bsdf_file.write_bytes(b"tensor_file\0\x01\x00" + bytes(64))
     with pytest.raises(SceneError, match=r"ibiza\.bsdf: not an HDF5 file .*`cdbrdf import FILE -o OUT\.h5`"):
         cr.load_dict({"type": "cdbrdf", "filename": str(bsdf_file)})
+
+
+def test_mitsubas_own_loader_says_the_checks_are_not_applied(cr, tmp_path, caplog):
+    """Mitsuba gives a BSDF no shape: a plain load warns at the plug-in's set-up; cdbrdf's loader refuses."""
+    path = write_scene(tmp_path, mesh=cylinder(uv=False))
+    with caplog.at_level(logging.WARNING, logger="cdbrdf"):
+        mi.load_file(str(path))
+    assert "made by Mitsuba's own loader" in caplog.text and "UV coordinates" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="cdbrdf"), pytest.raises(SceneError, match="UV coordinates"):
+        cr.load_file(path)
+    assert "own loader" not in caplog.text

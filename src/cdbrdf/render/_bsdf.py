@@ -268,11 +268,8 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                 return props[key] if key in props else default
 
             self.units = scene_units(get("unit", "mm"))
-            if "unit" in props and not bool(get("scene_scale_applied", False)):
-                _LOG.warning("cdbrdf BSDF: unit %s is applied with each shape's to_world scale by "
-                             "cdbrdf.render.load_file and load_dict (and cdbrdf render); Mitsuba's own loader "
-                             "gives the plug-in no shape, so the curvature attribute is used as it is (right when "
-                             "each to_world turns its mesh's unit into the scene's)", self.units)
+            #: whether cdbrdf's loaders applied the scene's unit with the shapes' to_world scales
+            self.scene_scale_applied = bool(get("scene_scale_applied", False))
             self.settings = Settings.parse(
                 mode=get("mode", "cdbrdf"), curvature=get("curvature"), curvature_mode=get("curvature_mode"),
                 curvature_scale=get("curvature_scale", 1.0), sampling=get("sampling", "table"),

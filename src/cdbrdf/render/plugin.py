@@ -228,9 +228,18 @@ def _factory(cls: type) -> Callable[[Any], Any]:
 
     def make(props: Any) -> Any:
         try:
-            return cls(props)
+            bsdf = cls(props)
         except (ValueError, OSError) as exc:  # cdbrdf's errors (ValueError) and a missing file
             raise exc.with_traceback(None) from None
+        if _APPLIED not in props:
+            unit = f" and its unit ({bsdf.units})" if "unit" in props else ""
+            _LOG.warning(
+                "cdbrdf BSDF%s: made by Mitsuba's own loader, which gives the plug-in no shape: the checks of the "
+                "shapes that use it (UV coordinates, the curvature attribute, no twosided wrapper)%s are not "
+                "applied and the curvature attribute is used as it is; load the scene with "
+                "cdbrdf.render.load_file or load_dict, or call cdbrdf.render.check_scene(scene)",
+                f" {props.id()!r}" if props.id() else "", unit)
+        return bsdf
 
     return make
 
@@ -335,6 +344,16 @@ def _apply_units(scene: dict, unit_mm: float | None) -> dict:
     return out
 
 
+def _mark_loaded(d: Any) -> Any:
+    """Every ``cdbrdf`` BSDF dict marked as loaded by cdbrdf (its scale applied or not needed)."""
+    if isinstance(d, dict):
+        out = {k: _mark_loaded(v) for k, v in d.items()}
+        if d.get("type") == PLUGIN_NAME and _APPLIED not in d:
+            out[_APPLIED] = False
+        return out
+    return d
+
+
 def load_dict(scene: dict, *, check: bool = True, unit_mm: float | None = None) -> Any:
     """:func:`mitsuba.load_dict` that accepts ``"table": CDBRDF``, applies the scene's unit and checks the result.
 
@@ -353,7 +372,7 @@ def load_dict(scene: dict, *, check: bool = True, unit_mm: float | None = None) 
         raise SceneError(f"unit_mm: must be a positive number of millimetres per scene unit, got {unit_mm}")
     if isinstance(scene, dict) and scene.get("type") == "scene":
         scene = _apply_units(scene, unit_mm)
-    spec = _replace_tables(scene)
+    spec = _replace_tables(_mark_loaded(scene))
     if not isinstance(spec, dict):  # {"type": "cdbrdf", "table": ...} alone: the instance itself
         return spec
     try:

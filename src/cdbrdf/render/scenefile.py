@@ -247,6 +247,9 @@ def _prepare(state: Any, *, unit_mm: float | None, mi: Any) -> LoadReport:
             _LOG.info("%s: shape %r: curvature attribute x %.6g (to_world scale %.6g, file unit %s mm, scene "
                       "unit %.6g mm)", where, name, factor, s, "1 (assumed)" if m_file is None else f"{m_file:g}",
                       u_mm)
+    for node in nodes:  # the plug-in's other instances (used by no shape): loaded by cdbrdf too
+        if _is_cdbrdf(node, mi) and _APPLIED not in node.props:
+            node.props[_APPLIED] = False
     return report
 
 
