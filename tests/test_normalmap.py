@@ -112,3 +112,14 @@ def test_a_gltf_normal_texture_is_read(tmp_path):
     mesh = prepare_mesh(read_mesh(tmp_path / "cloth.glb"), neighbourhood_mm=5.0)  # glTF: metres
     assert np.abs(mesh.attributes["curvature"]).max() == pytest.approx(A * (2 * np.pi / L) ** 2, rel=0.15)
     assert any("normalTexture" in n for n in mesh.metadata["notes"])
+
+
+def test_a_mesh_too_coarse_for_the_maps_folds_gets_a_note():
+    nmap = normal_map_from_normals(sine_normals(200))  # folds 20 mm long
+    for n, coarse in ((61, False), (7, True)):  # 1 mm and 10 mm edges
+        v0, f0, uv0 = sheet(n=n)
+        notes = prepare_mesh(Mesh(v0, f0, None, uv0), neighbourhood_mm=5.0, normal_map=nmap).metadata["notes"]
+        said = [x for x in notes if "coarse for the normal map's folds" in x]
+        assert bool(said) == coarse, notes
+        if coarse:
+            assert "about 20 mm long" in said[0]

@@ -21,8 +21,11 @@ decoded as data (``2 code / max - 1``), never as sRGB; ``convention``
 ``"opengl"`` (+v up, green up: Blender, glTF) or ``"directx"`` (green down).
 
 Baked per vertex, the detail is only as fine as the mesh: where the mesh's
-median edge exceeds the filter's scale, the vertices sample the map's
-curvature sparsely and a note says so (subdivide the mesh).
+median edge exceeds a quarter of the map's fold length (``2 pi rms(slope) /
+rms(curvature)``, the wavelength of sine folds), the vertices sample its
+folds sparsely and a note says so (subdivide the mesh). The map's shading
+(its normals) is not applied to the renderer's normals: what it adds is
+its curvature, looked up in the table.
 """
 
 from __future__ import annotations
@@ -47,6 +50,9 @@ NORMAL_MAP_CONVENTIONS: tuple[str, ...] = ("opengl", "directx")
 #: resolution of the mesh's own fit (a quadric weighted by a Gaussian of sigma = radius / 2), measured
 #: on sine folds (``tests/test_normalmap.py``).
 FILTER_SHARE = 0.125
+
+#: Vertices per fold length at least for the folds of a map to be baked per vertex (else a note).
+SAMPLES_PER_FOLD = 4.0
 
 #: Smallest ``c`` (the normal's component along the surface normal) accepted: steeper texels are clipped.
 _MIN_NZ = 0.1
@@ -230,10 +236,15 @@ def add_normal_map(
     notes = [f"{normal_map.name}: {wid} x {hgt} texels over {mu:.4g} x {mv:.4g} mm (median), "
              f"filtered at {sigma_mm:.3g} mm; its curvature is up to {float(np.abs(detail).max()):.3g} 1/mm "
              f"(median {float(np.median(np.abs(detail))):.3g})"]
+    # the folds' length: 2 pi rms(slope) / rms(curvature) (the wavelength of a sine fold)
+    k_tex = np.hypot(grads[..., 0] / mu, grads[..., 3] / mv)
+    slope_rms, k_rms = float(np.sqrt(np.mean(p * p + q * q))), float(np.sqrt(np.mean(k_tex * k_tex)))
+    fold_mm = 2 * math.pi * slope_rms / k_rms if k_rms > 0 else math.inf
     edge = _median_edge_mm(positions, faces, mm_per_unit)
-    if edge > 2.0 * sigma_mm:
-        notes.append(f"the mesh (median edge {edge:.3g} mm) is coarser than the normal map's curvature (filtered "
-                     f"at {sigma_mm:.3g} mm): baked per vertex, its folds are sampled sparsely; subdivide the mesh")
+    if edge > fold_mm / SAMPLES_PER_FOLD:
+        notes.append(f"the mesh (median edge {edge:.3g} mm) is coarse for the normal map's folds (about "
+                     f"{fold_mm:.3g} mm long): baked per vertex, they are sampled sparsely; subdivide the mesh to "
+                     f"{fold_mm / SAMPLES_PER_FOLD:.2g} mm edges")
     arrays = {"k1": n1, "k2": n2, "d1": e1, "d2": e2, "kappa": kappa, "directional": sxx, "detail": detail}
     return arrays, notes
 
