@@ -118,7 +118,8 @@ def test_up_axis_is_detected_and_can_be_given(variant, tmp_path):
     v, f, uv, _ = cylinder_patch(10.0, n=12, angle=2 * np.pi * 0.999, length=120.0)
     path = write_obj(tmp_path / "post.obj", v, f, uv)
     mesh = prepare_mesh(path)
-    assert detect_up(mesh) == ("y", "OBJ's usual convention")
+    up, why = detect_up(mesh)
+    assert up == "y" and "convention" not in why  # from its geometry
     w_h = {}
     for up in ("auto", "z"):
         img = render_scene(mesh_scene(white_table(), mesh, up=up, size=(40, 40), spp=1, max_depth=2,
@@ -179,6 +180,45 @@ def test_exposure_from_the_render():
     assert np.allclose(out[0, 1], 0.25) and np.allclose(out[4, 4], 0.001)
 
 
+def test_grey_card_exposure_is_the_cards_irradiance():
+    from cdbrdf.colour import card_exposure_ev
+    from cdbrdf.render.lighting import card_irradiance, studio_environment
+
+    assert card_exposure_ev(np.pi) == 0.0 and card_exposure_ev(4 * np.pi) == pytest.approx(-2.0)
+    assert card_irradiance((30.0, 10.0, 2.0), None) == 2.0
+    # a uniform sky of radiance L gives pi L on any card; the studio sky adds to the key light's pi
+    assert card_irradiance(None, np.full((64, 128, 3), 0.5)) == pytest.approx(0.5 * np.pi, rel=1e-3)
+    assert np.pi < card_irradiance((45.0, 0.0, np.pi), studio_environment()) < 1.5 * np.pi
+    with pytest.raises(ValueError, match="card irradiance"):
+        card_exposure_ev(0.0)
+
+
+def test_a_dark_fabric_shows_at_its_own_reflectance(variant):
+    """Indigo (a Lambertian table of albedo (0.03, 0.05, 0.12)) on a square facing the light: the default
+    exposure (grey card) shows it at its albedo; the picture-driven one pushes it 2 EV brighter."""
+    from cdbrdf.mesh import Mesh
+    from cdbrdf.render import render_table
+
+    albedo = np.array([0.03, 0.05, 0.12])
+    g = cdbrdf.Grid(kappa=[0.0], theta_l=[0, 45, 75], phi_l=[0, 180], theta_v=[0, 45, 75], phi_v=[0, 180])
+    table = cdbrdf.CDBRDF(np.broadcast_to(albedo / np.pi, g.shape + (3,)).copy(), **g.axes(),
+                          attrs={"quantity": "brdf"})
+    x, y = np.meshgrid(np.linspace(-50, 50, 11), np.linspace(-50, 50, 11), indexing="ij")
+    v = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    q = (np.arange(10)[:, None] * 11 + np.arange(10)[None, :]).ravel()
+    f = np.concatenate([np.c_[q, q + 11, q + 12], np.c_[q, q + 12, q + 1]])
+    square = Mesh(v, f, None, np.c_[x.ravel(), y.ravel()] / 100 + 0.5, {}, metadata={"up": "z"})
+    shown = {}
+    for rule in ("card", "auto"):
+        pic = render_table(table, square, size=(24, 24), spp=4, lighting="paper", light=(0.0, 0.0),
+                           view=(60.0, -90.0), exposure=rule)
+        img = pic.images["cdbrdf"]
+        shown[rule] = img[10:14, 10:14, :3].reshape(-1, 3).mean(axis=0) * 2.0 ** pic.exposure_ev
+        assert pic.exposure_source == {"card": "grey card", "auto": "auto"}[rule]
+    assert shown["card"] == pytest.approx(albedo, rel=0.03)
+    assert shown["auto"] == pytest.approx(4 * albedo, rel=0.03)  # the +2 EV cap: light periwinkle
+
+
 # -- the commands -------------------------------------------------------------------------------
 def test_curvature_command_records_the_unit_and_render_uses_it(variant, tmp_path, capsys):
     from cdbrdf.cli import main
@@ -229,7 +269,7 @@ def test_render_warns_of_a_wrong_unit(variant, tmp_path, caplog):
     with caplog.at_level(logging.WARNING, logger="cdbrdf"):
         assert main(["-q", "render", str(table), "--mesh", str(src), "--units", "m", "--size", "8x8", "--spp", "1",
                      "-o", str(tmp_path / "b.exr")]) == 0
-    assert not [r for r in caplog.records if r.levelno == logging.WARNING]
+    assert not [r for r in caplog.records if r.levelno == logging.WARNING and "curvature" in r.getMessage()]
 
 
 def test_render_options_are_checked(variant, tmp_path, capsys):

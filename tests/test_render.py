@@ -663,7 +663,7 @@ def test_render_table_compares_modes_at_one_exposure_and_restores_the_variant():
     assert mi.variant() == "scalar_rgb"  # render_table ran in llvm_ad_rgb and gave the variant back
     assert set(pic.images) == {"brdf", "cdbrdf"} and pic.images["brdf"].shape == (16, 24, 4)
     assert pic.surface == "sine sheet" and pic.lighting == "paper" and pic.light == (45.0, 0.0, np.pi)
-    assert pic.mesh is None and not pic.backdrop and pic.exposure_source == "auto"
+    assert pic.mesh is None and not pic.backdrop and pic.exposure_source == "grey card" and pic.exposure_ev == 0.0
     # the curvature changes the crests, not the whole picture: the images differ, but not everywhere
     a, b = pic.display("brdf"), pic.display("cdbrdf")
     assert a.shape == (16, 24, 3) and np.abs(a - b).max() > 0 and np.isclose(a, b, rtol=1e-3).any()

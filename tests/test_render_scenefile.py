@@ -55,7 +55,9 @@ def cylinder(radius=1 / KAPPA, n=40, *, uv=True, directional=None):
     return Mesh(v, f.astype(np.int64), None, tex, attrs)
 
 
-def write_scene(folder, *, shape_extra="", bsdf_extra="", unit_comment=None, wrap=False, mesh=None, name="s.xml"):
+def write_scene(folder, *, shape_extra="", bsdf_extra="", unit_comment=None, wrap=False, mesh=None, name="s.xml",
+                metres=False):
+    """The scene; with ``metres`` the same scene in metres (the mm mesh scaled by 0.001, the camera too)."""
     from cdbrdf.mesh import write_ply
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -72,7 +74,8 @@ def write_scene(folder, *, shape_extra="", bsdf_extra="", unit_comment=None, wra
   <default name="spp" value="4"/>
   <integrator type="path"><integer name="max_depth" value="2"/></integrator>
   <sensor type="orthographic">
-    <transform name="to_world"><scale value="3"/><lookat origin="0, 0, 100" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <transform name="to_world"><scale value="{0.003 if metres else 3}"/>
+      <lookat origin="0, 0, {0.1 if metres else 100}" target="0, 0, 0" up="0, 1, 0"/></transform>
     <film type="hdrfilm"><integer name="width" value="9"/><integer name="height" value="9"/>
       <rfilter type="box"/></film>
     <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
@@ -82,6 +85,10 @@ def write_scene(folder, *, shape_extra="", bsdf_extra="", unit_comment=None, wra
     <rgb name="irradiance" value="3.14159265"/></emitter>
 </scene>
 """
+    if metres:
+        xml = xml.replace('<string name="filename" value="cyl.ply"/>',
+                          '<string name="filename" value="cyl.ply"/><transform name="to_world"><scale value="0.001"/>'
+                          '</transform>')
     (folder / name).write_text(xml)
     return folder / name
 
@@ -115,6 +122,60 @@ def test_to_world_scale_and_units_change_the_curvature(cr, tmp_path):
         # keep the apex in the 9 x 9 view: the camera sees [-3, 3] mm
         img = np.array(mi.render(scene, spp=4))
         assert apex(img) == pytest.approx(np.pi * (0.5 + want), rel=0.01), (k, apex(img))
+
+
+def test_a_scene_in_metres_renders_like_the_scene_in_mm_when_its_unit_is_given(cr, tmp_path, caplog):
+    """The mm mesh scaled by 0.001 into a scene in metres: the scene unit, from the loader, the BSDF or nobody."""
+    ref = np.array(mi.render(cr.load_file(write_scene(tmp_path / "mm")), spp=4))
+    metres = write_scene(tmp_path / "m", metres=True)
+    given = np.array(mi.render(cr.load_file(metres, unit_mm=1000.0), spp=4))
+    in_bsdf = write_scene(tmp_path / "mb", metres=True, bsdf_extra='<string name="unit" value="m"/>')
+    with caplog.at_level(logging.WARNING, logger="cdbrdf"):
+        from_bsdf = np.array(mi.render(cr.load_file(in_bsdf), spp=4))
+    assert not caplog.records
+    for img in (given, from_bsdf):
+        assert abs(img.mean() / ref.mean() - 1) < 0.005
+    # not given: the curvature is 1000 times too large, and the warning names the unit
+    with caplog.at_level(logging.WARNING, logger="cdbrdf"):
+        wrong = np.array(mi.render(cr.load_file(metres), spp=4))
+    assert abs(wrong.mean() / ref.mean() - 1) > 0.03
+    assert any("with the scene unit m" in r.getMessage() and "tighter than a yarn" in r.getMessage()
+               for r in caplog.records), caplog.text
+    # Mitsuba's own loader: the attribute as it is, right for a to_world that turns mm into metres;
+    # a unit there is reported as not applied
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="cdbrdf"):
+        plain = np.array(mi.render(mi.load_file(str(in_bsdf)), spp=4))
+    assert abs(plain.mean() / ref.mean() - 1) < 0.005
+    assert "made by Mitsuba's own loader, which gives the plug-in no shape" in caplog.text
+    assert "its unit (m)" in caplog.text
+
+
+def test_dict_scenes_apply_the_unit_with_to_world(cr, tmp_path):
+    from cdbrdf.mesh import write_ply
+
+    write_ply(tmp_path / "cyl.ply", cylinder())
+    table = kappa_table()
+
+    def scene(scale, cam, **bsdf):
+        return {"type": "scene", "integrator": {"type": "path", "max_depth": 2},
+                "sensor": {"type": "orthographic",
+                           "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 100 * cam / 3], target=[0, 0, 0],
+                                                                      up=[0, 1, 0]).scale(cam),
+                           "film": {"type": "hdrfilm", "width": 9, "height": 9, "rfilter": {"type": "box"}}},
+                "cyl": {"type": "ply", "filename": str(tmp_path / "cyl.ply"),
+                        "to_world": mi.ScalarTransform4f().scale(scale),
+                        "bsdf": {"type": "cdbrdf", "table": table, **bsdf}},
+                "sun": {"type": "directional", "direction": [0, 0, -1], "irradiance": np.pi}}
+
+    ref = apex(np.array(mi.render(cr.load_dict(scene(1.0, 3.0)), spp=4)))
+    assert ref == pytest.approx(np.pi * (0.5 + KAPPA), rel=0.01)
+    for kw in ({"unit": "m"}, {}):
+        got = apex(np.array(mi.render(cr.load_dict(scene(0.001, 0.003, **kw), unit_mm=None if kw else 1000.0),
+                                      spp=4)))
+        assert got == pytest.approx(ref, rel=0.005)
+    doubled = apex(np.array(mi.render(cr.load_dict(scene(2.0, 6.0)), spp=4)))
+    assert doubled == pytest.approx(np.pi * (0.5 + KAPPA / 2), rel=0.01)
 
 
 def test_non_uniform_scale_is_refused(cr, tmp_path):
@@ -359,3 +420,15 @@ def test_plugin_errors_of_cdbrdf_load_dict_are_one_line(cr, tmp_path):
     bsdf_file.write_bytes(b"tensor_file\0\x01\x00" + bytes(64))
     with pytest.raises(SceneError, match=r"ibiza\.bsdf: not an HDF5 file .*`cdbrdf import FILE -o OUT\.h5`"):
         cr.load_dict({"type": "cdbrdf", "filename": str(bsdf_file)})
+
+
+def test_mitsubas_own_loader_says_the_checks_are_not_applied(cr, tmp_path, caplog):
+    """Mitsuba gives a BSDF no shape: a plain load warns at the plug-in's set-up; cdbrdf's loader refuses."""
+    path = write_scene(tmp_path, mesh=cylinder(uv=False))
+    with caplog.at_level(logging.WARNING, logger="cdbrdf"):
+        mi.load_file(str(path))
+    assert "made by Mitsuba's own loader" in caplog.text and "UV coordinates" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="cdbrdf"), pytest.raises(SceneError, match="UV coordinates"):
+        cr.load_file(path)
+    assert "own loader" not in caplog.text

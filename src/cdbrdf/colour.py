@@ -54,6 +54,8 @@ __all__ = [
     "RENDER_EXPOSURE_PERCENTILE",
     "RENDER_EXPOSURE_TARGET",
     "RENDER_EV_RANGE",
+    "GREY_CARD",
+    "card_exposure_ev",
     "auto_exposure",
     "auto_exposure_ev",
     "resolve_exposure",
@@ -98,6 +100,10 @@ RENDER_EXPOSURE_PERCENTILE = 99.0
 
 #: Display value (before encoding) that the automatic render exposure aims at.
 RENDER_EXPOSURE_TARGET = 0.85
+
+#: Reflectance of a photographer's grey card, which an exposure "from the grey card" shows at the same
+#: linear value (display mid-grey, sRGB 0.46): every colour then shows at its own reflectance.
+GREY_CARD = 0.18
 
 #: Default range of :func:`auto_exposure_ev`, in stops (EV).
 RENDER_EV_RANGE: tuple[float, float] = (-8.0, 12.0)
@@ -284,6 +290,26 @@ def resolve_exposure(exposure: float | str | None, lum: ArrayLike, quantity: str
 
 
 # -- 8-bit display ---------------------------------------------------------------------
+def card_exposure_ev(card_irradiance: float) -> float:
+    """The exposure (EV) at which a grey card lit by ``card_irradiance`` shows as mid-grey.
+
+    A Lambertian card of reflectance :data:`GREY_CARD` under irradiance
+    ``E`` has radiance ``GREY_CARD E / pi``; shown at ``GREY_CARD`` it needs
+    the factor ``pi / E``: ``log2(pi / E)`` stops, whatever the scene's
+    contents. A surface of reflectance ``rho`` under the same light then
+    shows at ``rho`` (a dark indigo denim stays dark, white is just white).
+
+    Raises
+    ------
+    ValueError
+        For an irradiance that is not a positive finite number.
+    """
+    e = float(card_irradiance)
+    if not (math.isfinite(e) and e > 0):
+        raise ValueError(f"card irradiance: must be a positive finite number, got {card_irradiance!r}")
+    return math.log2(math.pi / e)
+
+
 def tonemap_srgb8(image: ArrayLike, *, exposure_ev: float = 0.0) -> NDArray[np.uint8]:
     """Linear radiance -> 8-bit sRGB: ``srgb(clip(image * 2**exposure_ev, 0, 1))``.
 

@@ -280,6 +280,7 @@ def _stage(progress: Progress | None, label: str) -> Callable[[int, int], None] 
 def _contact_sheet(capture_dir: Path, grid: Grid, path: Path, *, material: str) -> None:
     """Photographs of every stand at one light, normal and grazing views."""
     from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
 
     from .images import read_image
     from .plot import kappa_label
@@ -305,7 +306,8 @@ def _contact_sheet(capture_dir: Path, grid: Grid, path: Path, *, material: str) 
                 ev = auto_exposure_ev(lin, target=0.7)
                 ax.imshow(tonemap_srgb8(lin, exposure_ev=ev), interpolation="nearest")
                 h, w = x.shape[:2]
-                ax.add_patch(_rect(w // 2 - 3.5, h // 2 - 3.5, 7, 7))
+                ax.add_patch(Rectangle((w // 2 - 3.5, h // 2 - 3.5), 7, 7, fill=False, edgecolor="red",
+                                       linewidth=1.0))
             if r == 0:
                 ax.set_title(kappa_label(float(kappa)), fontsize=9)
             if k == 0:
@@ -313,12 +315,6 @@ def _contact_sheet(capture_dir: Path, grid: Grid, path: Path, *, material: str) 
     fig.suptitle(f"{material}: photographs from the simulated rig (light {tl:g}/{pl:g} deg; "
                  "red square: the 7 x 7 patch)", fontsize=10)
     fig.savefig(path)
-
-
-def _rect(x: float, y: float, w: float, h: float) -> Any:
-    from matplotlib.patches import Rectangle
-
-    return Rectangle((x, y), w, h, fill=False, edgecolor="red", linewidth=1.0)
 
 
 def _render_pair(table: CDBRDF, surface: Any, *, config: DemoConfig, progress: Progress | None,
@@ -332,7 +328,8 @@ def _render_pair(table: CDBRDF, surface: Any, *, config: DemoConfig, progress: P
 
     t0 = time.perf_counter()
     pic = render_table(table, surface, modes=("brdf", "cdbrdf"), size=config.render_size, spp=config.render_spp,
-                       lighting="paper", light=(45.0, 0.0), curvature=curvature, progress=stage)
+                       lighting="paper", light=(45.0, 0.0), exposure="auto", curvature=curvature,
+                       progress=stage)
     return pic, time.perf_counter() - t0
 
 

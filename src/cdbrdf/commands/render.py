@@ -8,13 +8,17 @@ found next to the scene, curvature units and the scene checks) with the
 ``mitsuba`` command's options: ``-D name=value`` for the scene's parameters,
 ``--spp`` (the sensor's count unless given), the variant, ``--seed``; the
 scene defines camera, film, lights and integrator. ``--units`` is the
-scene's unit there (mm per scene unit).
+scene's unit there (mm per scene unit; default the ``cdbrdf`` BSDF's
+``unit``, which ``-D`` can set through a ``$unit`` parameter, else mm).
 
 PNG output is tone-mapped by an exposure and sRGB-encoded:
 ``png = srgb(clip(radiance * 2**exposure, 0, 1))`` with ``--exposure`` in EV,
-by default chosen from the render (``auto``: the 99th percentile of the
-object's luminance maps to 0.85 of white,
-:func:`cdbrdf.render.picture.exposure_from_render`). With the default light
+or by default (``card``) the exposure at which an 18 % grey card facing the
+key light shows as mid-grey, so that every fabric shows at its own
+reflectance (:mod:`cdbrdf.render.picture`); ``auto`` chooses it from the
+render (the 99th percentile of the object's luminance maps to 0.85 of
+white, :func:`cdbrdf.render.picture.exposure_from_render`; the default for
+a scene file, whose lights cdbrdf does not know). With the default light
 irradiance (pi) a white Lambertian surface facing the light has radiance 1,
 i.e. just white at 0 EV. EXR output is the linear radiance (no exposure
 applied; black where the built-in studio sky is hidden); both are written by
@@ -71,8 +75,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Render a CDBRDF file with Mitsuba 3 (llvm_ad_rgb) on the paper's sine sheet or on "
         "a mesh (PLY, OBJ, glTF/GLB, STL, OFF; repaired, its curvature computed in 1/mm from --units "
         "unless the file has it), or render a Mitsuba XML scene that uses <bsdf type=\"cdbrdf\">. "
-        "PNG is sRGB-encoded after the exposure (radiance x 2^EV, clipped; default: chosen from the "
-        "render); EXR is linear.",
+        "PNG is sRGB-encoded after the exposure (radiance x 2^EV, clipped; default: an 18 %% grey card "
+        "facing the key light shows as mid-grey); EXR is linear.",
     )
     p.add_argument("file", type=input_path(),
                    help="a CDBRDF file (.h5), or a Mitsuba scene (.xml) using <bsdf type=\"cdbrdf\">")
@@ -80,8 +84,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="output .png or .exr (--compare: .png, .pdf or .svg)")
     p.add_argument("--spp", type=int_range(1, MAX_SPP), default=None,
                    help=f"samples per pixel, 1 to {MAX_SPP} (default: {DEFAULT_SPP}; a scene file: its sensor's)")
-    p.add_argument("--exposure", type=keyword(("auto",), finite_float(-64, 64, unit="EV")), default="auto",
-                   help="PNG exposure in EV, -64 to 64, or auto: from the render (default: auto)")
+    p.add_argument("--exposure", type=keyword(("card", "auto"), finite_float(-64, 64, unit="EV")), default=None,
+                   help="PNG exposure in EV, -64 to 64; card: an 18%% grey card facing the key light shows as "
+                   "mid-grey (default); auto: from the render (the default for a scene file)")
     p.add_argument("--seed", type=seed(_SEED_MAX), default=0,
                    help=f"random seed, 0 to {_SEED_MAX} (default: 0)")
     p.add_argument("--variant", choices=VARIANTS, default="llvm_ad_rgb",
@@ -90,7 +95,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
                    default=None, metavar="UNIT",
                    help="length unit: of --mesh (mm, cm, m, in or mm per model unit; default: the one the "
-                   "file records, else mm), or of a scene file (mm per scene unit; default: mm)")
+                   "file records, else mm), or of a scene file (mm per scene unit; default: the cdbrdf BSDF's "
+                   "'unit', else mm)")
 
     scene_file = p.add_argument_group("a Mitsuba scene file (SCENE.xml)")
     scene_file.add_argument("-D", dest="define", action="append", default=None, type=key_value(),
@@ -128,8 +134,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="the curvature looked up: max (the paper's: principal curvature of larger "
                        "magnitude) or directional (normal curvature along the material's x axis) "
                        "(default: max)")
+    table.add_argument("--normal-map", metavar="FILE", type=existing_file(".png", ".tif", ".tiff", ".exr"),
+                       default=None, help="a tangent-space normal map of --mesh (OpenGL convention, green up): its "
+                       "curvature is added to the mesh's, baked per vertex (default: the OBJ's MTL 'norm' map)")
     table.add_argument("--up", choices=UP_AXES, default=None,
-                       help="up axis of --mesh (default auto: recorded in the file, else the format's usual one)")
+                       help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
     table.add_argument("--amplitude", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
                        help="sine sheet amplitude, mm (default: 2)")
     table.add_argument("--wavelength", type=finite_float(0.01, 1e5, unit="mm"), default=None,
@@ -148,8 +157,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 #: Options of the table form (default None: not given), each refused with a scene file.
 _TABLE_ONLY = ("scene", "mesh", "brdf", "compare", "size", "lighting", "light", "irradiance", "no_light", "envmap",
-               "neighbourhood", "frame", "curvature", "up", "amplitude", "wavelength", "sheet_size", "max_depth",
-               "view")
+               "neighbourhood", "frame", "curvature", "normal_map", "up", "amplitude", "wavelength", "sheet_size",
+               "max_depth", "view")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -207,7 +216,8 @@ def _run_table(args: argparse.Namespace) -> int:
             light=None if args.no_light else (args.light if args.light is not None else "auto"),
             irradiance=args.irradiance or DEFAULT_IRRADIANCE, envmap=args.envmap, view=args.view,
             units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame, up=args.up or "auto",
-            curvature_mode=args.curvature or "max", exposure=args.exposure, variant=args.variant,
+            normal_map=args.normal_map,
+            curvature_mode=args.curvature or "max", exposure=args.exposure or "card", variant=args.variant,
             progress=progress)
     if pic.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), pic.mesh)
@@ -245,7 +255,7 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     out = Path(args.output)
     if out.suffix.lower() not in IMAGE_FORMATS:
         raise OptionError(f"{out}: unknown image type {out.suffix.lower()!r}; use {' or '.join(IMAGE_FORMATS)}")
-    unit_mm = 1.0 if args.units is None else parse_units(args.units).mm_per_unit
+    unit_mm = None if args.units is None else parse_units(args.units).mm_per_unit
     cr.set_variant(args.variant)  # the command is the application: it chooses the variant
     import mitsuba as mi
 
@@ -253,7 +263,7 @@ def _run_scene_file(args: argparse.Namespace) -> int:
     from ..render.scenefile import LoadReport
 
     report = LoadReport()
-    scene = cr.load_file(args.file, variables=dict(args.define or []), unit_mm=float(unit_mm), report=report)
+    scene = cr.load_file(args.file, variables=dict(args.define or []), unit_mm=unit_mm, report=report)
     check_not_input([(out, False)], report.files)  # e.g. -o over the scene's environment map
     if not isinstance(scene, mi.Scene):
         raise SceneError(f"{args.file}: holds a {type(scene).__name__}, not a scene")
@@ -268,9 +278,10 @@ def _run_scene_file(args: argparse.Namespace) -> int:
         expo = ""
     else:
         rgb = np.repeat(image, 3, axis=-1) if image.shape[-1] == 1 else image[..., :3]
-        ev = exposure_from_render(rgb) if args.exposure == "auto" else float(args.exposure)
+        auto = args.exposure in (None, "auto")
+        ev = exposure_from_render(rgb) if auto else float(args.exposure)
         write_render(out, rgb, exposure_ev=ev)
-        expo = f", exposure {ev:+.2f} EV ({'auto' if args.exposure == 'auto' else 'given'})"
+        expo = f", exposure {ev:+.2f} EV ({'auto' if auto else 'given'})"
     if not args.quiet:
         h, w = image.shape[:2]
         say(f"{out}: written ({w}x{h}, {args.spp or scene.sensors()[0].sampler().sample_count()} spp, "

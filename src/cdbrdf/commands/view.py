@@ -54,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "1/mm from --units unless the file has it, e.g. one written by cdbrdf curvature)")
     mesh_options(p)
     p.add_argument("--up", choices=UP_AXES, default="auto",
-                   help="up axis of --mesh (default auto: recorded in the file, else the format's usual one)")
+                   help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
     p.add_argument("--grid", type=_grid, metavar="THETA_STEP,PHI_STEP[,N_KAPPA]",
                    help="resample the tables onto a regular grid first (degrees; e.g. 15,30), for a table "
                    "too large for the GPU's textures")

@@ -17,7 +17,9 @@ renderer and the viewer, which use it:
 - :func:`prepare_mesh` (:mod:`~cdbrdf.mesh.prepare`): a user's mesh made
   ready to render, and its up axis (:func:`detect_up`, :func:`z_up_mesh`);
 - the analytic surfaces with their sizes (:mod:`~cdbrdf.mesh.surfaces`): the
-  paper's sine sheet, a draped cloth, a skirt.
+  paper's sine sheet, a draped cloth, a skirt; garments as their makers
+  export them (:mod:`~cdbrdf.mesh.garments`: sewn panels, a scanned bust);
+- the curvature a normal map draws (:mod:`~cdbrdf.mesh.normalmap`).
 """
 
 from __future__ import annotations
@@ -37,7 +39,9 @@ from .curvature import (
 )
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, PrincipalCurvatures
 from .frames import FRAMES
+from .garments import Garment, bust_mesh, garment_mesh
 from .io import CURVATURE_PLY_PROPERTY, MESH_FORMATS, read_mesh, read_obj, read_ply, write_ply
+from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, read_normal_map
 from .prepare import UP_AXES, check_up, detect_up, prepare_mesh, to_z_up, z_up_mesh
 from .repair import WELD_TOLERANCE, RepairedMesh, repair, weld
 from .surfaces import (
@@ -101,4 +105,10 @@ __all__ = [
     "draped_cloth_mesh",
     "Skirt",
     "skirt_mesh",
+    "Garment",
+    "garment_mesh",
+    "bust_mesh",
+    "NORMAL_MAP_CONVENTIONS",
+    "NormalMap",
+    "read_normal_map",
 ]

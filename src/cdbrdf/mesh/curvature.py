@@ -41,6 +41,8 @@ from .units import Units, parse_units
 
 __all__ = [
     "CURVATURE_MODES",
+    "LOCATIONS",
+    "outside_by_location",
     "ATTRIBUTES",
     "PLY_PROPERTIES",
     "MESH_ATTRIBUTES",
@@ -56,6 +58,13 @@ _LOG = logging.getLogger(__name__)
 
 #: The curvatures the BSDF can be given: the paper's, and the normal curvature along x.
 CURVATURE_MODES: tuple[str, ...] = ("max", "directional")
+
+#: Smallest neighbourhood (diameter) in median edge lengths of the mesh: on a mesh coarser than the
+#: neighbourhood asked for, the fit is made over this many edges (a CAD garment's 9-14 mm edges).
+ADAPT_EDGES = 2.0
+
+#: Where a vertex lies, for the report of curvature outside a table's range (:attr:`SurfaceCurvature.location`).
+LOCATIONS: tuple[str, ...] = ("interior", "boundary", "seam")
 
 #: Largest neighbourhood, as a share of the mesh's size (bounding-box diagonal): a larger one is
 #: reduced to it, with a note (a wrong unit?); beyond it a quadric cannot follow the surface.
@@ -106,6 +115,12 @@ class SurfaceCurvature:
     representative
         For every *input* vertex the input vertex standing for it in the
         output (itself, or the first of its identical twins).
+    location
+        ``(n,)`` where each vertex lies, an index into :data:`LOCATIONS`:
+        0 interior, 1 on an open boundary or a cut (its curvature is taken
+        from the fits on the surface's side, not from half a neighbourhood),
+        2 on a seam (the boundary of a panel or UV chart that another
+        panel's coincident vertices close: fitted as one surface).
     repairs, notes
         What was repaired; what else the user should know (one line each).
     """
@@ -129,6 +144,7 @@ class SurfaceCurvature:
     representative: NDArray[np.int64]
     repairs: tuple[str, ...]
     notes: tuple[str, ...]
+    location: NDArray[np.int8]
 
     def curvature(self, mode: str) -> NDArray[np.float64]:
         """The curvature of ``mode`` (``"max"`` or ``"directional"``), mm^-1."""
@@ -161,6 +177,21 @@ def _per_output(rep: RepairedMesh, pc: PrincipalCurvatures, mm_per_unit: float) 
     d1 = np.where(front[:, None], pc.d1[a], pc.d2[a])
     d2 = np.where(front[:, None], pc.d2[a], pc.d1[a])
     return PrincipalCurvatures(k1, k2, d1, d2)
+
+
+def _boundary_vertices(faces: NDArray[np.int64], n: int) -> NDArray[np.bool_]:
+    """Vertices on an edge of one face only (open boundaries and cuts)."""
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    edges, count = np.unique(e, axis=0, return_counts=True)
+    out = np.zeros(n, np.bool_)
+    out[edges[count == 1].reshape(-1)] = True
+    return out
+
+
+def _median_edge(v: NDArray[np.float64], f: NDArray[np.int64]) -> float:
+    if f.size == 0:
+        return 0.0
+    return float(np.median(np.linalg.norm(v[f[:, [1, 2, 0]]] - v[f], axis=2)))
 
 
 def _vertex_areas(positions: NDArray[np.float64], faces: NDArray[np.int64], n: int) -> NDArray[np.float64]:
@@ -257,12 +288,21 @@ def surface_curvature(  # noqa: C901 - the steps in order
                      f"({diag * u.mm_per_unit:.4g} mm across in unit {u}): fitted over {used:.3g} mm instead; "
                      "is the unit right?")
         radius = 0.5 * MAX_NEIGHBOURHOOD_SHARE * diag
+    edge_mm = _median_edge(rep.vertices, rep.faces) * u.mm_per_unit
+    if ADAPT_EDGES * edge_mm > 2 * radius * u.mm_per_unit and 2 * radius < MAX_NEIGHBOURHOOD_SHARE * diag:
+        wide = min(ADAPT_EDGES * edge_mm / u.mm_per_unit, MAX_NEIGHBOURHOOD_SHARE * diag)
+        notes.append(f"the mesh is coarser than the neighbourhood (median edge {edge_mm:.3g} mm): fitted over "
+                     f"{wide * u.mm_per_unit:.3g} mm ({ADAPT_EDGES:g} edge lengths) instead of "
+                     f"{2 * radius * u.mm_per_unit:.3g} mm")
+        radius = 0.5 * wide
+    boundary_a = _boundary_vertices(rep.faces, rep.vertices.shape[0])
     pc_a, _, n_bad = fit_curvatures(rep.vertices, rep.normals, components=rep.components, radius=radius,
-                                    edge_length=rep.mean_edge_length, progress=progress)
+                                    edge_length=rep.mean_edge_length, one_sided=boundary_a, progress=progress)
     if n_bad:
         notes.append(f"{n_bad} vertices have too few neighbours with a similar normal to fit; their curvature is 0")
     pc = _per_output(rep, pc_a, u.mm_per_unit)
     src = rep.out_source
+    src_first = np.arange(src.size)  # the repair's output vertex of each output vertex
     side = rep.out_side
     out_faces = rep.out_faces
     normals_o = rep.out_normals
@@ -299,6 +339,7 @@ def surface_curvature(  # noqa: C901 - the steps in order
         corner_uv, _ = face_frame_uv(positions_o, out_faces, tangent[out_faces], align=frame == "principal")
         corners = out_faces.reshape(-1)
         src = src[corners]
+        src_first = src_first[corners]
         side = side[corners]
         normals_o = normals_o[corners]
         tangent = tangent[corners]
@@ -314,11 +355,25 @@ def surface_curvature(  # noqa: C901 - the steps in order
                      "is the maximum one")
         directional = np.where(undefined, pc.kappa, directional)
     areas = _vertex_areas(positions_o, out_faces, n_o)
+    # a seam: a panel's (or UV chart's) boundary in the file that the analysis surface closes
+    f_in = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    location = np.where(boundary_a[rep.out_vertex[src_first]], 1,
+                        np.where(_boundary_vertices(f_in, v.shape[0])[src], 2, 0))
     for note in notes:
         _LOG.info("%s: %s", name, note)
     return SurfaceCurvature(src, out_faces, normals_o, uv_o, pc.kappa, directional, pc.k1, pc.k2, pc.d1, pc.d2,
                             side, tangent, frame or "none", u, nb, areas, rep.representative, rep.repairs,
-                            tuple(notes))
+                            tuple(notes), location.astype(np.int8))
+
+
+def outside_by_location(kappa: NDArray[np.float64], location: NDArray[np.int8],
+                        kappa_range: tuple[float, float]) -> dict[str, tuple[int, int]]:
+    """Per location (:data:`LOCATIONS`): the vertices with ``kappa`` outside ``kappa_range``, and all of them."""
+    lo, hi = float(min(kappa_range)), float(max(kappa_range))
+    tol = 1e-9 * max(1.0, abs(lo), abs(hi))
+    out = (kappa < lo - tol) | (kappa > hi + tol)
+    return {name: (int(np.count_nonzero(out & (location == i))), int(np.count_nonzero(location == i)))
+            for i, name in enumerate(LOCATIONS)}
 
 
 #: Mitsuba mesh attribute of each curvature mode (what the ``cdbrdf`` BSDF reads), mm^-1.

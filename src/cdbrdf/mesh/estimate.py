@@ -80,6 +80,9 @@ SAMPLES_PER_NEIGHBOURHOOD = 40
 #: Fitted samples whose shape operators are averaged at a vertex of a thinned mesh.
 TRANSFER_NEIGHBOURS = 12
 
+#: Growth of the radius at a boundary: a half disc of sqrt(2) r holds as much surface as a disc of r.
+ONE_SIDED_GROWTH = math.sqrt(2.0)
+
 #: Largest angle between a sample's normal and the vertex's, degrees.
 NORMAL_CONE_DEG = 60.0
 
@@ -199,6 +202,7 @@ def fit_curvatures(
     components: NDArray[np.int64] | None = None,
     radius: float,
     edge_length: float,
+    one_sided: NDArray[np.bool_] | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> tuple[PrincipalCurvatures, NDArray[np.float64], int]:
     """Principal curvatures at every vertex of an oriented surface, fitted within ``radius``.
@@ -216,6 +220,12 @@ def fit_curvatures(
         Radius of the fitted ball, in the vertices' unit (half the neighbourhood).
     edge_length
         The mesh's mean edge length (decides whether it is thinned).
+    one_sided
+        ``(n,)`` vertices on the surface's open boundaries and cuts: they are
+        fitted again over a one-sided neighbourhood as large as a full one
+        (the radius grown by :data:`ONE_SIDED_GROWTH`, at least twice
+        :data:`MIN_NEIGHBOURS` samples), not over half a neighbourhood (a
+        spike on a coarse mesh).
     progress
         ``progress(done, total)`` in vertices, after each chunk.
 
@@ -297,5 +307,36 @@ def fit_curvatures(
                 progress(nq + stop, total)
         k1, k2, d1, d2, status = vk1, vk2, vd1, vd2, vstatus
         fitted_n = nrm
+    if one_sided is not None and one_sided.any():
+        k1, k2, d1, d2, status = _one_sided(pos, nrm, comp, tree, sp, sn, sw, sc, one_sided, k1, k2, d1, d2,
+                                            fitted_n, status, radius=radius, cos_max=cos_max)
     bad = int(np.count_nonzero(status == 1))
     return PrincipalCurvatures(k1, k2, d1, d2), fitted_n, bad
+
+
+def _one_sided(pos: NDArray[np.float64], nrm: NDArray[np.float64], comp: NDArray[np.int64],
+               tree: Any, sp: NDArray[np.float64], sn: NDArray[np.float64], sw: NDArray[np.float64],
+               sc: NDArray[np.int64], one_sided: NDArray[np.bool_], k1: NDArray[np.float64],
+               k2: NDArray[np.float64], d1: NDArray[np.float64], d2: NDArray[np.float64],
+               fitted_n: NDArray[np.float64], status: NDArray[np.int8], *, radius: float,
+               cos_max: float) -> tuple[Any, ...]:
+    """The boundary vertices fitted again over a half disc as large as the full one (see fit_curvatures)."""
+    from .._jit import run_split
+    from ._kernels import GRAIN, fit_vertices
+
+    q = np.flatnonzero(one_sided)
+    k = int(min(2 * MAX_NEIGHBOURS, sp.shape[0]))
+    dist, idx = tree.query(pos[q], k=k, workers=-1)
+    dist, idx = dist.reshape(q.size, k), idx.reshape(q.size, k)
+    b1, b2 = np.zeros(q.size), np.zeros(q.size)
+    e1, e2, en = np.zeros((q.size, 3)), np.zeros((q.size, 3)), np.zeros((q.size, 3))
+    bs = np.zeros(q.size, np.int8)
+    run_split(fit_vertices, q.size, np.ascontiguousarray(pos[q]), np.ascontiguousarray(nrm[q]),
+              np.ascontiguousarray(comp[q]), sp, sn, sw, sc, np.ascontiguousarray(idx, dtype=np.int64),
+              np.ascontiguousarray(dist), float(ONE_SIDED_GROWTH * radius), 2 * MIN_NEIGHBOURS, cos_max,
+              b1, b2, e1, e2, en, bs, grain=GRAIN)
+    done = bs == 0
+    k1, k2, d1, d2, status = k1.copy(), k2.copy(), d1.copy(), d2.copy(), status.copy()
+    k1[q[done]], k2[q[done]], d1[q[done]], d2[q[done]] = b1[done], b2[done], e1[done], e2[done]
+    status[q[done]] = 0
+    return k1, k2, d1, d2, status

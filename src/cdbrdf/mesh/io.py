@@ -235,7 +235,45 @@ def _read_trimesh(p: Path, fmt: str) -> Mesh:
     if uv_all is None and any(u is not None for u in uvs):
         meta["notes"] = [f"{sum(u is None for u in uvs)} of {len(uvs)} parts have no UVs: the UVs are not used"]
     n_all = np.concatenate(ns) if all(n is not None for n in ns) else None
+    nmap = _obj_normal_map(p, data) if fmt == "obj" else _gltf_normal_map(scene, p) if fmt in ("gltf", "glb") \
+        else None
+    if nmap is not None:
+        meta["normal_map"] = nmap
     return Mesh(v_all, f_all, n_all, uv_all, {}, None, meta)
+
+
+_MTLLIB = re.compile(rb"(?m)^[ \t]*mtllib[ \t]+([^\r\n]+?)[ \t]*$")
+_NORM = re.compile(r"(?m)^[ \t]*norm[ \t]+(?:-\S+[ \t]+\S+[ \t]+)*([^\r\n]+?)[ \t]*$")
+
+
+def _obj_normal_map(p: Path, data: bytes) -> str | None:
+    """The tangent-space normal map an OBJ's material library names (``norm FILE``), if it exists."""
+    from ..fsutil import read_regular
+
+    for m in _MTLLIB.finditer(data):
+        mtl = p.parent / m.group(1).decode("utf-8", "replace")
+        try:
+            text = read_regular(mtl, max_bytes=1 << 20).decode("utf-8", "replace")
+        except OSError:
+            continue
+        for n in _NORM.finditer(text):
+            tex = mtl.parent / n.group(1)
+            if tex.is_file():
+                return str(tex)
+    return None
+
+
+def _gltf_normal_map(scene: Any, p: Path) -> Any:
+    """The ``normalTexture`` of a glTF's first material that has one, as a normal map, or None."""
+    from .normalmap import normal_map_from_normals
+
+    for geom in scene.geometry.values():
+        mat = getattr(getattr(geom, "visual", None), "material", None)
+        tex = getattr(mat, "normalTexture", None)
+        if tex is not None:
+            px = np.asarray(tex.convert("RGB"), dtype=np.float64)
+            return normal_map_from_normals(2.0 * px / 255.0 - 1.0, name=f"{p}: normalTexture")
+    return None
 
 
 def _scene_parts(scene: Any) -> list[tuple[NDArray[np.float64], NDArray[np.int64], Any, Any]]:

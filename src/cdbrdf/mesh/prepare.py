@@ -4,14 +4,19 @@
 repairs it, gives it the material's frame and its curvatures in mm^-1
 (:mod:`cdbrdf.mesh.curvature`) and checks them against a table's kappa range.
 
-**Up axis** (:func:`detect_up`): the one the file records (a PLY written by
-cdbrdf; glTF is Y-up by its specification); else a flat object (its extent
-along y or z below a fifth of the other two) lies on that axis; else the
-format's convention: Y for OBJ, glTF and OFF, Z for PLY and STL (Blender's
-PLY and STL exporters and most CAD and 3-D printing tools). ``up="y"`` or
-``"z"`` overrides it. :func:`z_up_mesh` turns a mesh into the z-up world
-frame by ``(x, y, z) -> (x, -z, y)``, so a Y-up mesh's front (+z) faces a
-camera at azimuth -90 degrees.
+**Up axis** (:func:`detect_up`), from the geometry first: the axis a PLY
+written by cdbrdf records; else a flat object (its extent along y or z
+below a fifth of the other two) lies on that axis; else the direction the
+open boundaries point (a garment's neck, hem and sleeves, a figure's neck
+and base: the boundaries after the seams are closed, each weighted by its
+perimeter, decide when y or z has 1.5 times the other's share); else a flat
+base (a planar cap at one end of an axis holding at least 2 % of the
+surface, as scans are cut); else the taller of y and z (by 1.2 times). The
+format's convention (Y for OBJ, glTF and OFF, Z for PLY and STL) decides
+only when the geometry does not, and a geometry that disagrees with it is
+logged as a warning. ``up="y"`` or ``"z"`` overrides it. :func:`z_up_mesh`
+turns a mesh into the z-up world frame by ``(x, y, z) -> (x, -z, y)``, so a
+Y-up mesh's front (+z) faces a camera at azimuth -90 degrees.
 """
 
 from __future__ import annotations
@@ -27,9 +32,10 @@ from numpy.typing import NDArray
 
 from ..errors import MeshError, OptionError
 from .core import Mesh
-from .curvature import check_neighbourhood, neighbourhood_from_table, surface_curvature
+from .curvature import check_neighbourhood, neighbourhood_from_table, outside_by_location, surface_curvature
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM
 from .io import read_mesh
+from .normalmap import NormalMap, add_normal_map, read_normal_map
 from .units import check_kappa_range, check_size, parse_units
 
 __all__ = ["UP_AXES", "prepare_mesh", "detect_up", "to_z_up", "z_up_mesh", "check_up"]
@@ -38,6 +44,15 @@ _LOG = logging.getLogger(__name__)
 
 #: Up axes a mesh can be given (``"auto"``: :func:`detect_up`).
 UP_AXES: tuple[str, ...] = ("auto", "y", "z")
+
+#: An axis is the openings' when their length along it is at least this many times that along the other.
+OPENINGS_RATIO = 1.5
+
+#: Share of the surface a flat base must have (a scan's cut).
+BASE_SHARE = 0.02
+
+#: An axis is the tallest when the extent along it is at least this many times that along the other.
+EXTENT_RATIO = 1.2
 
 _Y_TO_Z = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 
@@ -51,6 +66,8 @@ def prepare_mesh(
     table: Any = None,
     kappa_range: tuple[float, float] | None = None,
     recompute: bool = False,
+    normal_map: str | PathLike[str] | NormalMap | None = None,
+    normal_map_convention: str = "opengl",
     progress: Callable[[int, int], None] | None = None,
 ) -> Mesh:
     """Read a user mesh for rendering: repair it, give it a frame and its curvatures in mm^-1.
@@ -80,6 +97,14 @@ def prepare_mesh(
         Without a table: the kappa range to check the curvature against.
     recompute
         Compute the curvature even when the file has it.
+    normal_map
+        A tangent-space normal map (a file, or a
+        :class:`~cdbrdf.mesh.normalmap.NormalMap`) whose curvature is added
+        to the mesh's, baked per vertex (:mod:`cdbrdf.mesh.normalmap`); the
+        mesh needs its UVs. Default: the map the file names (an OBJ's
+        ``norm`` in its MTL), if any.
+    normal_map_convention
+        ``"opengl"`` (green up; Blender, glTF) or ``"directx"``.
     progress
         ``progress(done, total)`` while fitting, in vertices.
 
@@ -90,7 +115,10 @@ def prepare_mesh(
         attributes ``"curvature"`` (maximum) and ``"curvature_dir"``
         (directional) in mm^-1; its metadata says what was done
         (``"repairs"``, ``"notes"``, ``"units"``, ``"neighbourhood_mm"``,
-        ``"frame"``, and with a table ``"outside_share"``).
+        ``"frame"``, ``"location"`` (:data:`cdbrdf.mesh.curvature.LOCATIONS`
+        index per vertex), and with a table ``"outside_share"`` and
+        ``"outside_by_location"``: per location the vertices outside the
+        table's kappa range and all of them).
 
     Raises
     ------
@@ -152,9 +180,21 @@ def prepare_mesh(
         attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in ("curvature", "curvature_dir")}
         attrs["curvature"] = s.kappa
         attrs["curvature_dir"] = s.directional
+        nmap = normal_map if normal_map is not None else meta.get("normal_map")
+        if nmap is not None:
+            if s.uv is None or s.frame != "uv":
+                raise MeshError(f"{name}: a normal map needs the mesh's own UV coordinates (frame 'uv')")
+            nm = nmap if isinstance(nmap, NormalMap) else read_normal_map(nmap, convention=normal_map_convention)
+            arr, nm_notes = add_normal_map(nm, positions=mesh.vertices[s.source], faces=s.faces, uv=s.uv,
+                                           normals=s.normals, tangent=s.tangent, k1=s.k1, k2=s.k2, d1=s.d1,
+                                           d2=s.d2, mm_per_unit=u.mm_per_unit, neighbourhood_mm=nb)
+            attrs["curvature"] = arr["kappa"]
+            attrs["curvature_dir"] = arr["directional"]
+            notes.extend(nm_notes)
         out = Mesh(mesh.vertices[s.source], s.faces, s.normals, s.uv, attrs,
                    None if mesh.tangents is None else mesh.tangents[s.source], dict(meta))
-        out.metadata.update({"curvature_units": "1/mm", "neighbourhood_mm": nb, "frame": s.frame})
+        out.metadata.update({"curvature_units": "1/mm", "neighbourhood_mm": nb, "frame": s.frame,
+                             "location": s.location})
     out.metadata["units"] = u.name
     out.metadata["repairs"] = repairs
     out.metadata["neighbourhood_note"] = f"neighbourhood: {nb:g} mm ({nb_note})"
@@ -169,6 +209,14 @@ def prepare_mesh(
         out.metadata["outside_share"] = chk.outside_share
         if chk.message:
             _LOG.warning("%s: %s", name, chk.message)
+        loc = out.metadata.get("location")
+        if isinstance(loc, np.ndarray) and loc.shape == (out.n_vertices,):
+            by = outside_by_location(out.attributes["curvature"], loc, kappa_range)
+            out.metadata["outside_by_location"] = by
+            n_out = sum(o for o, _ in by.values())
+            notes.append(f"curvature outside the table's range [{min(kappa_range):g}, {max(kappa_range):g}] 1/mm: "
+                         f"{n_out} of {out.n_vertices} vertices ({n_out / max(out.n_vertices, 1):.2%}; "
+                         + ", ".join(f"{k} {o} of {t}" for k, (o, t) in by.items()) + ")")
     out.metadata["notes"] = notes
     return out
 
@@ -190,21 +238,114 @@ def _vertex_areas(v: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.fl
     return np.bincount(f.reshape(-1), weights=np.repeat(a / 3.0, 3), minlength=v.shape[0]).astype(np.float64)
 
 
+def _open_loops(v: NDArray[np.float64], f: NDArray[np.int64]) -> list[NDArray[np.int64]]:
+    """The open boundaries of a mesh with its seams closed: vertex sets of its boundary loops (welded indices)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from .repair import weld
+
+    wid = weld(v)
+    fw = wid[f]
+    fw = fw[(fw[:, 0] != fw[:, 1]) & (fw[:, 1] != fw[:, 2]) & (fw[:, 2] != fw[:, 0])]
+    e = np.sort(np.concatenate([fw[:, [0, 1]], fw[:, [1, 2]], fw[:, [2, 0]]]), axis=1)
+    edges, count = np.unique(e, axis=0, return_counts=True)
+    b = edges[count == 1]
+    if b.size == 0:
+        return []
+    n = int(wid.max()) + 1
+    g = coo_matrix((np.ones(b.shape[0]), (b[:, 0], b[:, 1])), shape=(n, n))
+    _, label = connected_components(g, directed=False)
+    verts = np.unique(b)
+    first = np.zeros(n, np.int64)
+    first[wid[::-1]] = np.arange(wid.size)[::-1]  # an input vertex of each welded one
+    return [first[verts[label[verts] == c]] for c in np.unique(label[verts])]
+
+
+def _openings_axis(mesh: Mesh) -> tuple[NDArray[np.float64], int]:
+    """Per axis (x, y, z) the length of the open boundaries pointing along it, and the number of openings."""
+    v = mesh.vertices
+    score = np.zeros(3)
+    loops = [lp for lp in _open_loops(v, mesh.faces) if lp.size >= 3]
+    centre = v.mean(axis=0)
+    for lp in loops:
+        p = v[lp]
+        c = p.mean(axis=0)
+        # the loop's direction: its plane's normal (least spread), pointing away from the object
+        _, _, vt = np.linalg.svd(p - c, full_matrices=False)
+        d = vt[-1] if np.dot(vt[-1], c - centre) >= 0 else -vt[-1]
+        length = float(np.sqrt(np.sum((p - c) ** 2, axis=1)).mean()) * 2 * math.pi  # about its perimeter
+        score += length * np.abs(d)
+    return score, len(loops)
+
+
+def _base_axis(mesh: Mesh) -> tuple[int, float] | None:
+    """The axis of a flat base (a planar cap at the bottom of a scan) and its share of the area, or None."""
+    v, f = mesh.vertices, mesh.faces
+    p = v[f]
+    cr = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    area = 0.5 * np.linalg.norm(cr, axis=1)
+    total = float(area.sum())
+    if not total > 0:
+        return None
+    nrm = cr / np.maximum(2 * area, 1e-300)[:, None]
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    best: tuple[int, float] | None = None
+    for a in range(3):
+        tol = 0.01 * float(hi[a] - lo[a])
+        flat = np.abs(nrm[:, a]) > 0.999
+        for end in (lo[a], hi[a]):
+            at = flat & (np.abs(p[:, :, a] - end).max(axis=1) <= tol)
+            share = float(area[at].sum()) / total
+            if share >= BASE_SHARE and (best is None or share > best[1]):
+                best = (a, share)
+    return best
+
+
 def detect_up(mesh: Mesh) -> tuple[str, str]:
-    """The up axis of a mesh (``"y"`` or ``"z"``) and why (see the module's description)."""
-    rec = mesh.metadata.get("up")
-    if rec in ("y", "z"):
-        why = "glTF's convention" if mesh.metadata.get("format") in ("gltf", "glb") else "recorded in the file"
-        return str(rec), why
-    e = mesh.vertices.max(0) - mesh.vertices.min(0) if mesh.n_vertices else np.ones(3)
-    if e[2] < 0.2 * min(e[0], e[1]):
-        return "z", "the object is flat along z"
-    if e[1] < 0.2 * min(e[0], e[2]):
-        return "y", "the object is flat along y"
+    """The up axis of a mesh (``"y"`` or ``"z"``) and why, from its geometry (see the module's description).
+
+    A disagreement between the geometry and the file format's convention is
+    logged as a warning (``--up`` overrides both).
+    """
     fmt = str(mesh.metadata.get("format", "ply"))
-    if fmt in ("obj", "gltf", "glb", "off"):
-        return "y", f"{fmt.upper()}'s usual convention"
-    return "z", f"{fmt.upper()}'s usual convention"
+    rec = mesh.metadata.get("up")
+    if rec in ("y", "z") and fmt not in ("gltf", "glb"):
+        return str(rec), "recorded in the file"
+    convention = "y" if fmt in ("obj", "gltf", "glb", "off") else "z"
+    conv_why = "glTF's specification" if fmt in ("gltf", "glb") else f"{fmt.upper()}'s usual convention"
+    if mesh.n_vertices == 0 or mesh.faces.size == 0:
+        return convention, conv_why
+    e = mesh.vertices.max(0) - mesh.vertices.min(0)
+    axis: str | None = None
+    why = ""
+    if e[2] < 0.2 * min(e[0], e[1]):
+        axis, why = "z", "the object is flat along z"
+    elif e[1] < 0.2 * min(e[0], e[2]):
+        axis, why = "y", "the object is flat along y"
+    else:
+        score, n_open = _openings_axis(mesh)
+        yz = score[1:]
+        if n_open and yz.max() > 0 and yz.max() >= OPENINGS_RATIO * yz.min() and yz.max() >= score[0]:
+            axis = "yz"[int(np.argmax(yz))]
+            why = (f"its {n_open} open boundar{'y points' if n_open == 1 else 'ies point'} mostly along {axis} "
+                   "(a garment's neck, hem and sleeves, a scan's cut base)")
+        else:
+            base = _base_axis(mesh)
+            if base is not None and base[0] > 0:
+                axis = "xyz"[base[0]]
+                why = f"a flat base across {axis} ({base[1]:.0%} of the surface)"
+            elif max(e[1], e[2]) >= EXTENT_RATIO * min(e[1], e[2]) and max(e[1], e[2]) >= e[0]:
+                axis = "y" if e[1] > e[2] else "z"
+                why = f"the object is tallest along {axis}"
+    if axis is None:
+        return convention, conv_why + " (the geometry does not tell)"
+    if axis != convention:
+        name = str(mesh.metadata.get("source", "mesh"))
+        _LOG.warning("%s: the geometry says the up axis is %s (%s) while %s is %s; using %s (--up overrides)",
+                     name, axis, why, conv_why, convention, axis)
+        why += f"; not {conv_why}, {convention}"
+    return axis, why
 
 
 def to_z_up(points: NDArray[np.float64], up: str) -> NDArray[np.float64]:

@@ -11,7 +11,11 @@ A wrong unit shows as curvature outside the table's kappa range: a garment in
 metres read as millimetres is 1000 times too small and 1000 times too curved,
 so all of it would be clamped to the table's last kappa. :func:`check_kappa_range`
 measures the share of the surface (by area) outside the range and, when most
-of it is, names the unit under which the least would be.
+of it is *and* the surface bends tighter than cloth can (a median bend
+radius below :data:`YARN_SCALE_MM`, the thickness of a yarn), names the unit
+under which the least would be. A small object that is really small (an 8 mm
+teapot in mm) bends at radii cloth can have: its curvature is beyond the
+table's stands but no other unit is suggested.
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ __all__ = [
     "WARN_OUTSIDE_SHARE",
     "SUGGEST_OUTSIDE_SHARE",
     "MAX_SIZE_MM",
+    "YARN_SCALE_MM",
     "check_size",
 ]
 
@@ -47,6 +52,10 @@ WARN_OUTSIDE_SHARE = 0.10
 
 #: Share above which the likely unit is suggested.
 SUGGEST_OUTSIDE_SHARE = 0.5
+
+#: The smallest bend radius cloth can have, mm (about a yarn's thickness): a surface whose median
+#: bend radius is smaller has a wrong unit.
+YARN_SCALE_MM = 0.5
 
 #: Largest extent of a mesh in mm (1 km). The renderer holds positions in float32: at 1 km they are
 #: still resolved to 0.06 mm, finer than any curvature neighbourhood, while the camera frames the whole
@@ -163,6 +172,14 @@ def _outside(kappa: np.ndarray, weights: np.ndarray, lo: float, hi: float, tol: 
     return float(weights[out].sum() / total) if total > 0 else 0.0
 
 
+def _weighted_median(x: np.ndarray, w: np.ndarray) -> float:
+    order = np.argsort(x)
+    c = np.cumsum(w[order])
+    if not c.size or c[-1] <= 0:
+        return float(np.median(x)) if x.size else 0.0
+    return float(x[order][np.searchsorted(c, 0.5 * c[-1])])
+
+
 def check_kappa_range(
     kappa_mm: ArrayLike,
     areas: ArrayLike,
@@ -190,8 +207,10 @@ def check_kappa_range(
     Returns
     -------
     KappaRangeCheck
-        The likely unit is looked for among the named units by rescaling
-        the curvature (``kappa / mm_per_unit`` per unit); with a different
+        The likely unit is looked for, when the median bend radius of the
+        curved part (``|kappa|`` above half the range's end) is below
+        :data:`YARN_SCALE_MM`, among the named units that make it at least
+        that, by rescaling the curvature (``kappa / mm_per_unit`` per unit); with a different
         unit the neighbourhood of the estimate changes too, so the shares it
         quotes are estimates.
     """
@@ -207,11 +226,14 @@ def check_kappa_range(
         # so clamping changes nothing and there is nothing to warn about or to suggest
         return KappaRangeCheck(share, (lo, hi), None, None)
     likely = None
-    if share > SUGGEST_OUTSIDE_SHARE:
+    curved = np.abs(k) > 0.5 * max(abs(lo), abs(hi))
+    median_k = _weighted_median(np.abs(k[curved]), w[curved]) if curved.any() else 0.0
+    if share > SUGGEST_OUTSIDE_SHARE and median_k * YARN_SCALE_MM > 1.0:
         k_model = k * units.mm_per_unit  # per model unit
-        best = min(((name, _outside(k_model / mm, w, lo, hi, tol)) for name, mm in UNITS_MM.items()),
-                   key=lambda t: t[1])
-        if best[0] != units.name and best[1] < 0.5 * share:
+        best = min(((name, _outside(k_model / mm, w, lo, hi, tol)) for name, mm in UNITS_MM.items()
+                    if median_k * units.mm_per_unit / mm * YARN_SCALE_MM <= 1.0), key=lambda t: t[1],
+                   default=None)
+        if best is not None and best[0] != units.name:
             likely = best
     message = None
     if share > WARN_OUTSIDE_SHARE:
@@ -221,6 +243,9 @@ def check_kappa_range(
         message = (f"{share:.0%} of the surface (by area) has a curvature outside the table's range "
                    f"[{lo:g}, {hi:g}] 1/mm and is rendered with the nearest end{size}")
         if likely is not None:
-            message += (f"; the unit is probably wrong: with --units {likely[0]} about {likely[1]:.0%} "
-                        "would be outside")
+            message += (f"; the unit is probably wrong (a median bend radius of {1 / median_k:.3g} mm is "
+                        f"tighter than a yarn): with --units {likely[0]} about {likely[1]:.0%} would be outside")
+        elif share > SUGGEST_OUTSIDE_SHARE:
+            message += (f"; its median bend radius, {1 / median_k:.3g} mm, is one cloth can have: the object "
+                        "bends more tightly than the table's stands (the unit is not the cause)")
     return KappaRangeCheck(share, (lo, hi), likely, message)

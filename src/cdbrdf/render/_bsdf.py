@@ -31,6 +31,7 @@ from ..interp import LookupGrid, prepare
 from ..mesh import ATTRIBUTES
 from . import _lookup_jit as lj
 from . import _sampling
+from ._units import scene_units
 
 __all__ = [
     "CURVATURE_MODES",
@@ -278,6 +279,9 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             def get(key: str, default: Any = None) -> Any:
                 return props[key] if key in props else default
 
+            self.units = scene_units(get("unit", "mm"))
+            #: whether cdbrdf's loaders applied the scene's unit with the shapes' to_world scales
+            self.scene_scale_applied = bool(get("scene_scale_applied", False))
             self.settings = Settings.parse(
                 mode=get("mode", "cdbrdf"), curvature=get("curvature"), curvature_mode=get("curvature_mode"),
                 curvature_scale=get("curvature_scale", 1.0), sampling=get("sampling", "table"),

@@ -33,7 +33,7 @@ from ..errors import OptionError, SceneError
 from ..frames import direction_from_angles
 
 __all__ = ["DEFAULT_IRRADIANCE", "LIGHTINGS", "STUDIO_KEY", "STUDIO_SKY", "directional_light",
-           "studio_environment", "environment_map"]
+           "studio_environment", "environment_map", "card_irradiance"]
 
 #: Default irradiance of the directional light (W m^-2): white Lambertian -> radiance 1.
 DEFAULT_IRRADIANCE = math.pi
@@ -124,3 +124,31 @@ def environment_map(path: str | PathLike[str]) -> NDArray[np.float32]:
     if not np.all(np.isfinite(px[..., :3])):
         raise SceneError(f"{p}: the environment map holds NaN or infinite pixels")
     return np.ascontiguousarray(px[..., :3])
+
+
+def card_irradiance(light: tuple[float, float, float] | None, environment: NDArray[np.floating] | None) -> float:
+    """Irradiance (W m^-2) on a grey card facing the key light (or the zenith without one), for the exposure.
+
+    Parameters
+    ----------
+    light
+        ``(theta_deg, phi_deg, irradiance)`` of the directional light, or None.
+    environment
+        A latitude-longitude map as the scenes place it (rows from the
+        zenith down, its +y the world's up), or None: its radiance over the
+        card's hemisphere, cosine-weighted, is added.
+    """
+    n = np.array([0.0, 0.0, 1.0]) if light is None else direction_from_angles(light[0], light[1])
+    e = 0.0 if light is None else float(light[2])
+    if environment is not None:
+        env = np.asarray(environment, dtype=np.float64)
+        h, w = env.shape[:2]
+        th = (np.arange(h) + 0.5) * math.pi / h
+        ph = (np.arange(w) + 0.5) * 2 * math.pi / w
+        T, P = np.meshgrid(th, ph, indexing="ij")
+        # Mitsuba's envmap direction of a texel, turned by the scenes' 90 degrees about x: (x, y, z) -> (x, -z, y)
+        d = np.stack([np.sin(T) * np.sin(P), np.sin(T) * np.cos(P), np.cos(T)], -1)
+        cos = np.clip(d @ n, 0.0, None)
+        lum = env[..., :3].mean(axis=-1) if env.ndim == 3 else env
+        e += float((lum * cos * np.sin(T)).sum() * (math.pi / h) * (2 * math.pi / w))
+    return e

@@ -1,12 +1,17 @@
 """Pictures of a table: renders in passes, their exposure, the backdrop, and :func:`render_table`.
 
-**Exposure** (:func:`exposure_from_render`): the exposure (EV) that maps the
-99th percentile of the object's luminance (pixels it covers) to 0.85 of
-display white (:func:`cdbrdf.colour.auto_exposure_ev`), but at most
-:data:`MAX_AUTO_EV` stops above the physical exposure (at which a white
-Lambertian surface facing a key light of the default irradiance pi is
-white), so that a dark fabric such as denim stays dark instead of being
-pushed to pastel.
+**Exposure** (:data:`EXPOSURES`): ``"card"`` (the default of
+:func:`render_table`) is the exposure at which an 18 % grey card facing the
+key light, lit by it and the environment, shows as mid-grey
+(:func:`cdbrdf.colour.card_exposure_ev`, :func:`cdbrdf.render.lighting.card_irradiance`):
+every surface then shows at its own reflectance, so a dark indigo denim
+stays indigo, whatever else is in the picture. ``"auto"``
+(:func:`exposure_from_render`) maps the 99th percentile of the object's
+luminance (pixels it covers) to 0.85 of display white
+(:func:`cdbrdf.colour.auto_exposure_ev`), at most :data:`MAX_AUTO_EV` stops
+above the physical exposure (a white Lambertian surface facing a key light
+of the default irradiance pi is white): bright pictures, for dark scenes
+of unknown light.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ from .lighting import DEFAULT_IRRADIANCE
 __all__ = [
     "BACKDROP",
     "MAX_AUTO_EV",
+    "EXPOSURES",
     "DEFAULT_SIZE",
     "DEFAULT_SPP",
     "RENDER_MODES",
@@ -43,6 +49,12 @@ BACKDROP = 0.5
 
 #: Largest automatic exposure, in stops above the physical one (see the module's description).
 MAX_AUTO_EV = 2.0
+
+#: Named exposure rules of :func:`render_table` (see the module's description), beside a number of EV.
+EXPOSURES: Mapping[str, str] = {
+    "card": "grey card: an 18 % grey card facing the key light shows as mid-grey",
+    "auto": "auto: the object's 99th luminance percentile at 0.85 of white",
+}
 
 
 def render_scene(
@@ -185,7 +197,8 @@ class Picture:
     exposure_ev
         The exposure to show them at (the same for every mode).
     exposure_source
-        ``"auto"`` (:func:`exposure_from_render` of the CDBRDF image) or ``"given"``.
+        ``"grey card"`` (:func:`cdbrdf.colour.card_exposure_ev`), ``"auto"``
+        (:func:`exposure_from_render` of the CDBRDF image) or ``"given"``.
     surface
         What was rendered: ``"sine sheet"`` or the mesh's name.
     lighting
@@ -261,8 +274,9 @@ def render_table(
     neighbourhood_mm: float | None = None,
     frame: str | None = None,
     up: str = "auto",
+    normal_map: str | PathLike[str] | None = None,
     curvature_mode: str = "max",
-    exposure: float | str = "auto",
+    exposure: float | str = "card",
     variant: str | None = None,
     curvature: bool = False,
     progress: Callable[[str, int, int], None] | None = None,
@@ -315,11 +329,17 @@ def render_table(
         For a mesh: its length unit, the curvature's neighbourhood (mm), the
         source of the material's x axis, its up axis
         (:func:`cdbrdf.mesh.prepare_mesh`, :func:`cdbrdf.mesh.detect_up`).
+    normal_map
+        A tangent-space normal map of the mesh, whose curvature is added to
+        the mesh's (:mod:`cdbrdf.mesh.normalmap`); default: the one the mesh
+        file names, if any.
     curvature_mode
         ``"max"`` (the paper's) or ``"directional"``.
     exposure
-        EV, or ``"auto"`` (:func:`exposure_from_render` of the CDBRDF image,
-        else the first mode's).
+        EV, or a rule of :data:`EXPOSURES`: ``"card"`` (the default: an 18 %
+        grey card facing the key light shows as mid-grey) or ``"auto"``
+        (:func:`exposure_from_render` of the CDBRDF image, else the first
+        mode's). :attr:`Picture.exposure_source` says which, in words.
     variant
         Mitsuba variant (default :data:`cdbrdf.render.DEFAULT_VARIANT`).
     curvature
@@ -358,9 +378,10 @@ def render_table(
         raise OptionError(f"modes: {modes!r:.60} must be distinct values of {', '.join(RENDER_MODES)}")
     if lighting is not None and lighting not in LIGHTINGS:
         raise OptionError(f"lighting: {lighting!r:.40} is not one of {', '.join(LIGHTINGS)}")
-    if not (isinstance(exposure, str) and exposure == "auto"):
+    if not (isinstance(exposure, str) and exposure in EXPOSURES):
         if isinstance(exposure, str) or not math.isfinite(float(exposure)):
-            raise OptionError(f"exposure: expected a finite number of stops or 'auto', got {exposure!r:.40}")
+            raise OptionError(f"exposure: expected a finite number of stops or one of {', '.join(EXPOSURES)}, "
+                              f"got {exposure!r:.40}")
     w, h = (int(x) for x in size)
     check_limit("render_pixels", w * h, what=f"a {w} x {h} render")
     btf = _as_btf(table)
@@ -378,6 +399,8 @@ def render_table(
         sheet = surface if isinstance(surface, SineSheet) else SineSheet()
         if envmap is not None:
             raise OptionError("envmap: only for meshes (the sine sheet is the paper's set-up)")
+        if normal_map is not None:
+            raise OptionError("normal_map: only for meshes (the sine sheet's folds are its geometry)")
         if lighting == "studio":
             raise OptionError("lighting 'studio': only for meshes (the sine sheet is the paper's set-up)")
         if sun is None:
@@ -394,7 +417,7 @@ def render_table(
             source, name = read_mesh(surface), str(surface)
         cb = None if progress is None else (lambda done, total: progress("curvature", done, total))
         mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=tbl,
-                            progress=cb)
+                            normal_map=normal_map, progress=cb)
         up_axis, why = (up, "given") if up != "auto" else detect_up(mesh)
     images: dict[str, NDArray[np.float32]] = {}
     kappa_image = None
@@ -416,6 +439,13 @@ def render_table(
     shown = images["cdbrdf" if "cdbrdf" in images else modes[0]]
     if exposure == "auto":
         ev, how = exposure_from_render(shown, irradiance=irradiance), "auto"
+    elif exposure == "card":
+        from ..colour import card_exposure_ev
+        from .lighting import card_irradiance, environment_map, studio_environment
+
+        env = environment_map(envmap) if envmap is not None else \
+            studio_environment() if (not is_sheet and lighting == "studio") else None
+        ev, how = card_exposure_ev(card_irradiance(sun, env)), "grey card"
     else:
         ev, how = float(exposure), "given"
     return Picture(images=images, exposure_ev=ev, exposure_source=how, surface=name, lighting=lighting,

@@ -71,14 +71,18 @@ pi f), mono variants use the luminance. ``mi.traverse`` exposes ``values``
 from __future__ import annotations
 
 import logging
+import math
 import re
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
+import numpy as np
+
 from ..errors import OptionError, SceneError
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
+from ._units import curvature_warning, ply_unit_mm, scene_factor, scene_units, uniform_scale
 
 __all__ = [
     "CURVATURE_MODES",
@@ -117,8 +121,11 @@ VARIANTS: tuple[str, ...] = ("llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", 
                              "cuda_ad_spectral", "cuda_ad_mono", "scalar_rgb", "scalar_spectral", "scalar_mono")
 
 #: Keys of a ``{"type": "cdbrdf", "table": ...}`` dict entry.
+#: The property cdbrdf's loaders set on a BSDF whose curvature factor they applied.
+_APPLIED = "scene_scale_applied"
+
 _DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_mode", "curvature_scale", "scale",
-                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter"})
+                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter", "unit", _APPLIED})
 
 
 def available_variants() -> tuple[str, ...]:
@@ -221,9 +228,18 @@ def _factory(cls: type) -> Callable[[Any], Any]:
 
     def make(props: Any) -> Any:
         try:
-            return cls(props)
+            bsdf = cls(props)
         except (ValueError, OSError) as exc:  # cdbrdf's errors (ValueError) and a missing file
             raise exc.with_traceback(None) from None
+        if _APPLIED not in props:
+            unit = f" and its unit ({bsdf.units})" if "unit" in props else ""
+            _LOG.warning(
+                "cdbrdf BSDF%s: made by Mitsuba's own loader, which gives the plug-in no shape: the checks of the "
+                "shapes that use it (UV coordinates, the curvature attribute, no twosided wrapper)%s are not "
+                "applied and the curvature attribute is used as it is; load the scene with "
+                "cdbrdf.render.load_file or load_dict, or call cdbrdf.render.check_scene(scene)",
+                f" {props.id()!r}" if props.id() else "", unit)
+        return bsdf
 
     return make
 
@@ -241,23 +257,40 @@ def make_bsdf(
     storage: str = "auto",
     uv_scale: float | str | tuple[float, float] | None = None,
     texel_filter: str | None = None,
+    unit: str | float | None = None,
 ) -> Any:
     """A ``cdbrdf`` BSDF instance from a table object (or file name).
 
     The instance can be put into a scene dict in place of a BSDF dict
     (``"bsdf": make_bsdf(table)``). Parameters as in the plug-in table above;
     ``curvature=None`` with ``curvature_mode=None`` reads ``vertex_curvature``;
-    ``scale`` may be a float or a Mitsuba texture (an object or a dict).
+    ``scale`` may be a float or a Mitsuba texture (an object or a dict);
+    ``unit`` is the scene's unit (applied by :func:`load_dict` with the
+    shape's ``to_world``; see ``docs/rendering.md``, "Curvature units").
     ``table`` may be a :class:`cdbrdf.CDBTF` (or its file): ``uv_scale`` (mm
     per UV unit, one number or ``(u, v)``; default 1: UVs in mm) and
     ``texel_filter`` (``"bilinear"``, ``"nearest"``) place its texels.
     """
+    return _make_bsdf(table, mode=mode, curvature=curvature, curvature_mode=curvature_mode,
+                      curvature_scale=curvature_scale, scale=scale, sampling=sampling, cosine_weight=cosine_weight,
+                      storage=storage, uv_scale=uv_scale, texel_filter=texel_filter, unit=unit)
+
+
+def _make_bsdf(table: Any, *, mode: str = "cdbrdf", curvature: str | float | None = None,
+               curvature_mode: str | None = None, curvature_scale: float = 1.0, scale: float | Any = 1.0,
+               sampling: str = "table", cosine_weight: float | None = None, storage: str = "auto",
+               uv_scale: float | str | tuple[float, float] | None = None, texel_filter: str | None = None,
+               unit: str | float | None = None, scene_scale_applied: bool = False) -> Any:
     import mitsuba as mi
 
     from ._bsdf import bsdf_class
 
     register()
     props = mi.Properties(PLUGIN_NAME)
+    if unit is not None:
+        props["unit"] = unit if isinstance(unit, str) else float(unit)
+    if scene_scale_applied:
+        props[_APPLIED] = True
     props["mode"] = str(mode)
     if curvature is not None:
         props["curvature"] = curvature if isinstance(curvature, str) else float(curvature)
@@ -287,23 +320,70 @@ def _replace_tables(d: Any) -> Any:
             if unknown:
                 raise OptionError(f"cdbrdf BSDF: unknown parameter(s) {sorted(unknown)}")
             kw = {k: v for k, v in d.items() if k not in ("type", "table", "id")}
-            return make_bsdf(d["table"], **kw)
+            return _make_bsdf(d["table"], **kw)
         return {k: _replace_tables(v) for k, v in d.items()}
     return d
 
 
-def load_dict(scene: dict, *, check: bool = True) -> Any:
-    """:func:`mitsuba.load_dict` that accepts ``"table": CDBRDF`` and checks the result.
+def _apply_units(scene: dict, unit_mm: float | None) -> dict:
+    """The scene dict with each shape's inline ``cdbrdf`` BSDF given its curvature factor (:mod:`._units`)."""
+    import mitsuba
 
-    ``{"type": "cdbrdf", "table": t, ...}`` entries become plug-in instances;
-    with ``check`` the loaded scene goes through :func:`check_scene`. An
-    object that cannot be made (a missing table, a damaged environment map)
-    is one :class:`~cdbrdf.errors.SceneError` line.
+    mi: Any = mitsuba
+    out = dict(scene)
+    for key, shape in scene.items():
+        if not isinstance(shape, dict):
+            continue
+        bsdf = shape.get("bsdf")
+        if not (isinstance(bsdf, dict) and bsdf.get("type") == PLUGIN_NAME):
+            continue
+        unit = scene_units(bsdf["unit"]) if "unit" in bsdf else None
+        u_mm = unit_mm if unit_mm is not None else unit.mm_per_unit if unit is not None else 1.0
+        s = 1.0
+        if "to_world" in shape:
+            tw = shape["to_world"]
+            s = uniform_scale(np.array(tw.matrix if hasattr(tw, "matrix") else tw), what=f"shape {key!r} to_world")
+        m_file = None
+        if shape.get("type") == "ply" and "filename" in shape:
+            m_file = ply_unit_mm(str(mi.file_resolver().resolve(str(shape["filename"]))))
+        factor = scene_factor(m_file=m_file, scale=s, unit_mm=u_mm)
+        b = dict(bsdf)
+        b["curvature_scale"] = float(b.get("curvature_scale", 1.0)) * factor
+        b["unit"] = float(u_mm)
+        b[_APPLIED] = True
+        out[key] = {**shape, "bsdf": b}
+    return out
+
+
+def _mark_loaded(d: Any) -> Any:
+    """Every ``cdbrdf`` BSDF dict marked as loaded by cdbrdf (its scale applied or not needed)."""
+    if isinstance(d, dict):
+        out = {k: _mark_loaded(v) for k, v in d.items()}
+        if d.get("type") == PLUGIN_NAME and _APPLIED not in d:
+            out[_APPLIED] = False
+        return out
+    return d
+
+
+def load_dict(scene: dict, *, check: bool = True, unit_mm: float | None = None) -> Any:
+    """:func:`mitsuba.load_dict` that accepts ``"table": CDBRDF``, applies the scene's unit and checks the result.
+
+    ``{"type": "cdbrdf", "table": t, ...}`` entries become plug-in instances.
+    A shape's own ``cdbrdf`` BSDF dict gets the curvature factor of its
+    ``to_world`` scale and the scene's unit (``unit_mm``, mm per scene unit;
+    default: the BSDF's ``unit``, else mm; ``docs/rendering.md``, "Curvature
+    units"). With ``check`` the loaded scene goes through
+    :func:`check_scene`. An object that cannot be made (a missing table, a
+    damaged environment map) is one :class:`~cdbrdf.errors.SceneError` line.
     """
     import mitsuba as mi
 
     register()
-    spec = _replace_tables(scene)
+    if unit_mm is not None and not (math.isfinite(unit_mm) and unit_mm > 0):
+        raise SceneError(f"unit_mm: must be a positive number of millimetres per scene unit, got {unit_mm}")
+    if isinstance(scene, dict) and scene.get("type") == "scene":
+        scene = _apply_units(scene, unit_mm)
+    spec = _replace_tables(_mark_loaded(scene))
     if not isinstance(spec, dict):  # {"type": "cdbrdf", "table": ...} alone: the instance itself
         return spec
     try:
@@ -362,8 +442,13 @@ def cdbrdf_shapes(scene: Any) -> Iterator[tuple[Any, Any, Any]]:
                     break
 
 
-def check_scene(scene: Any) -> None:
-    """Refuse shapes with a ``cdbrdf`` BSDF that cannot define its frame or curvature.
+def check_scene(scene: Any, *, curvature: bool = True) -> None:
+    """Refuse shapes with a ``cdbrdf`` BSDF that cannot define its frame or curvature; warn of an implausible one.
+
+    With ``curvature``, the curvature the renderer will see on those meshes
+    is checked against the tables' kappa range and a warning is logged once
+    when it is implausible, with the likely scene unit
+    (:func:`cdbrdf.render._units.curvature_warning`).
 
     Raises
     ------
@@ -400,3 +485,9 @@ def check_scene(scene: Any) -> None:
                 f"{attr!r}, which the shape does not have ({hint}, or give the BSDF a constant "
                 "curvature); without it the curvature would read as 0"
             )
+    if not curvature:
+        return
+    shapes = [(shape, bsdf) for shape, bsdf, _ in cdbrdf_shapes(scene) if isinstance(shape, mi.Mesh)]
+    msg = curvature_warning(shapes)
+    if msg:
+        _LOG.warning("%s", msg)

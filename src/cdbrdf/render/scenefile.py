@@ -53,20 +53,12 @@ import numpy as np
 from ..errors import SceneError
 from ..fsutil import check_regular, read_regular
 from ._bsdf import PLUGIN_NAME
-from .plugin import check_scene, mitsuba_message, register
+from ._units import ply_unit_mm, scene_factor, scene_units, uniform_scale
+from .plugin import _APPLIED, check_scene, mitsuba_message, register
 
 __all__ = ["LoadReport", "load_file", "ply_unit_mm", "uniform_scale"]
 
 _LOG = logging.getLogger(__name__)
-
-#: The PLY header comment that records a mesh file's unit (``comment cdbrdf units cm``, ``... units 2.5``).
-_UNIT_COMMENT = re.compile(r"^comment\s+cdbrdf\s+units\s+(.+)$")
-
-#: Relative tolerance on the singular values of a "uniform" scale.
-_UNIFORM_RTOL = 1e-5
-
-#: Bytes of a PLY header read for its unit comment at most.
-_HEADER_BYTES = 65536
 
 #: Largest XML file read for its ``<include>`` elements, and how deep includes nest at most.
 _MAX_XML_BYTES = 256 * 1024 * 1024
@@ -95,48 +87,6 @@ class LoadReport:
     curvature_scales: list[tuple[str, float]] = field(default_factory=list)
     unwrapped: list[str] = field(default_factory=list)
     files: list[Path] = field(default_factory=list)
-
-
-def uniform_scale(matrix: Any, *, what: str = "to_world") -> float:
-    """The uniform scale of an affine 4x4 (or 3x3) matrix; a :class:`SceneError` for a non-uniform one."""
-    m = np.asarray(matrix, dtype=np.float64)
-    m3 = m[:3, :3]
-    sv = np.linalg.svd(m3, compute_uv=False)
-    if not np.all(np.isfinite(sv)) or sv[-1] <= 0.0:
-        raise SceneError(f"{what}: the transform is singular or not finite")
-    if sv[0] - sv[-1] > _UNIFORM_RTOL * sv[0]:
-        raise SceneError(
-            f"{what}: non-uniform scale (factors {', '.join(f'{x:.6g}' for x in sv)}) changes the "
-            "curvature differently along each direction; bake the transform into the mesh and compute "
-            "its curvature with `cdbrdf curvature`"
-        )
-    return float(np.prod(sv) ** (1.0 / 3.0))
-
-
-def ply_unit_mm(path: str | PathLike[str]) -> float | None:
-    """The unit (mm per file unit) a PLY header records (``comment cdbrdf units ...``), or None.
-
-    Reads the header only; a unit :func:`cdbrdf.mesh.parse_units` does
-    not accept counts as none recorded.
-    """
-    from ..errors import MeshError
-    from ..mesh import parse_units
-
-    try:
-        head = read_regular(path, max_bytes=_HEADER_BYTES)  # never a FIFO or /dev/zero; the header only
-    except OSError:
-        return None
-    for line in head[:_HEADER_BYTES].split(b"\n")[:256]:
-        text = line.decode("ascii", "replace").strip()
-        if text == "end_header":
-            break
-        m = _UNIT_COMMENT.match(text)
-        if m:
-            try:
-                return float(parse_units(m.group(1).strip()).mm_per_unit)
-            except MeshError:
-                return None
-    return None
 
 
 def _regular(path: Path, where: str) -> Path | None:
@@ -233,13 +183,14 @@ def _is_cdbrdf(node: Any, mi: Any) -> bool:
     return node.type == mi.ObjectType.BSDF and node.props.plugin_name() == PLUGIN_NAME
 
 
-def _prepare(state: Any, *, unit_mm: float, mi: Any) -> LoadReport:
+def _prepare(state: Any, *, unit_mm: float | None, mi: Any) -> LoadReport:
     """The pass described in the module docstring, on a parsed, resolved scene."""
     import mitsuba.parser as mp
 
     report = LoadReport()
     nodes = state.nodes
     clones: dict[tuple[int, float], int] = {}
+    originals: dict[int, Any] = {}
     n0 = len(nodes)
     for i in range(n0):
         node = nodes[i]
@@ -262,31 +213,47 @@ def _prepare(state: Any, *, unit_mm: float, mi: Any) -> LoadReport:
                                  "is two-sided by itself and changes the sign of kappa on the back)", where, name)
             if not _is_cdbrdf(target, mi):
                 continue
+            if unit_mm is not None:
+                u_mm = unit_mm
+            elif "unit" in target.props:
+                u_mm = scene_units(target.props["unit"]).mm_per_unit
+            else:
+                u_mm = 1.0
             s = 1.0
             if "to_world" in props:
                 s = uniform_scale(np.array(props["to_world"].matrix), what=f"{where}: shape {name!r} to_world")
             m_file = None
             if props.plugin_name() == "ply" and "filename" in props:
                 m_file = ply_unit_mm(str(mi.file_resolver().resolve(str(props["filename"]))))
-            factor = (m_file if m_file is not None else 1.0) / (s * unit_mm)
-            if abs(factor - 1.0) <= 1e-12:
-                continue
+            factor = scene_factor(m_file=m_file, scale=s, unit_mm=u_mm)
             k = (j, round(factor, 12))
             if k not in clones:
-                c = mp.SceneNode(target)
+                # the BSDF itself for its first factor, a copy of it as it was for each other one
+                first = j not in originals
+                if first:
+                    originals[j] = mp.SceneNode(target)
+                c = target if first else mp.SceneNode(originals[j])
                 base = float(c.props["curvature_scale"]) if "curvature_scale" in c.props else 1.0
                 c.props["curvature_scale"] = base * factor
-                nodes.append(c)
-                clones[k] = len(nodes) - 1
+                c.props["unit"] = float(u_mm)
+                c.props[_APPLIED] = True
+                if not first:
+                    nodes.append(c)
+                clones[k] = j if first else len(nodes) - 1
             props[key] = mi.Properties.ResolvedReference(clones[k])
+            if abs(factor - 1.0) <= 1e-12:
+                continue
             report.curvature_scales.append((name, factor))
             _LOG.info("%s: shape %r: curvature attribute x %.6g (to_world scale %.6g, file unit %s mm, scene "
                       "unit %.6g mm)", where, name, factor, s, "1 (assumed)" if m_file is None else f"{m_file:g}",
-                      unit_mm)
+                      u_mm)
+    for node in nodes:  # the plug-in's other instances (used by no shape): loaded by cdbrdf too
+        if _is_cdbrdf(node, mi) and _APPLIED not in node.props:
+            node.props[_APPLIED] = False
     return report
 
 
-def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = None, unit_mm: float = 1.0,
+def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = None, unit_mm: float | None = None,
               check: bool = True, optimize: bool = True, report: LoadReport | None = None) -> Any:
     """Load a Mitsuba XML file (a scene or one object) with the ``cdbrdf`` plug-in.
 
@@ -297,7 +264,8 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
     variables
         Values of the file's ``$name`` parameters (Mitsuba's ``-D name=value``).
     unit_mm
-        Millimetres per scene unit (see the module docstring).
+        Millimetres per scene unit (see the module docstring); default: the
+        ``unit`` of each ``cdbrdf`` BSDF, else 1 (mm).
     check
         Run :func:`cdbrdf.render.check_scene` on a loaded scene.
     optimize
@@ -332,7 +300,7 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
         raise SceneError(f"{p}: no such scene file") from None
     except OSError as exc:
         raise SceneError(f"scene file {exc}") from None
-    if not (math.isfinite(unit_mm) and unit_mm > 0):
+    if unit_mm is not None and not (math.isfinite(unit_mm) and unit_mm > 0):
         raise SceneError(f"unit_mm: must be a positive number of millimetres per scene unit, got {unit_mm}")
     register()
     params = {str(k): str(v) for k, v in (variables or {}).items()}
@@ -353,7 +321,7 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
         except RuntimeError as exc:
             raise SceneError(f"{p}: {mitsuba_message(exc)}") from None
         files += _check_nodes(state, mi=mi)
-        rep = _prepare(state, unit_mm=float(unit_mm), mi=mi)
+        rep = _prepare(state, unit_mm=None if unit_mm is None else float(unit_mm), mi=mi)
         try:
             if optimize:
                 mp.transform_merge_equivalent(config, state)

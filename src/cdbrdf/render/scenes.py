@@ -20,7 +20,7 @@ from ..errors import MeshError, OptionError
 from ..mesh import Mesh, SineSheet, check_up, prepare_mesh, sine_sheet_mesh, z_up_mesh
 from .camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW, FRAME_FILL, _subsample, perspective_camera
 from .lighting import DEFAULT_IRRADIANCE, LIGHTINGS, STUDIO_KEY, directional_light, environment_map, studio_environment
-from .plugin import load_dict
+from .plugin import check_scene, load_dict
 
 __all__ = ["sine_scene", "mesh_scene", "mitsuba_mesh"]
 
@@ -67,7 +67,9 @@ def _build(mesh: Mesh, table: Any, *, mode: str, scale: float, size: tuple[int, 
                        "to_world": mi.ScalarTransform4f().rotate([1.0, 0.0, 0.0], 90.0)}
     for i, light in enumerate(lights):
         d[f"light{i}"] = light
-    return load_dict(d)
+    scene = load_dict(d, check=False)
+    check_scene(scene, curvature=False)  # the mesh's curvature was checked when it was prepared
+    return scene
 
 
 def mitsuba_mesh(mesh: Mesh, *, bsdf: Any = None, name: str = "object") -> Any:
