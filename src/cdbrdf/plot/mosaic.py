@@ -465,7 +465,7 @@ def plot_mosaic(
         is the reference).
     diff_limit
         Colour range of the difference, ± this value in the table's unit.
-        Default: the :data:`DIFF_PERCENTILE`-th percentile of |difference| over
+        Default: the :data:`DIFF_PERCENTILE`-th percentile of ``|difference|`` over
         the measured samples of the shown panels (values beyond, e.g. at
         filled samples, are saturated; the colour bar's arrows say so).
     channel

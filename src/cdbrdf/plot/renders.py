@@ -89,7 +89,7 @@ def plot_curvature_map(
     surfaces
         ``(title, vertices (n, 3) mm, faces (m, 3), kappa (n,) mm^-1)`` per panel.
     limit
-        Colour-scale limit in mm^-1 (default: the 99th percentile of |kappa|).
+        Colour-scale limit in mm^-1 (default: the 99th percentile of ``|kappa|``).
 
     Returns
     -------
