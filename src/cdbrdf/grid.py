@@ -150,12 +150,13 @@ class Grid:
     kappa
         Curvatures in mm^-1, strictly increasing (any spacing), in
         [-:data:`MAX_ABS_KAPPA`, :data:`MAX_ABS_KAPPA`].
-    theta_l, theta_v
-        Light and view elevations in degrees, strictly increasing in [0, 90).
-    phi_l, phi_v
-        Light and view azimuths in degrees, evenly spaced in [0, 360). In an
-        isotropic grid ``phi_l`` is ``[0]`` and ``phi_v`` the azimuth
-        difference ``phi_v - phi_l``.
+    phi_l, theta_l
+        Light azimuths in degrees, evenly spaced in [0, 360), and light
+        elevations in degrees, strictly increasing in [0, 90). In an isotropic
+        grid ``phi_l`` is ``[0]``.
+    phi_v, theta_v
+        View azimuths and elevations, the same rules; in an isotropic grid
+        ``phi_v`` is the azimuth difference ``phi_v - phi_l``.
     symmetry
         ``"anisotropic"`` (default) or ``"isotropic"`` (:data:`SYMMETRIES`).
 
@@ -283,8 +284,11 @@ class Grid:
         )
 
     def axes(self) -> dict[str, Any]:
-        """The axes by name, in storage order (float64 arrays; typed Any so that ``CDBRDF(v, **g.axes())``
-        type-checks beside the table's other keywords)."""
+        """The axes by name, in storage order.
+
+        Float64 arrays, typed Any so that ``CDBRDF(v, **g.axes())`` type-checks
+        beside the table's other keywords.
+        """
         return {name: getattr(self, name) for name in AXES[:-1]}
 
     def mesh(self) -> dict[str, NDArray[np.float64]]:

@@ -93,8 +93,8 @@ class CDBRDF:
         refused). Must be finite and within +-:data:`MAX_ABS_VALUE`.
     kappa
         Curvatures, mm^-1, strictly increasing.
-    theta_l, phi_l, theta_v, phi_v
-        Light/view elevation and azimuth axes, degrees (see :class:`Grid`).
+    phi_l, theta_l, phi_v, theta_v
+        Light and view azimuth and elevation axes, degrees (see :class:`Grid`).
     measured
         Boolean mask, shape ``values.shape[:-1]``: True where the sample was
         measured, False where it was filled. Default: all True.
@@ -119,8 +119,8 @@ class CDBRDF:
         Integer codes of :data:`cdbrdf.schema.FILL_METHOD_CODES`, shape
         ``values.shape[:-1]``: how each sample was filled; 0 (``measured``)
         for, and only for, measured samples. Default: ``nearest`` where a
-        fill source is known, ``unknown`` where not (what files before 1.2
-        hold).
+        fill source is known, ``unknown`` where not (files of format 1.0 and
+        1.1 record no method).
     fill_sources
         Integer array ``values.shape[:-1] + (n_slot,)``: every measured
         sample each filled value was computed from (flat indices, used slots

@@ -302,7 +302,7 @@ def import_brdf(
         Measure the error of the table against the source (a fraction of a second).
     progress
         ``progress(done, total)`` over the source evaluations.
-    options
+    **options
         Reader options (``encoding="srgb" | "linear"`` for UTIA files).
 
     Returns

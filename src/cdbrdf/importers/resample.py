@@ -317,6 +317,7 @@ def resample(
     Returns
     -------
     Resampled
+        The cell means on the grid's direction axes and how they were computed.
 
     Raises
     ------

@@ -306,6 +306,7 @@ def measure(
     table : CDBRDF
         ``quantity="brdf"`` with a white reference, else ``"relative"``.
     report : MeasureReport
+        What was read, skipped, saturated and filled.
 
     Raises
     ------

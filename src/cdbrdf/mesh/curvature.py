@@ -209,6 +209,7 @@ def surface_curvature(  # noqa: C901 - the steps in order
     Returns
     -------
     SurfaceCurvature
+        The repaired mesh's faces, normals, frame and curvatures (mm^-1).
 
     Raises
     ------

@@ -390,6 +390,7 @@ def repair(  # noqa: C901 - one pass, step by step
     Returns
     -------
     RepairedMesh
+        The analysis surface, the output mesh and what was repaired.
 
     Raises
     ------

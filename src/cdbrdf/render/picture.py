@@ -321,6 +321,7 @@ def render_table(
     Returns
     -------
     Picture
+        The image of every mode, the exposure to show them at and what was rendered.
 
     Raises
     ------

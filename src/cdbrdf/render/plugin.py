@@ -170,6 +170,11 @@ def variant(name: str = DEFAULT_VARIANT) -> Iterator[str]:
     What library code uses (:func:`cdbrdf.render.render_table`, the simulated
     rig, the importers' checks against Mitsuba): it never leaves the caller's
     variant changed. Checks and registers as :func:`set_variant` does.
+
+    Yields
+    ------
+    str
+        The variant in use inside the block.
     """
     import mitsuba as mi
 
@@ -337,6 +342,11 @@ def cdbrdf_shapes(scene: Any) -> Iterator[tuple[Any, Any, Any]]:
 
     ``wrapper`` is the shape's own BSDF when the plug-in sits inside another
     BSDF (e.g. ``twosided``), else None.
+
+    Yields
+    ------
+    tuple
+        ``(shape, bsdf, wrapper)`` per shape.
     """
     from ._bsdf import bsdf_class
 

@@ -150,6 +150,7 @@ def sine_scene(
     Returns
     -------
     mitsuba.Scene
+        The sine sheet's scene, loaded in the active variant.
     """
     lights = [directional_light(*light)] if light is not None else []
     return _build(sine_sheet_mesh(sheet), table, mode=mode, scale=scale, size=size, spp=spp,

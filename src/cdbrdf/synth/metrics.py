@@ -63,8 +63,11 @@ def low_elevation_slice(table: CDBRDF, kappa: float, max_theta_deg: float = 30.0
 
 
 def in_plane_luminance(table: CDBRDF, kappa: float, plane_phi_deg: float) -> float:
-    """Mean luminance of the samples whose view and light lie in the plane at
-    azimuth ``plane_phi_deg`` (azimuths ``phi`` and ``phi + 180``), all elevations."""
+    """Mean luminance of the samples whose view and light lie in one plane.
+
+    The plane at azimuth ``plane_phi_deg`` (azimuths ``phi`` and ``phi + 180``),
+    all elevations, at curvature ``kappa`` (mm^-1).
+    """
     i = int(np.flatnonzero(np.isclose(table.kappa, kappa))[0])
     az = [plane_phi_deg % 360.0, (plane_phi_deg + 180.0) % 360.0]
     il = [int(np.flatnonzero(np.isclose(table.phi_l, a))[0]) for a in az]
@@ -184,6 +187,7 @@ def bend_contrast(
     Returns
     -------
     BendContrast
+        The median Delta E*ab, the scale and the swatch colours.
 
     Raises
     ------
