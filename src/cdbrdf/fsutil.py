@@ -299,6 +299,15 @@ def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp", sweep: bool 
     file (errno ``ENOSPC``), whatever the writing library raised; the old
     file is left as it was.
 
+    Parameters
+    ----------
+    path
+        The destination.
+    suffix
+        End of the temporary's name.
+    sweep
+        Remove temporaries of killed runs for ``path`` first.
+
     Yields
     ------
     pathlib.Path

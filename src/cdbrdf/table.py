@@ -322,7 +322,14 @@ class CDBRDF:
         return self._fill_std
 
     def fill_method_names(self) -> NDArray[np.str_]:
-        """:attr:`fill_method` as names (``"measured"``, ``"nearest"``, ``"kappa_fit"``, ...)."""
+        """:attr:`fill_method` as names.
+
+        Returns
+        -------
+        numpy.ndarray
+            Strings (``"measured"``, ``"nearest"``, ``"kappa_fit"``, ...), shape
+            ``values.shape[:-1]``.
+        """
         names = np.array(list(FILL_METHOD_CODES), dtype=object)
         lut = np.empty(max(FILL_METHOD_CODES.values()) + 1, dtype=object)
         lut[list(FILL_METHOD_CODES.values())] = names
@@ -414,6 +421,11 @@ class CDBRDF:
         Built by :func:`cdbrdf.interp.prepare` on first use and kept by the
         table (the table never changes), so every lookup of this table, the
         renderer's included, shares one prepared grid.
+
+        Returns
+        -------
+        LookupGrid
+            The prepared grid.
         """
         if self._lookup is None:
             from .interp import prepare
@@ -432,6 +444,16 @@ class CDBRDF:
         the lookup); between samples the slice is interpolated linearly in
         kappa and a sample counts as measured only if both neighbours were
         (the others' fill method is ``unknown``).
+
+        Parameters
+        ----------
+        kappa
+            The curvature of the slice, mm^-1.
+
+        Returns
+        -------
+        CDBRDF
+            A table with the one curvature ``kappa``.
         """
         if isinstance(kappa, (bool, np.bool_)) or not isinstance(kappa, (int, float, np.integer, np.floating)):
             raise TableError(f"kappa: expected a number (1/mm), got {type(kappa).__name__} {kappa!r}")
@@ -498,6 +520,16 @@ class CDBRDF:
         ``(phi_l = i s, phi_v = phi_v[0] + j s)`` is the isotropic table's
         sample at the difference ``(j - i) s``. An anisotropic table is returned
         as it is.
+
+        Parameters
+        ----------
+        max_azimuths
+            The most azimuths per axis; default: all of ``phi_v``.
+
+        Returns
+        -------
+        CDBRDF
+            The anisotropic table (this table when it is anisotropic).
         """
         if not self.isotropic:
             return self
@@ -527,7 +559,15 @@ class CDBRDF:
         )
 
     def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
-        """Write the table to an HDF5 file (atomically); see ``docs/format.md`` and :func:`cdbrdf.io.write`."""
+        """Write the table to an HDF5 file, atomically (``docs/format.md``, :func:`cdbrdf.io.write`).
+
+        Parameters
+        ----------
+        path
+            Destination; its folder must exist.
+        compression
+            HDF5 filter of the datasets, ``"gzip"`` or None.
+        """
         _io.write(TableParts.of(self), path, compression=compression)
 
     def fig7(self) -> NDArray[np.floating]:
@@ -557,6 +597,11 @@ class CDBRDF:
         as JSON text, ``cdbrdf_attrs`` holding them all), so that
         ``to_xarray().to_netcdf(path)`` writes a file :func:`cdbrdf.load`
         reads back as this table. Needs xarray.
+
+        Returns
+        -------
+        xarray.Dataset
+            The table's arrays, coordinates and attributes.
         """
         return _io.to_dataset(TableParts.of(self))
 
@@ -571,12 +616,33 @@ class CDBRDF:
         with it, :func:`cdbrdf.io.attrs_from_globals`), else the dataset's
         attributes but the format's own. Channel names that are not the
         defaults become ``attrs["channels"]`` (unless the attrs name them).
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+            The dataset.
+
+        Returns
+        -------
+        CDBRDF
+            The table.
         """
         parts = _io.parts_from_dataset(ds)
         return cls(parts.values, **parts.table_kwargs())
 
     def with_attrs(self, **attrs: Any) -> CDBRDF:
-        """A copy with ``attrs`` updated (the symmetry cannot change this way)."""
+        """A copy with ``attrs`` updated (the symmetry cannot change this way).
+
+        Parameters
+        ----------
+        **attrs
+            Attributes to set.
+
+        Returns
+        -------
+        CDBRDF
+            The copy.
+        """
         a = copy.deepcopy(self._attrs)
         a.update(attrs)
         return CDBRDF(
