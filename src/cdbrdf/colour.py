@@ -473,8 +473,10 @@ def lab_chroma_hue(lab: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.floa
 
     Returns
     -------
-    chroma, hue : numpy.ndarray
-        ``C*ab`` and ``h_ab`` in degrees, [0, 360), shape ``(...)``.
+    chroma : numpy.ndarray
+        ``C*ab``, shape ``(...)``.
+    hue : numpy.ndarray
+        ``h_ab`` in degrees, [0, 360).
     """
     v = np.asarray(lab, dtype=np.float64)
     if v.ndim == 0 or v.shape[-1] != 3:

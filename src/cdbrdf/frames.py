@@ -48,8 +48,10 @@ def angles_from_direction(v: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np
 
     Returns
     -------
-    theta_deg, phi_deg : numpy.ndarray
-        Elevation from the normal and azimuth, degrees, shape ``(...)``.
+    theta_deg : numpy.ndarray
+        Elevation from the normal, degrees, shape ``(...)``.
+    phi_deg : numpy.ndarray
+        Azimuth, degrees, in [0, 360).
     """
     v = np.asarray(v, dtype=np.float64)
     if v.shape[-1:] != (3,):

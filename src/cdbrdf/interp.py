@@ -368,8 +368,10 @@ def apply_pole_rule(
 
     Returns
     -------
-    values, theta_l, theta_v : numpy.ndarray
-        New arrays: the samples and the elevation axes with their pole nodes.
+    values : numpy.ndarray
+        The samples with the pole rule applied (a new array).
+    theta_l, theta_v : numpy.ndarray
+        The elevation axes with their pole nodes.
     """
     v = np.asarray(values)
     if v.ndim < 5:
