@@ -122,7 +122,13 @@ _DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_m
 
 
 def available_variants() -> tuple[str, ...]:
-    """The variants of :data:`VARIANTS` that the installed Mitsuba provides."""
+    """The variants of :data:`VARIANTS` that the installed Mitsuba provides.
+
+    Returns
+    -------
+    tuple of str
+        The variants, in the order of :data:`VARIANTS`.
+    """
     import mitsuba as mi
 
     have = set(mi.variants())
@@ -137,6 +143,11 @@ def set_variant(variant: str = DEFAULT_VARIANT) -> str:
     variant
         One of :data:`VARIANTS` that the installed Mitsuba has
         (:func:`available_variants`); default ``"llvm_ad_rgb"``.
+
+    Returns
+    -------
+    str
+        The variant set.
 
     Raises
     ------
@@ -170,6 +181,11 @@ def variant(name: str = DEFAULT_VARIANT) -> Iterator[str]:
     What library code uses (:func:`cdbrdf.render.render_table`, the simulated
     rig, the importers' checks against Mitsuba): it never leaves the caller's
     variant changed. Checks and registers as :func:`set_variant` does.
+
+    Parameters
+    ----------
+    name
+        One of :data:`VARIANTS`.
 
     Yields
     ------
@@ -248,9 +264,24 @@ def make_bsdf(
     """A ``cdbrdf`` BSDF instance from a table object (or file name).
 
     The instance can be put into a scene dict in place of a BSDF dict
-    (``"bsdf": make_bsdf(table)``). Parameters as in the plug-in table above;
-    ``curvature=None`` with ``curvature_mode=None`` reads ``vertex_curvature``;
-    ``scale`` may be a float or a Mitsuba texture (an object or a dict).
+    (``"bsdf": make_bsdf(table)``).
+
+    Parameters
+    ----------
+    table
+        A :class:`~cdbrdf.table.CDBRDF` or a file name.
+    mode, curvature, curvature_mode, curvature_scale
+        The plug-in's parameters (module docstring, ``docs/rendering.md``);
+        ``curvature=None`` with ``curvature_mode=None`` reads ``vertex_curvature``.
+    scale
+        A float or a Mitsuba texture (an object or a dict).
+    sampling, cosine_weight, storage
+        The plug-in's parameters.
+
+    Returns
+    -------
+    mitsuba.BSDF
+        The plug-in instance, in the active variant.
     """
     import mitsuba as mi
 
@@ -294,6 +325,18 @@ def load_dict(scene: dict, *, check: bool = True) -> Any:
     with ``check`` the loaded scene goes through :func:`check_scene`. An
     object that cannot be made (a missing table, a damaged environment map)
     is one :class:`~cdbrdf.errors.SceneError` line.
+
+    Parameters
+    ----------
+    scene
+        A Mitsuba scene dictionary.
+    check
+        Check the loaded scene.
+
+    Returns
+    -------
+    mitsuba.Object
+        The loaded scene or object.
     """
     import mitsuba as mi
 
@@ -343,6 +386,11 @@ def cdbrdf_shapes(scene: Any) -> Iterator[tuple[Any, Any, Any]]:
     ``wrapper`` is the shape's own BSDF when the plug-in sits inside another
     BSDF (e.g. ``twosided``), else None.
 
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        A loaded scene.
+
     Yields
     ------
     tuple
@@ -364,6 +412,11 @@ def cdbrdf_shapes(scene: Any) -> Iterator[tuple[Any, Any, Any]]:
 
 def check_scene(scene: Any) -> None:
     """Refuse shapes with a ``cdbrdf`` BSDF that cannot define its frame or curvature.
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        A loaded scene.
 
     Raises
     ------
