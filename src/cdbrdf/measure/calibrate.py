@@ -54,7 +54,13 @@ class MeasureReport:
     skipped_files: list[tuple[str, str]] = field(default_factory=list)
 
     def summary(self) -> str:
-        """A few human-readable lines."""
+        """A few human-readable lines.
+
+        Returns
+        -------
+        str
+            The report as text.
+        """
         lines = [
             f"{self.n_images} photographs used ({self.n_images_resumed} from the checkpoint), "
             f"{self.n_white} white reference(s), {self.n_dark} dark frame(s); quantity {self.quantity}",
