@@ -182,11 +182,33 @@ class Mosaic:
         return "sr^-1" if self.quantity == "brdf" else "relative"
 
     def luminance(self, *, channel: int | str | None = None) -> NDArray[np.float64]:
-        """``(n, R, C)`` luminance (or one channel) of :attr:`images`."""
+        """The luminance (or one channel) of :attr:`images`.
+
+        Parameters
+        ----------
+        channel
+            A channel's index or name; None for the luminance.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, R, C)``.
+        """
         return luminance(self.images, channel=channel, channels=self.channels)
 
     def difference_luminance(self, *, channel: int | str | None = None) -> NDArray[np.float64]:
-        """``(n, R, C)`` luminance (or one channel) of :attr:`difference`."""
+        """The luminance (or one channel) of :attr:`difference`.
+
+        Parameters
+        ----------
+        channel
+            A channel's index or name; None for the luminance.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, R, C)``.
+        """
         return luminance(self.difference, channel=channel, channels=self.channels)
 
 

@@ -39,6 +39,12 @@ def plot_render_comparison(
         Exposure in stops applied to both before sRGB encoding.
     title
         Figure title.
+    labels
+        Titles of panels (a) and (b).
+    width_in
+        Width of a new figure, inches.
+    fig
+        Draw into this (empty) figure instead of a new one.
 
     Returns
     -------
@@ -90,6 +96,10 @@ def plot_curvature_map(
         ``(title, vertices (n, 3) mm, faces (m, 3), kappa (n,) mm^-1)`` per panel.
     limit
         Colour-scale limit in mm^-1 (default: the 99th percentile of ``|kappa|``).
+    width_in
+        Width of a new figure, inches.
+    fig
+        Draw into this (empty) figure instead of a new one.
 
     Returns
     -------
