@@ -118,7 +118,18 @@ class DemoConfig:
         return k * pl * tl * pv * tv + pl * tl
 
     def expected_seconds(self, n_materials: int) -> float:
-        """A rough estimate of the run time on a 2-core machine."""
+        """A rough estimate of the run time on a 2-core machine.
+
+        Parameters
+        ----------
+        n_materials
+            Number of materials run.
+
+        Returns
+        -------
+        float
+            Seconds.
+        """
         w, h = self.render_size
         photos = self.n_photos * self.seconds_per_photo
         renders = 4 * self.render_spp * w * h / 1e6 * self.seconds_per_render_spp_mpix
@@ -176,11 +187,24 @@ class MaterialResult:
 class DemoResult:
     """The demo's output folder, report and per-material results.
 
-    ``timings_s``: seconds per stage, summed over the materials
-    (``photographs``, ``measuring``, ``figures``, ``render_sine``,
-    ``render_drape``), plus ``surfaces_figure``, ``cleanup`` (waiting for
-    the photographs' deletion, which runs beside the renders), ``viewer``
-    and ``total``; written to ``results.json`` under the same name.
+    Attributes
+    ----------
+    folder
+        The output folder.
+    report
+        Its ``report.html``.
+    config
+        The settings run.
+    materials
+        One result per material, in order.
+    seconds
+        The whole run, seconds.
+    timings_s
+        Seconds per stage, summed over the materials (``photographs``,
+        ``measuring``, ``figures``, ``render_sine``, ``render_drape``), plus
+        ``surfaces_figure``, ``cleanup`` (waiting for the photographs'
+        deletion, which runs beside the renders), ``viewer`` and ``total``;
+        written to ``results.json`` under the same name.
     """
 
     folder: Path
@@ -195,12 +219,26 @@ def compare_with_truth(measured: CDBRDF, truth: CDBRDF) -> tuple[dict[str, float
     """Errors of a measured table against the ground truth at its samples.
 
     The truth is evaluated at every sample of ``measured`` (exact at shared
-    nodes). Returns overall statistics and one row per stand (curvature):
-    samples, measured, filled, the median / 95th-percentile relative error
-    (luminance) of the measured samples and of the filled samples, and, when
-    the table records the fill's uncertainty (``fill_std``), the fraction of
-    filled samples whose error lies within 1 and 2 of their standard
-    deviations (luminance of ``fill_std``).
+    nodes).
+
+    Parameters
+    ----------
+    measured
+        The measured table.
+    truth
+        The table it was photographed from.
+
+    Returns
+    -------
+    overall : dict
+        Statistics over all samples.
+    per_stand : list of dict
+        One row per stand (curvature): samples, measured, filled, the median
+        / 95th-percentile relative error (luminance) of the measured samples
+        and of the filled samples, and, when the table records the fill's
+        uncertainty (``fill_std``), the fraction of filled samples whose error
+        lies within 1 and 2 of their standard deviations (luminance of
+        ``fill_std``).
     """
     g = measured.grid.mesh()
     t = truth.evaluate(g["theta_v"], g["phi_v"], g["theta_l"], g["phi_l"], g["kappa"])
@@ -588,6 +626,11 @@ def run_demo(
         ("Filling") compares designs.
     progress
         ``progress(stage, done, total)`` callback.
+
+    Returns
+    -------
+    DemoResult
+        The output folder, the report and the numbers.
     """
     from . import materials as mats
     from .outputs import check_output_folder, output_folder

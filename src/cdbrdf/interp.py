@@ -167,6 +167,17 @@ class KernelGrid(NamedTuple):
     float32 tables and once for float64 tables (``flat`` keeps the table's
     dtype: a float32 table read as float64 would double the memory the
     gathers touch, 20 % slower; the kernels compute in float64 either way).
+
+    Attributes
+    ----------
+    shape
+        ``(n_kappa, n_phi_l, n_theta_l, n_phi_v, n_theta_v, channel)`` as integers.
+    flat, stride, kappa, kappa_inv_d, theta_l, theta_l_inv_d, theta_l_inv_step
+        As in :class:`LookupGrid`.
+    theta_v, theta_v_inv_d, theta_v_inv_step, phi_l0, phi_l_inv_step, phi_v0
+        As in :class:`LookupGrid`.
+    phi_v_inv_step, kappa_node, kappa_scan, kappa_slot_inv_d, isotropic
+        As in :class:`LookupGrid`.
     """
 
     flat: NDArray[np.floating]
