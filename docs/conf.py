@@ -67,8 +67,16 @@ add_module_names = False
 # numpydoc's checks of every documented docstring (warnings, so errors under -W), but
 # for sections the project does not require everywhere: an extended summary, See
 # Also, Examples, types in the docstring (the signature shows the type hints) and
-# the wording rules on summaries' first words.
-numpydoc_validation_checks = {"all", "ES01", "SA01", "EX01", "PR04", "SS05", "SS02", "RT04", "PR08", "PR01", "RT01"}
+# the wording rules on summaries' first words. A class documented by an Attributes
+# section (the dataclasses) lists its fields there rather than under Parameters.
+numpydoc_validation_checks = {"all", "ES01", "SA01", "EX01", "PR04", "SS05", "SS02", "RT04", "PR08"}
+numpydoc_validation_overrides = {"PR01": [r"\n\s*Attributes\n\s*-{3,}\n"]}
+# Methods of the cloth model whose Parameters and Returns sections are still to be
+# written (synth/cloth.py is close to the module size limit).
+_UNDOCUMENTED = (
+    r"^cdbrdf\.synth\.(ClothModel\.(attrs|heightfield|stretch|tilts_rad)"
+    r"|ClothParams\.(parse_value|replace|to_dict|yarns))$"
+)
 
 # a summary line does not end at "Fig. 7" or "Rec. 709"
 
@@ -144,6 +152,7 @@ def _write_api_pages(out: Path) -> set[str]:
 
 
 numpydoc_validation_exclude = {f"^{re.escape(name)}$" for name in _write_api_pages(DOCS / "api" / "generated")}
+numpydoc_validation_exclude.add(_UNDOCUMENTED)
 
 
 

@@ -93,12 +93,30 @@ PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
 
 
 def names() -> list[str]:
-    """Names of the presets."""
+    """Names of the presets.
+
+    Returns
+    -------
+    list of str
+        The names.
+    """
     return sorted(PRESETS)
 
 
 def params(name: str, **overrides: Any) -> ClothParams:
     """The parameters of a preset with ``overrides`` applied.
+
+    Parameters
+    ----------
+    name
+        One of :func:`names`.
+    **overrides
+        Parameters changed, by name.
+
+    Returns
+    -------
+    ClothParams
+        The parameters.
 
     Raises
     ------
@@ -112,5 +130,18 @@ def params(name: str, **overrides: Any) -> ClothParams:
 
 
 def model(name: str, **overrides: Any) -> ClothModel:
-    """A :class:`ClothModel` of a preset (see :func:`params`)."""
+    """A :class:`ClothModel` of a preset.
+
+    Parameters
+    ----------
+    name
+        One of :func:`names`.
+    **overrides
+        Parameters changed (:func:`params`).
+
+    Returns
+    -------
+    ClothModel
+        The model.
+    """
     return ClothModel(params(name, **overrides))
