@@ -5,7 +5,7 @@ this runs each one as a script in its own process, with matplotlib's
 non-interactive backend, so an example that an API change breaks fails the
 test command too. The RGL example reads the shared data when present
 (``CDBRDF_SHARED_DATA``, the rule of ``tests/shared_data.py``) and writes a
-small file of its own otherwise. About 50 s in all (one worker).
+small file of its own otherwise. About 20 s of CPU in all (40 s on one worker of an idle 2-core machine).
 """
 
 from __future__ import annotations
