@@ -214,5 +214,26 @@ def _drop_type_docstrings(app, what, name, obj, options, lines):  # noqa: ANN001
             return
 
 
+def _comment_of_reexported_constant(app, what, name, obj, options, lines):  # noqa: ANN001, ANN202
+    """Give a re-exported constant the ``#:`` comment of the module that defines it."""
+    if what != "data" or lines:
+        return
+    from sphinx.errors import PycodeError
+    from sphinx.pycode import ModuleAnalyzer
+
+    attr = name.rpartition(".")[2]
+    for modname in sorted(m for m in sys.modules if m.startswith("cdbrdf.")):
+        if getattr(sys.modules[modname], attr, None) is not obj:
+            continue
+        try:
+            docs = ModuleAnalyzer.for_module(modname).find_attr_docs()
+        except PycodeError:
+            continue
+        if ("", attr) in docs:
+            lines[:] = [line for line in docs[("", attr)] if line.strip()]
+            return
+
+
 def setup(app):  # noqa: ANN001, ANN201
     app.connect("autodoc-process-docstring", _drop_type_docstrings, priority=100)
+    app.connect("autodoc-process-docstring", _comment_of_reexported_constant, priority=200)

@@ -51,7 +51,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["Mosaic", "mosaic_arrays", "plot_mosaic", "KAPPA_ATOL", "DIFF_PERCENTILE", "FILL_MARKS"]
 
-#: Percentile of |difference| that sets the default difference colour range.
+#: Percentile of ``|difference|`` that sets the default difference colour range.
 DIFF_PERCENTILE = 99.5
 
 #: Tolerance (mm^-1) when matching a requested curvature to the table's axis.
