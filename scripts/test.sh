@@ -11,7 +11,7 @@ cd "$ROOT"
 echo "[test] layers: lint-imports" >&2
 .venv/bin/lint-imports --no-cache >/dev/null || { .venv/bin/lint-imports --no-cache; exit 1; }
 echo "[test] lint: ruff" >&2
-.venv/bin/ruff check src tests benchmarks scripts
+.venv/bin/ruff check src tests benchmarks scripts examples docs
 echo "[test] types: mypy" >&2
 .venv/bin/mypy
 echo "[test] pytest" >&2

@@ -82,6 +82,16 @@ def global_attrs(parts: TableParts) -> dict[str, Any]:
     :func:`read` reads. The data digest (``cdbrdf_data_sha256``) is the
     writer's alone: data edited in xarray are not damaged data.
 
+    Parameters
+    ----------
+    parts
+        The table's arrays and attributes.
+
+    Returns
+    -------
+    dict
+        The global attributes by name.
+
     Raises
     ------
     TableError
@@ -108,6 +118,16 @@ def attrs_from_globals(globals_: Any) -> dict[str, Any]:
     attribute that mirrors one of its entries must agree with it, as in a
     file. Without it the global attributes are taken as they are, but for
     the format's own.
+
+    Parameters
+    ----------
+    globals_
+        The global attributes (a mapping).
+
+    Returns
+    -------
+    dict
+        The table's attributes.
 
     Raises
     ------

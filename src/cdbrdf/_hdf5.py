@@ -52,6 +52,16 @@ def superblock_version(path: str | PathLike[str]) -> int | None:
     The superblock is searched where HDF5 searches it: at byte 0, 512, 1024,
     2048... Versions 2 and 3 carry checksums of all file metadata; 0 and 1
     (HDF5 < 1.8 layout, the default of most writers) do not.
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    int or None
+        The version, None when no superblock is found.
     """
     with open(path, "rb") as fh:
         size = fh.seek(0, 2)

@@ -142,6 +142,16 @@ def linear_to_srgb(x: ArrayLike) -> NDArray[np.float64]:
     Values in [0, 1] map to [0, 1]; below the knee (0.0031308) the curve is the
     line ``12.92 x`` (so negative values stay negative), above it the power law
     ``1.055 x^(1/2.4) - 0.055`` (values above 1 exceed 1). NaN stays NaN.
+
+    Parameters
+    ----------
+    x
+        Linear values (any shape).
+
+    Returns
+    -------
+    numpy.ndarray
+        The encoded values.
     """
     x = np.asarray(x, dtype=np.float64)
     return np.where(
@@ -156,6 +166,16 @@ def srgb_to_linear(x: ArrayLike) -> NDArray[np.float64]:
 
     The inverse of :func:`linear_to_srgb`: ``x / 12.92`` up to the knee
     (0.04045), ``((x + 0.055) / 1.055)^2.4`` above. NaN stays NaN.
+
+    Parameters
+    ----------
+    x
+        sRGB-encoded values (any shape).
+
+    Returns
+    -------
+    numpy.ndarray
+        The linear values.
     """
     x = np.asarray(x, dtype=np.float64)
     return np.where(
@@ -171,18 +191,50 @@ def srgb_encode(linear: ArrayLike) -> NDArray[np.float64]:
     ``linear_to_srgb(clip(linear, 0, 1))``: negative values and -inf show as
     0, values above 1 and +inf as 1; NaN stays NaN (see :func:`tonemap_srgb8`
     for an encoding that maps NaN to black).
+
+    Parameters
+    ----------
+    linear
+        Linear values (any shape).
+
+    Returns
+    -------
+    numpy.ndarray
+        Encoded values in [0, 1].
     """
     return linear_to_srgb(np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0))
 
 
 # -- exposure --------------------------------------------------------------------------
 def ev_to_factor(ev: float) -> float:
-    """The linear factor of an exposure in stops: ``2**ev``."""
+    """The linear factor of an exposure in stops: ``2**ev``.
+
+    Parameters
+    ----------
+    ev
+        Exposure, stops.
+
+    Returns
+    -------
+    float
+        The factor.
+    """
     return float(2.0**ev)
 
 
 def factor_to_ev(factor: float) -> float:
-    """The exposure in stops of a positive linear factor: ``log2(factor)``."""
+    """The exposure in stops of a positive linear factor: ``log2(factor)``.
+
+    Parameters
+    ----------
+    factor
+        Linear factor, > 0.
+
+    Returns
+    -------
+    float
+        Exposure, stops.
+    """
     return math.log2(factor)
 
 
@@ -198,8 +250,22 @@ def _finite_percentile(values: ArrayLike, percentile: float) -> float | None:
 def auto_exposure(lum: ArrayLike, *, percentile: float = EXPOSURE_PERCENTILE, target: float = 1.0) -> float:
     """Exposure factor mapping the ``percentile``-th percentile of ``lum`` to ``target``.
 
-    Non-finite values are ignored. Returns 1 (no change) when that percentile
-    is not positive or no value is finite (an all-black table).
+    Non-finite values are ignored.
+
+    Parameters
+    ----------
+    lum
+        Luminances (any shape).
+    percentile
+        The percentile of ``lum`` that maps to ``target``, in [0, 100].
+    target
+        Its display value.
+
+    Returns
+    -------
+    float
+        The factor; 1 (no change) when that percentile is not positive or no
+        value is finite (an all-black table).
     """
     p = _finite_percentile(lum, percentile)
     return target / p if p is not None and p > 0 else 1.0
@@ -314,6 +380,18 @@ def tonemap_srgb8(image: ArrayLike, *, exposure_ev: float = 0.0) -> NDArray[np.u
     """Linear radiance -> 8-bit sRGB: ``srgb(clip(image * 2**exposure_ev, 0, 1))``.
 
     NaN and negative values show as black, +inf as white.
+
+    Parameters
+    ----------
+    image
+        Linear radiance (any shape; RGB last for a picture).
+    exposure_ev
+        Exposure, stops.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``uint8`` codes, the shape of ``image``.
     """
     x = np.asarray(image, dtype=np.float64) * ev_to_factor(exposure_ev)
     x = np.clip(np.nan_to_num(x, nan=0.0, posinf=1.0, neginf=0.0), 0.0, 1.0)
@@ -342,7 +420,18 @@ _LAB_KAPPA = 24389.0 / 27.0
 
 
 def linear_to_xyz(rgb: ArrayLike) -> NDArray[np.float64]:
-    """CIE XYZ of linear Rec. 709 RGB ``(..., 3)`` (:data:`RGB_TO_XYZ`); white (1, 1, 1) has Y = 1."""
+    """CIE XYZ of linear Rec. 709 RGB (:data:`RGB_TO_XYZ`); white (1, 1, 1) has Y = 1.
+
+    Parameters
+    ----------
+    rgb
+        Linear Rec. 709 RGB, ``(..., 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        X, Y, Z, ``(..., 3)``.
+    """
     v = np.asarray(rgb, dtype=np.float64)
     if v.ndim == 0 or v.shape[-1] != 3:
         raise OptionError(f"rgb: expected linear RGB values (..., 3), got shape {v.shape}")
@@ -356,6 +445,18 @@ def xyz_to_lab(xyz: ArrayLike, *, white: ArrayLike = D65_WHITE_XYZ) -> NDArray[n
     ``b* = 200 (f(Y/Yn) - f(Z/Zn))`` with ``f(t) = t^(1/3)`` above
     ``(6/29)^3`` and the CIE's linear segment below it (so negative values
     give finite, negative L*).
+
+    Parameters
+    ----------
+    xyz
+        CIE XYZ, ``(..., 3)``.
+    white
+        XYZ of the reference white (default D65 with Y = 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        L*, a*, b*, ``(..., 3)``.
     """
     v = np.asarray(xyz, dtype=np.float64)
     if v.ndim == 0 or v.shape[-1] != 3:
@@ -374,12 +475,35 @@ def linear_to_lab(rgb: ArrayLike) -> NDArray[np.float64]:
 
     Scale the values first so that 1 is the white they are seen against
     (e.g. a BRDF times pi, or a render's display white).
+
+    Parameters
+    ----------
+    rgb
+        Linear Rec. 709 RGB, ``(..., 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        L*, a*, b*, ``(..., 3)``.
     """
     return xyz_to_lab(linear_to_xyz(rgb))
 
 
 def lab_chroma_hue(lab: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Chroma ``C*ab = hypot(a*, b*)`` and hue angle ``h_ab`` in degrees, [0, 360), of L*a*b* ``(..., 3)``."""
+    """Chroma ``C*ab = hypot(a*, b*)`` and hue angle ``h_ab`` of L*a*b* colours.
+
+    Parameters
+    ----------
+    lab
+        CIE L*a*b*, ``(..., 3)``.
+
+    Returns
+    -------
+    chroma : numpy.ndarray
+        ``C*ab``, shape ``(...)``.
+    hue : numpy.ndarray
+        ``h_ab`` in degrees, [0, 360).
+    """
     v = np.asarray(lab, dtype=np.float64)
     if v.ndim == 0 or v.shape[-1] != 3:
         raise OptionError(f"lab: expected L*a*b* values (..., 3), got shape {v.shape}")
@@ -391,6 +515,16 @@ def delta_e_ab(lab1: ArrayLike, lab2: ArrayLike) -> NDArray[np.float64]:
 
     About 1 is a just-noticeable difference between patches side by side,
     about 2 the threshold of noticing in practice.
+
+    Parameters
+    ----------
+    lab1, lab2
+        CIE L*a*b* colours, ``(..., 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Delta E*ab, the broadcast shape without the last axis.
     """
     a = np.asarray(lab1, dtype=np.float64)
     b = np.asarray(lab2, dtype=np.float64)

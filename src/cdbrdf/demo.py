@@ -48,6 +48,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._demo_report import COMPARED_FILL, VIEWER_DIR, viewer_dirs, write_report
 from .colour import auto_exposure_ev, luminance, srgb_to_linear, tonemap_srgb8
 from .table import CDBRDF, PAPER_KAPPA, Grid
 
@@ -60,17 +61,11 @@ __all__ = ["DemoConfig", "CONFIGS", "DemoResult", "run_demo", "compare_with_trut
 #: The materials the demo runs by default: the paper's two woven fabrics and velvet.
 DEFAULT_FABRICS: tuple[str, ...] = ("denim", "shot", "velvet")
 
-#: The fill method the demo compares the default with (the paper's rule).
-COMPARED_FILL = "nearest"
-
 #: The maker the demo's output folder names in its owner mark (:func:`cdbrdf.outputs.output_folder`).
 DEMO_MAKER = "demo"
 
 #: Files every output folder of the demo holds.
 DEMO_SIGNATURE: tuple[str, ...] = ("report.html",)
-
-#: Folder of the interactive viewer inside the output folder (its ``index.html`` opens from disk).
-VIEWER_DIR = "viewer"
 
 #: Work folder for intermediate files, inside the partial output folder (removed on success).
 WORK_DIR = ".work"
@@ -125,7 +120,18 @@ class DemoConfig:
         return k * pl * tl * pv * tv + pl * tl
 
     def expected_seconds(self, n_materials: int) -> float:
-        """A rough estimate of the run time on a 2-core machine."""
+        """A rough estimate of the run time on a 2-core machine.
+
+        Parameters
+        ----------
+        n_materials
+            Number of materials run.
+
+        Returns
+        -------
+        float
+            Seconds.
+        """
         w, h = self.render_size
         photos = self.n_photos * self.seconds_per_photo
         renders = 4 * self.render_spp * w * h / 1e6 * self.seconds_per_render_spp_mpix
@@ -184,11 +190,24 @@ class MaterialResult:
 class DemoResult:
     """The demo's output folder, report and per-material results.
 
-    ``timings_s``: seconds per stage, summed over the materials
-    (``photographs``, ``measuring``, ``figures``, ``render_sine``,
-    ``render_drape``), plus ``surfaces_figure``, ``cleanup`` (waiting for
-    the photographs' deletion, which runs beside the renders), ``viewer``
-    and ``total``; written to ``results.json`` under the same name.
+    Attributes
+    ----------
+    folder
+        The output folder.
+    report
+        Its ``report.html``.
+    config
+        The settings run.
+    materials
+        One result per material, in order.
+    seconds
+        The whole run, seconds.
+    timings_s
+        Seconds per stage, summed over the materials (``photographs``,
+        ``measuring``, ``figures``, ``render_sine``, ``render_drape``), plus
+        ``surfaces_figure``, ``cleanup`` (waiting for the photographs'
+        deletion, which runs beside the renders), ``viewer`` and ``total``;
+        written to ``results.json`` under the same name.
     """
 
     folder: Path
@@ -203,12 +222,26 @@ def compare_with_truth(measured: CDBRDF, truth: CDBRDF) -> tuple[dict[str, float
     """Errors of a measured table against the ground truth at its samples.
 
     The truth is evaluated at every sample of ``measured`` (exact at shared
-    nodes). Returns overall statistics and one row per stand (curvature):
-    samples, measured, filled, the median / 95th-percentile relative error
-    (luminance) of the measured samples and of the filled samples, and, when
-    the table records the fill's uncertainty (``fill_std``), the fraction of
-    filled samples whose error lies within 1 and 2 of their standard
-    deviations (luminance of ``fill_std``).
+    nodes).
+
+    Parameters
+    ----------
+    measured
+        The measured table.
+    truth
+        The table it was photographed from.
+
+    Returns
+    -------
+    overall : dict
+        Statistics over all samples.
+    per_stand : list of dict
+        One row per stand (curvature): samples, measured, filled, the median
+        / 95th-percentile relative error (luminance) of the measured samples
+        and of the filled samples, and, when the table records the fill's
+        uncertainty (``fill_std``), the fraction of filled samples whose error
+        lies within 1 and 2 of their standard deviations (luminance of
+        ``fill_std``).
     """
     g = measured.grid.mesh()
     t = truth.evaluate(g["theta_v"], g["phi_v"], g["theta_l"], g["phi_l"], g["kappa"])
@@ -427,177 +460,18 @@ def _curvature_figure(path: Path) -> Any:
     return drape
 
 
-def _viewer_dirs(results: Sequence[MaterialResult]) -> list[tuple[str, list[MaterialResult]]]:
-    """The viewers' folders and their materials: two side by side, the first pair in :data:`VIEWER_DIR`."""
-    pairs = [list(results[i:i + 2]) for i in range(0, len(results), 2)]
-    return [(VIEWER_DIR if i == 0 else "-".join([VIEWER_DIR] + [m.name for m in p]), p) for i, p in enumerate(pairs)]
-
-
 def _export_viewer(folder: Path, results: Sequence[MaterialResult], drape: Any) -> None:
     """The interactive viewers of the measured tables (two side by side; one alone beside its ground truth)."""
     from . import materials as mats
     from .table import load
     from .view.export import viewer_files, write_viewer
 
-    for sub, pair in _viewer_dirs(results):
+    for sub, pair in viewer_dirs(results):
         tables = [(m.measured_path.name, load(m.measured_path)) for m in pair]
         if len(tables) == 1:
             tables.append((f"{pair[0].name} ground truth", mats.load(pair[0].name)))
         write_viewer(folder / sub, viewer_files(tables, meshes={"drape": ("draped cloth", drape)},
                                                 exposure_ev=pair[0].render_exposure_ev))
-
-
-def _stands_text(stands: Sequence[Stand]) -> str:
-    """The stands' geometry in words (the concave ones': face width and wall height)."""
-    from .measure.stands import DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM
-
-    shapes = sorted({(st.face_width_mm, st.wall_height_mm) for st in stands if st.kappa < 0})
-    if not shapes:
-        return "no concave stand"
-    words = "; ".join(f"faces {w:g} mm wide, walls {h:g} mm high" for w, h in shapes)
-    paper = shapes == [(DEFAULT_FACE_WIDTH_MM, DEFAULT_WALL_HEIGHT_MM)]
-    return f"concave stands: {words}" + (" (the default, as the paper's)" if paper else "")
-
-
-def _write_report(folder: Path, config: DemoConfig, results: Sequence[MaterialResult], seconds: float,
-                  stands: Sequence[Stand]) -> Path:
-    from .render.picture import MAX_AUTO_EV
-    from .report import Report, provenance_text
-
-    g = config.grid
-    r = Report(
-        "cdbrdf: curvature-dependent BRDFs of fabrics, end to end",
-        lead=(
-            "After Matsufuji &amp; Kawai, <i>Measurement and Rendering of Curvature Dependent BRDF</i>. "
-            f"Run <code>{config.name}</code>: {g.phi_v.size * g.theta_v.size} view x "
-            f"{g.phi_l.size * g.theta_l.size} light directions x {g.kappa.size} stand curvatures "
-            f"({', '.join(f'{k:g}' for k in g.kappa)} mm<sup>-1</sup>), photographs of "
-            f"{config.image_px} x {config.image_px} pixels ({config.field_mm:g} mm wide at the stand) from a "
-            f"simulated rig ({_stands_text(stands)}); "
-            "total time "
-            f"{seconds / 60:.1f} min."
-        ),
-    )
-    intro = r.section(
-        "What this shows",
-        "Each fabric is a micro-structure model whose reflectance depends on how it is bent "
-        "(the ground truth): woven cloth (denim, shot fabric), whose gaps between the yarns open on a "
-        "convex bend, or pile (velvet, towelling), whose fibres or loops fan apart on a convex bend "
-        "and show the ground, and crowd on a concave one. A simulated capture rig photographs it on "
-        "five cylindrical stands, convex and concave; cdbrdf measures the photographs into a CDBRDF "
-        "table exactly as it would a lab's, fills the directions a concave stand hides, and renders surfaces with the "
-        "table, taking the curvature at every point. Compare the CDBRDF renders with the plain "
-        "BRDF (the flat stand's slice) at the crests and valleys, or bend the sheet yourself in the "
-        "interactive viewer (WebGL2; it opens from disk): "
-        + ", ".join(f'<a href="{d}/index.html">{" and ".join(m.name for m in p)}</a>' for d, p in _viewer_dirs(results))
-        + ".",
-    )
-    intro.figure("surfaces-curvature.png", "Where the surfaces bend",
-                 "The two rendered surfaces coloured by the curvature the renderer looks up at each "
-                 "point: red convex (crests, fold ridges, the dome), blue concave (troughs, fold "
-                 "valleys), white flat. The CDBRDF renders below differ from the plain BRDF exactly "
-                 "where these colours are strong.")
-    intro.table(
-        "Samples per stand: measured, filled (hidden by the stand), and the error of the measured "
-        "table against the ground truth (relative, luminance)",
-        ["material", "kappa (1/mm)", "samples", "measured", "filled", "median error measured",
-         "95th pct error measured", "median error filled"],
-        [[m.name, f"{s['kappa']:+g}", s["samples"], s["measured"], s["filled"],
-          f"{100 * s['median_rel_error_measured']:.2f} %", f"{100 * s['p95_rel_error_measured']:.2f} %",
-          "-" if not s["filled"] else f"{100 * s['median_rel_error_filled']:.1f} %"]
-         for m in results for s in m.per_stand],
-    )
-    fill_name = results[0].fill_method if results else ""
-    compared = results[0].compared_fill.get("method", COMPARED_FILL) if results else COMPARED_FILL
-    intro.table(
-        f"Filled samples against the ground truth: the default fill, {fill_name} (the same "
-        "direction on the other stands, fitted along the curvature) and, beside it, the paper's rule, "
-        f"{compared} (the nearest measured direction at the same curvature); relative error "
-        "of the luminance, and the share of filled samples whose error lies within 1 and 2 of the "
-        "standard deviations the fill estimated for them (a calibrated estimate gives about 68 % and 95 %)",
-        ["material", "kappa (1/mm)", "filled", f"median {fill_name}", f"95th pct {fill_name}",
-         "within 1 sigma", "within 2 sigma", f"median {compared}", f"95th pct {compared}"],
-        [[m.name, f"{s['kappa']:+g}", s["filled"],
-          f"{100 * s['median_rel_error_filled']:.2f} %", f"{100 * s['p95_rel_error_filled']:.1f} %",
-          _pct(s["fill_within_1_sigma"]), _pct(s["fill_within_2_sigma"]),
-          f"{100 * c['median_rel_error_filled']:.1f} %", f"{100 * c['p95_rel_error_filled']:.1f} %"]
-         for m in results
-         for s, c in zip(m.per_stand, m.compared_fill.get("per_stand", m.per_stand), strict=True)
-         if s["filled"]],
-    )
-    intro.table(
-        "What bending does: the median colour difference Delta E*ab near the normal (view and light "
-        "elevations up to 30 degrees, 20,000 direction pairs, the flat table's median luminance scaled to 0.3) "
-        "between each bent stand and the flat one, in the measured table and in the ground truth, and the "
-        "change of the measured mean colour's lightness L*, chroma C* and hue h; on the rendered sine sheet, the "
-        "median Delta E*ab between the plain BRDF and the CDBRDF at the crests and troughs and where the sheet "
-        "is flat (the eye notices Delta E*ab above about 2; the flat pixels show the render's noise)",
-        ["material", "kappa (1/mm)", "Delta E*ab measured", "Delta E*ab truth", "Delta L*", "Delta C*",
-         "Delta h (deg)", "colour bent / flat (sRGB)", "sine sheet crests / flat"],
-        [[m.name, f"{a['kappa']:+g}", f"{a['median_delta_e']:.1f}", f"{b['median_delta_e']:.1f}",
-          f"{a['lightness_change']:+.1f}", f"{a['chroma_change']:+.1f}", f"{a['hue_change_deg']:+.0f}",
-          "#{:02x}{:02x}{:02x} / #{:02x}{:02x}{:02x}".format(*a["srgb8"], *a["flat_srgb8"]),
-          f"{m.contrast['sine']['crest_delta_e']:.1f} / {m.contrast['sine']['flat_delta_e']:.1f}" if i == 0 else ""]
-         for m in results if m.contrast
-         for i, (a, b) in enumerate(zip(m.contrast["table"]["measured"], m.contrast["table"]["truth"],
-                                        strict=True))],
-    )
-    intro.table(
-        "Times (seconds)",
-        ["material", "photographs", "measuring", "figures", "render sine sheet", "render draped cloth"],
-        [[m.name] + [f"{m.seconds.get(k, float('nan')):.1f}" for k in
-                     ("photographs", "measuring", "figures", "render_sine", "render_drape")]
-         for m in results],
-    )
-    for m in results:
-        s = r.section(f"{m.name}: {m.truth_attrs.get('description', m.name)}" if m.truth_attrs.get("description")
-                      else m.name)
-        s.figure(m.figures["photos"], "The photographs",
-                 "What the camera saw, one stand per column (concave on the left, convex on the right), "
-                 "for the normal view and two grazing views. On the concave stands the grazing views "
-                 "see the white wall or lose the light at the patch: those samples are marked hidden "
-                 "and filled, never averaged.")
-        s.figure(m.figures["mosaic_measured"], "Measured CDBRDF (paper's Fig. 7)",
-                 "One image per stand curvature: rows are light directions, columns view directions, "
-                 "grouped by azimuth with the elevation increasing inside each group. Hatched, "
-                 "outlined cells were hidden by the stand and filled: orange from the same direction "
-                 "on the other stands (fitted along the curvature), magenta from the nearest measured "
-                 "direction at the same curvature (where no stand measured the direction); there are "
-                 "no white wall artefacts. The bottom row is the difference to the flat stand: red "
-                 "where bending brightens the fabric.")
-        s.figure(m.figures["mosaic_truth"], "Ground truth on the paper's grid",
-                 "The fabric model's own table (72 x 72 directions per curvature), which the rig "
-                 "rendered; the measured mosaic above should look like it at its coarser sampling.")
-        s.figure(m.figures["sine"], "The paper's sine sheet (Figs. 9-10)",
-                 "Rendered in Mitsuba 3 with (a) the plain BRDF and (b) the measured CDBRDF, the "
-                 "curvature taken at every point; (c) shows where they differ: along the crests "
-                 "(convex) and troughs (concave), not on the flanks where the sheet is nearly flat. "
-                 "The swatches below are the mean colour of each render at the convex crests and at the "
-                 "flat lines, as shown on screen, with their median Delta E*ab. "
-                 f"Exposure {m.render_exposure_ev:+.1f} EV (0 EV shows a white Lambertian surface facing "
-                 f"the light as white; at most +{MAX_AUTO_EV:g} EV, so dark fabrics stay dark); "
-                 f"{config.render_size[0]} x "
-                 f"{config.render_size[1]} pixels, {config.render_spp} spp.")
-        s.figure(m.figures["drape"], "A draped cloth",
-                 "A generated cloth over a dome with radial folds, its curvature computed from the mesh "
-                 "(cdbrdf.mesh): the dome and the fold ridges are convex, the fold valleys concave.")
-        s.table("Overall error of the measured table against the ground truth",
-                ["quantity", "value"],
-                [["median relative error, measured samples", f"{100 * m.error['median_rel_error_measured']:.2f} %"],
-                 ["95th percentile, measured samples", f"{100 * m.error['p95_rel_error_measured']:.2f} %"],
-                 [f"median relative error, filled samples ({m.fill_method})",
-                  f"{100 * m.error['median_rel_error_filled']:.2f} %"],
-                 [f"95th percentile, filled samples ({m.fill_method})",
-                  f"{100 * m.error['p95_rel_error_filled']:.1f} %"],
-                 [f"median relative error, filled samples ({compared}, the paper's rule)",
-                  f"{100 * m.compared_fill['error']['median_rel_error_filled']:.1f} %"]])
-        s.detail("Measurement summary", m.summary)
-        s.detail("Provenance of the ground-truth material", provenance_text(m.truth_attrs))
-    return r.write(folder)
-
-
-def _pct(x: float) -> str:
-    return "-" if not np.isfinite(x) else f"{100 * x:.0f} %"
 
 
 def run_demo(
@@ -631,6 +505,11 @@ def run_demo(
         ("Filling") compares designs.
     progress
         ``progress(stage, done, total)`` callback.
+
+    Returns
+    -------
+    DemoResult
+        The output folder, the report and the numbers.
     """
     from . import materials as mats
     from .outputs import check_output_folder, output_folder
@@ -689,7 +568,7 @@ def run_demo(
                            "seconds": m.seconds, "figures": m.figures, "contrast": m.contrast}
                           for m in results],
         }, indent=2) + "\n")
-        _write_report(folder, cfg, results, seconds, chosen)
+        write_report(folder, cfg, results, seconds, chosen)
     final = Path(output)
     for m in results:
         m.measured_path = final / m.measured_path.name

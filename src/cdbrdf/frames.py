@@ -40,6 +40,18 @@ def angles_from_direction(v: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np
     """Elevation and azimuth in degrees (phi in [0, 360)) of vectors ``(..., 3)``.
 
     The vectors need not be normalised. phi is 0 along the normal.
+
+    Parameters
+    ----------
+    v
+        Directions in the local frame (z = normal), ``(..., 3)``.
+
+    Returns
+    -------
+    theta_deg : numpy.ndarray
+        Elevation from the normal, degrees, shape ``(...)``.
+    phi_deg : numpy.ndarray
+        Azimuth, degrees, in [0, 360).
     """
     v = np.asarray(v, dtype=np.float64)
     if v.shape[-1:] != (3,):
@@ -55,7 +67,18 @@ def angles_from_direction(v: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np
 def angular_distance_deg(
     theta1_deg: ArrayLike, phi1_deg: ArrayLike, theta2_deg: ArrayLike, phi2_deg: ArrayLike
 ) -> NDArray[np.float64]:
-    """Great-circle angle in degrees between two directions given as angles."""
+    """Great-circle angle in degrees between two directions given as angles.
+
+    Parameters
+    ----------
+    theta1_deg, phi1_deg, theta2_deg, phi2_deg
+        Elevations and azimuths of the two directions, degrees (broadcast).
+
+    Returns
+    -------
+    numpy.ndarray
+        The angle, degrees, in [0, 180].
+    """
     a = direction_from_angles(theta1_deg, phi1_deg)
     b = direction_from_angles(theta2_deg, phi2_deg)
     c = np.clip(np.sum(a * b, axis=-1), -1.0, 1.0)

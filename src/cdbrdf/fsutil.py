@@ -298,6 +298,20 @@ def atomic_path(path: str | PathLike[str], *, suffix: str = ".tmp", sweep: bool 
     or the file-size limit is full raises one :class:`OSError` naming the
     file (errno ``ENOSPC``), whatever the writing library raised; the old
     file is left as it was.
+
+    Parameters
+    ----------
+    path
+        The destination.
+    suffix
+        End of the temporary's name.
+    sweep
+        Remove temporaries of killed runs for ``path`` first.
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary path to write.
     """
     dest = check_output_file(path)
     folder = dest.parent if str(dest.parent) else Path(".")

@@ -72,6 +72,27 @@ def read_array(name: str, value: Any, *, kinds: str = _NUMBER_KINDS, what: str =
 
     A numpy masked array is accepted only when nothing is masked (its data is
     used): a mask would otherwise be dropped silently.
+
+    Parameters
+    ----------
+    name
+        The argument's name, for messages.
+    value
+        What was given.
+    kinds
+        Accepted :attr:`numpy.dtype.kind` characters.
+    what
+        What is expected, for messages.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``value`` as an array (not copied when it already is one).
+
+    Raises
+    ------
+    TableError
+        For a value that cannot be read as an array of those kinds.
     """
     if isinstance(value, np.ma.MaskedArray):
         n_masked = int(np.count_nonzero(np.ma.getmaskarray(value)))
@@ -150,12 +171,13 @@ class Grid:
     kappa
         Curvatures in mm^-1, strictly increasing (any spacing), in
         [-:data:`MAX_ABS_KAPPA`, :data:`MAX_ABS_KAPPA`].
-    theta_l, theta_v
-        Light and view elevations in degrees, strictly increasing in [0, 90).
-    phi_l, phi_v
-        Light and view azimuths in degrees, evenly spaced in [0, 360). In an
-        isotropic grid ``phi_l`` is ``[0]`` and ``phi_v`` the azimuth
-        difference ``phi_v - phi_l``.
+    phi_l, theta_l
+        Light azimuths in degrees, evenly spaced in [0, 360), and light
+        elevations in degrees, strictly increasing in [0, 90). In an isotropic
+        grid ``phi_l`` is ``[0]``.
+    phi_v, theta_v
+        View azimuths and elevations, the same rules; in an isotropic grid
+        ``phi_v`` is the azimuth difference ``phi_v - phi_l``.
     symmetry
         ``"anisotropic"`` (default) or ``"isotropic"`` (:data:`SYMMETRIES`).
 
@@ -212,6 +234,18 @@ class Grid:
 
         With ``symmetry="isotropic"`` the light azimuth is the single 0 and
         ``phi_v`` (the azimuth difference) steps by 30 degrees.
+
+        Parameters
+        ----------
+        kappa
+            Curvatures, mm^-1; default :data:`PAPER_KAPPA`.
+        symmetry
+            ``"anisotropic"`` or ``"isotropic"``.
+
+        Returns
+        -------
+        Grid
+            The grid.
         """
         return cls(
             kappa=PAPER_KAPPA if kappa is None else kappa,
@@ -238,6 +272,22 @@ class Grid:
         below 360. With ``symmetry="isotropic"`` the light azimuth is the single
         0 and ``phi_v`` is the azimuth difference, so the grid has
         ``360 / phi_step_deg`` times fewer samples.
+
+        Parameters
+        ----------
+        theta_step_deg, phi_step_deg
+            Elevation and azimuth steps, degrees.
+        theta_max_deg
+            Largest elevation, degrees.
+        kappa
+            Curvatures, mm^-1.
+        symmetry
+            ``"anisotropic"`` or ``"isotropic"``.
+
+        Returns
+        -------
+        Grid
+            The grid.
         """
         iso = check_symmetry(symmetry) == "isotropic"
         for name, x in (("theta_step_deg", theta_step_deg), ("phi_step_deg", phi_step_deg),
@@ -283,12 +333,26 @@ class Grid:
         )
 
     def axes(self) -> dict[str, Any]:
-        """The axes by name, in storage order (float64 arrays; typed Any so that ``CDBRDF(v, **g.axes())``
-        type-checks beside the table's other keywords)."""
+        """The axes by name, in storage order.
+
+        Float64 arrays, typed Any so that ``CDBRDF(v, **g.axes())`` type-checks
+        beside the table's other keywords.
+
+        Returns
+        -------
+        dict
+            ``kappa``, ``phi_l``, ``theta_l``, ``phi_v``, ``theta_v``.
+        """
         return {name: getattr(self, name) for name in AXES[:-1]}
 
     def mesh(self) -> dict[str, NDArray[np.float64]]:
-        """Every sample's coordinates, each broadcast to :attr:`shape`."""
+        """Every sample's coordinates.
+
+        Returns
+        -------
+        dict
+            The axes by name, each broadcast to :attr:`shape`.
+        """
         grids = np.meshgrid(*self.axes().values(), indexing="ij")
         return dict(zip(AXES[:-1], grids))
 

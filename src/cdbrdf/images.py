@@ -112,7 +112,23 @@ class ImageInfo:
 
 
 def image_format(path: str | PathLike[str]) -> str:
-    """The format (``png``, ``tiff``, ``exr``) chosen by a file's extension."""
+    """The image format chosen by a file's extension.
+
+    Parameters
+    ----------
+    path
+        The file's name.
+
+    Returns
+    -------
+    str
+        ``"png"``, ``"tiff"`` or ``"exr"``.
+
+    Raises
+    ------
+    ImageError
+        For another extension (the message lists the valid ones).
+    """
     ext = Path(path).suffix.lower()
     try:
         return FORMATS[ext]

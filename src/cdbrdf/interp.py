@@ -140,8 +140,18 @@ def wrap_azimuth(phi_deg: float) -> float:
     """``phi_deg`` reduced exactly into (-360, 360) when it lies outside.
 
     ``fmod`` is exact for every finite float, so a huge azimuth (1e30, 1e308)
-    keeps its true place on the circle. Azimuths already inside are returned
-    unchanged; infinities and NaN give NaN.
+    keeps its true place on the circle.
+
+    Parameters
+    ----------
+    phi_deg
+        An azimuth, degrees.
+
+    Returns
+    -------
+    float
+        The azimuth in (-360, 360): unchanged when already inside; NaN for
+        infinities and NaN.
     """
     x = float(phi_deg)
     if -PERIOD_DEG < x < PERIOD_DEG:
@@ -157,6 +167,17 @@ class KernelGrid(NamedTuple):
     float32 tables and once for float64 tables (``flat`` keeps the table's
     dtype: a float32 table read as float64 would double the memory the
     gathers touch, 20 % slower; the kernels compute in float64 either way).
+
+    Attributes
+    ----------
+    shape
+        ``(n_kappa, n_phi_l, n_theta_l, n_phi_v, n_theta_v, channel)`` as integers.
+    flat, stride, kappa, kappa_inv_d, theta_l, theta_l_inv_d, theta_l_inv_step
+        As in :class:`LookupGrid`.
+    theta_v, theta_v_inv_d, theta_v_inv_step, phi_l0, phi_l_inv_step, phi_v0
+        As in :class:`LookupGrid`.
+    phi_v_inv_step, kappa_node, kappa_scan, kappa_slot_inv_d, isotropic
+        As in :class:`LookupGrid`.
     """
 
     flat: NDArray[np.floating]
@@ -345,7 +366,23 @@ def apply_pole_rule(
     in the table's layout (any leading axes). Node 0 of each returned
     elevation axis is theta = 0 and holds the mean of the stored ring there
     (a virtual pole node is added when the axis starts above 0); isotropic:
-    the light pole averages the azimuth difference axis. Returns new arrays.
+    the light pole averages the azimuth difference axis.
+
+    Parameters
+    ----------
+    values
+        The samples, ``(..., n_phi_l, n_theta_l, n_phi_v, n_theta_v, channel)``.
+    theta_l, theta_v
+        The table's elevation axes, degrees.
+    isotropic
+        Whether the table is isotropic (``phi_v`` the azimuth difference).
+
+    Returns
+    -------
+    values : numpy.ndarray
+        The samples with the pole rule applied (a new array).
+    theta_l, theta_v : numpy.ndarray
+        The elevation axes with their pole nodes.
     """
     v = np.asarray(values)
     if v.ndim < 5:

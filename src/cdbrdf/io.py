@@ -142,8 +142,17 @@ def _stored_arrays(parts: TableParts) -> list[tuple[str, np.ndarray]]:
 def save(table: Any, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
     """Write ``table`` (a :class:`cdbrdf.CDBRDF`, or anything with its attributes) to ``path``.
 
-    :meth:`cdbrdf.CDBRDF.save` is the usual way to call it; see :func:`write`
-    for the parameters and errors.
+    :meth:`cdbrdf.CDBRDF.save` is the usual way to call it; :func:`write`
+    tells the errors.
+
+    Parameters
+    ----------
+    table
+        The table.
+    path
+        Destination; its folder must exist.
+    compression
+        HDF5 filter of the datasets, ``"gzip"`` or None.
     """
     write(TableParts.of(table), path, compression=compression)
 
@@ -612,7 +621,18 @@ def read(path: str | PathLike[str]) -> TableParts:
 
 
 def to_dataset(parts: TableParts) -> Any:
-    """The table of ``parts`` as an :class:`xarray.Dataset` laid out as the file (:meth:`cdbrdf.CDBRDF.to_xarray`)."""
+    """The table of ``parts`` as an :class:`xarray.Dataset` laid out as the file.
+
+    Parameters
+    ----------
+    parts
+        The table's arrays and attributes.
+
+    Returns
+    -------
+    xarray.Dataset
+        As :meth:`cdbrdf.CDBRDF.to_xarray` gives it.
+    """
     import xarray as xr
 
     q = parts.quantity
@@ -635,6 +655,16 @@ def parts_from_dataset(ds: Any) -> TableParts:
     :func:`~cdbrdf._fileattrs.attrs_from_globals`), else the dataset's
     attributes but the format's own. Channel names that are not the
     defaults become ``attrs["channels"]`` (unless the attrs name them).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The dataset.
+
+    Returns
+    -------
+    TableParts
+        The table's arrays and attributes.
 
     Raises
     ------

@@ -36,7 +36,13 @@ log = logging.getLogger(__name__)
 
 
 def names() -> list[str]:
-    """Names of the bundled materials."""
+    """Names of the bundled materials.
+
+    Returns
+    -------
+    list of str
+        The names (``"denim"``, ``"shot"``).
+    """
     return list(_NAMES)
 
 
@@ -47,12 +53,33 @@ def _check(name: str) -> str:
 
 
 def path(name: str) -> Path:
-    """Where the bundled table of ``name`` lives."""
+    """Where the bundled table of a material lives.
+
+    Parameters
+    ----------
+    name
+        One of :func:`names`.
+
+    Returns
+    -------
+    pathlib.Path
+        The HDF5 file in the package's ``data`` folder.
+    """
     return _DATA / f"{_check(name)}.h5"
 
 
 def load(name: str) -> CDBRDF:
-    """The bundled table of a material (a :class:`cdbrdf.CDBRDF`).
+    """The bundled table of a material.
+
+    Parameters
+    ----------
+    name
+        One of :func:`names`.
+
+    Returns
+    -------
+    CDBRDF
+        The table.
 
     Raises
     ------
@@ -78,7 +105,22 @@ def build(
     *,
     progress: Callable[[int, int], None] | None = None,
 ) -> CDBRDF:
-    """Tabulate the preset ``name`` (default: on the paper's grid)."""
+    """Tabulate a fabric preset of :mod:`cdbrdf.synth`.
+
+    Parameters
+    ----------
+    name
+        The preset (:func:`names`).
+    grid
+        The table's grid; default: the paper's.
+    progress
+        ``progress(done, total)`` during the tabulation.
+
+    Returns
+    -------
+    CDBRDF
+        The tabulated model.
+    """
     from .synth import presets
 
     return presets.model(_check(name)).tabulate(grid, progress=progress)

@@ -8,11 +8,6 @@ degrees), in the order fixed by the project's conventions
     values[kappa, phi_l, theta_l, phi_v, theta_v, channel]
 
 ``channel`` is linear RGB (Rec. 709 primaries) unless ``attrs`` say otherwise.
-Values must be real numbers (integer or float dtypes; bool, complex,
-``datetime64``/``timedelta64``, object and string dtypes are refused) and a
-numpy masked array is refused when it has masked entries. A table with more
-values than the ``table_samples`` limit (:mod:`cdbrdf.limits`) is refused
-before anything is allocated.
 
 Values are the BRDF in sr^-1 with the cosine of the light direction *not*
 included (``quantity = "brdf"``), or the same up to an unknown scale
@@ -93,17 +88,16 @@ class CDBRDF:
         refused). Must be finite and within +-:data:`MAX_ABS_VALUE`.
     kappa
         Curvatures, mm^-1, strictly increasing.
-    theta_l, phi_l, theta_v, phi_v
-        Light/view elevation and azimuth axes, degrees (see :class:`Grid`).
+    phi_l, theta_l, phi_v, theta_v
+        Light and view azimuth and elevation axes, degrees (see :class:`Grid`).
     measured
         Boolean mask, shape ``values.shape[:-1]``: True where the sample was
         measured, False where it was filled. Default: all True.
     fill_source
-        Integer array, shape ``values.shape[:-1]``: for a filled sample, the
+        Integer array, shape ``values.shape[:-1]``: for a filled sample the
         C-order flat index (over the five sample axes) of the measured sample
-        its value was copied from, or -2 when the source is unknown; -1 for
-        (and only for) measured samples. Default: -1 where measured, -2 where
-        filled.
+        its value was copied from, -2 when unknown; -1 for (and only for)
+        measured samples. Default: -1 where measured, -2 where filled.
     std
         Optional per-sample standard deviation, same shape as ``values``.
     attrs
@@ -112,27 +106,22 @@ class CDBRDF:
         ``symmetry``.
     symmetry
         ``"anisotropic"`` or ``"isotropic"`` (:data:`cdbrdf.schema.SYMMETRIES`);
-        default: ``attrs["symmetry"]``, else anisotropic. An isotropic table
-        has ``phi_l = [0]`` and its ``phi_v`` axis is the azimuth difference
-        ``phi_v - phi_l``; its attributes then hold ``symmetry = "isotropic"``.
+        default: ``attrs["symmetry"]``, else anisotropic. An isotropic table has
+        ``phi_l = [0]``, ``phi_v`` the azimuth difference ``phi_v - phi_l``.
     fill_method
-        Integer codes of :data:`cdbrdf.schema.FILL_METHOD_CODES`, shape
-        ``values.shape[:-1]``: how each sample was filled; 0 (``measured``)
-        for, and only for, measured samples. Default: ``nearest`` where a
-        fill source is known, ``unknown`` where not (what files before 1.2
-        hold).
+        Codes of :data:`cdbrdf.schema.FILL_METHOD_CODES`, shape ``values.shape[:-1]``:
+        how each sample was filled; 0 (``measured``) for, and only for, measured
+        samples. Default: ``nearest`` where a fill source is known, else ``unknown``.
     fill_sources
-        Integer array ``values.shape[:-1] + (n_slot,)``: every measured
-        sample each filled value was computed from (flat indices, used slots
-        first, -1 unused; all -1 for measured samples and unknown sources).
-        Its first slot is ``fill_source`` (-1 there where that is -2); either
-        one is derived from the other when only one is given. Default: the
-        one slot ``fill_source``.
+        Integer array ``values.shape[:-1] + (n_slot,)``: the measured samples
+        each filled value was computed from (flat indices, used slots first, -1
+        unused; all -1 for measured samples and unknown sources). Its first slot
+        is ``fill_source`` (-1 where that is -2); either is derived from the
+        other when only one is given. Default: the one slot ``fill_source``.
     fill_weights
-        Float array like ``fill_sources``: the weight of each source (a
-        filled value is the weighted sum of its sources, of their logarithms
-        for ``kappa_fit``); 0 in unused slots. Needed when a sample has
-        several sources; default 1 for the one source of a copy.
+        Float array like ``fill_sources``: the weight of each source (a filled
+        value is the weighted sum of its sources, of their logarithms for
+        ``kappa_fit``), 0 in unused slots; default 1 for the one source of a copy.
     fill_std
         Optional estimated standard deviation of the error of each filled
         value, same shape as ``values``; 0 where measured.
@@ -322,7 +311,13 @@ class CDBRDF:
         return self._fill_std
 
     def fill_method_names(self) -> NDArray[np.str_]:
-        """:attr:`fill_method` as names (``"measured"``, ``"nearest"``, ``"kappa_fit"``, ...)."""
+        """:attr:`fill_method` as names.
+
+        Returns
+        -------
+        numpy.ndarray
+            Names such as ``"measured"`` or ``"kappa_fit"``, shape ``values.shape[:-1]``.
+        """
         names = np.array(list(FILL_METHOD_CODES), dtype=object)
         lut = np.empty(max(FILL_METHOD_CODES.values()) + 1, dtype=object)
         lut[list(FILL_METHOD_CODES.values())] = names
@@ -396,8 +391,7 @@ class CDBRDF:
         Returns
         -------
         numpy.ndarray
-            ``broadcast(...).shape + (n_channels,)``, float64. Rows whose query
-            holds a NaN (or infinity) are NaN.
+            ``broadcast(...).shape + (n_channels,)``, float64; NaN where a query is NaN or infinite.
 
         Raises
         ------
@@ -411,9 +405,13 @@ class CDBRDF:
     def lookup_grid(self) -> LookupGrid:
         """The table prepared for lookup (:class:`cdbrdf.interp.LookupGrid`).
 
-        Built by :func:`cdbrdf.interp.prepare` on first use and kept by the
-        table (the table never changes), so every lookup of this table, the
-        renderer's included, shares one prepared grid.
+        Built by :func:`cdbrdf.interp.prepare` on first use and kept (the table never
+        changes): every lookup of this table, the renderer's included, shares it.
+
+        Returns
+        -------
+        LookupGrid
+            The prepared grid.
         """
         if self._lookup is None:
             from .interp import prepare
@@ -424,14 +422,22 @@ class CDBRDF:
     def brdf(self, kappa: float = 0.0) -> CDBRDF:
         """The plain BRDF: the table at one curvature as a one-kappa table.
 
-        With the default ``kappa = 0`` and a table that samples 0 this is the
-        flat stand's slice, copied exactly (mask, fill sources and methods
-        included; sources on other curvatures, which the one-curvature table
-        does not hold, are dropped, so ``fill_source`` is -2 there); outside
-        the table's curvature range the end slice is copied (clamped, as in
-        the lookup); between samples the slice is interpolated linearly in
-        kappa and a sample counts as measured only if both neighbours were
-        (the others' fill method is ``unknown``).
+        At a sampled curvature (the flat stand's 0 by default) the slice is copied
+        exactly, mask and fill provenance included (sources on other curvatures
+        are dropped: ``fill_source`` -2); outside the curvature range the end
+        slice is copied (clamped, as in the lookup); between samples it is
+        interpolated linearly in kappa, a sample measured only if both
+        neighbours were (the others' fill method ``unknown``).
+
+        Parameters
+        ----------
+        kappa
+            The curvature of the slice, mm^-1.
+
+        Returns
+        -------
+        CDBRDF
+            A table with the one curvature ``kappa``.
         """
         if isinstance(kappa, (bool, np.bool_)) or not isinstance(kappa, (int, float, np.integer, np.floating)):
             raise TableError(f"kappa: expected a number (1/mm), got {type(kappa).__name__} {kappa!r}")
@@ -492,12 +498,20 @@ class CDBRDF:
 
         Both azimuth axes of the result are (a subset of) the isotropic table's
         azimuth-difference nodes, so every value is an exact copy: light azimuths
-        ``0, s, 2 s, ...`` and view azimuths ``phi_v[0] + (0, s, 2 s, ...)``, with
-        ``s`` the difference step times the smallest divisor ``k`` of ``n_phi_v``
-        for which at most ``max_azimuths`` azimuths remain (default: all). Value
-        ``(phi_l = i s, phi_v = phi_v[0] + j s)`` is the isotropic table's
-        sample at the difference ``(j - i) s``. An anisotropic table is returned
-        as it is.
+        ``0, s, 2 s, ...``, view azimuths ``phi_v[0] + (0, s, 2 s, ...)``, ``s`` the
+        difference step times the smallest divisor of ``n_phi_v`` that leaves at
+        most ``max_azimuths`` azimuths; ``(phi_l = i s, phi_v = phi_v[0] + j s)``
+        is the isotropic sample at the difference ``(j - i) s``.
+
+        Parameters
+        ----------
+        max_azimuths
+            The most azimuths per axis; default: all of ``phi_v``.
+
+        Returns
+        -------
+        CDBRDF
+            The anisotropic table (this table when it is anisotropic).
         """
         if not self.isotropic:
             return self
@@ -527,7 +541,13 @@ class CDBRDF:
         )
 
     def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
-        """Write the table to an HDF5 file (atomically); see ``docs/format.md`` and :func:`cdbrdf.io.write`."""
+        """Write the table to an HDF5 file, atomically (``docs/format.md``, :func:`cdbrdf.io.write`).
+
+        Parameters
+        ----------
+        path, compression
+            Destination (its folder must exist); HDF5 filter, ``"gzip"`` or None.
+        """
         _io.write(TableParts.of(self), path, compression=compression)
 
     def fig7(self) -> NDArray[np.floating]:
@@ -546,17 +566,16 @@ class CDBRDF:
     def to_xarray(self) -> Any:
         """The table as an :class:`xarray.Dataset` with named dimensions.
 
-        The layout of the file (:mod:`cdbrdf.schema`): variables
-        ``reflectance`` (kappa, phi_l, theta_l, phi_v, theta_v, channel),
-        ``measured``, ``fill_source``, ``fill_method``, ``fill_sources`` and
-        ``fill_weights`` (dimensions ... ``fill_slot``) and, when present,
-        ``reflectance_std`` and ``fill_std``;
-        coordinates; ``units``, ``long_name`` and flag attributes as in the
-        file; the global attributes of the file (:func:`cdbrdf.io.global_attrs`:
-        every value netCDF-legal, non-scalar attributes such as ``provenance``
-        as JSON text, ``cdbrdf_attrs`` holding them all), so that
+        The layout of the file (``docs/format.md``, :mod:`cdbrdf.schema`):
+        ``reflectance`` and the provenance variables, coordinates, units and
+        the file's global attributes (:func:`cdbrdf.io.global_attrs`), so that
         ``to_xarray().to_netcdf(path)`` writes a file :func:`cdbrdf.load`
         reads back as this table. Needs xarray.
+
+        Returns
+        -------
+        xarray.Dataset
+            The table's arrays, coordinates and attributes.
         """
         return _io.to_dataset(TableParts.of(self))
 
@@ -564,19 +583,36 @@ class CDBRDF:
     def from_xarray(cls, ds: Any) -> CDBRDF:
         """A table from a :class:`xarray.Dataset` laid out as :meth:`to_xarray` makes.
 
-        Dimensions are transposed into the table's order when needed; values
-        are validated as by the constructor. The table's attributes are
-        ``cdbrdf_attrs`` when the dataset has it (as :meth:`to_xarray` and a
-        file give it; every attribute mirroring one of its entries must agree
-        with it, :func:`cdbrdf.io.attrs_from_globals`), else the dataset's
-        attributes but the format's own. Channel names that are not the
-        defaults become ``attrs["channels"]`` (unless the attrs name them).
+        Dimensions are transposed into the table's order when needed, the
+        attributes and channel names read as :func:`cdbrdf.io.parts_from_dataset`
+        reads them, the values validated as by the constructor.
+
+        Parameters
+        ----------
+        ds : xarray.Dataset
+            The dataset.
+
+        Returns
+        -------
+        CDBRDF
+            The table.
         """
         parts = _io.parts_from_dataset(ds)
         return cls(parts.values, **parts.table_kwargs())
 
     def with_attrs(self, **attrs: Any) -> CDBRDF:
-        """A copy with ``attrs`` updated (the symmetry cannot change this way)."""
+        """A copy with ``attrs`` updated (the symmetry cannot change this way).
+
+        Parameters
+        ----------
+        **attrs
+            Attributes to set.
+
+        Returns
+        -------
+        CDBRDF
+            The copy.
+        """
         a = copy.deepcopy(self._attrs)
         a.update(attrs)
         return CDBRDF(
@@ -630,7 +666,7 @@ def _same_optional(a: NDArray | None, b: NDArray | None) -> bool:
 def load(path: str | PathLike[str]) -> CDBRDF:
     """Read a CDBRDF file written by :meth:`CDBRDF.save` (any 1.x version).
 
-    Exported as ``cdbrdf.load``. The file is read and checked by
+    The file is read and checked by
     :func:`cdbrdf.io.read` (files without HDF5 metadata checksums in a child
     process stopped after :data:`cdbrdf.io.LEGACY_READ_TIMEOUT_S` seconds plus
     one per 20 MB; re-saving such a file makes it fast), then the table is built.
@@ -650,11 +686,9 @@ def load(path: str | PathLike[str]) -> CDBRDF:
     FileNotFoundError
         When ``path`` does not exist.
     FormatError
-        For any problem with an existing file: not HDF5, not a CDBRDF file, a
-        newer major version, missing variables or attributes, inconsistent
-        shapes, attributes or dtypes, non-monotonic axes, non-finite values,
-        checksum mismatches, damaged HDF5 structures, unreadable permissions.
-        The message starts with the file's path.
+        For any problem with an existing file (not a CDBRDF file, a newer major
+        version, missing or inconsistent data, checksum mismatches, damaged HDF5
+        structures, unreadable permissions); the message starts with its path.
     LimitError
         When the file declares more samples than the ``table_samples`` limit.
     """

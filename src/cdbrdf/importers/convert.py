@@ -68,6 +68,16 @@ _HDF5 = b"\x89HDF\r\n\x1a\n"
 def detect_format(path: str | PathLike[str]) -> str:
     """The format of a file from its first bytes and size, else its suffix.
 
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    str
+        One of :data:`FORMATS`.
+
     Raises
     ------
     FileNotFoundError
@@ -114,9 +124,23 @@ def detect_format(path: str | PathLike[str]) -> str:
 
 def read_source(path: str | PathLike[str], *, format: str = "auto", material: str | None = None,
                 **options: Any) -> Source:
-    """Read a plain BRDF file with the reader of its format (``"auto"``: :func:`detect_format`).
+    """Read a plain BRDF file with the reader of its format.
 
-    ``options`` go to the reader (``encoding`` for UTIA files).
+    Parameters
+    ----------
+    path
+        The file.
+    format
+        ``"auto"`` (:func:`detect_format`) or one of :data:`FORMATS`.
+    material
+        Name for the material (default: the file's description, else its name).
+    **options
+        Reader options (``encoding`` for UTIA files).
+
+    Returns
+    -------
+    Source
+        The BRDF as a function of the directions, with its metadata.
 
     Raises
     ------
@@ -144,7 +168,24 @@ _REGULAR = re.compile(r"regular:(.+)")
 
 
 def target_grid(spec: str | Grid, source: Source, *, kappa: float = 0.0, symmetry: str = "auto") -> Grid:
-    """The grid to import ``source`` onto (see the module docstring), at curvature ``kappa``.
+    """The grid to import ``source`` onto (see the module docstring).
+
+    Parameters
+    ----------
+    spec
+        ``"default"``, ``"paper"``, ``"native"``,
+        ``"regular:THETA_STEP,PHI_STEP[,THETA_MAX]"`` or a Grid.
+    source
+        The BRDF.
+    kappa
+        The grid's one curvature, mm^-1.
+    symmetry
+        ``"auto"`` (the source's), ``"isotropic"`` or ``"anisotropic"``.
+
+    Returns
+    -------
+    Grid
+        The grid.
 
     Raises
     ------
@@ -211,7 +252,22 @@ def table_from(source: Source, grid: Grid, *, spacing_deg: float = DEFAULT_SPACI
                max_evaluations: int = MAX_EVALUATIONS, method: str = "cell", correction: str = "deblur",
                dtype: Any = None, estimate: bool = True,
                progress: Callable[[int, int], None] | None = None) -> Any:
-    """The table of ``source`` on ``grid`` (one curvature), with its provenance (see :func:`import_brdf`)."""
+    """The table of ``source`` on ``grid`` (one curvature), with its provenance.
+
+    Parameters
+    ----------
+    source
+        The BRDF (:func:`read_source`).
+    grid
+        The target grid (:func:`target_grid`).
+    spacing_deg, max_evaluations, method, correction, dtype, estimate, progress
+        As for :func:`import_brdf`.
+
+    Returns
+    -------
+    CDBRDF
+        The table.
+    """
     from .._version import __version__
     from .source import table_on
 
@@ -302,7 +358,7 @@ def import_brdf(
         Measure the error of the table against the source (a fraction of a second).
     progress
         ``progress(done, total)`` over the source evaluations.
-    options
+    **options
         Reader options (``encoding="srgb" | "linear"`` for UTIA files).
 
     Returns

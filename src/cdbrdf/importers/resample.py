@@ -317,6 +317,7 @@ def resample(
     Returns
     -------
     Resampled
+        The cell means on the grid's direction axes and how they were computed.
 
     Raises
     ------
@@ -504,7 +505,7 @@ def estimate_error(source: Source, table: Any, *, n: int = 1 << 15, n_views: int
     Returns
     -------
     dict
-        ``brdf_relative_l1``: sum |Y_table - Y_source| / sum Y_source over
+        ``brdf_relative_l1``: sum ``|Y_table - Y_source|`` / sum ``Y_source`` over
         the pairs (Y = luminance): the mean relative difference of the BRDF
         under a directional light; ``albedo_relative_error_mean`` and
         ``_max``: of the directional albedo over the views (energy under a

@@ -97,7 +97,13 @@ class Source:
         return self.symmetry == "isotropic"
 
     def provenance(self) -> dict[str, Any]:
-        """Where the data came from, for a table's ``provenance`` (JSON-ready)."""
+        """Where the data came from, for a table's ``provenance``.
+
+        Returns
+        -------
+        dict
+            JSON-ready: the file, its format, digest and details.
+        """
         return {
             "file": str(self.path),
             "file_name": self.path.name,

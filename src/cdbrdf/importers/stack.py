@@ -112,10 +112,12 @@ def stack(
         ``"auto"``: isotropic when every source is, else anisotropic.
     material
         Name of the stacked material (needed when the files name theirs differently).
-    spacing_deg, max_evaluations, method, correction, dtype, estimate, options
+    spacing_deg, max_evaluations, method, correction, dtype, estimate
         As for :func:`cdbrdf.importers.import_brdf` (``estimate``: per slice).
     progress
         ``progress(done, total)`` over the files.
+    **options
+        Reader options, as for :func:`cdbrdf.importers.import_brdf`.
 
     Returns
     -------

@@ -35,7 +35,26 @@ _LOG = logging.getLogger(__name__)
 
 @dataclass
 class MeasureReport:
-    """What a measurement did (printed by ``cdbrdf measure``)."""
+    """What a measurement did (printed by ``cdbrdf measure``).
+
+    Attributes
+    ----------
+    n_samples, n_measured, n_filled
+        Samples of the table: all, measured, filled.
+    n_hidden, n_saturated, n_not_photographed, n_skipped_samples
+        Samples filled because a stand hides them, every photograph saturated,
+        no row photographs them, or their photographs were skipped.
+    n_images, n_images_resumed, n_white, n_dark
+        Photographs read (of them from a checkpoint), white references, dark frames.
+    quantity
+        ``"brdf"`` with a white reference, else ``"relative"``.
+    fill_method
+        The fill method used.
+    n_filled_by
+        Filled samples per fill method.
+    skipped_files
+        ``(file, reason)`` of every photograph skipped.
+    """
 
     n_samples: int = 0
     n_measured: int = 0
@@ -54,7 +73,13 @@ class MeasureReport:
     skipped_files: list[tuple[str, str]] = field(default_factory=list)
 
     def summary(self) -> str:
-        """A few human-readable lines."""
+        """A few human-readable lines.
+
+        Returns
+        -------
+        str
+            The report as text.
+        """
         lines = [
             f"{self.n_images} photographs used ({self.n_images_resumed} from the checkpoint), "
             f"{self.n_white} white reference(s), {self.n_dark} dark frame(s); quantity {self.quantity}",

@@ -374,9 +374,6 @@ def _stray_values(csv_path: Path, samples: list[CaptureRow]) -> None:
 def read_capture(folder: str | PathLike[str], *, csv_name: str = CAPTURE_FILE, patch: int = 7) -> Capture:
     """Parse a capture folder (``docs/capture.md``).
 
-    ``patch`` (N) sizes the patch whose footprint the stand geometry must
-    leave clear when ``stands.json`` gives ``pixel_mm``.
-
     The grid is, by default, derived from the sample rows: the sorted
     distinct values of each axis. A value that only a few rows use - fewer
     sample conditions than a tenth of the median of that axis's values - is
@@ -385,6 +382,21 @@ def read_capture(folder: str | PathLike[str], *, csv_name: str = CAPTURE_FILE, p
     ``stands.json`` may instead list the grid (``"grid": {"kappa": [...],
     "theta_l": [...], "phi_l": [...], "theta_v": [...], "phi_v": [...]}``):
     then every sample row must lie on it and any value is accepted.
+
+    Parameters
+    ----------
+    folder
+        The capture folder.
+    csv_name
+        The name of its table of photographs.
+    patch
+        The patch's side N, pixels: it sizes the footprint the stand
+        geometry must leave clear when ``stands.json`` gives ``pixel_mm``.
+
+    Returns
+    -------
+    Capture
+        The parsed folder.
 
     Raises
     ------

@@ -300,12 +300,15 @@ def measure(
         ``"nearest-stand"``, or ``"nearest"`` (the paper's rule: the nearest
         measured direction at the same curvature). It does not change what
         is read, so a checkpoint serves every method.
+    _interrupt_after
+        For the tests: stop as a killed run would once this many photographs are read.
 
     Returns
     -------
     table : CDBRDF
         ``quantity="brdf"`` with a white reference, else ``"relative"``.
     report : MeasureReport
+        What was read, skipped, saturated and filled.
 
     Raises
     ------

@@ -135,10 +135,31 @@ def write_plan(
 ) -> list[dict[str, Any]]:
     """Write ``capture.csv`` and ``stands.json`` into ``folder`` (created if needed).
 
-    ``pixel_mm`` (> 0) is written to ``stands.json`` and makes the hidden
-    marks cover the whole ``patch_px`` patch (:func:`hidden_mask`).
-    ``exposures`` other than the single exposure 1 make each sample and white
-    photograph a bracket (:func:`bracket_rows`). Returns the rows written.
+    Parameters
+    ----------
+    folder
+        The capture folder.
+    grid
+        The samples to photograph.
+    stands
+        One stand per curvature of ``grid``.
+    extension
+        The photographs' file type.
+    white
+        Also plan a white frame per light direction.
+    pixel_mm
+        Written to ``stands.json`` when > 0; the hidden marks then cover the
+        whole ``patch_px`` patch (:func:`hidden_mask`).
+    patch_px
+        The patch's side, pixels.
+    exposures
+        Relative exposure times; more than the single exposure 1 make each
+        sample and white photograph a bracket (:func:`bracket_rows`).
+
+    Returns
+    -------
+    list of dict
+        The rows written to ``capture.csv``.
     """
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)

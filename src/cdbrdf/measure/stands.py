@@ -150,9 +150,18 @@ class Stand:
 
         Seen from the point of the face ``margin_mm`` (arc length) from the
         centre towards the wall the direction points to: the worst point of
-        a patch that reaches ``margin_mm`` from the centre. 0 for stands that
-        hide nothing (convex and flat); ``inf`` when the margin reaches the
-        face's edge.
+        a patch that reaches ``margin_mm`` from the centre.
+
+        Parameters
+        ----------
+        margin_mm
+            Arc length from the centre, mm.
+
+        Returns
+        -------
+        float
+            The slope; 0 for stands that hide nothing (convex and flat),
+            ``inf`` when the margin reaches the face's edge.
         """
         if self.kappa >= 0:
             return 0.0
@@ -165,9 +174,19 @@ class Stand:
         return (z_e + self.wall_height_mm - pz) / (x_e - px)
 
     def hides(self, theta_deg: ArrayLike, phi_deg: ArrayLike, *, margin_mm: float = 0.0) -> NDArray[np.bool_]:
-        """True where the direction ``(theta, phi)`` cannot reach the patch (see module doc).
+        """Where a direction cannot reach the patch (see the module's description).
 
-        ``margin_mm``: the patch's half-extent on the face (0 = the centre only).
+        Parameters
+        ----------
+        theta_deg, phi_deg
+            Elevation and azimuth of the directions, degrees (broadcast).
+        margin_mm
+            The patch's half-extent on the face (0 = the centre only).
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean, True where the direction is hidden.
         """
         d = direction_from_angles(theta_deg, phi_deg)
         s = self.horizon_slope(margin_mm)
@@ -178,7 +197,13 @@ class Stand:
         return d[..., 2] < np.abs(d[..., 0]) * s - 1e-12
 
     def to_dict(self) -> dict[str, float]:
-        """The stand as written to ``stands.json``."""
+        """The stand as written to ``stands.json``.
+
+        Returns
+        -------
+        dict
+            Its dimensions by name.
+        """
         return asdict(self)
 
 
@@ -221,11 +246,28 @@ def hidden_mask(
     pixel_mm: float = 0.0,
     patch_px: int = 7,
 ) -> NDArray[np.uint8]:
-    """Per sample: 0 visible, 1 view hidden, 2 light hidden, 3 both; shape ``grid.shape``.
+    """Which samples of a grid the stands hide from the camera or the light.
 
     With ``pixel_mm = 0`` only the centre point is tested. Otherwise a sample
     is hidden when the camera or the light cannot reach any point of the
     patch: the margin is :func:`footprint_mm` at the sample's view elevation.
+
+    Parameters
+    ----------
+    grid
+        The capture's grid.
+    stands
+        One stand per curvature of the grid (a mapping by curvature, or in
+        the grid's order).
+    pixel_mm
+        Size of a camera pixel on the face, mm (0: the centre point only).
+    patch_px
+        The patch's side, pixels.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``grid.shape`` uint8: 0 visible, 1 view hidden, 2 light hidden, 3 both.
     """
     out = np.zeros(grid.shape, dtype=np.uint8)
     for k, kappa in enumerate(grid.kappa):

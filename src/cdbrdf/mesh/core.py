@@ -56,6 +56,12 @@ class Mesh:
         return int(self.vertices.shape[0])
 
     def copy(self) -> Mesh:
-        """A copy whose arrays and dicts can be replaced without touching this mesh."""
+        """A copy whose arrays and dicts can be replaced without touching this mesh.
+
+        Returns
+        -------
+        Mesh
+            The copy.
+        """
         return Mesh(self.vertices, self.faces, self.normals, self.uv, dict(self.attributes), self.tangents,
                     dict(self.metadata))

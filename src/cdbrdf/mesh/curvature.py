@@ -147,7 +147,18 @@ class SurfaceCurvature:
     location: NDArray[np.int8]
 
     def curvature(self, mode: str) -> NDArray[np.float64]:
-        """The curvature of ``mode`` (``"max"`` or ``"directional"``), mm^-1."""
+        """One of the curvatures, mm^-1.
+
+        Parameters
+        ----------
+        mode
+            ``"max"`` (:attr:`kappa`) or ``"directional"`` (:attr:`directional`).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n,)`` per output vertex.
+        """
         if mode == "max":
             return self.kappa
         if mode == "directional":
@@ -156,7 +167,23 @@ class SurfaceCurvature:
 
 
 def check_neighbourhood(neighbourhood_mm: float) -> float:
-    """The neighbourhood as a float, or :class:`MeshError` outside :data:`NEIGHBOURHOOD_RANGE_MM`."""
+    """Check a curvature neighbourhood.
+
+    Parameters
+    ----------
+    neighbourhood_mm
+        Diameter of the fitted patch, mm.
+
+    Returns
+    -------
+    float
+        The neighbourhood.
+
+    Raises
+    ------
+    MeshError
+        Outside :data:`NEIGHBOURHOOD_RANGE_MM`.
+    """
     lo, hi = NEIGHBOURHOOD_RANGE_MM
     try:
         x = float(neighbourhood_mm)
@@ -240,6 +267,7 @@ def surface_curvature(  # noqa: C901 - the steps in order
     Returns
     -------
     SurfaceCurvature
+        The repaired mesh's faces, normals, frame and curvatures (mm^-1).
 
     Raises
     ------
@@ -398,6 +426,13 @@ def neighbourhood_from_table(attrs: Mapping[str, Any] | None) -> tuple[float, st
     ----------
     attrs
         The table's attributes (``table.attrs``), or None.
+
+    Returns
+    -------
+    neighbourhood_mm : float
+        The neighbourhood's diameter, mm.
+    source : str
+        Where it comes from, for messages.
     """
     prov = attrs.get("provenance") if attrs else None
     if isinstance(prov, Mapping):
@@ -435,7 +470,12 @@ def principal_curvatures(
     The mesh is repaired first (:func:`repair`): the sign is relative to the
     repaired orientation, i.e. the given ``normals`` where there are any,
     outward on a closed surface, else the winding of most of each
-    component. See :func:`surface_curvature` for the parameters.
+    component.
+
+    Parameters
+    ----------
+    vertices, faces, normals, units, neighbourhood_mm, progress
+        As for :func:`surface_curvature`.
 
     Returns
     -------
@@ -472,7 +512,17 @@ def max_curvature(
 
     A sphere of radius 10 mm gives 0.1 everywhere, a cylinder of radius r
     gives 1/r across its axis (> 0 on the outside when its faces wind
-    outward). See :func:`principal_curvatures`.
+    outward).
+
+    Parameters
+    ----------
+    vertices, faces, normals, units, neighbourhood_mm
+        As for :func:`principal_curvatures`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n,)`` per input vertex, mm^-1.
     """
     return principal_curvatures(vertices, faces, normals=normals, units=units,
                                 neighbourhood_mm=neighbourhood_mm).kappa

@@ -121,8 +121,18 @@ class PrincipalCurvatures:
     def normal_curvature(self, tangent: NDArray[np.float64]) -> NDArray[np.float64]:
         """Signed normal curvature along ``tangent`` (``(n, 3)``, projected into the tangent plane).
 
-        Euler's formula ``k1 cos^2 + k2 sin^2`` of the angle to ``d1``; NaN
-        where the tangent has no component in the tangent plane.
+        Euler's formula ``k1 cos^2 + k2 sin^2`` of the angle to ``d1``.
+
+        Parameters
+        ----------
+        tangent
+            ``(n, 3)`` directions, projected into each tangent plane.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n,)`` curvatures; NaN where the tangent has no component in
+            the tangent plane.
         """
         t = np.asarray(tangent, dtype=np.float64)
         c1 = np.einsum("ij,ij->i", t, self.d1)

@@ -74,6 +74,16 @@ _KNOWN = {"x", "y", "z", "nx", "ny", "nz"} | {n for pair in _UV_NAMES for n in p
 def read_mesh(path: str | PathLike[str]) -> Mesh:
     """Read a mesh file chosen by its suffix (:data:`MESH_FORMATS`).
 
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    Mesh
+        The mesh; its metadata give the format and the file it came from.
+
     Raises
     ------
     MeshError
@@ -115,7 +125,18 @@ def _metadata(comments: list[str]) -> dict[str, Any]:
 
 
 def read_ply(path: str | PathLike[str]) -> Mesh:
-    """Read a PLY file (see the module's description)."""
+    """Read a PLY file (see the module's description).
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    Mesh
+        The mesh, with the file's vertex attributes and cdbrdf metadata.
+    """
     from ._ply import parse_ply
 
     p = Path(path)
@@ -159,7 +180,18 @@ def _split_corner_uv(mesh: Mesh, corner_uv: NDArray[np.float64]) -> Mesh:
 
 
 def read_obj(path: str | PathLike[str]) -> Mesh:
-    """Read a Wavefront OBJ (every object and group; see the module's description)."""
+    """Read a Wavefront OBJ (every object and group; see the module's description).
+
+    Parameters
+    ----------
+    path
+        The file.
+
+    Returns
+    -------
+    Mesh
+        The mesh.
+    """
     return _read_trimesh(Path(path), "obj")
 
 
@@ -316,6 +348,13 @@ def write_ply(path: str | PathLike[str], mesh: Mesh) -> None:
     Attributes are written as ``NAME_x`` float properties (Mitsuba loads them
     as ``vertex_NAME``); the metadata ``units``, ``up``, ``curvature_units``,
     ``neighbourhood_mm`` and ``frame`` as ``comment cdbrdf KEY VALUE`` lines.
+
+    Parameters
+    ----------
+    path
+        Destination.
+    mesh
+        The mesh.
     """
     from .._version import __version__
     from ..fsutil import atomic_path

@@ -303,10 +303,22 @@ def _base_axis(mesh: Mesh) -> tuple[int, float] | None:
 
 
 def detect_up(mesh: Mesh) -> tuple[str, str]:
-    """The up axis of a mesh (``"y"`` or ``"z"``) and why, from its geometry (see the module's description).
+    """The up axis of a mesh and why, from its geometry (see the module's description).
 
     A disagreement between the geometry and the file format's convention is
     logged as a warning (``--up`` overrides both).
+
+    Parameters
+    ----------
+    mesh
+        The mesh.
+
+    Returns
+    -------
+    up : str
+        ``"y"`` or ``"z"``.
+    reason : str
+        Why, in a few words.
     """
     fmt = str(mesh.metadata.get("format", "ply"))
     rec = mesh.metadata.get("up")
@@ -349,7 +361,20 @@ def detect_up(mesh: Mesh) -> tuple[str, str]:
 
 
 def to_z_up(points: NDArray[np.float64], up: str) -> NDArray[np.float64]:
-    """Points (or normals) of a ``up``-up mesh in the z-up world frame."""
+    """Points (or normals) of a mesh in the z-up world frame.
+
+    Parameters
+    ----------
+    points
+        ``(n, 3)`` points or directions.
+    up
+        The mesh's up axis, ``"y"`` or ``"z"``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, 3)`` in the z-up frame.
+    """
     if up == "z":
         return points
     if up == "y":
@@ -358,7 +383,18 @@ def to_z_up(points: NDArray[np.float64], up: str) -> NDArray[np.float64]:
 
 
 def check_up(up: object) -> None:
-    """Refuse an up axis that is not one of :data:`UP_AXES`."""
+    """Refuse an up axis that is not one of :data:`UP_AXES`.
+
+    Parameters
+    ----------
+    up
+        The value given.
+
+    Raises
+    ------
+    MeshError
+        For another value (the message lists the valid ones).
+    """
     if up not in UP_AXES:
         raise OptionError(f"up: {up!r:.40} is not one of {', '.join(UP_AXES)}")
 
@@ -366,9 +402,24 @@ def check_up(up: object) -> None:
 def z_up_mesh(mesh: Mesh, up: str = "auto") -> tuple[Mesh, str, str]:
     """A copy of ``mesh`` in the z-up world frame, the up axis it had and why.
 
-    ``up``: ``"auto"`` (:func:`detect_up`), ``"y"`` or ``"z"``. Vertices,
-    normals and tangents are turned (:func:`to_z_up`) and the copy records
-    ``up = "z"``; the returned reason is ``"given"`` for an explicit axis.
+    Vertices, normals and tangents are turned (:func:`to_z_up`) and the
+    copy records ``up = "z"``.
+
+    Parameters
+    ----------
+    mesh
+        The mesh.
+    up
+        ``"auto"`` (:func:`detect_up`), ``"y"`` or ``"z"``.
+
+    Returns
+    -------
+    mesh : Mesh
+        The copy, z up.
+    up : str
+        The axis ``mesh`` had.
+    reason : str
+        Why; ``"given"`` for an explicit axis.
     """
     check_up(up)
     axis, why = detect_up(mesh) if up == "auto" else (up, "given")

@@ -197,6 +197,18 @@ def weld(vertices: NDArray[np.float64], *, tolerance: float = WELD_TOLERANCE) ->
 
     Welded indices are numbered in order of first appearance; the welded
     position is that of the group's first vertex.
+
+    Parameters
+    ----------
+    vertices
+        ``(n, 3)`` positions.
+    tolerance
+        Weld distance as a fraction of the bounding-box diagonal.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n,)`` welded index of every vertex.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
@@ -390,6 +402,7 @@ def repair(  # noqa: C901 - one pass, step by step
     Returns
     -------
     RepairedMesh
+        The analysis surface, the output mesh and what was repaired.
 
     Raises
     ------

@@ -36,7 +36,20 @@ __all__ = ["DrapedCloth", "draped_cloth_height", "draped_cloth_mesh", "Skirt", "
 
 
 def sine_sheet_height(x_mm: ArrayLike, *, amplitude_mm: float, wavelength_mm: float) -> NDArray[np.float64]:
-    """Height ``z = A sin(2 pi x / L)`` of the sine sheet (mm)."""
+    """Height ``z = A sin(2 pi x / L)`` of the sine sheet.
+
+    Parameters
+    ----------
+    x_mm
+        Positions across the sheet, mm.
+    amplitude_mm, wavelength_mm
+        ``A`` and ``L``, mm.
+
+    Returns
+    -------
+    numpy.ndarray
+        Heights, mm.
+    """
     x = np.asarray(x_mm, dtype=np.float64)
     return amplitude_mm * np.sin(2.0 * np.pi * x / wavelength_mm)
 
@@ -48,6 +61,18 @@ def sine_sheet_curvature(x_mm: ArrayLike, *, amplitude_mm: float, wavelength_mm:
     curvature across the sheet is ``-z'' / (1 + z'^2)^(3/2)`` (> 0 at crests,
     convex; < 0 in troughs); along the sweep it is 0, so this is also the
     principal curvature of larger magnitude.
+
+    Parameters
+    ----------
+    x_mm
+        Positions across the sheet, mm.
+    amplitude_mm, wavelength_mm
+        ``A`` and ``L``, mm.
+
+    Returns
+    -------
+    numpy.ndarray
+        Curvatures, mm^-1.
     """
     x = np.asarray(x_mm, dtype=np.float64)
     k = 2.0 * np.pi / wavelength_mm
@@ -114,6 +139,16 @@ def sine_sheet_mesh(sheet: SineSheet = SineSheet()) -> Mesh:
     analytic signed curvature (mm^-1) of every vertex (x, the bending
     direction, is a principal direction, so both modes agree); faces wind
     counter-clockwise seen from +z.
+
+    Parameters
+    ----------
+    sheet
+        The sheet's geometry.
+
+    Returns
+    -------
+    Mesh
+        The mesh, in mm, z up.
     """
     nx, ny = sheet.grid_shape
     x = np.linspace(-sheet.width_mm / 2, sheet.width_mm / 2, nx)
@@ -178,7 +213,20 @@ class DrapedCloth:
 
 
 def draped_cloth_height(x_mm: ArrayLike, y_mm: ArrayLike, cloth: DrapedCloth = DrapedCloth()) -> NDArray[np.float64]:
-    """Height (mm) of the draped cloth at ``(x, y)`` (mm)."""
+    """Height of the draped cloth.
+
+    Parameters
+    ----------
+    x_mm, y_mm
+        Positions seen from above, mm (broadcast).
+    cloth
+        The cloth's parameters.
+
+    Returns
+    -------
+    numpy.ndarray
+        Heights, mm.
+    """
     x = np.asarray(x_mm, dtype=np.float64)
     y = np.asarray(y_mm, dtype=np.float64)
     r2 = x * x + y * y
@@ -197,6 +245,16 @@ def draped_cloth_mesh(cloth: DrapedCloth = DrapedCloth()) -> Mesh:
     concave (kappa < 0). Curvature is not stored: the renderer computes it
     from the mesh (:func:`cdbrdf.mesh.max_curvature`), as for a user's
     mesh.
+
+    Parameters
+    ----------
+    cloth
+        The cloth's parameters.
+
+    Returns
+    -------
+    Mesh
+        The mesh, in mm, z up.
     """
     n = int(cloth.resolution)
     s = cloth.size_mm
@@ -286,6 +344,16 @@ def skirt_mesh(skirt: Skirt = Skirt()) -> Mesh:
     the other way; the sash's two layers share positions and have their
     own vertices, UVs and opposite windings. No normals are given (as in
     many exports): which side is the front follows from the repair.
+
+    Parameters
+    ----------
+    skirt
+        The skirt's parameters.
+
+    Returns
+    -------
+    Mesh
+        The mesh, in mm, y up.
     """
     sk = skirt
     y = np.linspace(sk.length_mm, 0.0, sk.down)

@@ -66,9 +66,27 @@ MAX_SIZE_MM = 1e6
 
 
 def check_size(vertices: ArrayLike, units: Units, *, name: str = "mesh") -> float:
-    """The mesh's extent (bounding-box diagonal) in mm; a :class:`MeshError` beyond :data:`MAX_SIZE_MM`.
+    """The mesh's extent (bounding-box diagonal) in mm.
 
-    Vertices that are not all finite numbers are left to the mesh's own checks (NaN for a size).
+    Parameters
+    ----------
+    vertices
+        ``(n, 3)`` positions in ``units``.
+    units
+        Their unit.
+    name
+        For messages (the file's name).
+
+    Returns
+    -------
+    float
+        The diagonal, mm; NaN when the vertices are not all finite numbers
+        (left to the mesh's own checks).
+
+    Raises
+    ------
+    MeshError
+        Beyond :data:`MAX_SIZE_MM`.
     """
     v = np.asarray(vertices, dtype=np.float64)
     if v.size == 0 or v.ndim != 2 or not np.isfinite(v).all():
@@ -105,7 +123,17 @@ class Units:
 
 
 def parse_units(value: str | float | Units) -> Units:
-    """The :class:`Units` of a name (``mm``, ``cm``, ``m``, ``in``) or a number (mm per unit).
+    """The :class:`Units` of a name or a number.
+
+    Parameters
+    ----------
+    value
+        ``"mm"``, ``"cm"``, ``"m"``, ``"in"``, millimetres per unit, or Units.
+
+    Returns
+    -------
+    Units
+        The unit.
 
     Raises
     ------

@@ -105,7 +105,20 @@ def channel_index(channel: int | str, nc: int, channels: Sequence[str] | None) -
 
 
 def kappa_label(kappa_mm: float, *, unit: bool = True) -> str:
-    """``"κ = 0.13 mm⁻¹ (convex)"``: the curvature with its sign's meaning."""
+    """The curvature with its sign's meaning, e.g. ``"κ = 0.13 mm⁻¹ (convex)"``.
+
+    Parameters
+    ----------
+    kappa_mm
+        The curvature, mm^-1.
+    unit
+        Include the unit.
+
+    Returns
+    -------
+    str
+        The label.
+    """
     k = float(kappa_mm)
     kind = "flat" if k == 0 else ("convex" if k > 0 else "concave")
     num = "0" if k == 0 else f"{k:+.3g}".replace("-", "\u2212")

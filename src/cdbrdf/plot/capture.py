@@ -43,6 +43,7 @@ def plot_hidden(grid: Grid, hidden: ArrayLike, *, fig: Figure | None = None, dpi
     Returns
     -------
     matplotlib.figure.Figure
+        The plan's samples coloured by what hides them.
 
     Raises
     ------

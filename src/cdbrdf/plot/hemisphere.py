@@ -68,6 +68,7 @@ def plot_hemisphere(
     Returns
     -------
     matplotlib.figure.Figure
+        One polar panel per curvature.
     """
     from matplotlib.colors import Normalize
     from matplotlib.patheffects import withStroke

@@ -51,7 +51,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["Mosaic", "mosaic_arrays", "plot_mosaic", "KAPPA_ATOL", "DIFF_PERCENTILE", "FILL_MARKS"]
 
-#: Percentile of |difference| that sets the default difference colour range.
+#: Percentile of ``|difference|`` that sets the default difference colour range.
 DIFF_PERCENTILE = 99.5
 
 #: Tolerance (mm^-1) when matching a requested curvature to the table's axis.
@@ -182,11 +182,33 @@ class Mosaic:
         return "sr^-1" if self.quantity == "brdf" else "relative"
 
     def luminance(self, *, channel: int | str | None = None) -> NDArray[np.float64]:
-        """``(n, R, C)`` luminance (or one channel) of :attr:`images`."""
+        """The luminance (or one channel) of :attr:`images`.
+
+        Parameters
+        ----------
+        channel
+            A channel's index or name; None for the luminance.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, R, C)``.
+        """
         return luminance(self.images, channel=channel, channels=self.channels)
 
     def difference_luminance(self, *, channel: int | str | None = None) -> NDArray[np.float64]:
-        """``(n, R, C)`` luminance (or one channel) of :attr:`difference`."""
+        """The luminance (or one channel) of :attr:`difference`.
+
+        Parameters
+        ----------
+        channel
+            A channel's index or name; None for the luminance.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, R, C)``.
+        """
         return luminance(self.difference, channel=channel, channels=self.channels)
 
 
@@ -465,7 +487,7 @@ def plot_mosaic(
         is the reference).
     diff_limit
         Colour range of the difference, ± this value in the table's unit.
-        Default: the :data:`DIFF_PERCENTILE`-th percentile of |difference| over
+        Default: the :data:`DIFF_PERCENTILE`-th percentile of ``|difference|`` over
         the measured samples of the shown panels (values beyond, e.g. at
         filled samples, are saturated; the colour bar's arrows say so).
     channel

@@ -43,14 +43,14 @@ def plot_render_comparison(
     labels
         Titles of panels (a) and (b).
     width_in
-        Figure width, inches.
+        Width of a new figure, inches.
     swatches
         A :class:`cdbrdf.render.CrestContrast` of the two renders: a row of
         colour swatches under the panels, the mean colour of each render at
         the convex crests and where the surface is flat, with the median
         Delta E*ab of each region.
     fig
-        Draw into this figure instead of a new one.
+        Draw into this (empty) figure instead of a new one.
 
     Returns
     -------
@@ -130,7 +130,11 @@ def plot_curvature_map(
     surfaces
         ``(title, vertices (n, 3) mm, faces (m, 3), kappa (n,) mm^-1)`` per panel.
     limit
-        Colour-scale limit in mm^-1 (default: the 99th percentile of |kappa|).
+        Colour-scale limit in mm^-1 (default: the 99th percentile of ``|kappa|``).
+    width_in
+        Width of a new figure, inches.
+    fig
+        Draw into this (empty) figure instead of a new one.
 
     Returns
     -------

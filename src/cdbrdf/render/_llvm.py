@@ -144,6 +144,16 @@ def find_llvm(*, timeout_s: float = 60.0) -> LLVMInfo:
 
     Runs Dr.Jit's search (see the module docstring) in a child process, so
     nothing is loaded into this one.
+
+    Parameters
+    ----------
+    timeout_s
+        How long the child may take, seconds.
+
+    Returns
+    -------
+    LLVMInfo
+        The library's path and version, or why none was found.
     """
     env = dict(os.environ)
     try:

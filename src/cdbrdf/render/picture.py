@@ -66,10 +66,12 @@ def render_scene(
     progress: Callable[[int, int], None] | None = None,
     alpha: bool = False,
 ) -> NDArray[np.float32]:
-    """Render ``scene`` in passes; returns linear RGB ``(H, W, 3)`` float32 (RGBA with ``alpha``).
+    """Render ``scene`` in passes.
 
     Parameters
     ----------
+    scene : mitsuba.Scene
+        The scene.
     spp
         Samples per pixel (default: the sensor's).
     seed
@@ -81,6 +83,11 @@ def render_scene(
     alpha
         Also return the coverage (1 where the object is seen; with the
         studio lighting's hidden sky, 0 on the background), as a 4th channel.
+
+    Returns
+    -------
+    numpy.ndarray
+        Linear RGB ``(H, W, 3)`` float32 (RGBA with ``alpha``).
 
     Raises
     ------
@@ -135,6 +142,18 @@ def exposure_from_render(image: NDArray[np.floating], *, irradiance: float = DEF
     (alpha >= 0.5) count. At most :data:`MAX_AUTO_EV` stops above the
     physical exposure for a key light of ``irradiance`` (``log2(pi /
     irradiance)``). See :func:`cdbrdf.colour.auto_exposure_ev`.
+
+    Parameters
+    ----------
+    image
+        Linear RGB or RGBA render.
+    irradiance
+        The key light's irradiance.
+
+    Returns
+    -------
+    float
+        The exposure, stops.
     """
     from ..colour import auto_exposure_ev
 
@@ -152,8 +171,20 @@ def exposure_from_render(image: NDArray[np.floating], *, irradiance: float = DEF
 def composite(image: NDArray[np.floating], *, exposure_ev: float, backdrop: float = BACKDROP) -> NDArray[np.float32]:
     """An RGBA render over a uniform backdrop that shows as ``backdrop`` (display value) at ``exposure_ev``.
 
-    Returns linear RGB ``rgb + (1 - alpha) * backdrop * 2**-exposure_ev``; an
-    RGB image is returned as it is.
+    Parameters
+    ----------
+    image
+        ``(H, W, 4)`` linear RGBA, or RGB.
+    exposure_ev
+        The exposure the picture is shown at, stops.
+    backdrop
+        The backdrop's display value.
+
+    Returns
+    -------
+    numpy.ndarray
+        Linear RGB ``rgb + (1 - alpha) * backdrop * 2**-exposure_ev``; an RGB
+        image as it is.
     """
     img = np.asarray(image, dtype=np.float64)
     if img.shape[-1] < 4:
@@ -164,9 +195,21 @@ def composite(image: NDArray[np.floating], *, exposure_ev: float, backdrop: floa
 
 def render(scene: Any, *, spp: int | None = None, seed: int = 0,
            progress: Callable[[int, int], None] | None = None) -> Any:
-    """Render a scene after :func:`cdbrdf.render.check_scene`; returns a float32 (H, W, C) NumPy image.
+    """Render a scene after :func:`cdbrdf.render.check_scene`.
 
-    ``progress`` is an optional callable ``progress(done, total)`` called per pass.
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        The scene.
+    spp, seed
+        As for :func:`render_scene`.
+    progress
+        ``progress(done, total)``, called per pass.
+
+    Returns
+    -------
+    numpy.ndarray
+        Float32 ``(H, W, C)`` image, linear.
     """
     from .plugin import check_scene
 
@@ -232,7 +275,18 @@ class Picture:
     curvature: NDArray[np.float32] | None = None
 
     def display(self, mode: str = "cdbrdf") -> NDArray[np.float32]:
-        """Linear RGB of ``mode`` as shown: over the backdrop where the studio's sky is hidden."""
+        """Linear RGB of ``mode`` as shown: over the backdrop where the studio's sky is hidden.
+
+        Parameters
+        ----------
+        mode
+            ``"cdbrdf"`` or ``"brdf"`` (one of :attr:`images`).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(H, W, 3)`` float32, linear.
+        """
         img = self.images[mode]
         return composite(img, exposure_ev=self.exposure_ev) if self.backdrop else img[..., :3]
 
@@ -352,6 +406,7 @@ def render_table(
     Returns
     -------
     Picture
+        The image of every mode, the exposure to show them at and what was rendered.
 
     Raises
     ------

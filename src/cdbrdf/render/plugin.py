@@ -129,7 +129,13 @@ _DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_m
 
 
 def available_variants() -> tuple[str, ...]:
-    """The variants of :data:`VARIANTS` that the installed Mitsuba provides."""
+    """The variants of :data:`VARIANTS` that the installed Mitsuba provides.
+
+    Returns
+    -------
+    tuple of str
+        The variants, in the order of :data:`VARIANTS`.
+    """
     import mitsuba as mi
 
     have = set(mi.variants())
@@ -144,6 +150,11 @@ def set_variant(variant: str = DEFAULT_VARIANT) -> str:
     variant
         One of :data:`VARIANTS` that the installed Mitsuba has
         (:func:`available_variants`); default ``"llvm_ad_rgb"``.
+
+    Returns
+    -------
+    str
+        The variant set.
 
     Raises
     ------
@@ -177,6 +188,16 @@ def variant(name: str = DEFAULT_VARIANT) -> Iterator[str]:
     What library code uses (:func:`cdbrdf.render.render_table`, the simulated
     rig, the importers' checks against Mitsuba): it never leaves the caller's
     variant changed. Checks and registers as :func:`set_variant` does.
+
+    Parameters
+    ----------
+    name
+        One of :data:`VARIANTS`.
+
+    Yields
+    ------
+    str
+        The variant in use inside the block.
     """
     import mitsuba as mi
 
@@ -262,14 +283,30 @@ def make_bsdf(
     """A ``cdbrdf`` BSDF instance from a table object (or file name).
 
     The instance can be put into a scene dict in place of a BSDF dict
-    (``"bsdf": make_bsdf(table)``). Parameters as in the plug-in table above;
-    ``curvature=None`` with ``curvature_mode=None`` reads ``vertex_curvature``;
-    ``scale`` may be a float or a Mitsuba texture (an object or a dict);
-    ``unit`` is the scene's unit (applied by :func:`load_dict` with the
-    shape's ``to_world``; see ``docs/rendering.md``, "Curvature units").
-    ``table`` may be a :class:`cdbrdf.CDBTF` (or its file): ``uv_scale`` (mm
-    per UV unit, one number or ``(u, v)``; default 1: UVs in mm) and
-    ``texel_filter`` (``"bilinear"``, ``"nearest"``) place its texels.
+    (``"bsdf": make_bsdf(table)``).
+
+    Parameters
+    ----------
+    table
+        A :class:`~cdbrdf.table.CDBRDF`, a :class:`cdbrdf.CDBTF` or a file name.
+    mode, curvature, curvature_mode, curvature_scale
+        The plug-in's parameters (module docstring, ``docs/rendering.md``);
+        ``curvature=None`` with ``curvature_mode=None`` reads ``vertex_curvature``.
+    scale
+        A float or a Mitsuba texture (an object or a dict).
+    sampling, cosine_weight, storage
+        The plug-in's parameters.
+    uv_scale, texel_filter
+        For a CD-BTF: mm per UV unit (one number or ``(u, v)``; default 1: UVs
+        in mm) and ``"bilinear"`` or ``"nearest"``.
+    unit
+        The scene's unit (applied by :func:`load_dict` with the shape's
+        ``to_world``; ``docs/rendering.md``, "Curvature units").
+
+    Returns
+    -------
+    mitsuba.BSDF
+        The plug-in instance, in the active variant.
     """
     return _make_bsdf(table, mode=mode, curvature=curvature, curvature_mode=curvature_mode,
                       curvature_scale=curvature_scale, scale=scale, sampling=sampling, cosine_weight=cosine_weight,
@@ -375,6 +412,20 @@ def load_dict(scene: dict, *, check: bool = True, unit_mm: float | None = None) 
     units"). With ``check`` the loaded scene goes through
     :func:`check_scene`. An object that cannot be made (a missing table, a
     damaged environment map) is one :class:`~cdbrdf.errors.SceneError` line.
+
+    Parameters
+    ----------
+    scene
+        A Mitsuba scene dictionary.
+    check
+        Check the loaded scene.
+    unit_mm
+        Millimetres per scene unit (default: each BSDF's ``unit``, else mm).
+
+    Returns
+    -------
+    mitsuba.Object
+        The loaded scene or object.
     """
     import mitsuba as mi
 
@@ -427,6 +478,16 @@ def cdbrdf_shapes(scene: Any) -> Iterator[tuple[Any, Any, Any]]:
 
     ``wrapper`` is the shape's own BSDF when the plug-in sits inside another
     BSDF (e.g. ``twosided``), else None.
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        A loaded scene.
+
+    Yields
+    ------
+    tuple
+        ``(shape, bsdf, wrapper)`` per shape.
     """
     from ._bsdf import bsdf_class
 
@@ -449,6 +510,11 @@ def check_scene(scene: Any, *, curvature: bool = True) -> None:
     is checked against the tables' kappa range and a warning is logged once
     when it is implausible, with the likely scene unit
     (:func:`cdbrdf.render._units.curvature_warning`).
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        A loaded scene.
 
     Raises
     ------

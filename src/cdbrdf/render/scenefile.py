@@ -276,6 +276,7 @@ def load_file(path: str | PathLike[str], *, variables: dict[str, Any] | None = N
     Returns
     -------
     mitsuba.Scene or mitsuba.Object
+        What the file describes, loaded in the active variant.
 
     Raises
     ------

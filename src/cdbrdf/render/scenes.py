@@ -80,6 +80,20 @@ def mitsuba_mesh(mesh: Mesh, *, bsdf: Any = None, name: str = "object") -> Any:
     one-channel mesh attribute ``vertex_NAME`` (the curvatures: what the
     ``cdbrdf`` BSDF reads, :data:`cdbrdf.mesh.ATTRIBUTES`). Nothing is
     written to a file.
+
+    Parameters
+    ----------
+    mesh
+        The mesh.
+    bsdf
+        Its BSDF (a Mitsuba BSDF object); None leaves Mitsuba's default.
+    name
+        The shape's id.
+
+    Returns
+    -------
+    mitsuba.Mesh
+        The shape.
     """
     import mitsuba as mi
 
@@ -140,6 +154,8 @@ def sine_scene(
     spp, max_depth
         Samples per pixel and Mitsuba path length (2 = direct light only; the
         default 3 adds one inter-reflection between the corrugations).
+    scale
+        Factor on the table's values (the plug-in's ``scale``).
     elevation_deg, azimuth_deg, fov_deg
         Camera elevation above the sheet, azimuth (from +x; -90 looks along
         +y, across the corrugations) and field of view (smaller axis).
@@ -152,6 +168,7 @@ def sine_scene(
     Returns
     -------
     mitsuba.Scene
+        The sine sheet's scene, loaded in the active variant.
     """
     lights = [directional_light(*light)] if light is not None else []
     return _build(sine_sheet_mesh(sheet), table, mode=mode, scale=scale, size=size, spp=spp,
@@ -189,6 +206,8 @@ def mesh_scene(
     mesh
         A mesh file or a :class:`Mesh`; without a ``"curvature"`` attribute it
         goes through :func:`prepare_mesh` first (with ``units``).
+    units
+        The mesh's length unit (:func:`~cdbrdf.mesh.parse_units`); default: the file's, else mm.
     mode
         ``"cdbrdf"`` or ``"brdf"``.
     curvature_mode
@@ -204,15 +223,20 @@ def mesh_scene(
     envmap
         An environment map (.exr/.hdr) instead of the studio sky, or beside
         the paper's light.
-    up
-        ``"auto"`` (:func:`detect_up`), ``"y"`` or ``"z"``.
     size, spp, max_depth, scale, elevation_deg, azimuth_deg, fov_deg
         As in :func:`sine_scene`; the elevation is above the ground plane of
         the up axis.
+    up
+        ``"auto"`` (:func:`detect_up`), ``"y"`` or ``"z"``.
     fill
         Share of the frame's limiting side the object fills.
     bsdf
         A BSDF dict or instance used instead of the plug-in of ``table``.
+
+    Returns
+    -------
+    mitsuba.Scene
+        The scene, loaded in the active variant.
     """
     if lighting not in LIGHTINGS:
         raise OptionError(f"lighting: {lighting!r} is not one of {', '.join(LIGHTINGS)}")

@@ -55,7 +55,18 @@ class NoiseModel:
 
     @classmethod
     def parse(cls, text: str) -> NoiseModel:
-        """``"none"`` or ``"FULL_WELL[,READ]"`` (electrons), e.g. ``"20000,3"``."""
+        """A noise model from its command-line text.
+
+        Parameters
+        ----------
+        text
+            ``"none"`` or ``"FULL_WELL[,READ]"`` (electrons), e.g. ``"20000,3"``.
+
+        Returns
+        -------
+        NoiseModel
+            The model.
+        """
         t = text.strip().lower()
         if t in ("none", "off", "0"):
             return cls(0.0, 0.0)
@@ -88,6 +99,18 @@ class NoiseModel:
         normal limit (mean and variance ``e``; the skewness ``1 / sqrt(e)``
         left out is under 3 %), four times cheaper to draw than Poisson. Read
         noise is normal with standard deviation ``read_e``.
+
+        Parameters
+        ----------
+        x
+            Noise-free linear values, 1 = full well (any shape).
+        rng
+            The random generator.
+
+        Returns
+        -------
+        numpy.ndarray
+            Noisy linear values (not clipped), the shape of ``x``.
         """
         if not self.enabled:
             return x

@@ -39,7 +39,21 @@ __all__ = ["SimulationReport", "simulate_capture", "load_material"]
 
 @dataclass
 class SimulationReport:
-    """What :func:`simulate_capture` wrote."""
+    """What :func:`simulate_capture` wrote.
+
+    Attributes
+    ----------
+    folder
+        The capture folder.
+    n_images, n_white, n_dark
+        Photographs written: all, white references, dark frames.
+    n_saturated_pixels
+        Pixels at the sensor's largest code.
+    seconds_rendering
+        Time spent in Mitsuba, seconds.
+    files
+        The photographs' paths relative to ``folder``.
+    """
 
     folder: Path
     n_images: int = 0
@@ -50,7 +64,13 @@ class SimulationReport:
     files: list[str] = field(default_factory=list)
 
     def summary(self) -> str:
-        """One line."""
+        """The report in one line.
+
+        Returns
+        -------
+        str
+            The counts and the rendering time.
+        """
         return (
             f"{self.folder}: {self.n_images} photographs ({self.n_white} white references, "
             f"{self.n_dark} dark frames), {self.n_saturated_pixels} saturated pixels, "
@@ -59,7 +79,19 @@ class SimulationReport:
 
 
 def load_material(material: CDBRDF | str | PathLike[str]) -> CDBRDF:
-    """A table from a :class:`CDBRDF`, a CDBRDF file or a preset name (:mod:`cdbrdf.materials`)."""
+    """The table of a material.
+
+    Parameters
+    ----------
+    material
+        A :class:`CDBRDF`, a CDBRDF file or a bundled material's name
+        (:mod:`cdbrdf.materials`).
+
+    Returns
+    -------
+    CDBRDF
+        The table.
+    """
     if isinstance(material, CDBRDF):
         return material
     p = Path(material)
@@ -116,6 +148,8 @@ def simulate_capture(
         by two rows, no stray row). Default: a plan for ``grid`` (default the
         material's own grid) and ``stands`` (default: one per kappa of the
         grid, default geometry), written like ``cdbrdf plan``.
+    grid, stands
+        Without ``plan``: the samples and the stands of the plan.
     size
         Image width and height in pixels.
     field_mm
@@ -144,6 +178,11 @@ def simulate_capture(
         Noise seed (the photographs of one rendering draw from ``(seed, its first row)``).
     progress
         ``progress(done, total)`` (photographs) after each rendering's photographs are written.
+
+    Returns
+    -------
+    SimulationReport
+        What was written.
     """
     if not isinstance(image_kind, str) or image_kind not in IMAGE_KINDS:
         raise OptionError(f"image_kind: {image_kind!r:.40} is not one of {', '.join(IMAGE_KINDS)}")

@@ -88,6 +88,18 @@ def stand_meshes(stand: Stand, *, segments: int = 256) -> dict[str, dict[str, ND
     Each mesh is a dict of ``positions``, ``normals`` (smooth, exact),
     ``uv`` (u along the bending direction x, so dP/du is the material's
     reference tangent) and ``faces``. Lengths in mm.
+
+    Parameters
+    ----------
+    stand
+        The stand.
+    segments
+        Segments along the curved face.
+
+    Returns
+    -------
+    dict
+        The meshes by part name.
     """
     w = stand.face_width_mm
     L = stand.length_mm

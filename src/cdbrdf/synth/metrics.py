@@ -51,13 +51,40 @@ FLAT_MEDIAN_LUMINANCE = 0.3
 
 
 def chromaticity(rgb: ArrayLike) -> NDArray[np.float64]:
-    """rgb chromaticity ``(r, g, b) / (r + g + b)`` of the *mean* of ``rgb (..., 3)``."""
+    """The rgb chromaticity ``(r, g, b) / (r + g + b)`` of the *mean* colour.
+
+    Parameters
+    ----------
+    rgb
+        Linear RGB, ``(..., 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(3,)`` chromaticity of the mean of ``rgb``.
+    """
     m = np.asarray(rgb, dtype=np.float64).reshape(-1, 3).mean(axis=0)
     return m / m.sum()
 
 
 def low_elevation_slice(table: CDBRDF, kappa: float, max_theta_deg: float = 30.0) -> NDArray[np.float64]:
-    """Samples at one curvature with view and light elevations <= ``max_theta_deg``."""
+    """Samples at one curvature with view and light elevations <= ``max_theta_deg``.
+
+    Parameters
+    ----------
+    table
+        The table.
+    kappa
+        One of its curvatures, mm^-1.
+    max_theta_deg
+        Largest elevation, degrees.
+
+    Returns
+    -------
+    numpy.ndarray
+        The samples, ``(n_phi_l, n_theta_l, n_phi_v, n_theta_v, channel)`` over the
+        kept elevations.
+    """
     i = int(np.flatnonzero(np.isclose(table.kappa, kappa))[0])
     tl = table.theta_l <= max_theta_deg + 1e-9
     tv = table.theta_v <= max_theta_deg + 1e-9
@@ -65,8 +92,23 @@ def low_elevation_slice(table: CDBRDF, kappa: float, max_theta_deg: float = 30.0
 
 
 def in_plane_luminance(table: CDBRDF, kappa: float, plane_phi_deg: float) -> float:
-    """Mean luminance of the samples whose view and light lie in the plane at
-    azimuth ``plane_phi_deg`` (azimuths ``phi`` and ``phi + 180``), all elevations."""
+    """Mean luminance of the samples whose view and light lie in one plane.
+
+    Parameters
+    ----------
+    table
+        The table.
+    kappa
+        One of its curvatures, mm^-1.
+    plane_phi_deg
+        The plane's azimuth, degrees: the samples at azimuths ``phi`` and
+        ``phi + 180``, all elevations.
+
+    Returns
+    -------
+    float
+        The mean luminance.
+    """
     i = int(np.flatnonzero(np.isclose(table.kappa, kappa))[0])
     az = [plane_phi_deg % 360.0, (plane_phi_deg + 180.0) % 360.0]
     il = [int(np.flatnonzero(np.isclose(table.phi_l, a))[0]) for a in az]
@@ -85,6 +127,15 @@ def near_normal_pairs(
 
     Elevations uniform in ``[0, max_theta_deg]`` and azimuths uniform in
     ``[0, 360)``, independently for the view and the light.
+
+    Parameters
+    ----------
+    n
+        Number of pairs.
+    max_theta_deg
+        Largest elevation, degrees.
+    seed
+        Seed of the random generator.
 
     Returns
     -------
@@ -144,12 +195,28 @@ class BendContrast:
         return float(self.lab[0] - self.reference_lab[0])
 
     def chroma_hue(self) -> tuple[tuple[float, float], tuple[float, float]]:
-        """``((C*, h) at kappa, (C*, h) at the reference)``, hue angles in degrees."""
+        """Chroma and hue of the two swatches.
+
+        Returns
+        -------
+        at_kappa : tuple of float
+            ``(C*ab, h_ab)`` at :attr:`kappa`, the hue angle in degrees.
+        at_reference : tuple of float
+            The same at :attr:`reference_kappa`.
+        """
         c, h = lab_chroma_hue(np.stack([self.lab, self.reference_lab]))
         return (float(c[0]), float(h[0])), (float(c[1]), float(h[1]))
 
     def swatches_srgb8(self) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
-        """The two swatch colours as 8-bit sRGB ``(3,)`` each: ``(at kappa, at the reference)``."""
+        """The two swatch colours as 8-bit sRGB.
+
+        Returns
+        -------
+        at_kappa : numpy.ndarray
+            ``(3,)`` uint8 at :attr:`kappa`.
+        at_reference : numpy.ndarray
+            ``(3,)`` uint8 at :attr:`reference_kappa`.
+        """
         return tonemap_srgb8(self.rgb), tonemap_srgb8(self.reference_rgb)
 
 
@@ -186,6 +253,7 @@ def bend_contrast(
     Returns
     -------
     BendContrast
+        The median Delta E*ab, the scale and the swatch colours.
 
     Raises
     ------

@@ -99,7 +99,13 @@ PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType({**_WOVEN, **PILE_PR
 
 
 def names() -> list[str]:
-    """Names of the presets."""
+    """Names of the presets.
+
+    Returns
+    -------
+    list of str
+        The names.
+    """
     return sorted(PRESETS)
 
 
@@ -119,6 +125,18 @@ def params_class(name: str) -> type[ClothParams] | type[PileParams]:
 def params(name: str, **overrides: Any) -> ClothParams | PileParams:
     """The parameters of a preset with ``overrides`` applied.
 
+    Parameters
+    ----------
+    name
+        One of :func:`names`.
+    **overrides
+        Parameters changed, by name.
+
+    Returns
+    -------
+    ClothParams
+        The parameters.
+
     Raises
     ------
     OptionError
@@ -129,6 +147,19 @@ def params(name: str, **overrides: Any) -> ClothParams | PileParams:
 
 
 def model(name: str, **overrides: Any) -> ClothModel | PileModel:
-    """The model of a preset (:class:`ClothModel` or :class:`PileModel`; see :func:`params`)."""
+    """The model of a preset.
+
+    Parameters
+    ----------
+    name
+        One of :func:`names`.
+    **overrides
+        Parameters changed (:func:`params`).
+
+    Returns
+    -------
+    ClothModel or PileModel
+        The model (:class:`PileModel` for a pile preset).
+    """
     p = params(name, **overrides)
     return PileModel(p) if isinstance(p, PileParams) else ClothModel(p)

@@ -79,13 +79,27 @@ _FLOAT16_MAX = 65504.0
 
 @dataclass(frozen=True)
 class Asset:
-    """One packed asset: a JSON-serialisable header and its binary blob."""
+    """One packed asset: a JSON-serialisable header and its binary blob.
+
+    Attributes
+    ----------
+    header
+        Shapes, types and metadata, JSON-serialisable.
+    blob
+        The packed arrays.
+    """
 
     header: dict[str, Any]
     blob: bytes
 
     def header_json(self) -> str:
-        """The header as compact JSON."""
+        """The header as compact JSON.
+
+        Returns
+        -------
+        str
+            The JSON text.
+        """
         return json.dumps(self.header, separators=(",", ":"), allow_nan=False)
 
 
@@ -113,9 +127,21 @@ class _Blob:
 
 
 def texture_shape(table: Any, *, max_width: int = WEBGL2_MIN_LIMITS["MAX_TEXTURE_SIZE"]) -> tuple[int, int, int]:
-    """``(width, height, layers)`` of a table's lookup texture (pole nodes included).
+    """The size of a table's lookup texture (pole nodes included).
 
     A layer's ``n_light * n_view`` texels are folded into rows of at most ``max_width``.
+
+    Parameters
+    ----------
+    table
+        The table.
+    max_width
+        The widest row, texels.
+
+    Returns
+    -------
+    tuple of int
+        ``(width, height, layers)``.
     """
     lg = table.lookup_grid()
     k, pl, tl, pv, tv, _ = lg.shape
@@ -126,6 +152,15 @@ def texture_shape(table: Any, *, max_width: int = WEBGL2_MIN_LIMITS["MAX_TEXTURE
 
 def check_texture(table: Any, *, name: str = "table", limits: Mapping[str, int] = WEBGL2_MIN_LIMITS) -> None:
     """Refuse a table whose lookup texture exceeds ``limits`` (default: WebGL2's guaranteed ones).
+
+    Parameters
+    ----------
+    table
+        The table.
+    name
+        Its name, for messages.
+    limits
+        The GPU's limits by WebGL name.
 
     Raises
     ------
@@ -151,7 +186,19 @@ def check_texture(table: Any, *, name: str = "table", limits: Mapping[str, int] 
 
 
 def parse_grid(text: str) -> tuple[float, float, int | None]:
-    """``"THETA_STEP,PHI_STEP[,N_KAPPA]"`` -> steps in degrees and an optional curvature count.
+    """Read a ``--grid`` value.
+
+    Parameters
+    ----------
+    text
+        ``"THETA_STEP,PHI_STEP[,N_KAPPA]"``.
+
+    Returns
+    -------
+    theta_step_deg, phi_step_deg : float
+        The steps, degrees.
+    n_kappa : int or None
+        The curvature count, if given.
 
     Raises
     ------
@@ -185,6 +232,20 @@ def resample(table: Any, *, theta_step_deg: float, phi_step_deg: float, n_kappa:
     curvatures over its range. The symmetry is kept. Every sample of the
     result is an interpolated value: the result is marked measured
     everywhere and its attributes say ``resampled_from`` (the old shape).
+
+    Parameters
+    ----------
+    table
+        The table.
+    theta_step_deg, phi_step_deg
+        The steps, degrees.
+    n_kappa
+        Number of curvatures; default: the table's axis.
+
+    Returns
+    -------
+    CDBRDF
+        The resampled table.
     """
     from ..grid import Grid
     from ..table import CDBRDF
@@ -244,6 +305,11 @@ def table_asset(table: Any, *, name: str = "table", precision: str = "auto") -> 
         Its label in the viewer (the file name).
     precision
         One of :data:`PRECISIONS`: the texture's float type.
+
+    Returns
+    -------
+    Asset
+        The packed table.
 
     Raises
     ------
@@ -333,6 +399,11 @@ def mesh_asset(mesh: Any, *, name: str) -> Asset:
         attribute ``"curvature"`` in mm^-1, lengths in mm).
     name
         Its label in the viewer.
+
+    Returns
+    -------
+    Asset
+        The packed mesh.
     """
     from ..mesh.frames import face_uv_tangents, vertex_tangents
     from ..mesh.units import parse_units

@@ -70,6 +70,11 @@ def default_meshes(*, drape: Any = None) -> dict[str, Any]:
     drape
         An already prepared draped-cloth mesh (the demo has one), else it is
         built and prepared here (:func:`cdbrdf.mesh.prepare_mesh`).
+
+    Returns
+    -------
+    dict
+        ``{"drape": prepared Mesh}``.
     """
     if drape is None:
         from ..mesh import DrapedCloth, draped_cloth_mesh, prepare_mesh
@@ -103,6 +108,11 @@ def viewer_files(
         Texture precision (:data:`cdbrdf.view.asset.PRECISIONS`).
     exposure_ev
         The page's initial exposure, stops (default: from the first table).
+
+    Returns
+    -------
+    dict
+        The files' bytes by relative path (``index.html``, scripts, assets).
 
     Raises
     ------
@@ -145,10 +155,22 @@ def viewer_files(
 
 
 def write_viewer(folder: str | PathLike[str], files: Mapping[str, bytes]) -> Path:
-    """Write ``files`` (:func:`viewer_files`) into ``folder`` (created if missing); returns its ``index.html``.
+    """Write the viewer's files into a folder (created if missing).
 
     For a folder that is itself being built atomically (the demo's partial
     output folder); :func:`export_viewer` is the atomic, refusing writer.
+
+    Parameters
+    ----------
+    folder
+        The folder.
+    files
+        Its files by relative path (:func:`viewer_files`).
+
+    Returns
+    -------
+    pathlib.Path
+        ``folder/index.html``.
     """
     root = Path(folder)
     root.mkdir(parents=True, exist_ok=True)
@@ -168,6 +190,13 @@ def export_viewer(dest: str | PathLike[str], files: Mapping[str, bytes]) -> Path
     write (or one with files added since) is refused with
     :class:`FileExistsError`, one that another command made (the demo's
     output, a simulated capture) with :class:`~cdbrdf.errors.OutputError`.
+
+    Parameters
+    ----------
+    dest
+        The folder.
+    files
+        Its files by relative path (:func:`viewer_files`).
 
     Returns
     -------

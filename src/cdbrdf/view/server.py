@@ -182,7 +182,13 @@ class ViewerServer:
         self._httpd.serve_forever(poll_interval=0.2)
 
     def start(self) -> ViewerServer:
-        """Serve from a background thread (tests, scripts); returns self."""
+        """Serve from a background thread (tests, scripts).
+
+        Returns
+        -------
+        ViewerServer
+            This server.
+        """
         self._thread = threading.Thread(target=self.serve_forever, name="cdbrdf-view", daemon=True)
         self._thread.start()
         return self
