@@ -432,3 +432,42 @@ def test_mitsubas_own_loader_says_the_checks_are_not_applied(cr, tmp_path, caplo
     with caplog.at_level(logging.WARNING, logger="cdbrdf"), pytest.raises(SceneError, match="UV coordinates"):
         cr.load_file(path)
     assert "own loader" not in caplog.text
+
+
+def test_inline_bsdf_under_a_scaled_shape_loads_in_a_fresh_process(tmp_path):
+    """A shape with a to_world scale and its cdbrdf BSDF inline, unnamed, seen by a perspective camera.
+
+    The curvature factor of the scale was once given to a copy of the BSDF
+    node appended after the scene's nodes, which made Mitsuba's loader crash
+    the process (a bus error) on this scene; run in a child so that a crash
+    fails this test instead of the suite.
+    """
+    import subprocess
+    import sys
+
+    from cdbrdf.mesh import SineSheet, sine_sheet_mesh, write_ply
+
+    write_ply(tmp_path / "sheet.ply", sine_sheet_mesh(SineSheet(vertices_per_wavelength=8)))
+    kappa_table().save(tmp_path / "t.h5")
+    (tmp_path / "scene.xml").write_text("""<scene version="3.0.0">
+  <integrator type="path"/>
+  <sensor type="perspective">
+    <transform name="to_world"><lookat origin="0, -60, 40" target="0, 0, 0" up="0, 0, 1"/></transform>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="12"/></film>
+    <sampler type="independent"><integer name="sample_count" value="2"/></sampler>
+  </sensor>
+  <emitter type="directional"><vector name="direction" value="0, 0, -1"/></emitter>
+  <shape type="ply"><string name="filename" value="sheet.ply"/>
+    <transform name="to_world"><scale value="5"/></transform>
+    <bsdf type="cdbrdf"><string name="filename" value="t.h5"/></bsdf>
+  </shape>
+</scene>
+""")
+    code = ("import sys, cdbrdf.render as cr, mitsuba as mi\n"
+            "with cr.variant('llvm_ad_rgb'):\n"
+            "    img = mi.render(cr.load_file(sys.argv[1]))\n"
+            "    print(img.shape)\n")
+    r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "scene.xml")], capture_output=True, text=True,
+                       timeout=300, cwd=tmp_path)
+    assert r.returncode == 0, (r.returncode, r.stderr[-2000:])
+    assert "(12, 16, 3)" in r.stdout
