@@ -79,8 +79,6 @@ _UNDOCUMENTED = (
 )
 
 # a summary line does not end at "Fig. 7" or "Rec. 709"
-
-# a summary line does not end at "Fig. 7" or "Rec. 709"
 _autosummary.WELL_KNOWN_ABBREVIATIONS = (*_autosummary.WELL_KNOWN_ABBREVIATIONS, "Fig.", "Figs.", "Rec.", "Sec.")
 
 # The module pages are written here, before autosummary runs: each object gets one

@@ -365,6 +365,16 @@ def card_exposure_ev(card_irradiance: float) -> float:
     contents. A surface of reflectance ``rho`` under the same light then
     shows at ``rho`` (a dark indigo denim stays dark, white is just white).
 
+    Parameters
+    ----------
+    card_irradiance
+        Irradiance on the card, W m^-2.
+
+    Returns
+    -------
+    float
+        The exposure, stops.
+
     Raises
     ------
     ValueError

@@ -212,17 +212,35 @@ class CDBTF:
         return copy.deepcopy(self._compression)
 
     def mean(self) -> CDBRDF:
-        """The tile mean, a :class:`~cdbrdf.CDBRDF`: what a patch of whole repeats reflects."""
+        """The tile mean: what a patch of whole repeats reflects.
+
+        Returns
+        -------
+        CDBRDF
+            The mean over the texels.
+        """
         return self._mean
 
     def texel_centres_mm(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The texel centres along u and along v, mm."""
+        """The texel centres.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Centres along u and along v, mm.
+        """
         nu, nv = self.texels
         su, sv = self._repeat
         return (np.arange(nu) + 0.5) * su / nu, (np.arange(nv) + 0.5) * sv / nv
 
     def decode(self) -> NDArray[np.float32]:
-        """The decoded texels at the grid's samples, ``(n_v, n_u) + grid.shape + (channels,)`` float32."""
+        """The decoded texels at the grid's samples.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n_v, n_u) + grid.shape + (channels,)`` float32.
+        """
         nv, nu, r = self._weights.shape
         m = self._mean.values.astype(np.float32)
         basis = np.moveaxis(self._basis, -2, 0).reshape(r, m.size)  # (rank, samples * channels)
@@ -231,7 +249,14 @@ class CDBTF:
         return out
 
     def nbytes_ratio(self) -> float:
-        """Raw float32 bytes of every texel's table over the float32 bytes of mean, basis and weights."""
+        """The compression ratio against raw float32.
+
+        Returns
+        -------
+        float
+            Bytes of every texel's table in float32 over the float32 bytes of
+            the mean, the basis and the weights.
+        """
         nu, nv = self.texels
         raw = nu * nv * self._mean.values.size
         return raw / (self._mean.values.size + self._basis.size + self._weights.size)
@@ -240,7 +265,11 @@ class CDBTF:
     def lookup_grid(self) -> LookupGrid:
         """The mean and the components as one table of ``(1 + rank) * channels`` channels, prepared for lookup.
 
-        Channel ``i * channels + c`` is component ``i`` (0: the mean) of channel ``c``.
+        Returns
+        -------
+        cdbrdf.interp.LookupGrid
+            Channel ``i * channels + c`` is component ``i`` (0: the mean) of
+            channel ``c``.
         """
         if self._lookup is None:
             from ..interp import prepare
@@ -251,9 +280,17 @@ class CDBTF:
         return self._lookup
 
     def texel_weights(self, u_mm: ArrayLike, v_mm: ArrayLike) -> NDArray[np.float64]:
-        """The component weights at positions ``(u, v)`` (mm; periodic bilinear between texel centres).
+        """The component weights at positions ``(u, v)`` (periodic bilinear between texel centres).
 
-        Returns ``broadcast shape + (rank,)``; NaN rows where a position is not finite.
+        Parameters
+        ----------
+        u_mm, v_mm
+            Positions in the repeat, mm (broadcast; any value, wrapped).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``broadcast shape + (rank,)``; NaN rows where a position is not finite.
         """
         u, v = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (u_mm, v_mm)))
         nu, nv = self.texels
@@ -320,7 +357,15 @@ class CDBTF:
 
     # -- file -------------------------------------------------------------------------
     def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
-        """Write the BTF to an HDF5 file, atomically (``docs/format.md``, the CD-BTF variables)."""
+        """Write the BTF to an HDF5 file, atomically (``docs/format.md``, the CD-BTF variables).
+
+        Parameters
+        ----------
+        path
+            The file.
+        compression
+            HDF5 filter of the variables (``"gzip"`` or None).
+        """
         from .file import BTFParts, write
 
         write(BTFParts(self._mean, self._weights, self._basis, self._repeat, self.compression), path,

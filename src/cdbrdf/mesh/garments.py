@@ -99,6 +99,11 @@ def _body_point(g: Garment, phi: NDArray[np.float64], z: NDArray[np.float64]) ->
 def garment_mesh(garment: Garment = Garment()) -> Mesh:
     """The sewn top of :class:`Garment` (see the module's description).
 
+    Parameters
+    ----------
+    garment
+        Its sizes.
+
     Returns
     -------
     Mesh

@@ -60,7 +60,15 @@ _MIN_NZ = 0.1
 
 @dataclass(frozen=True)
 class NormalMap:
-    """A tangent-space normal map: ``(H, W, 3)`` unit normals, row 0 at the top (v = 1)."""
+    """A tangent-space normal map.
+
+    Parameters
+    ----------
+    normals
+        ``(H, W, 3)`` unit normals, row 0 at the top (v = 1).
+    name
+        What to call it in messages (its file).
+    """
 
     normals: NDArray[np.float64]
     name: str = "normal map"
@@ -88,6 +96,19 @@ def read_normal_map(path: str | PathLike[str], *, convention: str = "opengl") ->
 
     Integer codes are decoded as ``2 code / max - 1`` (not as sRGB); float
     images hold the components directly.
+
+    Parameters
+    ----------
+    path
+        The image file.
+    convention
+        ``"opengl"`` (+y up, Blender, glTF) or ``"directx"`` (+y down), one
+        of :data:`NORMAL_MAP_CONVENTIONS`.
+
+    Returns
+    -------
+    NormalMap
+        The unit normals.
 
     Raises
     ------

@@ -123,6 +123,7 @@ def crest_contrast(
     Returns
     -------
     CrestContrast
+        The medians, pixel counts and swatches.
 
     Raises
     ------

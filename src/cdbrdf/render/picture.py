@@ -333,8 +333,8 @@ def render_table(
     exposure: float | str = "card",
     variant: str | None = None,
     curvature: bool = False,
-    progress: Callable[[str, int, int], None] | None = None,
     uv_scale: float | tuple[float, float] | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
 ) -> Picture:
     """Render a table on the paper's sine sheet or on a mesh, with the CDBRDF and/or the plain BRDF.
 
@@ -399,6 +399,9 @@ def render_table(
     curvature
         Also record the curvature seen at each pixel (:attr:`Picture.curvature`,
         for :func:`cdbrdf.render.contrast.crest_contrast`).
+    uv_scale
+        For a CD-BTF: mm per UV unit of the mesh (one number or ``(u, v)``);
+        default: the sheet's size for the sine sheet, 1 (UVs in mm) for a mesh.
     progress
         ``progress(stage, done, total)``: ``"curvature"`` (vertices) while a
         mesh is prepared, ``"rendering MODE"`` (samples per pixel).

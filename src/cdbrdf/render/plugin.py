@@ -515,6 +515,8 @@ def check_scene(scene: Any, *, curvature: bool = True) -> None:
     ----------
     scene : mitsuba.Scene
         A loaded scene.
+    curvature
+        Also check the curvature those meshes carry (the warning above).
 
     Raises
     ------

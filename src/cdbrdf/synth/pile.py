@@ -212,6 +212,16 @@ class PileParams:
     def replace(self, **changes: Any) -> PileParams:
         """A copy with some parameters changed (validated).
 
+        Parameters
+        ----------
+        **changes
+            New values by parameter name.
+
+        Returns
+        -------
+        PileParams
+            The copy.
+
         Raises
         ------
         OptionError
@@ -226,12 +236,30 @@ class PileParams:
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-friendly parameters (tuples become lists)."""
+        """JSON-friendly parameters.
+
+        Returns
+        -------
+        dict
+            Every parameter by name (tuples become lists).
+        """
         return {f.name: list(v) if isinstance(v := getattr(self, f.name), tuple) else v for f in fields(self)}
 
     @classmethod
     def parse_value(cls, name: str, text: str) -> Any:
-        """Convert a command-line value ``text`` for parameter ``name`` (colours as ``r,g,b``).
+        """Convert a command-line value for a parameter.
+
+        Parameters
+        ----------
+        name
+            The parameter.
+        text
+            Its value as typed (colours as ``r,g,b``).
+
+        Returns
+        -------
+        Any
+            The value, of the parameter's type.
 
         Raises
         ------
@@ -397,6 +425,16 @@ class PileModel:
     def layer_scale(self, kappa: float) -> NDArray[np.float64]:
         """Density factor ``1 / (1 + kappa z)`` of each slab (mid-height ``z``) at curvature ``kappa``.
 
+        Parameters
+        ----------
+        kappa
+            Curvature, mm^-1 (> 0 convex).
+
+        Returns
+        -------
+        numpy.ndarray
+            One factor per slab of the pile.
+
         Raises
         ------
         OptionError
@@ -433,7 +471,10 @@ class PileModel:
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The BRDF split into the light scattered by the pile and by the ground.
 
-        Arguments as :meth:`evaluate`.
+        Parameters
+        ----------
+        theta_v, phi_v, theta_l, phi_l, kappa
+            As :meth:`evaluate` (degrees, mm^-1; broadcast).
 
         Returns
         -------
@@ -530,7 +571,13 @@ class PileModel:
         return CDBRDF(values, **g.axes(), attrs=self.attrs())
 
     def attrs(self) -> dict[str, Any]:
-        """Table metadata: quantity, material, model and parameters (provenance)."""
+        """Table metadata.
+
+        Returns
+        -------
+        dict
+            Quantity, material, model and parameters (provenance).
+        """
         return {
             "quantity": "brdf",
             "material": self.params.name,
@@ -559,7 +606,22 @@ class PileModel:
         n_theta: int = 24,
         n_phi: int = 48,
     ) -> NDArray[np.float64]:
-        """Directional albedo ``int f cos(theta_l) dw_l`` (midpoint rule), RGB, ``(n_views, 3)``."""
+        """Directional albedo ``int f cos(theta_l) dw_l`` (midpoint rule).
+
+        Parameters
+        ----------
+        theta_v, phi_v
+            View directions, degrees (broadcast).
+        kappa
+            Curvature, mm^-1.
+        n_theta, n_phi
+            Light elevations and azimuths of the midpoint rule.
+
+        Returns
+        -------
+        numpy.ndarray
+            RGB albedo, ``(n_views, 3)``.
+        """
         tv, pv = np.broadcast_arrays(np.atleast_1d(np.asarray(theta_v, float)), np.atleast_1d(np.asarray(phi_v, float)))
         dt = 90.0 / n_theta
         dp = 360.0 / n_phi
