@@ -13,6 +13,11 @@ Writes, for each bundled material:
   +0.22 (which yarn is on top, and the height), showing gaps open and close
   (:func:`cdbrdf.plot.plot_weave`).
 
+``--before DIR`` also draws ``<name>_mosaic_before.png`` from the tables
+``DIR/<name>.h5`` (e.g. the bundled tables of an earlier commit, written out
+with ``git show COMMIT:src/cdbrdf/data/denim.h5 > DIR/denim.h5``), at its
+own automatic exposure, for a before/after comparison.
+
 ``--convergence`` also prints the integration-error study of the document
 (:func:`cdbrdf.synth.convergence.convergence`; minutes).
 """
@@ -24,6 +29,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+import cdbrdf
 from cdbrdf import materials
 from cdbrdf.plot import plot_kappa_curves, plot_mosaic, plot_weave, save_figure
 from cdbrdf.synth.convergence import convergence
@@ -35,6 +41,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("out_dir", help="folder for the PNG files (e.g. docs/img)")
     parser.add_argument("--convergence", action="store_true", help="also print the convergence study (slow)")
+    parser.add_argument("--before", metavar="DIR", help="also draw <name>_mosaic_before.png from DIR/<name>.h5")
     args = parser.parse_args(argv)
     out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -47,9 +54,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         for suffix, fig in figures:
             print(save_figure(fig, out / f"{name}_{suffix}.png", dpi=110))
+        if args.before:
+            old = cdbrdf.load(Path(args.before) / f"{name}.h5")
+            fig = plot_mosaic(old, exposure="auto", dpi=110, title=f"{name}: before")
+            print(save_figure(fig, out / f"{name}_mosaic_before.png", dpi=110))
     if args.convergence:
         for name in materials.names():
-            print(f"{name}: rays texels rms_rel max_rel")
+            print(f"{name}: points texels rms_rel max_rel")
             for r, t, rms, mx in convergence(name):
                 print(f"  {r:5d} {t:4d} {rms:.4f} {mx:.4f}")
     return 0
