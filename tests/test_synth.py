@@ -350,8 +350,8 @@ def test_reciprocal(name):
     (the issue asks for a median below 0.5 % and a 99th percentile below 3 %).
     """
     m = presets.model(name, **FAST)
-    tv, pv, tl, pl = _random_pairs(150, 2)
-    for k in (-0.22, 0.0, 0.1, 0.22):
+    tv, pv, tl, pl = _random_pairs(80, 2)
+    for k in (-0.22, 0.1, 0.22):
         a = m.evaluate(tv, pv, tl, pl, k)
         b = m.evaluate(tl, pl, tv, pv, k)
         assert a.max() > 0
@@ -411,7 +411,7 @@ def test_bending_shows_more_weft(name):
     """Both presets have the warp along the stand's axis: a convex bend spreads
     the warp and shows more of the weft near the normal, a concave one less
     (the share of each yarn's colour in the light reflected near the normal)."""
-    m = presets.model(name, texels=64, points=987, tilt_samples=3)
+    m = presets.model(name, texels=48, points=610, tilt_samples=1)
     seen = {k: seen_fractions(m, k) for k in (-0.22, 0.0, 0.22)}
     assert seen[-0.22]["weft"] < seen[0.0]["weft"] < seen[0.22]["weft"]
     assert seen[-0.22]["warp"] > seen[0.0]["warp"] > seen[0.22]["warp"]

@@ -59,7 +59,7 @@ PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
                 "warp_pitch_mm": 0.400,
                 # 18 picks per cm.
                 "weft_pitch_mm": 0.556,
-                # Ne 6 (98 tex) warp, d = 0.371 mm; warp cover 0.93; in the cloth
+                # Ne 6 (98 tex) warp, d = 0.371 mm (cover d/p = 0.93); in the cloth
                 # 0.39 mm wide (a 0.01 mm gap) by 0.353 mm high (same area).
                 "warp_width_mm": 0.390,
                 "warp_height_mm": 0.353,
@@ -106,15 +106,15 @@ PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
                 "warp_along": "y",
                 # Red-orange silk, L* 44, a* 43, b* 40.
                 "warp_rgb": (0.45, 0.06, 0.02),
-                # Yellow silk, L* 80, a* -22, b* 74.
-                "weft_rgb": (0.55, 0.62, 0.02),
+                # Golden-yellow silk, L* 81, a* -11, b* 75 (hue angle 99 deg).
+                "weft_rgb": (0.70, 0.60, 0.02),
                 # The white stand under the cloth (as for denim).
                 "backing_rgb": (0.80, 0.80, 0.80),
                 # 80 ends per cm.
                 "warp_pitch_mm": 0.125,
                 # 2 x 21 den (4.7 tex) twisted silk filament, d = 0.086 mm at a
                 # packing of 0.6 (fibroin 1.33 g/cm^3); flattened 1.6 : 1 to
-                # 0.110 x 0.067 mm (warp cover 0.88).
+                # 0.110 x 0.067 mm (0.88 of the spacing; cover d/p = 0.69).
                 "warp_width_mm": 0.110,
                 "warp_height_mm": 0.067,
                 # 30 picks per cm.
