@@ -59,6 +59,8 @@ __all__ = ["Bend", "bend", "centre_line_length", "zero_strain_height"]
 _LENGTH_SAMPLES = 512
 #: Bisection steps of the bent crimp (the interval shrinks by 2^-60).
 _BISECTION = 60
+#: Doublings of the bracket before the root is given up (a bracket of 2^100 scales).
+_BRACKET = 100
 
 
 @dataclass(frozen=True)
@@ -168,15 +170,25 @@ def _root(f: Callable[[float], float], start: float, scale: float) -> float:
 
     The bracket grows from ``start`` in steps doubling from ``scale`` until
     ``f`` changes sign.
+
+    Raises
+    ------
+    ArithmeticError
+        When ``f`` does not change sign within ``2^100`` scales.
     """
     lo = hi = start
     d = scale
-    if f(start) <= 0.0:
-        while f(hi) < 0.0:
+    for _ in range(_BRACKET):
+        if f(start) <= 0.0:
+            if f(hi) >= 0.0:
+                break
             lo, hi, d = hi, hi + d, 2.0 * d
-    else:
-        while f(lo) > 0.0:
+        else:
+            if f(lo) <= 0.0:
+                break
             hi, lo, d = lo, lo - d, 2.0 * d
+    else:
+        raise ArithmeticError(f"no sign change of the bending equation within {d:g} mm of {start:g} mm")
     for _ in range(_BISECTION):
         mid = 0.5 * (lo + hi)
         if f(mid) > 0.0:
