@@ -201,19 +201,30 @@ def visibility(H, xmap, dy, step, pos, normal, dirs, out, start, stop):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def integrate(pair_v, pair_l, dirs, vis, normal, tangent, kind, weight, params, out, start, stop):
+def integrate(pair_v, pair_l, dirs, vis, pos, normal, tangent, kind, weight, params, texel_grid, out, start, stop):
     """``sum_p w_p f_p(v, l) (n_p . v) (n_p . l) V_p(v) V_p(l)`` per pair, for pairs ``start`` to ``stop``.
 
     ``pair_v``/``pair_l`` index ``dirs`` and the rows of ``vis``; ``weight``
     is each point's share of the surface area (mm^2). The sum is symmetric in
-    v and l term by term. Writes ``out (n_pairs, 3)``.
+    v and l term by term. Writes ``out (n_pairs, n_bins, 3)`` (zeroed): with
+    one bin the sum over all points (``pos`` and ``texel_grid`` are not
+    read); with more, each point's term goes to the texel where the line
+    from the point along ``v`` crosses the height ``texel_grid[0]``, on a
+    periodic grid of ``texel_grid[3] x texel_grid[4]`` texels over a repeat
+    of ``texel_grid[1] x texel_grid[2]`` mm (bin ``v * n_u + u``).
     """
     npt = normal.shape[0]
+    nbin = out.shape[1]
+    z_ref = texel_grid[0]
+    lx = texel_grid[1]
+    ly = texel_grid[2]
+    n_u = int(texel_grid[3])
+    n_v = int(texel_grid[4])
     for q in range(start, stop):
         iv = pair_v[q]
         il = pair_l[q]
         vx, vy, vz = dirs[iv, 0], dirs[iv, 1], dirs[iv, 2]
-        lx, ly, lz = dirs[il, 0], dirs[il, 1], dirs[il, 2]
+        lx_, ly_, lz_ = dirs[il, 0], dirs[il, 1], dirs[il, 2]
         r_acc = 0.0
         g_acc = 0.0
         b_acc = 0.0
@@ -222,15 +233,28 @@ def integrate(pair_v, pair_l, dirs, vis, normal, tangent, kind, weight, params, 
                 continue
             nx_, ny_, nz_ = normal[p, 0], normal[p, 1], normal[p, 2]
             cv = nx_ * vx + ny_ * vy + nz_ * vz
-            cl = nx_ * lx + ny_ * ly + nz_ * lz
+            cl = nx_ * lx_ + ny_ * ly_ + nz_ * lz_
             k = kind[p]
             par = params[k]
             s, c = _terms(nx_, ny_, nz_, tangent[p, 0], tangent[p, 1], tangent[p, 2],
-                          vx, vy, vz, lx, ly, lz, par)
+                          vx, vy, vz, lx_, ly_, lz_, par)
             w = weight[p] * (cv * cl) * par[P_INK]
-            r_acc += (s + c * par[P_R]) * w
-            g_acc += (s + c * par[P_G]) * w
-            b_acc += (s + c * par[P_B]) * w
-        out[q, 0] = r_acc
-        out[q, 1] = g_acc
-        out[q, 2] = b_acc
+            if nbin == 1:
+                r_acc += (s + c * par[P_R]) * w
+                g_acc += (s + c * par[P_G]) * w
+                b_acc += (s + c * par[P_B]) * w
+            else:
+                # vis[iv, p] != 0 implies vz > 0.
+                t = (z_ref - pos[p, 2]) / vz
+                fu = (pos[p, 0] + t * vx) / lx
+                fv = (pos[p, 1] + t * vy) / ly
+                iu = int(math.floor((fu - math.floor(fu)) * n_u)) % n_u
+                jv = int(math.floor((fv - math.floor(fv)) * n_v)) % n_v
+                b = jv * n_u + iu
+                out[q, b, 0] += (s + c * par[P_R]) * w
+                out[q, b, 1] += (s + c * par[P_G]) * w
+                out[q, b, 2] += (s + c * par[P_B]) * w
+        if nbin == 1:
+            out[q, 0, 0] = r_acc
+            out[q, 0, 1] = g_acc
+            out[q, 0, 2] = b_acc

@@ -417,12 +417,20 @@ class ClothModel:
         return kappa * x
 
     # -- evaluation -------------------------------------------------------------------
-    def _flat(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
+    def _flat(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float,
+              texels: tuple[int, int] | None = None) -> NDArray[np.float64]:
         """``f cos(theta_v) cos(theta_l)`` in the flat frame, (n, 3): the micro-surface
-        integral over the repeat's area seen from above (symmetric in v and l)."""
-        out = np.zeros((v.shape[0], 3))
+        integral over the repeat's area seen from above (symmetric in v and l).
+
+        With ``texels = (n_u, n_v)``, (n, n_u * n_v, 3): per texel, the integral
+        over the points seen in it (the line from the point along ``v`` crosses
+        the repeat's mean height in the texel) over the texel's area; their
+        mean is the value without ``texels``.
+        """
+        nbin = 1 if texels is None else texels[0] * texels[1]
+        out = np.zeros((v.shape[0], nbin, 3))
         if v.shape[0] == 0:
-            return out
+            return out if texels is not None else out[:, 0]
         _, hf, pts = self._geometry_at(kappa)
         ny, nx = hf.shape
         dy = hf.size_mm[1] / ny
@@ -433,6 +441,9 @@ class ClothModel:
         H = np.ascontiguousarray(hf.height)
         n_pts = pts.weight.size
         area = hf.size_mm[0] * hf.size_mm[1]
+        # The mean height over the repeat's area seen from above, the repeat, the texels.
+        z_mean = float(np.average(hf.height.mean(axis=0), weights=hf.texel_width_mm))
+        texel_grid = np.array([z_mean, hf.size_mm[0], hf.size_mm[1]] + list(texels or (1, 1)), dtype=np.float64)
         # Pairs in chunks whose distinct directions' visibility table fits _VIS_BYTES
         # (one chunk for a grid: its directions repeat).
         per_chunk = max(1, _VIS_BYTES // (2 * n_pts))
@@ -443,17 +454,20 @@ class ClothModel:
             vis = np.zeros((dirs.shape[0], n_pts), dtype=np.uint8)
             dirs = np.ascontiguousarray(dirs)
             run_split(_trace.visibility, dirs.shape[0], H, xmap, dy, step, pts.position, pts.normal, dirs, vis)
-            part = np.zeros((c1 - c0, 3))
-            run_split(_trace.integrate, c1 - c0, inv[: c1 - c0], inv[c1 - c0 :], dirs, vis, pts.normal,
-                      pts.tangent, pts.kind, pts.weight, self._kernel_params, part, grain=16)
-            out[c0:c1] = part / area
-        return out
+            part = np.zeros((c1 - c0, nbin, 3))
+            run_split(_trace.integrate, c1 - c0, inv[: c1 - c0], inv[c1 - c0 :], dirs, vis, pts.position,
+                      pts.normal, pts.tangent, pts.kind, pts.weight, self._kernel_params, texel_grid, part,
+                      grain=16)
+            out[c0:c1] = part / (area / nbin)
+        return out if texels is not None else out[:, 0]
 
-    def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
-        """BRDF (n, 3) for unit direction pairs at one curvature."""
+    def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float,
+               texels: tuple[int, int] | None = None) -> NDArray[np.float64]:
+        """BRDF (n, 3) for unit direction pairs at one curvature; per texel (n, n_u * n_v, 3) with
+        ``texels = (n_u, n_v)`` (:meth:`_flat`; the mean over the texels is the value without)."""
         tilts = self.tilts_rad(kappa)
         n = v.shape[0]
-        num = np.zeros((n, 3))
+        num = np.zeros((n, 3) if texels is None else (n, texels[0] * texels[1], 3))
         den = np.zeros(n)
         vs, ls, idx = [], [], []
         for a in tilts:
@@ -469,15 +483,15 @@ class ClothModel:
             idx.append(np.flatnonzero(ok))
         # Each patch: its projected area towards the viewer (cos theta_v') times the
         # radiance it sends per unit irradiance (f cos theta_l'); g = f cos theta_v' cos theta_l'.
-        g = self._flat(np.concatenate(vs), np.concatenate(ls), kappa)
+        g = self._flat(np.concatenate(vs), np.concatenate(ls), kappa, texels)
         start = 0
         for i in idx:
             num[i] += g[start : start + i.size]
             start += i.size
         denom = den * l[:, 2]
         good = denom > 1e-12
-        out = np.zeros((n, 3))
-        out[good] = num[good] / denom[good, None]
+        out = np.zeros(num.shape)
+        out[good] = num[good] / denom[good].reshape((-1,) + (1,) * (num.ndim - 1))
         return out
 
     def evaluate(
