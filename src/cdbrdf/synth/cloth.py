@@ -445,8 +445,9 @@ class ClothModel:
         z_mean = float(np.average(hf.height.mean(axis=0), weights=hf.texel_width_mm))
         texel_grid = np.array([z_mean, hf.size_mm[0], hf.size_mm[1]] + list(texels or (1, 1)), dtype=np.float64)
         # Pairs in chunks whose distinct directions' visibility table fits _VIS_BYTES
-        # (one chunk for a grid: its directions repeat).
-        per_chunk = max(1, _VIS_BYTES // (2 * n_pts))
+        # (one chunk when all of them fit, as on a grid: its directions repeat).
+        n_dirs = np.unique(np.concatenate([v, l]), axis=0).shape[0]
+        per_chunk = v.shape[0] if n_dirs * n_pts <= _VIS_BYTES else max(1, _VIS_BYTES // (2 * n_pts))
         for c0 in range(0, v.shape[0], per_chunk):
             c1 = min(c0 + per_chunk, v.shape[0])
             dirs, inv = np.unique(np.concatenate([v[c0:c1], l[c0:c1]]), axis=0, return_inverse=True)
