@@ -1,6 +1,9 @@
 """The CD-BTF of the presets: compression ratio and error, the tile mean against the CDBRDF of synth.
 
-Run: ``python benchmarks/bench_btf.py [--texels 32] [--grid paper|coarse] [--preset denim ...]``.
+Run: ``python benchmarks/bench_btf.py [--texels 32] [--grid paper|coarse] [--preset denim ...]``;
+``--noise`` measures the integration noise of the texels instead (``--texels 16``: the relative RMS
+difference of the texel values at 16, 64 and 256 points per texel from those at 1,024, on 27 direction
+pairs at kappa 0.22).
 
 For each preset: tabulate per texel (:func:`cdbrdf.synth.texels.tabulate_texels`),
 compress at ``--max-error`` (the rank, its recorded errors and ratio), the
@@ -56,6 +59,32 @@ def _dense_evaluate(d: _Dense, repeat, u, v, q, chunk=1024):
     return out
 
 
+def _noise(name: str, texels: int) -> None:
+    """Relative RMS difference of the texels (and of the tile mean) from those at 1,024 points per texel."""
+    from cdbrdf.frames import direction_from_angles
+    from cdbrdf.synth.texels import texel_model
+
+    model = presets.model(name)
+    tv, pv = np.meshgrid([0.0, 30.0, 60.0], [0.0, 90.0, 200.0])
+    v = direction_from_angles(tv.reshape(-1), pv.reshape(-1))
+    lights = direction_from_angles(np.array([15.0, 45.0, 60.0]), np.array([180.0, 90.0, 300.0]))
+    vv, ll = np.repeat(v, 3, axis=0), np.tile(lights, (v.shape[0], 1))
+    res = {}
+    for ppt in (16, 64, 256, 1024):
+        res[ppt] = texel_model(model, texels, points_per_texel=ppt)._pairs(vv, ll, 0.22, (texels, texels))
+    ref = res.pop(1024)
+
+    def rel(a: np.ndarray, b: np.ndarray) -> float:
+        return round(float(np.sqrt(np.sum((a - b) ** 2) / np.sum(b ** 2))), 5)
+
+    print(json.dumps({
+        "preset": name, "texels": texels,
+        "texel_noise": {ppt: rel(x, ref) for ppt, x in res.items()},
+        "tile_mean_noise": {ppt: rel(x.mean(axis=1), ref.mean(axis=1)) for ppt, x in res.items()},
+        "texture": rel(ref, np.broadcast_to(ref.mean(axis=1, keepdims=True), ref.shape)),
+    }), flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", action="append", default=None)
@@ -64,14 +93,20 @@ def main() -> None:
     ap.add_argument("--max-error", type=float, default=0.03)
     ap.add_argument("--queries", type=int, default=100_000)
     ap.add_argument("--save", default=None, help="folder to write PRESET-btf.h5 into")
+    ap.add_argument("--points-per-texel", type=int, default=64)
+    ap.add_argument("--noise", action="store_true", help="measure the texels' integration noise instead")
     a = ap.parse_args()
+    if a.noise:
+        for name in a.preset or ["denim", "shot"]:
+            _noise(name, a.texels)
+        return
     grid = Grid.paper() if a.grid == "paper" else Grid.regular(theta_step_deg=30, phi_step_deg=90,
                                                                kappa=[-0.22, 0.0, 0.22])
     rng = np.random.default_rng(0)
     for name in a.preset or ["denim", "shot"]:
         model = presets.model(name)
         t0 = time.perf_counter()
-        dense = tabulate_texels(model, grid, texels=a.texels)
+        dense = tabulate_texels(model, grid, texels=a.texels, points_per_texel=a.points_per_texel)
         t_tex = time.perf_counter() - t0
         repeat = model.heightfield(0.0).size_mm
         t0 = time.perf_counter()

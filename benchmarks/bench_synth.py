@@ -4,9 +4,10 @@ Run: ``.venv/bin/python benchmarks/bench_synth.py``
 
 For each preset (``denim``, ``shot``) times ``ClothModel.tabulate`` on
 :meth:`cdbrdf.Grid.paper` (72 x 72 directions x 5 curvatures, each sample an
-integral over the weave repeat: ``rays`` view rays marched through the height
-field, a shadow ray per hit, ``tilt_samples`` footprint patches on a bent
-cloth), after a warm-up that compiles the kernels. Target: <= 60 s per preset.
+integral over the weave repeat: ``points`` points on the micro-surface, each
+with a visibility ray towards the viewer and one towards the light,
+``tilt_samples`` footprint patches on a bent cloth), after a warm-up that
+compiles the kernels. Target: <= 60 s per preset.
 As a reference measured in the same run, the kappa = +0.22 slice is also
 computed in one thread; the ratio is the parallel speed-up (the values
 are checked to be identical: no reductions across threads). Exits 1 when a
@@ -63,8 +64,8 @@ def main(argv=None) -> int:
         passed = t_all <= TARGET_S and same
         ok &= passed
         rows.append((name, np.prod(g.shape), t_all, np.prod(g.shape) / t_all, t_ser / t_par, same, passed))
-    print(f"threads: {threads}; rays/sample, texels: "
-          f"{presets.params('denim').rays}, {presets.params('denim').texels}")
+    print(f"threads: {threads}; points/sample, texels: "
+          f"{presets.params('denim').points}, {presets.params('denim').texels}")
     print(f"{'preset':8s} {'samples':>8s} {'time s':>7s} {'samples/s':>10s} {'1-thread/N-thread':>18s} "
           f"{'identical':>9s}  result")
     for name, n, t, rate, speed, same, passed in rows:

@@ -6,7 +6,7 @@ from cdbrdf.plot import plot_kappa_curves, plot_weave
 from cdbrdf.synth import presets
 
 #: Coarse model settings, as in test_synth.py: enough for a figure.
-FAST = dict(texels=48, rays=233, tilt_samples=3)
+FAST = dict(texels=48, points=233, tilt_samples=3)
 
 
 def test_figures_draw():

@@ -8,23 +8,28 @@ import pytest
 import cdbrdf
 from cdbrdf.cli import main as cli_main
 from cdbrdf.synth import ClothParams, presets
+from cdbrdf.synth._trace import _height
+from cdbrdf.synth.bending import _hoop_rows, bend, centre_line_length
 from cdbrdf.synth.cloth import MODEL_NAME
 from cdbrdf.synth.fibre import FibreLobes, _terms, fresnel_dielectric, local_albedo_max
-from cdbrdf.synth.metrics import chromaticity, in_plane_luminance, luminance
+from cdbrdf.synth.metrics import in_plane_luminance, luminance
+from cdbrdf.synth.physics import seen_fractions
+from cdbrdf.synth.surface import surface_points
 from cdbrdf.synth.weave import (
     BACKING,
     WARP,
     WEFT,
+    Heightfield,
     YarnGeometry,
+    _x_mapping,
     build_heightfield,
-    face_stretch,
     weave_matrix,
     x_of_xi,
 )
 
 PAPER_T = np.arange(0.0, 76.0, 15.0)
 PAPER_P = np.arange(0.0, 360.0, 30.0)
-FAST = dict(texels=48, rays=233, tilt_samples=3)
+FAST = dict(texels=48, points=377, tilt_samples=3)
 WHITE = dict(warp_rgb=(1, 1, 1), weft_rgb=(1, 1, 1), backing_rgb=(1, 1, 1),
              warp_specular=1.0, weft_specular=1.0)
 
@@ -77,24 +82,73 @@ def test_parameter_validation():
         presets.params("denim", warp_along="z")
     with pytest.raises(ValueError, match=r"unknown cloth parameter.*'thicknes'.*valid names:.*thickness_mm"):
         presets.params("denim", thicknes=1.0)
-    with pytest.raises(ValueError, match="rays: must be an integer"):
-        presets.params("shot", rays=2.5)
+    with pytest.raises(ValueError, match="points: must be an integer"):
+        presets.params("shot", points=2.5)
+    with pytest.raises(ValueError, match="neutral_fraction: must lie in"):
+        presets.params("shot", neutral_fraction=1.5)
     with pytest.raises(ValueError, match="unknown preset 'felt'; valid presets: denim, shot, towel, velvet"):
         presets.model("felt")
     p = presets.params("denim", thickness_mm=0.7)
     assert p.thickness_mm == 0.7 and p.name == "denim"
     assert ClothParams.parse_value("warp_rgb", "0.1,0.2,0.3") == (0.1, 0.2, 0.3)
     assert ClothParams.parse_value("weave", "10;01") == ((1, 0), (0, 1))
-    assert ClothParams.parse_value("rays", "377") == 377
+    assert ClothParams.parse_value("points", "377") == 377
 
 
 # -- geometry ------------------------------------------------------------------------
-def test_face_stretch():
-    assert face_stretch(0.2, 1.0) == pytest.approx(1.1)
-    assert face_stretch(-0.2, 0.5) == pytest.approx(0.95)
-    assert face_stretch(0.0, 3.0) == 1.0
+def _bent(kappa, *, neutral_fraction=0.0, weave="plain", share=0.8, thickness=0.3):
+    warp = YarnGeometry(pitch_mm=0.2, width_mm=0.19, height_mm=0.1, crimp_mm=share * 0.1, twist_deg=0.0)
+    weft = YarnGeometry(pitch_mm=0.3, width_mm=0.25, height_mm=0.1, crimp_mm=(1 - share) * 0.1, twist_deg=0.0)
+    return bend(weave_matrix(weave), warp, weft, warp_along="y", kappa_per_mm=kappa, thickness_mm=thickness,
+                neutral_fraction=neutral_fraction), warp, weft
+
+
+def test_bend_flat_is_unchanged():
+    b, warp, weft = _bent(0.0)
+    assert (b.warp, b.weft, b.stretch_x, b.face_strain) == (warp, weft, 1.0, 0.0)
+    assert b.axial is b.warp and b.hoop is b.weft  # warp along y: the warp is axial
+
+
+@pytest.mark.parametrize("kappa", [-0.3, -0.1, 0.05, 0.2])
+@pytest.mark.parametrize("weave", ["plain", "twill_3_1"])
+def test_bend_keeps_yarn_lengths_and_contact(kappa, weave):
+    """The hoop yarns (along x) are inextensible: their centre line on the
+    cylinder is as long as on the flat cloth; the crossing yarns stay in
+    contact (the crimps add up to the two half heights); the axial yarns'
+    spacing is stretched by 1 + kappa (c_axial - z0)."""
+    b, warp, weft = _bent(kappa, weave=weave)
+    rows = _hoop_rows(weave_matrix(weave), "y")
+    flat = centre_line_length(rows, weft.crimp_mm, warp.pitch_mm, 1.0)
+    bent = centre_line_length(rows, b.hoop.crimp_mm, warp.pitch_mm, 1.0, kappa_per_mm=kappa,
+                              zero_strain_mm=b.zero_strain_mm)
+    # Bisection to 2^-60 of the crimp: the length agrees to rounding of the quadrature sums.
+    assert bent == pytest.approx(flat, rel=1e-12)
+    assert b.axial.crimp_mm + b.hoop.crimp_mm == pytest.approx(warp.crimp_mm + weft.crimp_mm, rel=1e-15)
+    assert b.stretch_x == pytest.approx(1 + kappa * (b.axial.crimp_mm - b.zero_strain_mm), rel=1e-15)
+    # Convex: the hoop yarns decrimp and the axial ones take the crimp (interchange).
+    assert np.sign(weft.crimp_mm - b.hoop.crimp_mm) == np.sign(kappa)
+    assert np.sign(b.stretch_x - 1) == np.sign(kappa)
+
+
+def test_bend_strain_and_its_limits():
+    # Bonded back: the face is stretched by kappa t; free bending: kappa t / 2.
+    b, _, _ = _bent(0.05)
+    assert b.zero_strain_mm == pytest.approx(-0.15) and b.face_strain == pytest.approx(0.05 * 0.3)
+    m, _, _ = _bent(0.05, neutral_fraction=0.5)
+    assert m.zero_strain_mm == 0.0 and m.face_strain == pytest.approx(0.05 * 0.15)
+    # About the mid-plane a plain weave's hoop yarns (mean height 0) hardly change length:
+    # their crimp moves far less than on the bonded cloth.
+    _, _, weft = _bent(0.0)
+    assert abs(m.hoop.crimp_mm - weft.crimp_mm) < 0.02 * abs(b.hoop.crimp_mm - weft.crimp_mm)
+    # Pulled straight: the crimp is 0 and the zero-strain surface has moved up so that
+    # the straight yarn spans the arc, n p (1 - kappa z0) = L.
+    s, warp, weft = _bent(0.5)
+    rows = _hoop_rows(weave_matrix("plain"), "y")
+    length = centre_line_length(rows, weft.crimp_mm, warp.pitch_mm, 1.0)
+    assert s.hoop.crimp_mm == 0.0 and s.zero_strain_mm > -0.15
+    assert 2 * warp.pitch_mm * (1 - 0.5 * s.zero_strain_mm) == pytest.approx(length, rel=1e-12)
     with pytest.raises(ValueError, match="tighter than its own thickness"):
-        face_stretch(2.0, 0.6)
+        _bent(4.0)
     with pytest.raises(ValueError, match="kappa"):
         presets.model("denim", **FAST).evaluate(0, 0, 0, 0, kappa=1.5)
 
@@ -151,6 +205,52 @@ def test_gap_opening_is_smooth_in_stretch():
     assert np.allclose(x_of_xi(np.arange(hf.shape[1]) + 0.5, hf.xmap), hf.x_mm)
     # The gap texels sit in the gap: 9 mm / 1000 wide at stretch 1.03.
     assert hf.texel_width_mm.min() == pytest.approx(0.3 * 0.03 / 4, rel=1e-9)
+
+
+def _wavy(amplitude_mm=0.05, n=40, length_mm=0.4, ny=8):
+    """A height field z = A sin(2 pi x / L), uniform texels along x (no gap texels)."""
+    xmap = _x_mapping(length_mm, 0.0, length_mm / n, 0)
+    x = x_of_xi(np.arange(n) + 0.5, xmap)
+    z = amplitude_mm * np.sin(2 * np.pi * x / length_mm)
+    height = np.tile(z, (ny, 1))
+    normal = np.zeros((ny, n, 3))
+    normal[..., 2] = 1.0
+    tangent = np.zeros((ny, n, 3))
+    tangent[..., 1] = 1.0  # along y, i.e. in every tangent plane of this surface
+    return Heightfield(height=height, normal=normal, tangent=tangent, kind=np.zeros((ny, n), dtype=np.int8),
+                       size_mm=(length_mm, 0.1), x_mm=x, texel_width_mm=np.full(n, length_mm / n), xmap=xmap)
+
+
+def test_surface_points_lie_on_the_traced_surface():
+    """The integration points are spread by area over the bilinear surface that
+    the visibility rays march through, and carry that surface's own normal."""
+    hf = _wavy()
+    pts = surface_points(hf, 2000)
+    # Known answer: the surface of the piecewise-linear (in x) profile through the
+    # texel centres, times the repeat's length along y.
+    z = hf.height[0]
+    dz = np.diff(np.concatenate([z, z[:1]]))
+    exact = np.sum(np.hypot(0.4 / 40, dz)) * 0.1
+    assert pts.area_mm2 == pytest.approx(exact, rel=1e-12)  # midpoint rule exact: slopes constant per cell
+    # The weights are an unbiased estimate of the area; the lattice spreads the points
+    # evenly, so the sum is within a fraction of a percent.
+    assert pts.weight.sum() == pytest.approx(exact, rel=0.005)
+    dy = 0.1 / 8
+    on = [_height(hf.height, x, y, hf.xmap, dy) for x, y in pts.position[:, :2]]
+    np.testing.assert_allclose(pts.position[:, 2], on, atol=1e-15)
+    # Normal: unit, perpendicular to the profile's slope there (finite difference).
+    e = 1e-7
+    slope = np.array([(_height(hf.height, x + e, y, hf.xmap, dy) - _height(hf.height, x - e, y, hf.xmap, dy))
+                      / (2 * e) for x, y in pts.position[:, :2]])
+    np.testing.assert_allclose(np.linalg.norm(pts.normal, axis=1), 1.0, atol=1e-12)
+    np.testing.assert_allclose(pts.normal[:, 0] + slope * pts.normal[:, 2], 0.0, atol=1e-6)
+    assert np.abs(np.sum(pts.normal * pts.tangent, axis=1)).max() < 1e-12  # fibres lie in the surface
+    # Steep parts hold as many points as their area calls for: the density of points
+    # per unit of x is proportional to the local area element sqrt(1 + slope^2).
+    steep = np.abs(slope) > 0.6
+    share = steep.mean()
+    expected = np.sum(np.hypot(0.4 / 40, dz)[np.abs(dz) / (0.4 / 40) > 0.6]) * 0.1 / exact
+    assert share == pytest.approx(expected, abs=0.03)
 
 
 # -- fibre scattering ----------------------------------------------------------------
@@ -232,27 +332,55 @@ def test_deterministic_and_thread_independent(monkeypatch):
     assert np.array_equal(a[:5], c)
 
 
-def test_approximately_reciprocal():
-    """Reciprocal in the continuum; the estimator is within its integration error."""
-    m = presets.model("denim")
-    rng = np.random.default_rng(2)
-    tv, tl = rng.uniform(0, 70, (2, 80))
-    pv, pl = rng.uniform(0, 360, (2, 80))
-    for k in (0.0, 0.22):
+def _random_pairs(n, seed, max_theta_deg=80.0):
+    rng = np.random.default_rng(seed)
+    tv, tl = rng.uniform(0, max_theta_deg, (2, n))
+    pv, pl = rng.uniform(0, 360, (2, n))
+    return tv, pv, tl, pl
+
+
+@pytest.mark.parametrize("name", ["denim", "shot"])
+def test_reciprocal(name):
+    """Swapping light and view gives the same value, at every curvature.
+
+    The integral is symmetric term by term (one visibility rule for both
+    directions at the same points, a symmetric local BRDF) and the footprint
+    average is symmetric while no patch turns away (tilts <= 6 deg here,
+    elevations <= 80 deg), so the values agree to rounding: 1e-12 relative
+    (the issue asks for a median below 0.5 % and a 99th percentile below 3 %).
+    """
+    m = presets.model(name, **FAST)
+    tv, pv, tl, pl = _random_pairs(80, 2)
+    for k in (-0.22, 0.1, 0.22):
         a = m.evaluate(tv, pv, tl, pl, k)
         b = m.evaluate(tl, pl, tv, pv, k)
-        rel = np.abs(a - b).sum(-1) / (a + b).sum(-1) * 2
-        assert np.median(rel) < 0.1
-        assert abs(a.mean() - b.mean()) / a.mean() < 0.02
+        assert a.max() > 0
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["denim", "shot"])
+def test_reciprocal_at_full_settings(name):
+    """The presets as tabulated: the issue's limits on the relative luminance
+    difference (median <= 0.5 %, 99th percentile <= 3 %), met to rounding."""
+    m = presets.model(name)
+    tv, pv, tl, pl = _random_pairs(300, 4)
+    for k in (-0.13, 0.1, 0.22):
+        a = luminance(m.evaluate(tv, pv, tl, pl, k))
+        b = luminance(m.evaluate(tl, pl, tv, pv, k))
+        rel = np.abs(a - b) / (0.5 * (a + b))
+        assert np.median(rel) <= 0.005 and np.percentile(rel, 99) <= 0.03
+        assert rel.max() < 1e-12
 
 
 @pytest.mark.parametrize("name, extra", [("denim", {}), ("shot", {}), ("denim", WHITE), ("shot", WHITE)])
 def test_energy_conservation(name, extra):
-    """Directional albedo <= 1 for every view direction and curvature (hemisphere quadrature)."""
+    """Directional albedo <= 1 for every view direction and the paper's curvatures
+    (hemisphere quadrature, 16 x 32 light directions)."""
     m = presets.model(name, **FAST, **extra)
     tv = np.array([0.0, 30.0, 60.0, 75.0, 85.0, 89.0])
     pv = np.array([0.0, 45.0, 90.0, 180.0, 270.0, 10.0])
-    for k in (-0.22, 0.0, 0.22):
+    for k in (-0.22, -0.13, 0.0, 0.13, 0.22):
         a = m.albedo(tv, pv, k, n_theta=16, n_phi=32)
         assert np.all(a >= 0)
         assert a.max() <= 1.0
@@ -277,30 +405,18 @@ def test_tabulate_attrs_and_nodes(denim):
     assert np.array_equal(t.values, direct.astype(np.float32))
 
 
-# -- the targets of the presets (on the paper's grid) ---------------------------------------
-def _low_grid(kappas):
-    t = PAPER_T[PAPER_T <= 30]
-    return cdbrdf.Grid(kappa=kappas, theta_l=t, phi_l=PAPER_P, theta_v=t, phi_v=PAPER_P)
-
-
-def test_denim_lightens_when_bent_convexly(denim):
-    t = denim.tabulate(_low_grid([-0.22, 0.0, 0.22]))
-    y = luminance(t.values).mean(axis=(1, 2, 3, 4))
-    assert y[2] >= 1.10 * y[1]
-    # Concave: visibly different (darker: the warp closes over the weft).
-    assert abs(y[0] / y[1] - 1) >= 0.03
-    per_sample = np.abs(luminance(t.values[0]) / luminance(t.values[1]) - 1)
-    assert np.median(per_sample) > 0.03
-
-
-def test_shot_colour_changes_with_curvature_and_azimuth(shot):
-    t = shot.tabulate(_low_grid([0.0, 0.22]))
-    d = np.abs(chromaticity(t.values[1]) - chromaticity(t.values[0]))
-    assert d.max() >= 0.02
-    TL, PL = np.meshgrid(PAPER_T, PAPER_P, indexing="ij")
-    c0 = chromaticity(shot.evaluate(45.0, 0.0, TL, PL, 0.0))
-    c90 = chromaticity(shot.evaluate(45.0, 90.0, TL, PL, 0.0))
-    assert np.abs(c0 - c90).max() >= 0.01
+# -- what bending does to the presets ----------------------------------------------------
+@pytest.mark.parametrize("name", ["denim", "shot"])
+def test_bending_shows_more_weft(name):
+    """Both presets have the warp along the stand's axis: a convex bend spreads
+    the warp and shows more of the weft near the normal, a concave one less
+    (the share of each yarn's colour in the light reflected near the normal)."""
+    m = presets.model(name, texels=48, points=610, tilt_samples=1)
+    seen = {k: seen_fractions(m, k) for k in (-0.22, 0.0, 0.22)}
+    assert seen[-0.22]["weft"] < seen[0.0]["weft"] < seen[0.22]["weft"]
+    assert seen[-0.22]["warp"] > seen[0.0]["warp"] > seen[0.22]["warp"]
+    # The shares are fractions of the light: together less than all of it.
+    assert 0.3 < sum(seen[0.0].values()) < 1.0
 
 
 @pytest.mark.parametrize("name", ["denim", "shot"])
@@ -316,7 +432,7 @@ def test_anisotropic(name, denim, shot):
 
 
 # -- command line --------------------------------------------------------------------
-@pytest.mark.parametrize("setting", ["thickness_mm=1e308", "thickness_mm=-1", "rays=0"])
+@pytest.mark.parametrize("setting", ["thickness_mm=1e308", "thickness_mm=-1", "points=0"])
 def test_cli_synth_bad_setting_is_the_only_line(tmp_path, capsys, setting):
     """Refused before any work: no progress bar (or anything else) before the error, without -q."""
     out = tmp_path / "s.h5"
@@ -329,12 +445,12 @@ def test_cli_synth_bad_setting_is_the_only_line(tmp_path, capsys, setting):
 def test_cli_synth(tmp_path, capsys):
     out = tmp_path / "s.h5"
     rc = cli_main(["-q", "synth", "shot", "--grid", "regular:45,90", "--kappa", "0,0.22",
-                   "--set", "rays=233", "--set", "texels=48", "--set", "warp_rgb=0.6,0.1,0.1", "-o", str(out)])
+                   "--set", "points=233", "--set", "texels=48", "--set", "warp_rgb=0.6,0.1,0.1", "-o", str(out)])
     assert rc == 0
     t = cdbrdf.load(out)
     assert t.shape == (2, 4, 2, 4, 2, 3) and t.attrs["material"] == "shot"
     assert t.attrs["provenance"]["parameters"]["warp_rgb"] == [0.6, 0.1, 0.1]
-    assert t.attrs["provenance"]["parameters"]["rays"] == 233
+    assert t.attrs["provenance"]["parameters"]["points"] == 233
     rc = cli_main(["synth", "denim", "--set", "thicknes=1", "-o", str(tmp_path / "x.h5")])
     assert rc == 2
     assert "valid names" in capsys.readouterr().err

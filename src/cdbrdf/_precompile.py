@@ -60,7 +60,7 @@ def precompile() -> dict[str, float]:
 
     t = time.perf_counter()
     tiny = Grid(kappa=[0.0], theta_l=[20.0], phi_l=[0.0], theta_v=[30.0], phi_v=[0.0])
-    presets.model("denim", texels=16, rays=34, tilt_samples=1).tabulate(tiny)
+    presets.model("denim", texels=16, points=34, tilt_samples=1).tabulate(tiny)
     seconds["cloth model"] = time.perf_counter() - t
     t = time.perf_counter()
     presets.model("velvet", layers=2, azimuths=1, rings=1).tabulate(tiny)

@@ -1,4 +1,5 @@
-"""``cdbrdf synth PRESET [--set name=value ...] [--grid ...] [--btf TEXELS [--max-error E]] -o FILE``."""
+"""``cdbrdf synth PRESET [--set name=value ...] [--grid ...] [--btf TEXELS [--points-per-texel N]
+[--max-error E]] -o FILE``."""
 
 from __future__ import annotations
 
@@ -46,7 +47,7 @@ def _parse_grid_spec(spec: str) -> tuple[float, float] | None:
 def register(sub: argparse._SubParsersAction) -> None:
     from ..btf import DEFAULT_MAX_ERROR
     from ..synth.presets import names
-    from ..synth.texels import MAX_TEXELS
+    from ..synth.texels import MAX_TEXELS, POINTS_PER_TEXEL
     from ._args import finite_float, float_list, int_range, output_file
 
     p = sub.add_parser(
@@ -78,6 +79,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="TEXELS",
         help="tabulate per texel: a CD-BTF of TEXELS x TEXELS texels per weave repeat, compressed "
         "(docs/btf.md); the file's reflectance is the tile mean",
+    )
+    p.add_argument(
+        "--points-per-texel",
+        type=int_range(1, 4096),
+        default=None,
+        metavar="N",
+        help=f"with --btf: surface points per texel (default {POINTS_PER_TEXEL}; the per-texel noise "
+        "falls about as 1/N, docs/btf.md)",
     )
     p.add_argument(
         "--max-error",
@@ -157,6 +166,8 @@ def run(args: argparse.Namespace) -> int:
     overrides = parse_sets(args.sets, preset=args.preset)
     if args.max_error is not None and args.btf is None:
         raise OptionError("--max-error: only with --btf (the compression of a CD-BTF)")
+    if args.points_per_texel is not None and args.btf is None:
+        raise OptionError("--points-per-texel: only with --btf (the integration of a CD-BTF)")
     model = presets.model(args.preset, **overrides)
     grid = parse_grid(args.grid, args.kappa)
     quiet = getattr(args, "quiet", False)
@@ -175,12 +186,13 @@ def run(args: argparse.Namespace) -> int:
 def _run_btf(args: argparse.Namespace, model: Any, grid: Any, quiet: bool, t0: float) -> int:
     """``--btf``: tabulate per texel, compress, write the CD-BTF file."""
     from ..btf import DEFAULT_MAX_ERROR
-    from ..synth.texels import tabulate_btf
+    from ..synth.texels import POINTS_PER_TEXEL, tabulate_btf
     from ._progress import ProgressBars
 
     target = DEFAULT_MAX_ERROR if args.max_error is None else args.max_error
+    ppt = POINTS_PER_TEXEL if args.points_per_texel is None else args.points_per_texel
     with ProgressBars(quiet=quiet, unit="kappa") as bars:
-        btf = tabulate_btf(model, grid, texels=args.btf, max_error=target,
+        btf = tabulate_btf(model, grid, texels=args.btf, points_per_texel=ppt, max_error=target,
                            progress=bars.callback(f"synth {args.preset} --btf {args.btf}"))
     btf.save(args.output)
     if not quiet:

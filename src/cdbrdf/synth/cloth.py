@@ -8,36 +8,38 @@ light direction not included, linear Rec. 709 RGB) and tabulates it onto any
 
 How a value is computed (``docs/fabric-model.md`` has the details):
 
-1. *Geometry.* One repeat of the weave is built as a periodic height field
-   (:func:`cdbrdf.synth.weave.build_heightfield`), with the yarn layout
-   stretched along x by ``s = 1 + kappa t / 2`` (the face of a cloth of
-   thickness ``t`` on a cylinder of curvature ``kappa``; yarn cross-sections
-   keep their size, so gaps open for ``kappa > 0`` and close for ``kappa < 0``).
-2. *Masking.* Rays from the viewer, spread uniformly over the repeat (a
-   rank-1 lattice, exact for periodic integrands in the limit), are marched
-   through the height field to the first surface point ``p`` they meet.
-3. *Shadowing.* From ``p`` a ray is marched towards the light; ``V(p, l)`` is
-   1 if it leaves the cloth.
+1. *Geometry.* :func:`cdbrdf.synth.bending.bend` finds the yarns' geometry on
+   a cylinder of curvature ``kappa`` (the spacing of the yarns along the
+   axis, the crimp of the yarns around it); one repeat of the weave is built
+   from it as a periodic height field
+   (:func:`cdbrdf.synth.weave.build_heightfield`). The micro-surface is the
+   bilinear interpolation of its texel-centre heights.
+2. *Integration points* spread over that surface in proportion to its area
+   (:func:`cdbrdf.synth.surface.surface_points`), each with the surface's own
+   normal and the fibre direction of its yarn.
+3. *Visibility.* From each point a ray is marched towards the viewer and one
+   towards the light: ``V(p, w) = 1`` if it leaves the cloth (masking and
+   shadowing, by one rule).
 4. *Scattering.* ``f_p`` is the fibre BRDF of :mod:`cdbrdf.synth.fibre` with
-   the yarn's colour, fibre direction and surface normal at ``p``.
-5. The flat BRDF is the mean over the rays of
-   ``f_p(v, l) (n_p . l)+ V(p, l) / cos(theta_l)``: the visible micro-surface
-   seen per unit of projected area (Irawan & Marschner 2012, Sec. 4; Heitz
-   2014's visible-normal form of the micro-surface BRDF).
+   the yarn's colour, fibre direction and normal at ``p``.
+5. The flat BRDF is the micro-surface integral
+   ``f(v, l) = int f_p (n_p . v)+ (n_p . l)+ V(p, v) V(p, l) dA / (A cos theta_v cos theta_l)``
+   (``A`` the repeat's area seen from above; Heitz 2014, eq. 6 and 10).
 6. *Footprint.* On the cylinder the macro-normal turns by ``kappa x`` across
    the measured spot of diameter ``footprint_mm``; the value is the average
    over ``tilt_samples`` patches across it, each seen in its own frame and
    weighted by its projected area towards the viewer.
 
-Energy: every local BRDF has directional albedo <= 1, the rays see each
-point of the micro-surface in proportion to its projected area, and the
-footprint weights sum to 1, so the directional albedo of the cloth is <= 1 for
-every view direction and curvature (tested numerically).
+Energy: every local BRDF has directional albedo <= 1, the visible surface
+seen from a direction projects onto the repeat's area (the integral of
+``(n_p . v)+ V(p, v)`` is ``A cos theta_v``), shadowing only removes light and
+the footprint weights sum to 1, so the directional albedo of the cloth is
+<= 1 for every view direction and curvature (tested numerically).
 
-Reciprocity: the continuous model is reciprocal (the micro-surface integral is
-symmetric in v and l and so is ``f_p``); the estimator traces from the viewer
-and normalises the footprint by the viewer's projected area, so the computed
-values are reciprocal only to within the integration error.
+Reciprocity: ``f_p`` is symmetric in v and l, and so is every term of the
+integral (one visibility rule for both directions, at the same points), so
+the computed values are reciprocal to rounding; the footprint average is
+reciprocal while no patch turns away from the viewer or the light.
 
 References
 ----------
@@ -66,28 +68,26 @@ from ..errors import OptionError, QueryError
 from ..frames import direction_from_angles
 from ..table import CDBRDF, Grid
 from . import _trace
+from .bending import Bend, bend
 from .fibre import FibreLobes
+from .surface import SurfacePoints, surface_points
 from .weave import (
     Heightfield,
     YarnGeometry,
     build_heightfield,
-    face_stretch,
     weave_matrix,
 )
 
-__all__ = ["ClothParams", "ClothModel", "MODEL_NAME", "MODEL_VERSION", "RAYS_PER_TEXEL_SIDE"]
+__all__ = ["ClothParams", "ClothModel", "MODEL_NAME", "MODEL_VERSION"]
 
 log = logging.getLogger(__name__)
 
 MODEL_NAME = "cdbrdf.synth.cloth"
 #: Bump when a change alters any computed value.
-MODEL_VERSION = "1.1"
+MODEL_VERSION = "2.0"
 
-_LIGHT_CHUNK = 512
-_GOLDEN = 0.6180339887498949
-
-#: View rays per texel of a CD-BTF: this many squared, on a regular lattice (:meth:`ClothModel._texel_points`).
-RAYS_PER_TEXEL_SIDE = 2
+#: Largest visibility table (directions x points) held at once, bytes.
+_VIS_BYTES = 64 * 2**20
 
 RGB = tuple[float, float, float]
 
@@ -123,7 +123,12 @@ class ClothParams:
         In (0, 1]: fraction of the distance between crossings over which a
         yarn dives from one side to the other (1 = smooth cosine crimp).
     thickness_mm
-        Cloth thickness ``t``; the face stretches by ``1 + kappa t / 2``.
+        Cloth thickness ``t`` (the yarns are centred in it).
+    neutral_fraction
+        In [0, 1]: height of the zero-strain surface above the back, as a
+        fraction of the thickness (0: a cloth bonded to its stand, whose back
+        keeps its length; 1/2: a cloth bent freely). See
+        :mod:`cdbrdf.synth.bending`.
     footprint_mm
         Diameter (along x) of the spot whose reflectance a sample averages;
         on a bent cloth the normal turns by ``kappa * footprint`` across it.
@@ -139,8 +144,8 @@ class ClothParams:
         ``k_d`` in [0, 1]: isotropic fraction of the volume scattering.
     texels
         Height-field texels along the longer side of the repeat.
-    rays
-        View rays per sample (integration points over the repeat).
+    points
+        Integration points on the micro-surface of the repeat.
     tilt_samples
         Patches across the footprint on a bent cloth.
     """
@@ -162,6 +167,7 @@ class ClothParams:
     weft_twist_deg: float = 15.0
     crimp_transition: float = 1.0
     thickness_mm: float = 0.5
+    neutral_fraction: float = 0.0
     footprint_mm: float = 1.0
     ior: float = 1.53
     warp_specular: float = 1.0
@@ -172,8 +178,8 @@ class ClothParams:
     weft_sheen_deg: float = 20.0
     warp_isotropic: float = 0.7
     weft_isotropic: float = 0.7
-    texels: int = 128
-    rays: int = 1597
+    texels: int = 192
+    points: int = 4181
     tilt_samples: int = 5
 
     def __post_init__(self) -> None:
@@ -206,7 +212,7 @@ class ClothParams:
             if not _is_real(v) or not v > 0:
                 raise OptionError(f"{f}: must be a positive number, got {v!r}")
             object.__setattr__(self, f, float(v))
-        for f in ("crimp_share_warp", "warp_isotropic", "weft_isotropic"):
+        for f in ("crimp_share_warp", "neutral_fraction", "warp_isotropic", "weft_isotropic"):
             v = getattr(self, f)
             if not _is_real(v) or not 0 <= v <= 1:
                 raise OptionError(f"{f}: must lie in [0, 1], got {v!r}")
@@ -230,7 +236,7 @@ class ClothParams:
         for f in ("warp_gloss_deg", "weft_gloss_deg", "warp_sheen_deg", "weft_sheen_deg"):
             if getattr(self, f) > 90:
                 raise OptionError(f"{f}: must be at most 90 degrees, got {getattr(self, f)!r}")
-        for f, lo in (("texels", 8), ("rays", 16), ("tilt_samples", 1)):
+        for f, lo in (("texels", 8), ("points", 16), ("tilt_samples", 1)):
             v = getattr(self, f)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
                 raise OptionError(f"{f}: must be an integer >= {lo}, got {v!r}")
@@ -368,33 +374,39 @@ class ClothModel:
         rows.setflags(write=False)
         self._kernel_params = rows
         self._weave = p.weave_matrix
-        self._hf_cache: dict[float, Heightfield] = {}
+        self._geometry: dict[float, tuple[Bend, Heightfield, SurfacePoints]] = {}
 
     # -- geometry -------------------------------------------------------------------
+    def bend(self, kappa: float) -> Bend:
+        """The yarn geometry on a cylinder of curvature ``kappa`` (:func:`cdbrdf.synth.bending.bend`)."""
+        warp, weft = self.params.yarns()
+        return bend(self._weave, warp, weft, warp_along=self.params.warp_along, kappa_per_mm=kappa,
+                    thickness_mm=self.params.thickness_mm, neutral_fraction=self.params.neutral_fraction)
+
     def stretch(self, kappa: float) -> float:
-        """Face stretch ``1 + kappa t / 2`` along x."""
-        return face_stretch(kappa, self.params.thickness_mm)
+        """Stretch along x of the spacing of the yarns that run along y (1 when flat)."""
+        return self.bend(kappa).stretch_x
+
+    def _geometry_at(self, kappa: float) -> tuple[Bend, Heightfield, SurfacePoints]:
+        k = float(kappa)
+        geo = self._geometry.get(k)
+        if geo is None:
+            b = self.bend(k)
+            hf = build_heightfield(self._weave, b.warp, b.weft, warp_along=self.params.warp_along,
+                                   stretch_x=b.stretch_x, texels=self.params.texels)
+            geo = (b, hf, surface_points(hf, self.params.points))
+            if len(self._geometry) > 16:
+                self._geometry.clear()
+            self._geometry[k] = geo
+        return geo
 
     def heightfield(self, kappa: float = 0.0) -> Heightfield:
         """The micro-geometry of one repeat on a cylinder of curvature ``kappa``."""
-        k = float(kappa)
-        hf = self._hf_cache.get(k)
-        if hf is None:
-            warp, weft = self.params.yarns()
-            hf = build_heightfield(
-                self._weave, warp, weft, warp_along=self.params.warp_along,
-                stretch_x=self.stretch(k), texels=self.params.texels,
-            )
-            if len(self._hf_cache) > 16:
-                self._hf_cache.clear()
-            self._hf_cache[k] = hf
-        return hf
+        return self._geometry_at(kappa)[1]
 
-    def _points(self, hf: Heightfield) -> NDArray[np.float64]:
-        n = self.params.rays
-        i = np.arange(n, dtype=np.float64)
-        lx, ly = hf.size_mm
-        return np.stack([(i + 0.5) / n * lx, np.mod(0.5 + i * _GOLDEN, 1.0) * ly], axis=-1)
+    def surface_points(self, kappa: float = 0.0) -> SurfacePoints:
+        """The integration points on the micro-surface at curvature ``kappa``."""
+        return self._geometry_at(kappa)[2]
 
     def tilts_rad(self, kappa: float) -> NDArray[np.float64]:
         """Macro-normal tilt of each footprint patch (midpoints across the spot)."""
@@ -405,81 +417,60 @@ class ClothModel:
         return kappa * x
 
     # -- evaluation -------------------------------------------------------------------
-    def _texel_points(self, hf: Heightfield, texels: tuple[int, int]) -> NDArray[np.float64]:
-        """A regular lattice of ``RAYS_PER_TEXEL_SIDE**2`` points per texel of a ``(n_u, n_v)`` grid over the repeat."""
-        s = RAYS_PER_TEXEL_SIDE
-        lx, ly = hf.size_mm
-        x = (np.arange(texels[0] * s) + 0.5) / (texels[0] * s) * lx
-        y = (np.arange(texels[1] * s) + 0.5) / (texels[1] * s) * ly
-        X, Y = np.meshgrid(x, y)
-        return np.stack([X.reshape(-1), Y.reshape(-1)], axis=-1)
-
-    @staticmethod
-    def _texel_bins(hf: Heightfield, points: NDArray[np.float64], views: NDArray[np.float64],
-                    texels: tuple[int, int]) -> NDArray[np.int64]:
-        """The texel ``v * n_u + u`` of each view ray: where it crosses the repeat's mean height (periodic)."""
-        lx, ly = hf.size_mm
-        drop = (float(hf.height.max()) + 1e-6 - float(hf.height.mean())) / np.maximum(views[:, 2], 1e-9)
-        x = points[None, :, 0] - drop[:, None] * views[:, None, 0]
-        y = points[None, :, 1] - drop[:, None] * views[:, None, 1]
-        iu = np.floor(np.mod(x / lx, 1.0) * texels[0]).astype(np.int64) % texels[0]
-        iv = np.floor(np.mod(y / ly, 1.0) * texels[1]).astype(np.int64) % texels[1]
-        return np.ascontiguousarray(iv * texels[0] + iu)
-
     def _flat(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float,
               texels: tuple[int, int] | None = None) -> NDArray[np.float64]:
-        """``mean_rays f_p (n_p . l)+ V``, i.e. f * cos(theta_l), flat frame; (n, 3), or per texel (n, n_texels, 3)."""
+        """``f cos(theta_v) cos(theta_l)`` in the flat frame, (n, 3): the micro-surface
+        integral over the repeat's area seen from above (symmetric in v and l).
+
+        With ``texels = (n_u, n_v)``, (n, n_u * n_v, 3): per texel, the integral
+        over the points seen in it (the line from the point along ``v`` crosses
+        the repeat's mean height in the texel) over the texel's area; their
+        mean is the value without ``texels``.
+        """
         nbin = 1 if texels is None else texels[0] * texels[1]
         out = np.zeros((v.shape[0], nbin, 3))
         if v.shape[0] == 0:
             return out if texels is not None else out[:, 0]
-        hf = self.heightfield(kappa)
+        _, hf, pts = self._geometry_at(kappa)
         ny, nx = hf.shape
         dy = hf.size_mm[1] / ny
         xmap = np.ascontiguousarray(hf.xmap)
-        xs = np.ascontiguousarray(hf.x_mm)
         # Half the typical texel: the gap texels may be narrower (a thin gap
         # can be stepped over by an oblique ray, as it is hidden then anyway).
         step = 0.5 * min(float(np.median(hf.texel_width_mm)), dy)
-        uv, inv_v = np.unique(v, axis=0, return_inverse=True)
-        ul, inv_l = np.unique(l, axis=0, return_inverse=True)
-        inv_v = inv_v.reshape(-1)
-        inv_l = inv_l.reshape(-1)
         H = np.ascontiguousarray(hf.height)
-        points = self._points(hf) if texels is None else self._texel_points(hf, texels)
-        bins = np.zeros((1, 1), np.int64) if texels is None else self._texel_bins(hf, points, uv, texels)
-        hits = np.empty((uv.shape[0], points.shape[0]), dtype=np.int64)
-        run_split(_trace.trace_views, uv.shape[0], H, xmap, dy, step, np.ascontiguousarray(uv), points, hits)
-        needed = np.zeros(ny * nx, dtype=np.uint8)
-        needed[np.unique(hits)] = 1
-        normal = np.ascontiguousarray(hf.normal.reshape(-1, 3))
-        tangent = np.ascontiguousarray(hf.tangent.reshape(-1, 3))
-        kind = np.ascontiguousarray(hf.kind.reshape(-1))
-        order = np.argsort(inv_l, kind="stable")
-        for c0 in range(0, ul.shape[0], _LIGHT_CHUNK):
-            c1 = min(c0 + _LIGHT_CHUNK, ul.shape[0])
-            sm = np.zeros((c1 - c0, ny * nx), dtype=np.uint8)
-            run_split(_trace.shadow_maps, c1 - c0, H, xs, xmap, dy, step, np.ascontiguousarray(ul[c0:c1]), needed,
-                      sm)
-            row = np.full(ul.shape[0], -1, dtype=np.int64)
-            row[c0:c1] = np.arange(c1 - c0)
-            sel = order[(inv_l[order] >= c0) & (inv_l[order] < c1)]
-            if sel.size == 0:
-                continue
-            part = np.zeros((sel.size, nbin, 3))
-            run_split(_trace.integrate, sel.size, inv_v[sel].astype(np.int64), inv_l[sel].astype(np.int64), uv, ul,
-                      hits, sm, row, normal, tangent, kind, self._kernel_params, bins, part, grain=16)
-            out[sel] = part
+        n_pts = pts.weight.size
+        area = hf.size_mm[0] * hf.size_mm[1]
+        # The mean height over the repeat's area seen from above, the repeat, the texels.
+        z_mean = float(np.average(hf.height.mean(axis=0), weights=hf.texel_width_mm))
+        texel_grid = np.array([z_mean, hf.size_mm[0], hf.size_mm[1]] + list(texels or (1, 1)), dtype=np.float64)
+        # Pairs in chunks whose distinct directions' visibility table fits _VIS_BYTES
+        # (one chunk when all of them fit, as on a grid: its directions repeat).
+        n_dirs = np.unique(np.concatenate([v, l]), axis=0).shape[0]
+        per_chunk = v.shape[0] if n_dirs * n_pts <= _VIS_BYTES else max(1, _VIS_BYTES // (2 * n_pts))
+        for c0 in range(0, v.shape[0], per_chunk):
+            c1 = min(c0 + per_chunk, v.shape[0])
+            dirs, inv = np.unique(np.concatenate([v[c0:c1], l[c0:c1]]), axis=0, return_inverse=True)
+            inv = inv.reshape(-1).astype(np.int64)
+            vis = np.zeros((dirs.shape[0], n_pts), dtype=np.uint8)
+            dirs = np.ascontiguousarray(dirs)
+            run_split(_trace.visibility, dirs.shape[0], H, xmap, dy, step, pts.position, pts.normal, dirs, vis)
+            part = np.zeros((c1 - c0, nbin, 3))
+            run_split(_trace.integrate, c1 - c0, inv[: c1 - c0], inv[c1 - c0 :], dirs, vis, pts.position,
+                      pts.normal, pts.tangent, pts.kind, pts.weight, self._kernel_params, texel_grid, part,
+                      grain=16)
+            out[c0:c1] = part / (area / nbin)
         return out if texels is not None else out[:, 0]
 
     def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float,
                texels: tuple[int, int] | None = None) -> NDArray[np.float64]:
-        """BRDF (n, 3) for unit direction pairs at one curvature; per texel (n, n_texels, 3) with ``texels``."""
+        """BRDF (n, 3) for unit direction pairs at one curvature; per texel (n, n_u * n_v, 3) with
+        ``texels = (n_u, n_v)`` (:meth:`_flat`; the mean over the texels is the value without)."""
         tilts = self.tilts_rad(kappa)
         n = v.shape[0]
         num = np.zeros((n, 3) if texels is None else (n, texels[0] * texels[1], 3))
         den = np.zeros(n)
-        vs, ls, idx, wv = [], [], [], []
+        vs, ls, idx = [], [], []
         for a in tilts:
             ca, sa = math.cos(a), math.sin(a)
             # Patch frame: normal (sin a, 0, cos a), tangent (cos a, 0, -sin a).
@@ -491,11 +482,12 @@ class ClothModel:
             vs.append(vp[ok])
             ls.append(lp[ok])
             idx.append(np.flatnonzero(ok))
-            wv.append(cv[ok])
+        # Each patch: its projected area towards the viewer (cos theta_v') times the
+        # radiance it sends per unit irradiance (f cos theta_l'); g = f cos theta_v' cos theta_l'.
         g = self._flat(np.concatenate(vs), np.concatenate(ls), kappa, texels)
         start = 0
-        for i, w in zip(idx, wv):
-            num[i] += w.reshape((-1,) + (1,) * (num.ndim - 1)) * g[start : start + i.size]
+        for i in idx:
+            num[i] += g[start : start + i.size]
             start += i.size
         denom = den * l[:, 2]
         good = denom > 1e-12

@@ -1,19 +1,32 @@
 """Named cloth presets: ``denim`` and ``shot`` (tamamushi-ori).
 
-Each preset is a set of :class:`~cdbrdf.synth.cloth.ClothParams` values;
-:func:`params` returns them with user overrides applied (validated, unknown
-names rejected). The pile presets ``velvet`` and ``towel`` are
+Each preset is a set of :class:`~cdbrdf.synth.cloth.ClothParams` values, every
+one a physical quantity with its source or the reason for it next to it
+(``docs/fabric-model.md`` derives them and shows what bending does to each
+cloth); :func:`params` returns them with user overrides applied (validated,
+unknown names rejected). The pile presets ``velvet`` and ``towel`` are
 :class:`~cdbrdf.synth.pile.PileParams` values (:mod:`cdbrdf.synth.pile_presets`).
 
-- ``denim``: indigo-dyed cotton warp over a white (ecru) weft, 3/1
-  warp-faced twill, coarse twisted cotton yarns: matte with a faint sheen.
-  The warp runs along y (the axis of the bending cylinder), so bending along
-  x opens the gaps between the indigo warp yarns and shows the white weft
-  (the lightening the paper reports for convex bends).
-- ``shot``: tamamushi-ori silk taffeta: crimson warp, green weft, plain
-  weave, nearly untwisted filament yarns with a narrow, coloured sheen. Red
-  and green mix to the ochre/yellow the paper describes; the balance
-  between the two shifts with the bend and with the viewing direction.
+Yarn diameters follow Peirce (1937): a yarn of ``tex`` g/km packed at
+specific volume ``v`` cm^3/g has ``d = sqrt(4 tex v / (1000 pi))`` mm
+(cotton, ``v = 1.1``: ``d = 1 / (28 sqrt(Ne))`` inch); in the cloth the
+cross-section is an ellipse of the same area, flattened to the width the
+neighbours leave or to the flattening of the yarn type.
+
+- ``denim``: a 12-13 oz/yd^2 3/1 right-hand twill: indigo-dyed Ne 6 open-end
+  cotton warp over an undyed Ne 8 weft, 25 ends and 18 picks per cm. The
+  warp runs along y (the axis of the bending cylinder), so a convex bend
+  spreads the warp yarns and shows the white weft (lighter), a concave one
+  closes them (darker).
+- ``shot``: a shot silk taffeta (tamamushi-ori) of the heavy kind: a fine
+  red-orange filament warp, 80 ends per cm, woven plain with a thick yellow
+  dupion weft, 30 picks per cm. The two mix to an ochre yellow; a convex bend
+  spreads the warp and shows more of the weft (lighter, yellower).
+
+References
+----------
+F. T. Peirce, "The geometry of cloth structure", Journal of the Textile
+Institute Transactions 28(3), T45-T96, 1937.
 """
 
 from __future__ import annotations
@@ -34,25 +47,50 @@ _WOVEN: Mapping[str, Mapping[str, Any]] = MappingProxyType(
         "denim": MappingProxyType(
             {
                 "name": "denim",
+                # 3/1 warp-faced twill: the denim weave.
                 "weave": "twill_3_1",
+                # Warp along the stand's axis: bending across the warp opens it.
                 "warp_along": "y",
-                "warp_rgb": (0.015, 0.030, 0.140),
-                "weft_rgb": (0.60, 0.57, 0.50),
-                "backing_rgb": (0.30, 0.29, 0.26),
-                "warp_pitch_mm": 0.42,
-                "weft_pitch_mm": 0.60,
-                "warp_width_mm": 0.41,
-                "weft_width_mm": 0.28,
-                "warp_height_mm": 0.30,
-                "weft_height_mm": 0.12,
-                "crimp_share_warp": 0.85,
-                "warp_twist_deg": 25.0,
-                "weft_twist_deg": 20.0,
-                "thickness_mm": 1.0,
+                # Indigo-dyed cotton, L* 18, a* 11, b* -28 (dark raw indigo).
+                "warp_rgb": (0.012, 0.022, 0.090),
+                # Undyed (ecru) cotton, L* 84, a* -2, b* 9.
+                "weft_rgb": (0.66, 0.64, 0.53),
+                # Seen through holes: the stand under the cloth (white, as the
+                # paper's stands' walls in its Fig. 7b).
+                "backing_rgb": (0.80, 0.80, 0.80),
+                # 25 ends per cm.
+                "warp_pitch_mm": 0.400,
+                # 18 picks per cm.
+                "weft_pitch_mm": 0.556,
+                # Ne 6 (98 tex) warp, d = 0.371 mm (cover d/p = 0.93); in the cloth
+                # 0.39 mm wide (a 0.01 mm gap) by 0.353 mm high (same area).
+                "warp_width_mm": 0.390,
+                "warp_height_mm": 0.353,
+                # Ne 8 (74 tex) weft, d = 0.321 mm, flattened 1.3 : 1.
+                "weft_width_mm": 0.366,
+                "weft_height_mm": 0.281,
+                # Crimp: warp 14 %, weft 8.5 % (the warp does most of the crimping
+                # in a warp-faced twill).
+                "crimp_share_warp": 0.65,
+                # Surface helix angle atan(pi d T) of Z-twisted open-end yarns at
+                # twist multipliers 4.5 (warp) and 4.0 (weft): 27 and 24 deg.
+                "warp_twist_deg": 27.0,
+                "weft_twist_deg": 24.0,
+                # 0.85 mm: the yarn envelope (crowns of the face to crowns of the
+                # back) is 0.76 mm, surface hair adds the rest; heavy denims gauge
+                # about 0.8-1 mm. Areal mass from the counts, tex and crimps:
+                # 280 + 144 = 425 g/m^2 = 12.5 oz/yd^2.
+                "thickness_mm": 0.85,
+                # Bonded to the stand: the back keeps its length.
+                "neutral_fraction": 0.0,
+                # The paper's 7 x 7 pixels of 980 over a field of about 140 mm.
                 "footprint_mm": 1.0,
+                # Cellulose.
                 "ior": 1.53,
-                "warp_specular": 0.4,
-                "weft_specular": 0.4,
+                # Matte cotton: a weak surface reflection, broad lobes, mostly
+                # isotropic volume scattering.
+                "warp_specular": 0.2,
+                "weft_specular": 0.2,
                 "warp_gloss_deg": 12.0,
                 "weft_gloss_deg": 12.0,
                 "warp_sheen_deg": 25.0,
@@ -64,23 +102,47 @@ _WOVEN: Mapping[str, Mapping[str, Any]] = MappingProxyType(
         "shot": MappingProxyType(
             {
                 "name": "shot",
+                # Plain weave, as every shot silk: the taffeta construction (a
+                # fine, dense warp over a thicker weft, a faint weft-way rib).
                 "weave": "plain",
+                # Warp along the stand's axis: bending across the warp opens it.
                 "warp_along": "y",
-                "warp_rgb": (0.50, 0.02, 0.05),
-                "weft_rgb": (0.12, 0.60, 0.08),
-                "backing_rgb": (0.15, 0.12, 0.05),
-                "warp_pitch_mm": 0.20,
-                "weft_pitch_mm": 0.26,
-                "warp_width_mm": 0.20,
-                "weft_width_mm": 0.26,
-                "warp_height_mm": 0.08,
-                "weft_height_mm": 0.10,
-                "crimp_share_warp": 0.5,
-                "warp_twist_deg": 3.0,
-                "weft_twist_deg": 3.0,
-                "thickness_mm": 0.6,
-                "footprint_mm": 0.3,
+                # Red-orange silk, L* 44, a* 43, b* 40.
+                "warp_rgb": (0.45, 0.06, 0.02),
+                # Golden-yellow silk, L* 81, a* -11, b* 75 (hue angle 99 deg).
+                "weft_rgb": (0.70, 0.60, 0.02),
+                # The white stand under the cloth (as for denim).
+                "backing_rgb": (0.80, 0.80, 0.80),
+                # 80 ends per cm.
+                "warp_pitch_mm": 0.125,
+                # 2 x 21 den (4.7 tex) twisted silk filament, d = 0.086 mm at a
+                # packing of 0.6 (fibroin 1.33 g/cm^3); flattened 1.6 : 1 to
+                # 0.110 x 0.067 mm (0.88 of the spacing; cover d/p = 0.69).
+                "warp_width_mm": 0.110,
+                "warp_height_mm": 0.067,
+                # 30 picks per cm.
+                "weft_pitch_mm": 0.333,
+                # 300 den (33 tex) dupion silk, d = 0.231 mm, flattened 1.5 : 1.
+                "weft_width_mm": 0.283,
+                "weft_height_mm": 0.189,
+                # The fine warp wraps the thick weft: warp crimp 23 %, weft 6 %.
+                "crimp_share_warp": 0.85,
+                # Surface helix angle of the warp at 600 turns/m (9 deg) and of
+                # the weft at 200 turns/m (8 deg).
+                "warp_twist_deg": 9.0,
+                "weft_twist_deg": 8.0,
+                # 0.30 mm: the yarn envelope (0.29 mm). Areal mass from the counts,
+                # tex and crimps: 46 + 106 = 152 g/m^2 (35 momme, a heavy shot
+                # silk: the dupion weft of shot dupioni).
+                "thickness_mm": 0.30,
+                # Bonded to the stand: the back keeps its length.
+                "neutral_fraction": 0.0,
+                # The same rig as for denim.
+                "footprint_mm": 1.0,
+                # Silk fibroin.
                 "ior": 1.55,
+                # Silk lustre: strong, narrow surface reflection and a narrow,
+                # mostly forward coloured sheen.
                 "warp_specular": 0.6,
                 "weft_specular": 0.6,
                 "warp_gloss_deg": 6.0,

@@ -1,16 +1,18 @@
 """The woven-cloth model per texel: a CD-BTF (:class:`cdbrdf.CDBTF`) of one repeat.
 
-The cloth model's reflectance is a mean over view rays spread over one weave
-repeat (:mod:`cdbrdf.synth.cloth`). Per texel, the rays are laid on a regular
-lattice of :data:`~cdbrdf.synth.cloth.RAYS_PER_TEXEL_SIDE` squared rays per
-texel and each ray belongs to the texel where it crosses the repeat's mean
-height (the plane a rectified photograph maps to the fabric): a texel's value
-is the mean over its rays, with the same footprint tilts, shadowing and
-normalisation as the CDBRDF. The mean over the texels is then the cloth's
-CDBRDF computed with those rays (it differs from :meth:`ClothModel.tabulate`,
-which uses :attr:`ClothParams.rays` rays, by the integration error only).
-The texel coordinates are fractions of the repeat at every curvature (the
-face stretches on a bent cloth), in mm of the flat repeat.
+The cloth model's reflectance is an integral over points spread over the
+micro-surface of one weave repeat by area (:mod:`cdbrdf.synth.cloth`). Per
+texel, for a view direction, a point belongs to the texel where the line from
+the point along the view direction crosses the repeat's mean height (what an
+orthographic camera rectified to the fabric plane sees there): a texel's
+value is the sum over its points over the texel's area, with the same
+visibility, footprint tilts and normalisation as the CDBRDF. The mean over
+the texels is then exactly the cloth's CDBRDF computed with those points:
+:meth:`ClothModel.tabulate` of the model with
+``points = points_per_texel * n_u * n_v`` (it differs from the model's own
+:attr:`ClothParams.points` by the integration error only). The texel
+coordinates are fractions of the repeat at every curvature (the face
+stretches on a bent cloth), in mm of the flat repeat.
 """
 
 from __future__ import annotations
@@ -26,14 +28,17 @@ from ..errors import OptionError
 from ..frames import direction_from_angles
 from ..grid import Grid
 from ..limits import check
-from .cloth import RAYS_PER_TEXEL_SIDE, ClothModel
+from .cloth import ClothModel
 
-__all__ = ["tabulate_btf", "tabulate_texels", "MAX_TEXELS"]
+__all__ = ["tabulate_btf", "tabulate_texels", "texel_model", "MAX_TEXELS", "POINTS_PER_TEXEL"]
 
 _LOG = logging.getLogger(__name__)
 
 #: Most texels along a side of the repeat.
 MAX_TEXELS = 256
+
+#: Default surface points per texel (on average: the points are spread by area).
+POINTS_PER_TEXEL = 64
 
 #: Per-texel values computed at once (bounds the memory of one chunk of light directions), float64 RGB.
 _CHUNK_VALUES = 1 << 23
@@ -51,11 +56,38 @@ def _texels(texels: int | tuple[int, int]) -> tuple[int, int]:
     return nu, nv
 
 
+def _points_per_texel(n: int) -> int:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise OptionError(f"points_per_texel: expected a positive integer, got {n!r}")
+    return int(n)
+
+
+def texel_model(model: ClothModel, texels: int | tuple[int, int] = 32, *,
+                points_per_texel: int = POINTS_PER_TEXEL) -> ClothModel:
+    """The cloth with ``points_per_texel * n_u * n_v`` surface points: the model whose CDBRDF is the tile mean.
+
+    Parameters
+    ----------
+    model
+        The cloth.
+    texels, points_per_texel
+        As :func:`tabulate_texels`.
+
+    Returns
+    -------
+    ClothModel
+    """
+    nu, nv = _texels(texels)
+    n = _points_per_texel(points_per_texel) * nu * nv
+    return ClothModel(model.params.replace(points=max(16, n)))
+
+
 def tabulate_texels(
     model: ClothModel,
     grid: Grid | None = None,
     *,
     texels: int | tuple[int, int] = 32,
+    points_per_texel: int = POINTS_PER_TEXEL,
     progress: Callable[[int, int], None] | None = None,
 ) -> NDArray[np.float32]:
     """The cloth model per texel of one repeat on a grid, uncompressed.
@@ -68,6 +100,9 @@ def tabulate_texels(
         The sample axes; default :meth:`cdbrdf.Grid.paper`.
     texels
         Texels per repeat: ``n`` (n x n) or ``(n_u, n_v)``.
+    points_per_texel
+        Surface points per texel on average: the tile is integrated with
+        ``points_per_texel * n_u * n_v`` points (:func:`texel_model`).
     progress
         Called as ``progress(done, total)`` after each curvature slice.
 
@@ -81,6 +116,7 @@ def tabulate_texels(
         raise TypeError(f"grid: expected cdbrdf.Grid, got {type(g).__name__}")
     nu, nv = _texels(texels)
     n_tex = nu * nv
+    fine = texel_model(model, (nu, nv), points_per_texel=points_per_texel)
     check("table_samples", float(np.prod(g.shape)) * n_tex * 3,
           what=f"CD-BTF of {nu} x {nv} texels on a grid of shape {g.shape}")
     nk, npl, ntl, npv, ntv = g.shape
@@ -90,14 +126,15 @@ def tabulate_texels(
     lights = [(i, j) for i in range(npl) for j in range(ntl)]
     per_chunk = max(1, _CHUNK_VALUES // (v1.shape[0] * n_tex * 3))
     for ik, k in enumerate(g.kappa):
-        _LOG.debug("%s: per-texel kappa = %g (%d x %d texels)", model.params.name, k, nu, nv)
+        _LOG.debug("%s: per-texel kappa = %g (%d x %d texels, %d points)", model.params.name, k, nu, nv,
+                   fine.params.points)
         for c0 in range(0, len(lights), per_chunk):
             chunk = lights[c0 : c0 + per_chunk]
             l_dirs = direction_from_angles(np.array([g.theta_l[j] for _, j in chunk]),
                                            np.array([g.phi_l[i] for i, _ in chunk]))
             v = np.tile(v1, (len(chunk), 1))
             l = np.repeat(l_dirs, v1.shape[0], axis=0)
-            out = model._pairs(v, l, float(k), (nu, nv)).reshape(len(chunk), v1.shape[0], n_tex, 3)
+            out = fine._pairs(v, l, float(k), (nu, nv)).reshape(len(chunk), v1.shape[0], n_tex, 3)
             for (i, j), block in zip(chunk, out):
                 values[ik, i, j] = block
         if progress is not None:
@@ -112,6 +149,7 @@ def tabulate_btf(
     grid: Grid | None = None,
     *,
     texels: int | tuple[int, int] = 32,
+    points_per_texel: int = POINTS_PER_TEXEL,
     max_error: float = DEFAULT_MAX_ERROR,
     max_rank: int = MAX_RANK,
     progress: Callable[[int, int], None] | None = None,
@@ -120,7 +158,7 @@ def tabulate_btf(
 
     Parameters
     ----------
-    model, grid, texels, progress
+    model, grid, texels, points_per_texel, progress
         As :func:`tabulate_texels`.
     max_error, max_rank
         The compression's target relative RMS error and most components
@@ -129,14 +167,16 @@ def tabulate_btf(
     Returns
     -------
     CDBTF
-        ``quantity = "brdf"``; the tile mean's attributes are the model's
-        (:meth:`ClothModel.attrs`) with ``btf_texels`` and ``btf_rays_per_texel``.
+        ``quantity = "brdf"``; the tile mean's attributes are those of
+        :func:`texel_model` (:meth:`ClothModel.attrs`, its ``points`` the
+        tile's) with ``btf_texels`` and ``btf_points_per_texel``.
     """
     g = Grid.paper() if grid is None else grid
     nu, nv = _texels(texels)
-    dense = tabulate_texels(model, g, texels=(nu, nv), progress=progress)
-    attrs = model.attrs()
+    ppt = _points_per_texel(points_per_texel)
+    dense = tabulate_texels(model, g, texels=(nu, nv), points_per_texel=ppt, progress=progress)
+    attrs = texel_model(model, (nu, nv), points_per_texel=ppt).attrs()
     attrs["btf_texels"] = [nu, nv]
-    attrs["btf_rays_per_texel"] = RAYS_PER_TEXEL_SIDE ** 2
+    attrs["btf_points_per_texel"] = ppt
     return CDBTF.from_values(dense, g, repeat_mm=model.heightfield(0.0).size_mm, max_error=max_error,
                              max_rank=max_rank, attrs=attrs)

@@ -13,15 +13,8 @@ the upper envelope of all yarn tubes over a backing plane (what is seen
 through holes), sampled as a periodic height field with, per texel, the
 surface normal, the fibre tangent and the yarn it belongs to.
 
-Bending (see ``docs/fabric-model.md``): the cloth lies on a cylinder of
-curvature ``kappa`` whose axis is y, so it bends in the x direction. The
-neutral plane is the mid-plane of the cloth of thickness ``t``; material at
-height ``z`` above it is stretched along x by ``1 + kappa * z``. The face
-(``z = t/2``) is stretched by ``s = 1 + kappa * t / 2``. The yarns keep their
-cross-sections (they are not stretched, only moved): the centres of the yarns
-that run along y move apart by ``s`` (gaps open for ``kappa > 0``, yarns press
-into each other for ``kappa < 0``) and the crimp wave of the yarns that run
-along x is stretched by ``s``.
+Bending (:mod:`cdbrdf.synth.bending`) changes the crimp amplitudes and
+stretches the layout along x; :func:`build_heightfield` takes the result.
 
 References
 ----------
@@ -49,7 +42,6 @@ __all__ = [
     "YarnGeometry",
     "Heightfield",
     "build_heightfield",
-    "face_stretch",
     "x_of_xi",
     "WARP",
     "WEFT",
@@ -132,26 +124,6 @@ def weave_matrix(weave: str | ArrayLike) -> NDArray[np.int8]:
                 "every row and column needs both a 0 and a 1"
             )
     return m
-
-
-def face_stretch(kappa_per_mm: float, thickness_mm: float) -> float:
-    """Stretch of the cloth face along the bending direction, ``1 + kappa t / 2``.
-
-    Raises
-    ------
-    ValueError
-        When ``|kappa| * t >= 1``: the bending radius would be smaller than
-        the cloth thickness.
-    """
-    k = float(kappa_per_mm)
-    if not np.isfinite(k):
-        raise OptionError(f"kappa: must be finite, got {kappa_per_mm!r}")
-    if abs(k) * thickness_mm >= 1.0:
-        raise OptionError(
-            f"kappa: |kappa| = {abs(k):g} /mm bends a cloth of thickness {thickness_mm:g} mm "
-            f"tighter than its own thickness; need |kappa| < {1.0 / thickness_mm:g} /mm"
-        )
-    return 1.0 + k * thickness_mm / 2.0
 
 
 @dataclass(frozen=True)
@@ -279,8 +251,9 @@ def build_heightfield(
         ``"x"`` or ``"y"``: the local axis the warp runs along (x is the
         bending direction).
     stretch_x
-        Stretch of the yarn layout along x (:func:`face_stretch`); 1 = flat.
-        Yarn cross-sections are not stretched.
+        Stretch of the yarn layout along x (the bent cloth's
+        :attr:`~cdbrdf.synth.bending.Bend.stretch_x`); 1 = flat. Yarn
+        cross-sections are not stretched.
     texels
         Texels along the longer side of the repeat (the other side gets as many
         as keep texels about square).
