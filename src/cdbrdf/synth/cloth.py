@@ -378,7 +378,18 @@ class ClothModel:
 
     # -- geometry -------------------------------------------------------------------
     def bend(self, kappa: float) -> Bend:
-        """The yarn geometry on a cylinder of curvature ``kappa`` (:func:`cdbrdf.synth.bending.bend`)."""
+        """The yarn geometry on a cylinder of curvature ``kappa`` (:func:`cdbrdf.synth.bending.bend`).
+
+        Parameters
+        ----------
+        kappa
+            Curvature, mm^-1 (> 0 convex).
+
+        Returns
+        -------
+        Bend
+            The bent yarns and the stretch of the spacing.
+        """
         warp, weft = self.params.yarns()
         return bend(self._weave, warp, weft, warp_along=self.params.warp_along, kappa_per_mm=kappa,
                     thickness_mm=self.params.thickness_mm, neutral_fraction=self.params.neutral_fraction)
@@ -405,7 +416,18 @@ class ClothModel:
         return self._geometry_at(kappa)[1]
 
     def surface_points(self, kappa: float = 0.0) -> SurfacePoints:
-        """The integration points on the micro-surface at curvature ``kappa``."""
+        """The integration points on the micro-surface at curvature ``kappa``.
+
+        Parameters
+        ----------
+        kappa
+            Curvature, mm^-1.
+
+        Returns
+        -------
+        SurfacePoints
+            Positions, normals, fibre directions and area weights.
+        """
         return self._geometry_at(kappa)[2]
 
     def tilts_rad(self, kappa: float) -> NDArray[np.float64]:
