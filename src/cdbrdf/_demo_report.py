@@ -156,6 +156,8 @@ def write_report(folder: Path, config: Any, results: Sequence[Any], seconds: flo
                  "Rendered in Mitsuba 3 with (a) the plain BRDF and (b) the measured CDBRDF, the "
                  "curvature taken at every point; (c) shows where they differ: along the crests "
                  "(convex) and troughs (concave), not on the flanks where the sheet is nearly flat. "
+                 "Light and camera are near the normal (the light along the crests), where the paper "
+                 "compares its mosaics. "
                  "The swatches below are the mean colour of each render at the convex crests and at the "
                  "flat lines, as shown on screen, with their median Delta E*ab. "
                  f"Exposure {m.render_exposure_ev:+.1f} EV (0 EV shows a white Lambertian surface facing "
