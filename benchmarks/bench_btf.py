@@ -81,7 +81,7 @@ def _noise(name: str, texels: int) -> None:
         "preset": name, "texels": texels,
         "texel_noise": {ppt: rel(x, ref) for ppt, x in res.items()},
         "tile_mean_noise": {ppt: rel(x.mean(axis=1), ref.mean(axis=1)) for ppt, x in res.items()},
-        "texture": rel(ref, np.broadcast_to(ref.mean(axis=1, keepdims=True), ref.shape)),
+        "texture": rel(np.broadcast_to(ref.mean(axis=1, keepdims=True), ref.shape), ref),
     }), flush=True)
 
 
