@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 
 import cdbrdf
+import cdbrdf.materials
 from cdbrdf.demo import DemoConfig, compare_with_truth, run_demo
 from cdbrdf.errors import OptionError
+from cdbrdf.measure.fill import refill
 from cdbrdf.table import Grid
 
 from .conftest import make_table
@@ -87,10 +89,17 @@ def test_quick_demo_measures_the_ground_truth(quick_demo):
         own = np.flatnonzero(~t.measured.ravel())[:, None]
         assert ((src % per == own % per) | ~used).all() and ((src // per != own // per) | ~used).all()
         assert set(t.fill_method_names()[~t.measured]) == {"kappa_fit"} and m.fill_method == "kappa-fit"
-        # far better than the paper's rule, which the demo reports beside it
-        near = m.compared_fill
-        assert near["method"] == "nearest"
-        assert m.error["median_rel_error_filled"] < 0.25 * near["error"]["median_rel_error_filled"], (m.error, near)
+        # the paper's rule is reported beside it
+        assert m.compared_fill["method"] == "nearest"
+        # the filled samples are as good as the fill can be at all: near its error on the truth itself
+        # (the same samples hidden and filled from the truth's values at the others: scripts/fill_study.py)
+        g = t.grid.mesh()
+        exact = cdbrdf.materials.load(m.name).evaluate(g["theta_v"], g["phi_v"], g["theta_l"], g["phi_l"], g["kappa"])
+        floor_table = cdbrdf.CDBRDF(exact, **t.grid.axes(), measured=t.measured, attrs={"quantity": "brdf"})
+        floor, _ = compare_with_truth(refill(floor_table), cdbrdf.materials.load(m.name))
+        # plus the measurement's noise, which a line extrapolated along kappa amplifies (weights up to about 3)
+        noise = m.error["median_rel_error_measured"]
+        assert m.error["median_rel_error_filled"] < 1.3 * floor["median_rel_error_filled"] + 5 * noise, (m.error, floor)
         # measured samples reproduce the truth: noise of the rig is ~1 %
         assert m.error["median_rel_error_measured"] < 0.03, m.error
         assert m.error["p95_rel_error_measured"] < 0.15, m.error

@@ -118,13 +118,14 @@ def write_report(folder: Path, config: Any, results: Sequence[Any], seconds: flo
         "is flat (the eye notices Delta E*ab above about 2; the flat pixels show the render's noise)",
         ["material", "kappa (1/mm)", "Delta E*ab measured", "Delta E*ab truth", "Delta L*", "Delta C*",
          "Delta h (deg)", "colour bent / flat (sRGB)", "sine sheet crests / flat"],
-        [[m.name, f"{a['kappa']:+g}", f"{a['median_delta_e']:.1f}", f"{b['median_delta_e']:.1f}",
+        [[m.name, f"{a['kappa']:+g}", f"{a['median_delta_e']:.1f}",
+          "-" if b is None else f"{b['median_delta_e']:.1f}",
           f"{a['lightness_change']:+.1f}", f"{a['chroma_change']:+.1f}", f"{a['hue_change_deg']:+.0f}",
           "#{:02x}{:02x}{:02x} / #{:02x}{:02x}{:02x}".format(*a["srgb8"], *a["flat_srgb8"]),
           f"{m.contrast['sine']['crest_delta_e']:.1f} / {m.contrast['sine']['flat_delta_e']:.1f}" if i == 0 else ""]
          for m in results if m.contrast
-         for i, (a, b) in enumerate(zip(m.contrast["table"]["measured"], m.contrast["table"]["truth"],
-                                        strict=True))],
+         for truth in [{r["kappa"]: r for r in m.contrast["table"]["truth"]}]
+         for i, (a, b) in enumerate((a, truth.get(a["kappa"])) for a in m.contrast["table"]["measured"])],
     )
     intro.table(
         "Times (seconds)",
