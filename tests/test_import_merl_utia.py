@@ -38,6 +38,7 @@ def _reference_merl_index(theta_h, theta_d, phi_d):
     return th, td, pd
 
 
+@pytest.mark.slow
 def test_merl_layout_scales_and_half_difference_angles(merl_file):
     data = merl_file.read_bytes()
     assert len(data) == merl.FILE_BYTES == 12 + 3 * 90 * 90 * 180 * 8

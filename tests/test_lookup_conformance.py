@@ -306,6 +306,7 @@ def check_huge_azimuths() -> None:
                                                err_msg=name)
 
 
+@pytest.mark.slow
 def test_huge_finite_azimuths_stay_in_the_table_in_every_kernel():
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
     r = subprocess.run([sys.executable, "-c", "import tests.test_lookup_conformance as m; m.check_huge_azimuths()"],

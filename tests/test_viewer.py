@@ -660,7 +660,7 @@ def test_views_are_not_blank_and_linked(page):
     page.evaluate("cdbrdfViewer.setEnvironment(true)")
     env = page.locator("#view").screenshot()
     page.evaluate("cdbrdfViewer.setEnvironment(false)")
-    not_blank(env, colours=4)  # a sky lights the sheet evenly
+    not_blank(env, colours=3)  # a sky lights the sheet evenly (the recalibrated denim: a few shades)
     assert env != one
     page.evaluate("cdbrdfViewer.setOverlay(true)")
     not_blank(page.locator("#view").screenshot())
