@@ -29,13 +29,17 @@ def test_crest_contrast_against_known_colours():
     grey, yellow = np.array([0.2, 0.2, 0.2]), np.array([0.45, 0.4, 0.05])
     brdf = np.broadcast_to(grey, kappa.shape + (3,)).copy()
     cd = brdf.copy()
-    crest = np.abs(kappa) >= 0.155          # crest_fraction 0.775 of 0.2, off the grid of values
+    crest = kappa >= 0.155          # crest_fraction 0.775 of 0.2, off the grid of values
+    trough = kappa <= -0.155
     cd[crest] = yellow
+    cd[trough] = 0.5 * grey
     c = crest_contrast(_picture(kappa, brdf, cd), crest_fraction=0.775)
     expected = float(delta_e_ab(linear_to_lab(grey), linear_to_lab(yellow)))
     assert c.crest_delta_e == pytest.approx(expected, rel=1e-9)
+    assert c.trough_delta_e == pytest.approx(float(delta_e_ab(linear_to_lab(grey), linear_to_lab(0.5 * grey))))
     assert c.flat_delta_e == 0.0
     assert c.crest_pixels == int(crest[np.isfinite(kappa)].sum())
+    assert c.trough_pixels == int(trough[np.isfinite(kappa)].sum())
     assert c.kappa_max == pytest.approx(0.2, rel=1e-6)
     # the convex crest swatch is the yellow shown in sRGB; the flat swatch the grey
     np.testing.assert_allclose(c.crest_srgb["cdbrdf"], srgb_encode(yellow), rtol=1e-6)

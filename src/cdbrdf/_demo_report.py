@@ -114,15 +114,16 @@ def write_report(folder: Path, config: Any, results: Sequence[Any], seconds: flo
         "elevations up to 30 degrees, 20,000 direction pairs, the flat table's median luminance scaled to 0.3) "
         "between each bent stand and the flat one, in the measured table and in the ground truth, and the "
         "change of the measured mean colour's lightness L*, chroma C* and hue h; on the rendered sine sheet, the "
-        "median Delta E*ab between the plain BRDF and the CDBRDF at the crests and troughs and where the sheet "
+        "median Delta E*ab between the plain BRDF and the CDBRDF at the crests, in the troughs and where the sheet "
         "is flat (the eye notices Delta E*ab above about 2; the flat pixels show the render's noise)",
         ["material", "kappa (1/mm)", "Delta E*ab measured", "Delta E*ab truth", "Delta L*", "Delta C*",
-         "Delta h (deg)", "colour bent / flat (sRGB)", "sine sheet crests / flat"],
+         "Delta h (deg)", "colour bent / flat (sRGB)", "sine sheet crests / troughs / flat"],
         [[m.name, f"{a['kappa']:+g}", f"{a['median_delta_e']:.1f}",
           "-" if b is None else f"{b['median_delta_e']:.1f}",
           f"{a['lightness_change']:+.1f}", f"{a['chroma_change']:+.1f}", f"{a['hue_change_deg']:+.0f}",
           "#{:02x}{:02x}{:02x} / #{:02x}{:02x}{:02x}".format(*a["srgb8"], *a["flat_srgb8"]),
-          f"{m.contrast['sine']['crest_delta_e']:.1f} / {m.contrast['sine']['flat_delta_e']:.1f}" if i == 0 else ""]
+          " / ".join(f"{m.contrast['sine'][k]:.1f}" for k in ("crest_delta_e", "trough_delta_e", "flat_delta_e"))
+          if i == 0 else ""]
          for m in results if m.contrast
          for truth in [{r["kappa"]: r for r in m.contrast["table"]["truth"]}]
          for i, (a, b) in enumerate((a, truth.get(a["kappa"])) for a in m.contrast["table"]["measured"])],

@@ -435,7 +435,8 @@ def _material(
                                                    view=SINE_VIEW)
     res.render_exposure_ev = pic.exposure_ev
     sheet = crest_contrast(pic)
-    res.contrast["sine"] = {"crest_delta_e": sheet.crest_delta_e, "flat_delta_e": sheet.flat_delta_e,
+    res.contrast["sine"] = {"crest_delta_e": sheet.crest_delta_e, "trough_delta_e": sheet.trough_delta_e,
+                            "flat_delta_e": sheet.flat_delta_e,
                             "crest_srgb": sheet.crest_srgb, "flat_srgb": sheet.flat_srgb,
                             "crest_kappa": sheet.crest_fraction * sheet.kappa_max}
     fig = plot_render_comparison(pic.display("brdf"), pic.display("cdbrdf"), exposure_ev=pic.exposure_ev,

@@ -73,12 +73,13 @@ class CrestContrast:
 
     Attributes
     ----------
-    crest_delta_e, flat_delta_e
+    crest_delta_e, trough_delta_e, flat_delta_e
         Median Delta E*ab, pixel by pixel, between the two renders shown in
-        sRGB: over the crest pixels (``|kappa|`` at least ``crest_fraction``
-        of the largest seen) and over the flat ones (``|kappa|`` at most
-        ``flat_fraction`` of it).
-    crest_pixels, flat_pixels
+        sRGB: over the convex crest pixels (``kappa`` at least
+        ``crest_fraction`` of the largest ``|kappa|`` seen), the concave
+        trough pixels (``-kappa`` at least that) and the flat ones
+        (``|kappa|`` at most ``flat_fraction`` of it); NaN where there is none.
+    crest_pixels, trough_pixels, flat_pixels
         How many pixels each median is over.
     crest_srgb, flat_srgb
         Mean display colour (sRGB, 0-1) of each render, by mode, at the
@@ -90,8 +91,10 @@ class CrestContrast:
     """
 
     crest_delta_e: float
+    trough_delta_e: float
     flat_delta_e: float
     crest_pixels: int
+    trough_pixels: int
     flat_pixels: int
     crest_srgb: dict[str, tuple[float, float, float]]
     flat_srgb: dict[str, tuple[float, float, float]]
@@ -145,9 +148,10 @@ def crest_contrast(
     k_max = float(k_abs.max()) if seen.any() else 0.0
     if not k_max > 0:
         raise OptionError("picture: the surface it shows is nowhere curved; no crest to compare")
-    crest = seen & (k_abs >= crest_fraction * k_max)
+    bent = seen & (k_abs >= crest_fraction * k_max)
     flat = seen & (k_abs <= flat_fraction * k_max)
-    convex = crest & (kappa > 0)
+    convex = bent & (kappa > 0)
+    concave = bent & (kappa < 0)
     factor = ev_to_factor(picture.exposure_ev)
     shown = {m: np.clip(np.nan_to_num(picture.display(m) * factor), 0.0, 1.0) for m in modes}
     # L*a*b* of what the screen shows: the sRGB code values decoded back to linear light
@@ -162,7 +166,8 @@ def crest_contrast(
             return {}
         return {m: tuple(float(x) for x in srgb_encode(shown[m][sel].mean(axis=0))) for m in modes}  # type: ignore[misc]
 
-    return CrestContrast(crest_delta_e=median(crest), flat_delta_e=median(flat), crest_pixels=int(crest.sum()),
+    return CrestContrast(crest_delta_e=median(convex), trough_delta_e=median(concave), flat_delta_e=median(flat),
+                         crest_pixels=int(convex.sum()), trough_pixels=int(concave.sum()),
                          flat_pixels=int(flat.sum()), crest_srgb=swatch(convex), flat_srgb=swatch(flat),
                          kappa_max=k_max, crest_fraction=float(crest_fraction),
                          flat_fraction=float(flat_fraction))
