@@ -56,7 +56,6 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -66,8 +65,8 @@ from numpy.typing import ArrayLike, NDArray
 from .._jit import run_split
 from ..errors import OptionError, QueryError
 from ..frames import direction_from_angles
-from ..table import CDBRDF, Grid
 from . import _trace
+from ._model import SampledModel
 from .bending import Bend, bend
 from .fibre import FibreLobes
 from .surface import SurfacePoints, surface_points
@@ -341,7 +340,7 @@ def _is_real(v: Any) -> bool:
     return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and math.isfinite(v)
 
 
-class ClothModel:
+class ClothModel(SampledModel):
     """Reflectance of a woven cloth as a function of directions and curvature.
 
     Parameters
@@ -565,42 +564,8 @@ class ClothModel:
             out[sel] = self._pairs(v[sel], l[sel], float(k))
         return out.reshape(shape + (3,))
 
-    def tabulate(
-        self,
-        grid: Grid | None = None,
-        *,
-        progress: Callable[[int, int], None] | None = None,
-    ) -> CDBRDF:
-        """Sample the model on a grid into a :class:`cdbrdf.CDBRDF` (float32).
-
-        Parameters
-        ----------
-        grid
-            The sample axes; default :meth:`cdbrdf.Grid.paper`.
-        progress
-            Called as ``progress(done, total)`` after each curvature slice.
-
-        Returns
-        -------
-        CDBRDF
-            ``quantity = "brdf"``, every sample marked measured (computed),
-            attrs with the material name, the model and all its parameters.
-        """
-        g = Grid.paper() if grid is None else grid
-        if not isinstance(g, Grid):
-            raise TypeError(f"grid: expected cdbrdf.Grid, got {type(g).__name__}")
-        nk = g.kappa.size
-        PL, TL, PV, TV = np.meshgrid(g.phi_l, g.theta_l, g.phi_v, g.theta_v, indexing="ij")
-        v = direction_from_angles(TV.reshape(-1), PV.reshape(-1))
-        l = direction_from_angles(TL.reshape(-1), PL.reshape(-1))
-        values = np.empty(g.shape + (3,), dtype=np.float32)
-        for i, k in enumerate(g.kappa):
-            log.debug("%s: tabulating kappa = %g (%d samples)", self.params.name, k, v.shape[0])
-            vals = self._pairs(v, l, float(k))
-            values[i] = vals.reshape(g.shape[1:] + (3,)).astype(np.float32)
-            if progress is not None:
-                progress(i + 1, nk)
-        return CDBRDF(values, **g.axes(), attrs=self.attrs())
+    def _sample(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
+        return self._pairs(v, l, kappa)
 
     def attrs(self) -> dict[str, Any]:
         """Table metadata: quantity, material, model and parameters (provenance)."""
@@ -621,38 +586,3 @@ class ClothModel:
                 ],
             },
         }
-
-    def albedo(
-        self,
-        theta_v: ArrayLike,
-        phi_v: ArrayLike,
-        kappa: float = 0.0,
-        *,
-        n_theta: int = 24,
-        n_phi: int = 48,
-    ) -> NDArray[np.float64]:
-        """Directional albedo ``int f cos(theta_l) dw_l`` (midpoint rule), RGB.
-
-        Parameters
-        ----------
-        theta_v, phi_v
-            View directions (1-D arrays of equal length or scalars), degrees.
-        kappa
-            Curvature, mm^-1.
-        n_theta, n_phi
-            Quadrature nodes over the light hemisphere.
-
-        Returns
-        -------
-        numpy.ndarray
-            ``(n_views, 3)``.
-        """
-        tv, pv = np.broadcast_arrays(np.atleast_1d(np.asarray(theta_v, float)), np.atleast_1d(np.asarray(phi_v, float)))
-        dt = 90.0 / n_theta
-        dp = 360.0 / n_phi
-        tl = (np.arange(n_theta) + 0.5) * dt
-        pl = (np.arange(n_phi) + 0.5) * dp
-        TL, PL = np.meshgrid(tl, pl, indexing="ij")
-        w = np.cos(np.radians(TL)) * np.sin(np.radians(TL)) * np.radians(dt) * np.radians(dp)
-        f = self.evaluate(tv[:, None, None], pv[:, None, None], TL[None], PL[None], kappa)
-        return np.sum(f * w[None, ..., None], axis=(1, 2))

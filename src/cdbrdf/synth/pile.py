@@ -64,7 +64,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from types import MappingProxyType
 from typing import Any
@@ -75,8 +75,8 @@ from numpy.typing import ArrayLike, NDArray
 from .._jit import run_split
 from ..errors import OptionError, QueryError
 from ..frames import direction_from_angles
-from ..table import CDBRDF, Grid
 from . import _pile
+from ._model import SampledModel
 
 __all__ = ["PILE_KINDS", "PileParams", "PileModel", "PILE_MODEL_NAME", "PILE_MODEL_VERSION"]
 
@@ -382,7 +382,7 @@ def _layer_weights(p: PileParams) -> tuple[NDArray[np.float64], NDArray[np.float
     return np.ascontiguousarray(t), np.ascontiguousarray(W), np.ascontiguousarray(C), edges
 
 
-class PileModel:
+class PileModel(SampledModel):
     """Reflectance of a pile fabric as a function of directions and curvature.
 
     Parameters
@@ -532,43 +532,12 @@ class PileModel:
         pile, ground = self.evaluate_parts(theta_v, phi_v, theta_l, phi_l, kappa)
         return pile + ground
 
-    def tabulate(
-        self,
-        grid: Grid | None = None,
-        *,
-        progress: Callable[[int, int], None] | None = None,
-    ) -> CDBRDF:
-        """Sample the model on a grid into a :class:`cdbrdf.CDBRDF` (float32).
+    def _sample(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
+        parts = self._pairs(v, l, kappa)
+        return parts[:, :3] + parts[:, 3:]
 
-        Parameters
-        ----------
-        grid
-            The sample axes; default :meth:`cdbrdf.Grid.paper`.
-        progress
-            Called as ``progress(done, total)`` after each curvature slice.
-
-        Returns
-        -------
-        CDBRDF
-            ``quantity = "brdf"``, every sample marked measured (computed),
-            attrs with the material name, the model and all its parameters.
-        """
-        g = Grid.paper() if grid is None else grid
-        if not isinstance(g, Grid):
-            raise TypeError(f"grid: expected cdbrdf.Grid, got {type(g).__name__}")
-        for k in g.kappa:
-            self.layer_scale(float(k))
-        PL, TL, PV, TV = np.meshgrid(g.phi_l, g.theta_l, g.phi_v, g.theta_v, indexing="ij")
-        v = direction_from_angles(TV.reshape(-1), PV.reshape(-1))
-        l = direction_from_angles(TL.reshape(-1), PL.reshape(-1))
-        values = np.empty(g.shape + (3,), dtype=np.float32)
-        for i, k in enumerate(g.kappa):
-            log.debug("%s: tabulating kappa = %g (%d samples)", self.params.name, k, v.shape[0])
-            parts = self._pairs(v, l, float(k))
-            values[i] = (parts[:, :3] + parts[:, 3:]).reshape(g.shape[1:] + (3,)).astype(np.float32)
-            if progress is not None:
-                progress(i + 1, g.kappa.size)
-        return CDBRDF(values, **g.axes(), attrs=self.attrs())
+    def _check_kappa(self, kappa: float) -> None:
+        self.layer_scale(kappa)
 
     def attrs(self) -> dict[str, Any]:
         """Table metadata.
@@ -596,39 +565,6 @@ class PileModel:
                 ],
             },
         }
-
-    def albedo(
-        self,
-        theta_v: ArrayLike,
-        phi_v: ArrayLike,
-        kappa: float = 0.0,
-        *,
-        n_theta: int = 24,
-        n_phi: int = 48,
-    ) -> NDArray[np.float64]:
-        """Directional albedo ``int f cos(theta_l) dw_l`` (midpoint rule).
-
-        Parameters
-        ----------
-        theta_v, phi_v
-            View directions, degrees (broadcast).
-        kappa
-            Curvature, mm^-1.
-        n_theta, n_phi
-            Light elevations and azimuths of the midpoint rule.
-
-        Returns
-        -------
-        numpy.ndarray
-            RGB albedo, ``(n_views, 3)``.
-        """
-        tv, pv = np.broadcast_arrays(np.atleast_1d(np.asarray(theta_v, float)), np.atleast_1d(np.asarray(phi_v, float)))
-        dt = 90.0 / n_theta
-        dp = 360.0 / n_phi
-        TL, PL = np.meshgrid((np.arange(n_theta) + 0.5) * dt, (np.arange(n_phi) + 0.5) * dp, indexing="ij")
-        w = np.cos(np.radians(TL)) * np.sin(np.radians(TL)) * np.radians(dt) * np.radians(dp)
-        f = self.evaluate(tv[:, None, None], pv[:, None, None], TL[None], PL[None], kappa)
-        return np.sum(f * w[None, ..., None], axis=(1, 2))
 
 
 def _fibre_albedo(row: NDArray[np.float64], mode: int) -> NDArray[np.float64]:
