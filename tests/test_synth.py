@@ -316,6 +316,7 @@ def test_flat_limit_equals_unbent_model(denim):
     assert np.allclose(f1, f0, rtol=0.05, atol=1e-4)
 
 
+@pytest.mark.slow
 def test_deterministic_and_thread_independent(monkeypatch):
     import cdbrdf._jit
 
@@ -406,7 +407,7 @@ def test_tabulate_attrs_and_nodes(denim):
 
 
 # -- what bending does to the presets ----------------------------------------------------
-@pytest.mark.parametrize("name", ["denim", "shot"])
+@pytest.mark.parametrize("name", ["denim", pytest.param("shot", marks=pytest.mark.slow)])
 def test_bending_shows_more_weft(name):
     """Both presets have the warp along the stand's axis: a convex bend spreads
     the warp and shows more of the weft near the normal, a concave one less

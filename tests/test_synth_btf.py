@@ -89,6 +89,7 @@ def test_points_per_texel_is_recorded_and_validated(shot):
             tabulate_btf(shot, GRID, texels=4, points_per_texel=bad)
 
 
+@pytest.mark.slow
 def test_tile_mean_equals_the_cdbrdf_of_synth(shot):
     btf = tabulate_btf(shot, GRID, texels=16, max_error=0.03)
     ref = shot.tabulate(GRID)
