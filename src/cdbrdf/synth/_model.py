@@ -10,6 +10,7 @@ can be bent to (``_check_kappa``).
 from __future__ import annotations
 
 import logging
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import Any
 
@@ -24,23 +25,26 @@ __all__ = ["SampledModel"]
 log = logging.getLogger(__name__)
 
 
-class SampledModel:
-    """Tabulation and albedo of a fabric model (a base class; see the module's description)."""
+class SampledModel(ABC):
+    """Tabulation and albedo of a fabric model (an abstract base; see the module's description)."""
 
     params: Any
 
+    @abstractmethod
     def _sample(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
-        raise NotImplementedError
+        """BRDF ``(n, 3)`` for unit direction pairs ``v``, ``l`` ``(n, 3)`` at one curvature (mm^-1)."""
 
-    def _check_kappa(self, kappa: float) -> None:
-        """Raise for a curvature the model cannot be bent to (every one, by default)."""
+    def _check_kappa(self, kappa: float) -> None:  # noqa: B027 (a hook: every curvature is fine by default)
+        """Raise for a curvature the model cannot be bent to (none, by default)."""
 
+    @abstractmethod
     def attrs(self) -> dict[str, Any]:
-        raise NotImplementedError
+        """Table metadata: quantity, material, model and its parameters."""
 
+    @abstractmethod
     def evaluate(self, theta_v: ArrayLike, phi_v: ArrayLike, theta_l: ArrayLike, phi_l: ArrayLike,
                  kappa: ArrayLike = 0.0) -> NDArray[np.float64]:
-        raise NotImplementedError
+        """The BRDF at directions in degrees and a curvature in mm^-1 (broadcast), ``(..., 3)``."""
 
     def tabulate(
         self,

@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from .._jit import njit
-from .fibre import _fresnel
+from .fibre import _fibre_angles, _fresnel
 
 __all__: list[str] = []
 
@@ -43,21 +43,7 @@ _SQRT_2PI = math.sqrt(2.0 * math.pi)
 @njit(cache=True, inline="always", error_model="numpy")
 def _spec(tx, ty, tz, lx, ly, lz, vx, vy, vz, beta, eta):
     """The bare ``R`` lobe ``F g(theta_h) cos(phi/2) / (4 cos_d^2)`` (without ``cos_i cos_o``)."""
-    si = min(max(lx * tx + ly * ty + lz * tz, -1.0), 1.0)
-    so = min(max(vx * tx + vy * ty + vz * tz, -1.0), 1.0)
-    ti = math.asin(si)
-    to = math.asin(so)
-    th = 0.5 * (ti + to)
-    td = 0.5 * (to - ti)
-    ax, ay, az = lx - si * tx, ly - si * ty, lz - si * tz
-    bx, by, bz = vx - so * tx, vy - so * ty, vz - so * tz
-    na = math.sqrt(ax * ax + ay * ay + az * az)
-    nb = math.sqrt(bx * bx + by * by + bz * bz)
-    if na > 1e-9 and nb > 1e-9:
-        cphi = (ax * bx + ay * by + az * bz) / (na * nb)
-    else:
-        cphi = 1.0
-    chalf = math.sqrt(max(0.0, 0.5 * (1.0 + cphi)))
+    _, _, th, td, chalf = _fibre_angles(tx, ty, tz, lx, ly, lz, vx, vy, vz)
     cd = math.cos(td)
     g = math.exp(-th * th / (2.0 * beta * beta)) / (_SQRT_2PI * beta)
     return _fresnel(eta, cd * chalf) * g * chalf / (4.0 * max(cd * cd, 1e-6))

@@ -76,10 +76,13 @@ def fresnel_dielectric(eta: float, cos_i: float) -> float:
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _terms(nx, ny, nz, tx, ty, tz, vx, vy, vz, lx, ly, lz, p):
-    """(white specular part, coloured part per unit albedo) of the local BRDF."""
-    if p[P_LAMB] > 0.5:
-        return 0.0, 1.0 / math.pi
+def _fibre_angles(tx, ty, tz, lx, ly, lz, vx, vy, vz):
+    """Angles of a light and a view direction about a fibre along unit ``t`` (Marschner et al. 2003).
+
+    Returns ``(sin theta_i, sin theta_r, theta_h, theta_d, cos(phi / 2))``:
+    the sines of the longitudinal angles, their half sum and half difference,
+    and the cosine of half the azimuth between the two around the fibre.
+    """
     si = min(max(lx * tx + ly * ty + lz * tz, -1.0), 1.0)
     sr = min(max(vx * tx + vy * ty + vz * tz, -1.0), 1.0)
     ti = math.asin(si)
@@ -95,7 +98,15 @@ def _terms(nx, ny, nz, tx, ty, tz, vx, vy, vz, lx, ly, lz, p):
         cphi = (ax * bx + ay * by + az * bz) / (na * nb)
     else:
         cphi = 1.0
-    chalf = math.sqrt(max(0.0, 0.5 * (1.0 + cphi)))
+    return si, sr, th, td, math.sqrt(max(0.0, 0.5 * (1.0 + cphi)))
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _terms(nx, ny, nz, tx, ty, tz, vx, vy, vz, lx, ly, lz, p):
+    """(white specular part, coloured part per unit albedo) of the local BRDF."""
+    if p[P_LAMB] > 0.5:
+        return 0.0, 1.0 / math.pi
+    si, sr, th, td, chalf = _fibre_angles(tx, ty, tz, lx, ly, lz, vx, vy, vz)
     eta = p[P_ETA]
     gs = p[P_GS]
     spec = p[P_WS] * _fresnel(eta, math.cos(td) * chalf) * chalf
