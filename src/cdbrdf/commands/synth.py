@@ -85,7 +85,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=int_range(1, 4096),
         default=None,
         metavar="N",
-        help=f"with --btf: surface points per texel (default {POINTS_PER_TEXEL}; the per-texel noise "
+        help=f"with --btf, woven presets: surface points per texel (default {POINTS_PER_TEXEL}; the per-texel noise "
         "falls about as 1/N, docs/btf.md)",
     )
     p.add_argument(
@@ -186,13 +186,12 @@ def run(args: argparse.Namespace) -> int:
 def _run_btf(args: argparse.Namespace, model: Any, grid: Any, quiet: bool, t0: float) -> int:
     """``--btf``: tabulate per texel, compress, write the CD-BTF file."""
     from ..btf import DEFAULT_MAX_ERROR
-    from ..synth.texels import POINTS_PER_TEXEL, tabulate_btf
+    from ..synth.texels import tabulate_btf
     from ._progress import ProgressBars
 
     target = DEFAULT_MAX_ERROR if args.max_error is None else args.max_error
-    ppt = POINTS_PER_TEXEL if args.points_per_texel is None else args.points_per_texel
     with ProgressBars(quiet=quiet, unit="kappa") as bars:
-        btf = tabulate_btf(model, grid, texels=args.btf, points_per_texel=ppt, max_error=target,
+        btf = tabulate_btf(model, grid, texels=args.btf, points_per_texel=args.points_per_texel, max_error=target,
                            progress=bars.callback(f"synth {args.preset} --btf {args.btf}"))
     btf.save(args.output)
     if not quiet:

@@ -82,7 +82,7 @@ def fibre_albedo(thetas, fibre, mode, n_theta, n_phi, out, start, stop):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def pile_pairs(views, lights, tangents, weights, caps, z_edges, layer_scale, diameter, fibre, ground, corr_mm, out,
-               start, stop):
+               slabs, start, stop):
     """Pile and ground reflectance of pairs ``start`` to ``stop``.
 
     Parameters (arrays)
@@ -107,6 +107,11 @@ def pile_pairs(views, lights, tangents, weights, caps, z_edges, layer_scale, dia
         Horizontal correlation length of the gaps (the hot spot), mm.
     out
         ``(n, 6)``: the pile's RGB BRDF, then the ground's.
+    slabs
+        ``(n, L + 1, 3)`` or empty ``(0, L + 1, 3)``: when not empty, row ``j``
+        of a pair receives slab ``j``'s share of the pile's RGB BRDF (they
+        add up to ``out[:, :3]``) and row ``L`` the joint optical depth
+        of the two paths down to the ground (in its first column).
     """
     M = tangents.shape[0]
     L = weights.shape[0]
@@ -183,8 +188,13 @@ def pile_pairs(views, lights, tangents, weights, caps, z_edges, layer_scale, dia
             k = g * path / (lz * vz)
             diff += k * s_d
             spec += k * s_s
+            if slabs.shape[0] > 0:
+                for c in range(3):
+                    slabs[q, j, c] = scale * k * (s_d * fibre[F_R + c] + ks * s_s)
             tau_l, tau_v, depth, tj_top = tau_l_bot, tau_v_bot, depth_bot, tj_bot
         ts = math.exp(-tj_top) / math.pi
+        if slabs.shape[0] > 0:
+            slabs[q, L, 0] = tj_top
         spec *= ks
         out[q, 0] = scale * (diff * fibre[F_R] + spec)
         out[q, 1] = scale * (diff * fibre[F_G] + spec)

@@ -452,14 +452,26 @@ class PileModel(SampledModel):
 
     def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
         """Pile and ground BRDF ``(n, 6)`` for unit direction pairs at one curvature."""
-        out = np.zeros((v.shape[0], 6))
-        if v.shape[0] == 0:
-            return out
-        run_split(_pile.pile_pairs, v.shape[0], np.ascontiguousarray(v), np.ascontiguousarray(l),
+        return self._pairs_slabs(v, l, kappa, slabs=False)[0]
+
+    def _pairs_slabs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float, *,
+                     slabs: bool) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(out (n, 6), slabs (n, L + 1, 3))`` of :func:`_pile.pile_pairs` (slabs empty unless asked)."""
+        n = v.shape[0]
+        out = np.zeros((n, 6))
+        per_slab = np.zeros((n if slabs else 0, self.params.layers + 1, 3))
+        if n == 0:
+            return out, per_slab
+        run_split(_pile.pile_pairs, n, np.ascontiguousarray(v), np.ascontiguousarray(l),
                   self._tangents, self._weights, self._caps, self._edges, self.layer_scale(kappa),
                   self.params.strand_diameter_mm, self._fibre, self._ground, self.params.correlation_mm, out,
-                  grain=64)
-        return out
+                  per_slab, grain=64)
+        return out, per_slab
+
+    @property
+    def slab_edges_mm(self) -> NDArray[np.float64]:
+        """The slabs' boundaries, mm above the ground (``layers + 1``, increasing; flat cloth)."""
+        return self._edges.copy()
 
     def evaluate_parts(
         self,

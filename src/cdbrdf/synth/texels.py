@@ -29,6 +29,7 @@ from ..frames import direction_from_angles
 from ..grid import Grid
 from ..limits import check
 from .cloth import ClothModel
+from .pile import PileModel
 
 __all__ = ["tabulate_btf", "tabulate_texels", "texel_model", "MAX_TEXELS", "POINTS_PER_TEXEL"]
 
@@ -145,21 +146,29 @@ def tabulate_texels(
 
 
 def tabulate_btf(
-    model: ClothModel,
+    model: ClothModel | PileModel,
     grid: Grid | None = None,
     *,
     texels: int | tuple[int, int] = 32,
-    points_per_texel: int = POINTS_PER_TEXEL,
+    points_per_texel: int | None = None,
     max_error: float = DEFAULT_MAX_ERROR,
     max_rank: int = MAX_RANK,
     progress: Callable[[int, int], None] | None = None,
 ) -> CDBTF:
-    """Sample the cloth model per texel of one repeat (:func:`tabulate_texels`) and compress it.
+    """Sample a fabric model per texel of one repeat and compress it.
+
+    Woven cloth (:class:`ClothModel`): :func:`tabulate_texels`, one weave
+    repeat. Pile (:class:`~cdbrdf.synth.PileModel`):
+    :func:`cdbrdf.synth.pile_texels.tabulate_pile_texels`, one repeat of
+    tufts or loops.
 
     Parameters
     ----------
-    model, grid, texels, points_per_texel, progress
+    model, grid, texels, progress
         As :func:`tabulate_texels`.
+    points_per_texel
+        Woven cloth only (default :data:`POINTS_PER_TEXEL`): as
+        :func:`tabulate_texels`.
     max_error, max_rank
         The compression's target relative RMS error and most components
         (:meth:`cdbrdf.CDBTF.from_values`).
@@ -167,16 +176,35 @@ def tabulate_btf(
     Returns
     -------
     CDBTF
-        ``quantity = "brdf"``; the tile mean's attributes are those of
-        :func:`texel_model` (:meth:`ClothModel.attrs`, its ``points`` the
-        tile's) with ``btf_texels`` and ``btf_points_per_texel``.
+        ``quantity = "brdf"``; the tile mean's attributes are the model's
+        (for cloth those of :func:`texel_model`, its ``points`` the tile's)
+        with ``btf_texels`` and ``btf_points_per_texel`` (cloth) or
+        ``btf_tufts`` (pile: pitch and bundle width, mm).
+
+    Raises
+    ------
+    OptionError
+        For bad texel counts, or ``points_per_texel`` with a pile model.
     """
     g = Grid.paper() if grid is None else grid
+    if not isinstance(g, Grid):
+        raise TypeError(f"grid: expected cdbrdf.Grid, got {type(g).__name__}")
     nu, nv = _texels(texels)
-    ppt = _points_per_texel(points_per_texel)
-    dense = tabulate_texels(model, g, texels=(nu, nv), points_per_texel=ppt, progress=progress)
-    attrs = texel_model(model, (nu, nv), points_per_texel=ppt).attrs()
-    attrs["btf_texels"] = [nu, nv]
-    attrs["btf_points_per_texel"] = ppt
-    return CDBTF.from_values(dense, g, repeat_mm=model.heightfield(0.0).size_mm, max_error=max_error,
-                             max_rank=max_rank, attrs=attrs)
+    if isinstance(model, PileModel):
+        from .pile_texels import tabulate_pile_texels
+
+        if points_per_texel is not None:
+            raise OptionError("points_per_texel: only for woven cloth (a pile model has no integration points)")
+        dense, layout = tabulate_pile_texels(model, g, texels=(nu, nv), progress=progress)
+        attrs = model.attrs()
+        attrs["btf_texels"] = [nu, nv]
+        attrs["btf_tufts"] = {"pitch_mm": layout.pitch_mm, "sigma_mm": layout.sigma_mm}
+        repeat = layout.repeat_mm
+    else:
+        ppt = _points_per_texel(POINTS_PER_TEXEL if points_per_texel is None else points_per_texel)
+        dense = tabulate_texels(model, g, texels=(nu, nv), points_per_texel=ppt, progress=progress)
+        attrs = texel_model(model, (nu, nv), points_per_texel=ppt).attrs()
+        attrs["btf_texels"] = [nu, nv]
+        attrs["btf_points_per_texel"] = ppt
+        repeat = model.heightfield(0.0).size_mm
+    return CDBTF.from_values(dense, g, repeat_mm=repeat, max_error=max_error, max_rank=max_rank, attrs=attrs)
