@@ -5,12 +5,13 @@ Run: ``python benchmarks/bench_btf.py [--texels 32] [--grid paper|coarse] [--pre
 difference of the texel values at 16, 64 and 256 points per texel from those at 1,024, on 27 direction
 pairs at kappa 0.22).
 
-For each preset: tabulate per texel (:func:`cdbrdf.synth.texels.tabulate_texels`),
+For each preset: tabulate per texel (:func:`cdbrdf.synth.texels.tabulate_texels`; for a pile
+preset :func:`cdbrdf.synth.pile_texels.tabulate_pile_texels`),
 compress at ``--max-error`` (the rank, its recorded errors and ratio), the
 error at a 100:1 ratio, the relative RMS error of ``CDBTF.evaluate`` against
 the uncompressed texels looked up by the same rule on ``--queries`` random
 queries, and the median relative difference of the tile mean from
-``ClothModel.tabulate`` (``cdbrdf synth``). Prints one JSON object per preset.
+the model's ``tabulate`` (``cdbrdf synth``). Prints one JSON object per preset.
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ import numpy as np
 
 from cdbrdf import CDBTF, Grid
 from cdbrdf.interp import evaluate, prepare
-from cdbrdf.synth import presets
+from cdbrdf.synth import PileModel, presets
+from cdbrdf.synth.pile_texels import tabulate_pile_texels
 from cdbrdf.synth.texels import tabulate_texels
 
 
@@ -106,9 +108,13 @@ def main() -> None:
     for name in a.preset or ["denim", "shot"]:
         model = presets.model(name)
         t0 = time.perf_counter()
-        dense = tabulate_texels(model, grid, texels=a.texels, points_per_texel=a.points_per_texel)
+        if isinstance(model, PileModel):
+            dense, layout = tabulate_pile_texels(model, grid, texels=(a.texels, a.texels))
+            repeat = layout.repeat_mm
+        else:
+            dense = tabulate_texels(model, grid, texels=a.texels, points_per_texel=a.points_per_texel)
+            repeat = model.heightfield(0.0).size_mm
         t_tex = time.perf_counter() - t0
-        repeat = model.heightfield(0.0).size_mm
         t0 = time.perf_counter()
         btf = CDBTF.from_values(dense, grid, repeat_mm=repeat, max_error=a.max_error, attrs=model.attrs())
         t_comp = time.perf_counter() - t0
