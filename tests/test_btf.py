@@ -183,3 +183,45 @@ def test_uniform_texels_have_rank_zero_and_round_trip(tmp_path):
     btf.save(tmp_path / "u.h5")
     back = load(tmp_path / "u.h5")
     assert back.rank == 0 and back.texels == (4, 3) and back.mean() == btf.mean()
+
+
+def _errors(vals, btf):
+    """Relative RMS error of the decoded texels against ``vals``: whole and per kappa."""
+    d = btf.decode().astype(np.float64) - vals
+    whole = np.sqrt(np.sum(d**2) / np.sum(vals**2))
+    per_k = np.sqrt(np.sum(np.moveaxis(d, 2, 0).reshape(vals.shape[2], -1) ** 2, axis=1)
+                    / np.sum(np.moveaxis(vals, 2, 0).reshape(vals.shape[2], -1) ** 2, axis=1))
+    return whole, per_k
+
+
+def test_truncation_records_its_true_errors(tmp_path):
+    """The leading components of a PCA: the errors of the truncation are those against the texels."""
+    vals = _dense(rank=5, noise=0.01, seed=4)
+    full = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, max_error=0.02)
+    assert 5 <= full.rank < 47
+    for r in (0, 2, 4):
+        t = full.truncated(r)
+        assert t.rank == r and t.mean() is full.mean()
+        whole, per_k = _errors(vals, t)
+        c = t.compression
+        assert c["relative_rms_error"] == pytest.approx(whole, rel=1e-4)
+        np.testing.assert_allclose(c["relative_rms_error_per_kappa"], per_k, rtol=1e-4)
+        assert c["truncated_from"] == full.rank and c["max_error"] == 0.02
+        assert c["compression_ratio"] == pytest.approx(t.nbytes_ratio()) and t.nbytes_ratio() > full.nbytes_ratio()
+        np.testing.assert_array_equal(t.weights, full.weights[..., :r])
+    assert full.truncated(full.rank) is full
+    t = full.truncated(3)
+    t.save(tmp_path / "t.h5")
+    back = load(tmp_path / "t.h5")
+    assert back.compression["truncated_from"] == full.rank and back.rank == 3
+    assert back.compression["relative_rms_error"] == pytest.approx(t.compression["relative_rms_error"])
+    # truncating a truncation counts from the first factorisation
+    assert back.truncated(1).compression["truncated_from"] == full.rank
+    assert back.truncated(1).compression["relative_rms_error"] == pytest.approx(_errors(vals, full.truncated(1))[0],
+                                                                                rel=1e-4)
+
+
+@pytest.mark.parametrize("rank", [-1, 99, 1.5, True, "2"])
+def test_truncation_to_a_bad_rank_is_refused(exact, rank):
+    with pytest.raises(TableError, match=r"rank: expected an integer in \[0, 2\]"):
+        exact[1].truncated(rank)

@@ -10,8 +10,8 @@ fabric; the CD-BTF adds (``docs/format.md``, "The CD-BTF variables"):
   theta_l, phi_v, theta_v, component, channel)``, float32;
 - global attributes ``btf_repeat_mm`` (u, v), ``btf_method``, ``btf_rank``,
   ``btf_max_error``, ``btf_relative_rms_error``,
-  ``btf_relative_rms_error_per_kappa``, ``btf_compression_ratio`` and
-  ``btf_sha256`` (the digest of the CD-BTF's variables as stored).
+  ``btf_relative_rms_error_per_kappa``, ``btf_compression_ratio``, optionally
+  ``btf_truncated_from`` (:meth:`CDBTF.truncated`) and ``btf_sha256`` (the digest of the CD-BTF's variables as stored).
 
 Everything is written in the one atomic write of the CDBRDF file.
 """
@@ -109,6 +109,8 @@ def write(btf: BTFParts, path: str | PathLike[str], *, compression: str | None =
                 f.attrs[f"btf_{key}"] = float(comp[key])
         if "relative_rms_error_per_kappa" in comp:
             f.attrs["btf_relative_rms_error_per_kappa"] = np.array(comp["relative_rms_error_per_kappa"], float)
+        if "truncated_from" in comp:
+            f.attrs["btf_truncated_from"] = np.int64(comp["truncated_from"])
         f.attrs[_DIGEST] = data_digest(_stored(btf))
 
     write_table(TableParts.of(btf.mean), path, compression=compression, extra=extra)
@@ -200,6 +202,8 @@ def read(path: str | PathLike[str]) -> BTFParts:
         if "btf_relative_rms_error_per_kappa" in f.attrs:
             comp["relative_rms_error_per_kappa"] = [
                 float(x) for x in np.asarray(get_attr(p, f.attrs, "btf_relative_rms_error_per_kappa")).reshape(-1)]
+        if "btf_truncated_from" in f.attrs:
+            comp["truncated_from"] = int(_scalar(p, f.attrs, "btf_truncated_from"))
         stored = np.asarray(get_attr(p, f.attrs, _DIGEST)) if _DIGEST in f.attrs else None
     if repeat.size != 2 or not np.all(np.isfinite(repeat)) or np.any(repeat <= 0):
         raise fail(p, f"global attribute 'btf_repeat_mm' is not two positive sizes: {repeat!r}")

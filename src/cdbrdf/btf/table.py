@@ -46,7 +46,7 @@ MAX_RANK = 256
 
 #: The entries of :attr:`CDBTF.compression`.
 COMPRESSION_ATTRS = ("method", "rank", "max_error", "relative_rms_error", "relative_rms_error_per_kappa",
-                     "compression_ratio")
+                     "compression_ratio", "truncated_from")
 
 #: Queries looked up per chunk (bounds the memory of the ``(1 + rank) x channels`` lookups).
 _CHUNK = 1 << 15
@@ -246,6 +246,71 @@ class CDBTF:
         basis = np.moveaxis(self._basis, -2, 0).reshape(r, m.size)  # (rank, samples * channels)
         out = (self._weights.reshape(nv * nu, r) @ basis).reshape((nv, nu) + m.shape)
         out += m
+        return out
+
+    def truncated(self, rank: int) -> CDBTF:
+        """The CD-BTF of the leading ``rank`` components, with the errors of that truncation.
+
+        Components are ordered by energy, so the leading ones are the best
+        approximation of that rank (for the PCA of :meth:`from_values`).
+        The errors recorded in :attr:`compression` are updated from the
+        components themselves: the energy of the dropped part (exactly, from
+        the weights' and the components' Gram matrices) added to the error
+        recorded for the full rank (the residual is orthogonal to the
+        components, as it is for a PCA). ``max_error`` is kept (the target
+        the full rank was chosen for), and ``truncated_from`` records the
+        full rank.
+
+        Parameters
+        ----------
+        rank
+            Components to keep, ``0 <= rank <=`` :attr:`rank`.
+
+        Returns
+        -------
+        CDBTF
+            Sharing the tile mean; ``self`` when ``rank`` is the full rank.
+
+        Raises
+        ------
+        TableError
+            For a rank that is not an integer in ``[0, rank]``.
+        """
+        if isinstance(rank, bool) or not isinstance(rank, (int, np.integer)) or not 0 <= rank <= self.rank:
+            raise TableError(f"rank: expected an integer in [0, {self.rank}], got {rank!r}")
+        r = int(rank)
+        if r == self.rank:
+            return self
+        nv, nu, full = self._weights.shape
+        nk = self.grid.shape[0]
+        w = self._weights.reshape(nv * nu, full).astype(np.float64)
+        gw = w.T @ w  # (full, full)
+        wsum = w.sum(axis=0)
+        m = self._mean.values.astype(np.float64).reshape(nk, -1, self.n_channels)
+        stored, dropped = np.empty(nk), np.empty(nk)
+        for k in range(nk):
+            b = np.moveaxis(self._basis[k].reshape(-1, full, self.n_channels), 1, 0).reshape(full, -1)
+            b = b.astype(np.float64)
+            gb = b @ b.T
+            mb = b @ m[k].reshape(-1)
+            stored[k] = nv * nu * float(m[k].reshape(-1) @ m[k].reshape(-1)) + 2.0 * float(wsum @ mb) \
+                + float(np.sum(gw * gb))
+            dropped[k] = float(np.sum(gw[r:, r:] * gb[r:, r:]))
+        comp = self.compression
+        err_k = np.asarray(comp.get("relative_rms_error_per_kappa", np.zeros(nk)), dtype=np.float64)
+        if err_k.shape != (nk,) or not np.all((err_k >= 0) & (err_k < 1)):
+            err_k = np.zeros(nk)
+        truth = stored / (1.0 - err_k**2)  # the uncompressed slices' energy
+        residual = err_k**2 * truth
+        safe = np.where(truth > 0, truth, 1.0)
+        comp["relative_rms_error_per_kappa"] = [float(x) for x in np.sqrt((residual + dropped) / safe)]
+        comp["relative_rms_error"] = float(np.sqrt((residual.sum() + dropped.sum()) / (truth.sum() or 1.0)))
+        comp["rank"] = r
+        comp["truncated_from"] = int(comp.get("truncated_from", full))
+        out = CDBTF(self._mean, self._weights[..., :r], self._basis[..., :r, :], repeat_mm=self._repeat,
+                    compression=comp)
+        comp["compression_ratio"] = out.nbytes_ratio()
+        out._compression = comp
         return out
 
     def nbytes_ratio(self) -> float:
