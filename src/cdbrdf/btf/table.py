@@ -306,7 +306,7 @@ class CDBTF:
         comp["relative_rms_error_per_kappa"] = [float(x) for x in np.sqrt((residual + dropped) / safe)]
         comp["relative_rms_error"] = float(np.sqrt((residual.sum() + dropped.sum()) / (truth.sum() or 1.0)))
         comp["rank"] = r
-        comp["truncated_from"] = int(comp.get("truncated_from", full))
+        comp["truncated_from"] = int(comp.get("truncated_from") or full)
         out = CDBTF(self._mean, self._weights[..., :r], self._basis[..., :r, :], repeat_mm=self._repeat,
                     compression=comp)
         comp["compression_ratio"] = out.nbytes_ratio()
