@@ -1,9 +1,10 @@
 """The CD-BTF of the presets: compression ratio and error, the tile mean against the CDBRDF of synth.
 
 Run: ``python benchmarks/bench_btf.py [--texels 32] [--grid paper|coarse] [--preset denim ...]``;
-``--noise`` measures the integration noise of the texels instead (``--texels 16``: the relative RMS
-difference of the texel values at 16, 64 and 256 points per texel from those at 1,024, on 27 direction
-pairs at kappa 0.22).
+``--modes`` adds the error of keeping the leading singular vectors of each mode of the table
+(texel x kappa x light x view x channel: channel, kappa, light and view). ``--noise`` measures the
+integration noise of the texels instead (``--texels 16``: the relative RMS difference of the texel
+values at 16, 64 and 256 points per texel from those at 1,024, on 27 direction pairs at kappa 0.22).
 
 For each preset: tabulate per texel (:func:`cdbrdf.synth.texels.tabulate_texels`; for a pile
 preset :func:`cdbrdf.synth.pile_texels.tabulate_pile_texels`),
@@ -87,6 +88,21 @@ def _noise(name: str, texels: int) -> None:
     }), flush=True)
 
 
+def _mode_errors(dense: np.ndarray) -> dict:
+    """Relative RMS error of keeping the leading r singular vectors of each non-texel mode (higher-order SVD)."""
+    nv, nu, nk, npl, ntl, npv, ntv, nc = dense.shape
+    x = dense.reshape(nv * nu, nk, npl * ntl, npv * ntv, nc)
+    total = float(np.sum(x.astype(np.float64) ** 2))
+    out = {}
+    for axis, name in ((4, "channel"), (1, "kappa"), (2, "light"), (3, "view")):
+        a = np.moveaxis(x, axis, 0).reshape(x.shape[axis], -1).astype(np.float64)
+        lam = np.sort(np.linalg.eigvalsh(a @ a.T))[::-1]
+        left = np.maximum(1.0 - np.cumsum(lam) / total, 0.0)
+        out[name] = {r: round(float(np.sqrt(left[r - 1])), 5) for r in (1, 2, 4, 8, 16, 24, 32, 40, 48)
+                     if r <= lam.size}
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", action="append", default=None)
@@ -97,6 +113,7 @@ def main() -> None:
     ap.add_argument("--save", default=None, help="folder to write PRESET-btf.h5 into")
     ap.add_argument("--points-per-texel", type=int, default=64)
     ap.add_argument("--noise", action="store_true", help="measure the texels' integration noise instead")
+    ap.add_argument("--modes", action="store_true", help="add the error of truncating each mode (HOSVD)")
     a = ap.parse_args()
     if a.noise:
         for name in a.preset or ["denim", "shot"]:
@@ -149,6 +166,7 @@ def main() -> None:
             "query_error_at_100_to_1": round(q_err_100, 5),
             "tile_mean_vs_synth_median": round(float(np.median(rel)), 5),
             "tile_mean_vs_synth_p90": round(float(np.percentile(rel, 90)), 5),
+            **({"mode_errors": _mode_errors(dense)} if a.modes else {}),
             "seconds": {"texels": round(t_tex, 1), "compress": round(t_comp, 1), "synth_cdbrdf": round(t_ref, 1)},
         }), flush=True)
 
