@@ -42,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog="example: cdbrdf view denim.h5 shot.h5 --mesh shirt.obj --units cm",
     )
     p.add_argument("files", metavar="FILE", nargs="+", type=existing_file(),
-                   help="a CDBRDF file (.h5); a second one is shown side by side")
+                   help="a CDBRDF or CD-BTF file (.h5); a second one is shown side by side")
     p.add_argument("--export", metavar="DIR", type=output_folder(maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE),
                    help="write the viewer as a static folder DIR instead of serving it (replaced whole "
                    "only if it holds an earlier export of the viewer and nothing added to it)")
@@ -58,6 +58,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--grid", type=_grid, metavar="THETA_STEP,PHI_STEP[,N_KAPPA]",
                    help="resample the tables onto a regular grid first (degrees; e.g. 15,30), for a table "
                    "too large for the GPU's textures")
+    p.add_argument("--rank", type=int_range(0, 100000), metavar="N",
+                   help="for a CD-BTF: use at most its N leading components (default: all that fit the GPU's "
+                   "guaranteed texture size; fewer draw faster)")
     p.add_argument("--precision", type=keyword(("auto", "float32", "float16")), default="auto",
                    help="texture precision: auto (float16 only for very large tables), float32 or float16")
     p.set_defaults(func=run)
@@ -94,9 +97,12 @@ def _user_mesh(args: argparse.Namespace, table: object) -> object:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..btf import is_btf
+    from ..btf import load as load_btf
     from ..errors import OptionError
     from ..table import load
     from ..view.asset import resample
+    from ..view.btf_asset import btf_rank_that_fits
     from ..view.export import MAX_TABLES, default_meshes, export_viewer, viewer_files
 
     if len(args.files) > MAX_TABLES:
@@ -108,6 +114,19 @@ def run(args: argparse.Namespace) -> int:
         check_output_folder(args.export, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE)  # before any work
     tables = []
     for f in args.files:
+        if is_btf(f):
+            if args.grid is not None:
+                raise OptionError(f"--grid: {Path(f).name} is a CD-BTF, which the viewer shows on its own grid "
+                                  "(use --rank N for fewer components)")
+            t = load_btf(f)
+            fits = btf_rank_that_fits(t)
+            used = min(fits, t.rank if args.rank is None else args.rank)
+            if used < t.rank and not args.quiet:
+                why = "--rank" if args.rank is not None and args.rank <= fits else "all that fit WebGL2's textures"
+                say(f"{Path(f).name}: CD-BTF of rank {t.rank}: the viewer uses its leading {used} components "
+                    f"({why})", err=True)
+            tables.append((Path(f).name, t))
+            continue
         t = load(f)
         if args.grid is not None:
             ts, ps, nk = args.grid
@@ -115,8 +134,9 @@ def run(args: argparse.Namespace) -> int:
         tables.append((Path(f).name, t))
     meshes = {"drape": ("draped cloth", default_meshes()["drape"])}
     if args.mesh:
-        meshes["user"] = (Path(args.mesh).name, _user_mesh(args, tables[0][1]))
-    files = viewer_files(tables, meshes=meshes, precision=args.precision)
+        first = tables[0][1]
+        meshes["user"] = (Path(args.mesh).name, _user_mesh(args, first.mean() if hasattr(first, "texels") else first))
+    files = viewer_files(tables, meshes=meshes, precision=args.precision, max_rank=args.rank)
     if args.export:
         index = export_viewer(args.export, files)
         if not args.quiet:
