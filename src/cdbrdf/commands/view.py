@@ -6,6 +6,7 @@ import argparse
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 from ._text import say
 
@@ -96,13 +97,30 @@ def _user_mesh(args: argparse.Namespace, table: object) -> object:
     return world
 
 
+def _btf(args: argparse.Namespace, path: str) -> Any:
+    """A CD-BTF file, read; says on standard error when the viewer uses fewer components than it has."""
+    from ..btf import load
+    from ..errors import OptionError
+    from ..view.btf_asset import btf_rank_that_fits
+
+    name = Path(path).name
+    if args.grid is not None:
+        raise OptionError(f"--grid: {name} is a CD-BTF, which the viewer shows on its own grid "
+                          "(use --rank N for fewer components)")
+    t = load(path)
+    fits = btf_rank_that_fits(t)
+    used = min(fits, t.rank if args.rank is None else args.rank)
+    if used < t.rank and not args.quiet:
+        why = "--rank" if args.rank is not None and args.rank <= fits else "all that fit WebGL2's textures"
+        say(f"{name}: CD-BTF of rank {t.rank}: the viewer uses its leading {used} components ({why})", err=True)
+    return t
+
+
 def run(args: argparse.Namespace) -> int:
-    from ..btf import is_btf
-    from ..btf import load as load_btf
+    from ..btf import CDBTF, is_btf
     from ..errors import OptionError
     from ..table import load
     from ..view.asset import resample
-    from ..view.btf_asset import btf_rank_that_fits
     from ..view.export import MAX_TABLES, default_meshes, export_viewer, viewer_files
 
     if len(args.files) > MAX_TABLES:
@@ -112,20 +130,10 @@ def run(args: argparse.Namespace) -> int:
         from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
 
         check_output_folder(args.export, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE)  # before any work
-    tables = []
+    tables: list[tuple[str, Any]] = []
     for f in args.files:
         if is_btf(f):
-            if args.grid is not None:
-                raise OptionError(f"--grid: {Path(f).name} is a CD-BTF, which the viewer shows on its own grid "
-                                  "(use --rank N for fewer components)")
-            t = load_btf(f)
-            fits = btf_rank_that_fits(t)
-            used = min(fits, t.rank if args.rank is None else args.rank)
-            if used < t.rank and not args.quiet:
-                why = "--rank" if args.rank is not None and args.rank <= fits else "all that fit WebGL2's textures"
-                say(f"{Path(f).name}: CD-BTF of rank {t.rank}: the viewer uses its leading {used} components "
-                    f"({why})", err=True)
-            tables.append((Path(f).name, t))
+            tables.append((Path(f).name, _btf(args, f)))
             continue
         t = load(f)
         if args.grid is not None:
@@ -135,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
     meshes = {"drape": ("draped cloth", default_meshes()["drape"])}
     if args.mesh:
         first = tables[0][1]
-        meshes["user"] = (Path(args.mesh).name, _user_mesh(args, first.mean() if hasattr(first, "texels") else first))
+        meshes["user"] = (Path(args.mesh).name, _user_mesh(args, first.mean() if isinstance(first, CDBTF) else first))
     files = viewer_files(tables, meshes=meshes, precision=args.precision, max_rank=args.rank)
     if args.export:
         index = export_viewer(args.export, files)

@@ -9,6 +9,7 @@
   const DATA = window.CDBRDF_VIEWER_DATA;
   const $ = (id) => document.getElementById(id);
   const KMAX_OVERLAY = 0.25; // mm^-1 at full colour in the curvature overlay
+  const SOFTWARE_COMPONENTS = 8; // CD-BTF components a software renderer starts with
 
   function fail(text) {
     const m = $('message');
@@ -121,7 +122,9 @@ vec3 lookup(float tv, float pv, float tl, float pl, float k) {
   return acc;
 }
 
-// CD-BTF (cdbrdf.view.btf_asset): mean + sum_i w_i(u, v) basis_i, every term looked up by the rule above
+#ifdef BTF
+// CD-BTF (cdbrdf.view.btf_asset): mean + sum_i w_i(u, v) basis_i, every term looked up by the rule above.
+// Compiled only into the programs that draw a CD-BTF: the plain table's programs stay as small as before.
 uniform int uBtf;                 // 1: the bound table is a CD-BTF
 uniform sampler2DArray uComp;     // RGBA, a layer per kappa: texel i = sample * uPer + component (0: the mean)
 uniform int uCompW, uPer;         // its width; 1 + the rank packed
@@ -190,6 +193,7 @@ vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p) {
   }
   return acc;
 }
+#endif
 vec3 srgb(vec3 c) {
   c = clamp(c, 0.0, 1.0);
   return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
@@ -207,7 +211,11 @@ void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   vec4 a = texelFetch(uQ, ivec2(2 * p.x, p.y), 0);
   vec4 b = texelFetch(uQ, ivec2(2 * p.x + 1, p.y), 0);
+#ifdef BTF
   o = vec4(uBtf == 1 && b.w > 0.5 ? lookupBTF(a.x, a.y, a.z, a.w, b.x, b.yz) : lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
+#else
+  o = vec4(lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
+#endif
 }`;
 
   const POLAR_FS = `#version 300 es
@@ -253,13 +261,17 @@ void main() {
 ${LOOKUP_GLSL}
 in vec3 vWorld; in vec3 vN; in vec3 vT; in float vK; in float vS; in vec2 vUV;
 uniform int uSurf; uniform float uAmp, uWave, uStandK;
-uniform int uWeave; uniform float uWeaveScale;  // 1: decode the CD-BTF at (u, v) / scale (sheet and stand)
+uniform float uWeaveScale;  // BTF: decode the CD-BTF at (u, v) / scale (sheet and stand)
 uniform vec3 uEye; uniform vec3 uLight; uniform float uExpo;  // uExpo = pi * 2^EV (irradiance pi: white = 1)
 uniform int uEnv; uniform vec3 uEnvDir[9]; uniform float uEnvW[9];
 uniform int uMode; uniform float uSplitX; uniform int uOverlay; uniform float uKmax; uniform int uPick;
 out vec4 o;
 vec3 reflectance(vec2 av, vec2 al, float k) {
-  return uWeave == 1 ? lookupBTF(av.x, av.y, al.x, al.y, k, vUV / uWeaveScale) : lookup(av.x, av.y, al.x, al.y, k);
+#ifdef BTF
+  return lookupBTF(av.x, av.y, al.x, al.y, k, vUV / uWeaveScale);
+#else
+  return lookup(av.x, av.y, al.x, al.y, k);
+#endif
 }
 vec2 angles(vec3 d, vec3 n, vec3 t, vec3 b) {
   vec3 l = vec3(dot(d, t), dot(d, b), dot(d, n));
@@ -414,7 +426,7 @@ void main() {
   }
 
   // a CD-BTF's components (1 + rank texels per sample) and per-texel weights: units 8 + 2 index, 9 + 2 index
-  const BTF_UNIT = 8, DUMMY_UNIT = 12;
+  const BTF_UNIT = 8;
   function uploadBTF(asset, index, limits) {
     const h = asset.header, b = h.btf, c = b.components, w = b.weights;
     const over = [];
@@ -439,14 +451,6 @@ void main() {
     return { unit: BTF_UNIT + 2 * index, compW: c.width, per: c.per_sample, rank: b.rank, rankTotal: b.rank_total,
       texels: b.texels, repeat: b.repeat_mm };
   }
-  function uploadDummy() {  // what the CD-BTF samplers of a plain table point to (never read)
-    const t = gl.createTexture();
-    gl.activeTexture(gl.TEXTURE0 + DUMMY_UNIT);
-    gl.bindTexture(gl.TEXTURE_2D_ARRAY, t);
-    gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
-    gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
-    gl.texImage3D(gl.TEXTURE_2D_ARRAY, 0, gl.RGBA32F, 1, 1, 1, 0, gl.RGBA, gl.FLOAT, new Float32Array(4));
-  }
   // the components a table uses now: the slider's cap, at most what was packed
   const rankUsed = (tab) => (tab.btf ? Math.max(0, Math.min(tab.btf.rank, state.components)) : 0);
 
@@ -460,10 +464,9 @@ void main() {
     gl.uniform3f(prog.u.uInvStep, tab.invStep[0], tab.invStep[1], tab.invStep[2]);
     gl.uniform1i(prog.u.uTexW, tab.texW);
     const b = tab.btf;
-    gl.uniform1i(prog.u.uBtf, b ? 1 : 0);
-    gl.uniform1i(prog.u.uComp, b ? b.unit : DUMMY_UNIT);
-    gl.uniform1i(prog.u.uWts, b ? b.unit + 1 : DUMMY_UNIT);
-    if (b) {
+    if (b && 'uComp' in prog.u) {  // a program with the CD-BTF decode (withBTF), drawing a CD-BTF
+      gl.uniform1i(prog.u.uBtf, 1);
+      gl.uniform1i(prog.u.uComp, b.unit); gl.uniform1i(prog.u.uWts, b.unit + 1);
       gl.uniform1i(prog.u.uCompW, b.compW); gl.uniform1i(prog.u.uPer, b.per);
       gl.uniform2i(prog.u.uTexels, b.texels[0], b.texels[1]);
       gl.uniform2f(prog.u.uRepeat, b.repeat[0], b.repeat[1]);
@@ -503,7 +506,8 @@ void main() {
     return { vao, count: idx.length };
   }
 
-  let surfProg, evalProg, polarProg, tables = [], surfaces = {}, emptyVAO;
+  let surfProg, evalProg, polarProg, surfBtfProg = null, evalBtfProg = null, tables = [], surfaces = {}, emptyVAO;
+  const withBTF = (src) => src.replace('#version 300 es', '#version 300 es\n#define BTF 1');
   let pickFBO = null, evalFBO = null, polarFBO = null;
 
   function floatFBO(w, h, depth) {
@@ -545,7 +549,8 @@ void main() {
 
   function drawSurface(vp, pick) {
     const s = surfaces[state.surface];
-    const prog = surfProg, u = prog.u, e = eye();
+    const weave = !!(vp.tab.btf && state.weave && s.kind !== 0);  // meshes carry no UVs: the tile mean
+    const prog = weave ? surfBtfProg : surfProg, u = prog.u, e = eye();
     gl.viewport(vp.x, vp.y, vp.w, vp.h);
     gl.useProgram(prog.p);
     bindTable(prog, vp.tab);
@@ -566,8 +571,7 @@ void main() {
     gl.uniform1i(u.uOverlay, state.overlay ? 1 : 0);
     gl.uniform1f(u.uKmax, KMAX_OVERLAY);
     gl.uniform1i(u.uPick, pick || 0);
-    gl.uniform1i(u.uWeave, vp.tab.btf && state.weave && s.kind !== 0 ? 1 : 0);  // meshes carry no UVs
-    gl.uniform1f(u.uWeaveScale, state.weaveScale);
+    if (weave) gl.uniform1f(u.uWeaveScale, state.weaveScale);
     gl.bindVertexArray(s.vao);
     gl.drawElements(gl.TRIANGLES, s.count, gl.UNSIGNED_INT, 0);  // one draw call per surface
     state.drawCalls++;
@@ -615,6 +619,7 @@ void main() {
         `${b.repeat[0].toPrecision(3)} x ${b.repeat[1].toPrecision(3)} mm`;
       let why = '';
       if (b.rank < b.rankTotal) why = `; the export kept the leading ${b.rank} (${t.h.btf.rank < t.h.btf.rank_fits ? '--rank' : 'the GPU texture size'})`;
+      if (used < b.rank) why += `; the leading ${used}${state.software ? ' on software rendering' : ''}, the components slider goes up to ${b.rank}`;
       const shown = !state.weave ? 'showing the tile mean' : mesh ? 'this mesh has no UVs: tile mean' :
         `weave at ${state.weaveScale === 1 ? 'true size' : `${state.weaveScale.toFixed(1)}x size`}`;
       return `${t.h.name}: CD-BTF, rank ${used} used of ${b.rankTotal}${why}; ${tex}; ${shown}`;
@@ -702,9 +707,10 @@ void main() {
     gl.bindFramebuffer(gl.FRAMEBUFFER, evalFBO.fb);
     gl.viewport(0, 0, cols, rows);
     gl.disable(gl.DEPTH_TEST);
-    gl.useProgram(evalProg.p);
-    bindTable(evalProg, tab);
-    gl.uniform1i(evalProg.u.uQ, 6);
+    const ep = tab.btf ? evalBtfProg : evalProg;
+    gl.useProgram(ep.p);
+    bindTable(ep, tab);
+    gl.uniform1i(ep.u.uQ, 6);
     gl.bindVertexArray(emptyVAO);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
     gl.bindVertexArray(null);
@@ -932,12 +938,18 @@ void main() {
     evalProg = compile(FULLSCREEN_VS, EVAL_FS);
     polarProg = compile(FULLSCREEN_VS, POLAR_FS);
     emptyVAO = gl.createVertexArray();
-    uploadDummy();
     tables = DATA.tables.map((a, i) => uploadTable({ header: a.header, buffer: decode(a.data) }, i));
     const btfs = tables.filter((t) => t.btf);
-    state.components = Math.max(0, ...btfs.map((t) => t.btf.rank));
+    if (btfs.length) { surfBtfProg = compile(SURFACE_VS, withBTF(SURFACE_FS)); evalBtfProg = compile(FULLSCREEN_VS, withBTF(EVAL_FS)); }
+    // software WebGL (SwiftShader, llvmpipe) takes seconds a frame per few dozen components: it starts with
+    // the leading SOFTWARE_COMPONENTS (ordered by energy; the page says so, the slider goes up to all)
+    const dbg = gl.getExtension('WEBGL_debug_renderer_info');
+    state.renderer = String(gl.getParameter(dbg ? dbg.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+    state.software = /swiftshader|llvmpipe|softpipe|software|basic render/i.test(state.renderer);
+    const packed = Math.max(0, ...btfs.map((t) => t.btf.rank));
+    state.components = state.software ? Math.min(packed, SOFTWARE_COMPONENTS) : packed;
     $('weaveBox').style.display = btfs.length ? '' : 'none';
-    $('comps').max = String(state.components); $('comps').value = String(state.components);
+    $('comps').max = String(packed); $('comps').value = String(state.components);
     const grid = gridGeometry(480, 8);
     surfaces.sheet = Object.assign(makeVAO(surfProg, grid.pos, null, null, null, grid.idx), { kind: 1, label: 'sine sheet', distance: 150 });
     surfaces.stand = Object.assign(makeVAO(surfProg, grid.pos, null, null, null, grid.idx), { kind: 2, label: 'cylinder stand', distance: 150 });
