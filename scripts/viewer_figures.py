@@ -130,6 +130,7 @@ def _btf_figure(chromium: str, path: str | None, save) -> None:
                 page.evaluate(f"{v}.setLight(40, 10)")
                 page.evaluate(f"{v}.setBend(3)")
                 page.evaluate(f"{v}.setCamera(55, -90, 22)")
+                page.evaluate(f"{v}.setComponents({btf.rank})")  # all (software WebGL starts with 8)
                 print(page.evaluate(f"{v}.state()")["btfText"])
                 panels.append(page.locator("#view").screenshot())
                 page.evaluate(f"{v}.setWeave(false)")

@@ -8,6 +8,7 @@ hold whatever factorisation made a file.
 from __future__ import annotations
 
 import base64
+import re
 
 import numpy as np
 import pytest
@@ -282,3 +283,25 @@ def test_page_says_the_export_kept_fewer_components(browser, tmp_path):
         assert messages == []
     finally:
         page.close()
+
+
+@needs_chromium
+@pytest.mark.slow  # a page of its own
+def test_page_checks_the_gpus_limits_for_the_components(browser, tmp_path):
+    """Components wider than this GPU's MAX_TEXTURE_SIZE: the page says which limit and offers --rank."""
+    from cdbrdf.view.export import write_viewer
+
+    files = viewer_files([("b.h5", random_btf(aniso_grid()))], meshes={})
+    text, n = re.subn(r'"components":\{"width":\d+', '"components":{"width":1000000', files["data.js"].decode())
+    assert n == 1
+    files["data.js"] = text.encode()
+    index = write_viewer(tmp_path / "v", files)
+    page = browser.new_page()
+    try:
+        page.goto(index.resolve().as_uri(), wait_until="load")
+        err = page.evaluate("cdbrdfViewer.ready.then(() => 'ok', e => e.message)")
+        shown = page.locator("#message").text_content()
+    finally:
+        page.close()
+    assert "b.h5: the CD-BTF is too large for this GPU's textures (components texture 1000000 x" in err
+    assert "--rank N" in err and shown == err
