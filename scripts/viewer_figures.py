@@ -8,6 +8,11 @@ BRDF | CDBRDF view of the denim sheet bent hard, the curvature overlay, the
 draped cloth, the cylinder stand, and the 2-D views (mosaic with a clicked
 point's cell, polar slice). Each screenshot is checked for content (not
 blank) before it is written.
+
+``viewer-btf.png``: a CD-BTF of the denim (``cdbrdf.synth.texels.tabulate_btf``,
+8 x 8 texels, the paper's grid; about half a minute, or ``--btf FILE``)
+close up on the sine sheet with its weave, the same view with the tile mean,
+and on the cylinder stand. ``--only btf`` makes only that one.
 """
 
 from __future__ import annotations
@@ -37,6 +42,8 @@ def _check(png: bytes, name: str) -> bytes:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "docs" / "img"))
+    ap.add_argument("--only", choices=("all", "tables", "btf"), default="all", help="which figures")
+    ap.add_argument("--btf", metavar="FILE", help="the CD-BTF file of viewer-btf.png (default: synthesised)")
     args = ap.parse_args(argv)
     out = Path(args.out)
     chromium = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -53,6 +60,10 @@ def main(argv=None) -> int:
             Path(tmp).write_bytes(_check(png, name))
         print(f"wrote {out / name}")
 
+    if args.only in ("all", "btf"):
+        _btf_figure(chromium, args.btf, save)
+    if args.only == "btf":
+        return 0
     with tempfile.TemporaryDirectory() as tmp:
         files = viewer_files([("denim.h5", materials.load("denim")), ("shot.h5", materials.load("shot"))])
         index = export_viewer(Path(tmp) / "v", files)
@@ -86,6 +97,61 @@ def main(argv=None) -> int:
             finally:
                 browser.close()
     return 0
+
+
+def _btf_figure(chromium: str, path: str | None, save) -> None:
+    """viewer-btf.png: the weave close up on the sheet, the same view with the tile mean, the stand."""
+    from PIL import Image
+    from playwright.sync_api import sync_playwright
+
+    from cdbrdf.view.export import export_viewer, viewer_files
+
+    if path is None:
+        from cdbrdf.synth import presets
+        from cdbrdf.synth.texels import tabulate_btf
+
+        btf = tabulate_btf(presets.model("denim"), texels=8)
+    else:
+        from cdbrdf.btf import load
+
+        btf = load(path)
+    print(btf)
+    panels = []
+    with tempfile.TemporaryDirectory() as tmp:
+        index = export_viewer(Path(tmp) / "v", viewer_files([("denim-btf.h5", btf)], meshes={}))
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=chromium, headless=True, args=ARGS)
+            try:
+                page = browser.new_page(viewport={"width": 1300, "height": 1000})
+                page.goto(index.resolve().as_uri())
+                page.evaluate("cdbrdfViewer.ready")
+                v = "cdbrdfViewer"
+                page.evaluate(f"{v}.setSize(320, 240)")
+                page.evaluate(f"{v}.setLight(40, 10)")
+                page.evaluate(f"{v}.setBend(3)")
+                page.evaluate(f"{v}.setCamera(55, -90, 22)")
+                page.evaluate(f"{v}.setComponents({btf.rank})")  # all (software WebGL starts with 8)
+                print(page.evaluate(f"{v}.state()")["btfText"])
+                panels.append(page.locator("#view").screenshot())
+                page.evaluate(f"{v}.setWeave(false)")
+                panels.append(page.locator("#view").screenshot())
+                page.evaluate(f"{v}.setWeave(true)")
+                page.evaluate(f"{v}.setSurface('stand')")
+                page.evaluate(f"{v}.setStandCurvature(0.22)")
+                page.evaluate(f"{v}.setCamera(35, -60, 30)")
+                panels.append(page.locator("#view").screenshot())
+            finally:
+                browser.close()
+    ims = [Image.open(io.BytesIO(_check(png, "viewer-btf.png"))).convert("RGB") for png in panels]
+    gap = 6
+    out = Image.new("RGB", (sum(i.width for i in ims) + gap * (len(ims) - 1), ims[0].height), (30, 30, 30))
+    x = 0
+    for im in ims:
+        out.paste(im, (x, 0))
+        x += im.width + gap
+    buf = io.BytesIO()
+    out.save(buf, format="PNG", optimize=True)
+    save("viewer-btf.png", buf.getvalue())
 
 
 if __name__ == "__main__":

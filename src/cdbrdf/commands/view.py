@@ -6,6 +6,7 @@ import argparse
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 from ._text import say
 
@@ -42,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog="example: cdbrdf view denim.h5 shot.h5 --mesh shirt.obj --units cm",
     )
     p.add_argument("files", metavar="FILE", nargs="+", type=existing_file(),
-                   help="a CDBRDF file (.h5); a second one is shown side by side")
+                   help="a CDBRDF or CD-BTF file (.h5); a second one is shown side by side")
     p.add_argument("--export", metavar="DIR", type=output_folder(maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE),
                    help="write the viewer as a static folder DIR instead of serving it (replaced whole "
                    "only if it holds an earlier export of the viewer and nothing added to it)")
@@ -58,6 +59,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--grid", type=_grid, metavar="THETA_STEP,PHI_STEP[,N_KAPPA]",
                    help="resample the tables onto a regular grid first (degrees; e.g. 15,30), for a table "
                    "too large for the GPU's textures")
+    p.add_argument("--rank", type=int_range(0, 100000), metavar="N",
+                   help="for a CD-BTF: use at most its N leading components (default: all that fit the GPU's "
+                   "guaranteed texture size; fewer draw faster)")
     p.add_argument("--precision", type=keyword(("auto", "float32", "float16")), default="auto",
                    help="texture precision: auto (float16 only for very large tables), float32 or float16")
     p.set_defaults(func=run)
@@ -93,7 +97,27 @@ def _user_mesh(args: argparse.Namespace, table: object) -> object:
     return world
 
 
+def _btf(args: argparse.Namespace, path: str) -> Any:
+    """A CD-BTF file, read; says on standard error when the viewer uses fewer components than it has."""
+    from ..btf import load
+    from ..errors import OptionError
+    from ..view.btf_asset import btf_rank_that_fits
+
+    name = Path(path).name
+    if args.grid is not None:
+        raise OptionError(f"--grid: {name} is a CD-BTF, which the viewer shows on its own grid "
+                          "(use --rank N for fewer components)")
+    t = load(path)
+    fits = btf_rank_that_fits(t)
+    used = min(fits, t.rank if args.rank is None else args.rank)
+    if used < t.rank and not args.quiet:
+        why = "--rank" if args.rank is not None and args.rank <= fits else "all that fit WebGL2's textures"
+        say(f"{name}: CD-BTF of rank {t.rank}: the viewer uses its leading {used} components ({why})", err=True)
+    return t
+
+
 def run(args: argparse.Namespace) -> int:
+    from ..btf import CDBTF, is_btf
     from ..errors import OptionError
     from ..table import load
     from ..view.asset import resample
@@ -106,8 +130,11 @@ def run(args: argparse.Namespace) -> int:
         from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
 
         check_output_folder(args.export, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE)  # before any work
-    tables = []
+    tables: list[tuple[str, Any]] = []
     for f in args.files:
+        if is_btf(f):
+            tables.append((Path(f).name, _btf(args, f)))
+            continue
         t = load(f)
         if args.grid is not None:
             ts, ps, nk = args.grid
@@ -115,8 +142,9 @@ def run(args: argparse.Namespace) -> int:
         tables.append((Path(f).name, t))
     meshes = {"drape": ("draped cloth", default_meshes()["drape"])}
     if args.mesh:
-        meshes["user"] = (Path(args.mesh).name, _user_mesh(args, tables[0][1]))
-    files = viewer_files(tables, meshes=meshes, precision=args.precision)
+        first = tables[0][1]
+        meshes["user"] = (Path(args.mesh).name, _user_mesh(args, first.mean() if isinstance(first, CDBTF) else first))
+    files = viewer_files(tables, meshes=meshes, precision=args.precision, max_rank=args.rank)
     if args.export:
         index = export_viewer(args.export, files)
         if not args.quiet:

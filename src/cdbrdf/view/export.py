@@ -29,9 +29,11 @@ from os import PathLike
 from pathlib import Path
 from typing import Any
 
+from ..btf import CDBTF
 from ..errors import OptionError
 from ..mesh import SineSheet
 from .asset import Asset, mesh_asset, table_asset
+from .btf_asset import btf_asset
 
 __all__ = [
     "EXPORT_MAKER",
@@ -93,13 +95,16 @@ def viewer_files(
     meshes: Mapping[str, tuple[str, Any]] | None = None,
     precision: str = "auto",
     exposure_ev: float | None = None,
+    max_rank: int | None = None,
 ) -> dict[str, bytes]:
     """Every file of the viewer, by relative path.
 
     Parameters
     ----------
     tables
-        ``(label, CDBRDF)`` pairs: one table, or two shown side by side.
+        ``(label, CDBRDF or CDBTF)`` pairs: one table, or two shown side by
+        side. A :class:`cdbrdf.CDBTF` is shown with its weave on the sine
+        sheet and the stand (:func:`cdbrdf.view.btf_asset.btf_asset`).
     meshes
         ``{key: (label, prepared Mesh)}``; default: the draped cloth
         (:func:`default_meshes`). The sine sheet and the stand are drawn by
@@ -108,6 +113,9 @@ def viewer_files(
         Texture precision (:data:`cdbrdf.view.asset.PRECISIONS`).
     exposure_ev
         The page's initial exposure, stops (default: from the first table).
+    max_rank
+        For a CD-BTF: use at most this many leading components (default:
+        all that fit the GPU's guaranteed texture size).
 
     Returns
     -------
@@ -127,7 +135,11 @@ def viewer_files(
         meshes = {"drape": ("draped cloth", default_meshes()["drape"])}
     assets: list[tuple[str, Asset]] = []
     for i, (label, table) in enumerate(tables):
-        assets.append((f"table-{i}", table_asset(table, name=label, precision=precision)))
+        if isinstance(table, CDBTF):
+            a = btf_asset(table, name=label, precision=precision, max_rank=max_rank)
+        else:
+            a = table_asset(table, name=label, precision=precision)
+        assets.append((f"table-{i}", a))
     mesh_assets = [(key, mesh_asset(m, name=label)) for key, (label, m) in meshes.items()]
     files: dict[str, bytes] = {}
     pkg = resources.files("cdbrdf.view") / "assets"

@@ -9,6 +9,7 @@
   const DATA = window.CDBRDF_VIEWER_DATA;
   const $ = (id) => document.getElementById(id);
   const KMAX_OVERLAY = 0.25; // mm^-1 at full colour in the curvature overlay
+  const SOFTWARE_COMPONENTS = 8; // CD-BTF components a software renderer starts with
 
   function fail(text) {
     const m = $('message');
@@ -120,6 +121,79 @@ vec3 lookup(float tv, float pv, float tl, float pl, float k) {
   }
   return acc;
 }
+
+#ifdef BTF
+// CD-BTF (cdbrdf.view.btf_asset): mean + sum_i w_i(u, v) basis_i, every term looked up by the rule above.
+// Compiled only into the programs that draw a CD-BTF: the plain table's programs stay as small as before.
+uniform int uBtf;                 // 1: the bound table is a CD-BTF
+uniform sampler2DArray uComp;     // RGBA, a layer per kappa: texel i = sample * uPer + component (0: the mean)
+uniform int uCompW, uPer;         // its width; 1 + the rank packed
+uniform sampler2DArray uWts;      // RGBA32F (layer j: components 4j..4j+3) per texel, (u, v) = (x, y)
+uniform ivec2 uTexels;            // n_u, n_v
+uniform vec2 uRepeat;             // the repeat's size, mm
+uniform int uRank;                // components used (<= uPer - 1)
+
+// the corners the lookup above reads: flat sample index (row * n_columns + column), layer, weight
+int corners(float tv, float pv, float tl, float pl, float k, out int ci[32], out int cl[32], out float cw[32]) {
+  if (uIso == 1) { pv = wrapAz(wrapAz(pv) - wrapAz(pl)); pl = 0.0; }
+  int ik, itl, itv, ipl0, ipl1, ipv0, ipv1;
+  float wk, wtl, wtv, wpl, wpv;
+  linearNodes(0, uN.x, uInvStep.x, k, ik, wk);
+  linearNodes(1, uN.y, uInvStep.y, tl, itl, wtl);
+  linearNodes(2, uN.z, uInvStep.z, tv, itv, wtv);
+  periodicNodes(uPhi.x, uPhi.y, uNphi.x, pl, ipl0, ipl1, wpl);
+  periodicNodes(uPhi.z, uPhi.w, uNphi.y, pv, ipv0, ipv1, wpv);
+  if (itl == 0 && wtl == 0.0) { wpl = 0.0; if (uIso == 1) wpv = 0.0; }
+  if (itv == 0 && wtv == 0.0) wpv = 0.0;
+  int ntl = uN.y, ntv = uN.z, ncol = uNphi.y * uN.z, n = 0;
+  for (int a = 0; a < 2; a++) {
+    float fa = a == 0 ? 1.0 - wk : wk; if (fa == 0.0) continue;
+    for (int b = 0; b < 2; b++) {
+      float fb = fa * (b == 0 ? 1.0 - wpl : wpl); if (fb == 0.0) continue;
+      int ipl = b == 0 ? ipl0 : ipl1;
+      for (int c = 0; c < 2; c++) {
+        float fc = fb * (c == 0 ? 1.0 - wtl : wtl); if (fc == 0.0) continue;
+        int row = ipl * ntl + itl + c;
+        for (int d = 0; d < 2; d++) {
+          float fd = fc * (d == 0 ? 1.0 - wpv : wpv); if (fd == 0.0) continue;
+          int ipv = d == 0 ? ipv0 : ipv1;
+          for (int e = 0; e < 2; e++) {
+            float fe = fd * (e == 0 ? 1.0 - wtv : wtv); if (fe == 0.0) continue;
+            ci[n] = row * ncol + ipv * ntv + itv + e; cl[n] = ik + a; cw[n] = fe; n++;
+          }
+        }
+      }
+    }
+  }
+  return n;
+}
+vec3 comp(int s, int layer, int j) { int i = s * uPer + j; return texelFetch(uComp, ivec3(i % uCompW, i / uCompW, layer), 0).rgb; }
+vec4 wts(ivec2 t, int g) { return texelFetch(uWts, ivec3(t, g), 0); }
+// p: the position on the fabric, mm (periodic over the repeat)
+vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p) {
+  int ci[32]; int cl[32]; float cw[32];
+  int n = corners(tv, pv, tl, pl, k, ci, cl, cw);
+  vec3 acc = vec3(0.0);
+  for (int c = 0; c < 32; c++) { if (c >= n) break; acc += cw[c] * comp(ci[c], cl[c], 0); }
+  if (uRank == 0) return acc;
+  // the weights: periodic bilinear between texel centres (CDBTF.texel_weights)
+  vec2 r = p / uRepeat;
+  vec2 f = (r - floor(r)) * vec2(uTexels) - 0.5, f0 = floor(f), t = f - f0;
+  ivec2 i0 = (ivec2(f0) % uTexels + uTexels) % uTexels, i1 = (i0 + 1) % uTexels;
+  for (int g = 0; 4 * g < uRank; g++) {
+    vec4 w = mix(mix(wts(i0, g), wts(ivec2(i1.x, i0.y), g), t.x), mix(wts(ivec2(i0.x, i1.y), g), wts(i1, g), t.x), t.y);
+    for (int q = 0; q < 4; q++) {
+      int j = 4 * g + q + 1;
+      if (j > uRank) break;
+      if (w[q] == 0.0) continue;
+      vec3 s = vec3(0.0);
+      for (int c = 0; c < 32; c++) { if (c >= n) break; s += cw[c] * comp(ci[c], cl[c], j); }
+      acc += w[q] * s;
+    }
+  }
+  return acc;
+}
+#endif
 vec3 srgb(vec3 c) {
   c = clamp(c, 0.0, 1.0);
   return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
@@ -131,13 +205,17 @@ void main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2
 
   const EVAL_FS = `#version 300 es
 ${LOOKUP_GLSL}
-uniform sampler2D uQ;  // two texels per query: (theta_v, phi_v, theta_l, phi_l), (kappa, 0, 0, 0)
+uniform sampler2D uQ;  // two texels per query: (theta_v, phi_v, theta_l, phi_l), (kappa, u_mm, v_mm, 1: at (u, v))
 out vec4 o;
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   vec4 a = texelFetch(uQ, ivec2(2 * p.x, p.y), 0);
   vec4 b = texelFetch(uQ, ivec2(2 * p.x + 1, p.y), 0);
+#ifdef BTF
+  o = vec4(uBtf == 1 && b.w > 0.5 ? lookupBTF(a.x, a.y, a.z, a.w, b.x, b.yz) : lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
+#else
   o = vec4(lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
+#endif
 }`;
 
   const POLAR_FS = `#version 300 es
@@ -156,14 +234,15 @@ void main() {
   const SURFACE_VS = `#version 300 es
 in vec3 aPos; in vec3 aNrm; in vec3 aTan; in float aK;
 uniform mat4 uMVP; uniform int uSurf; uniform float uAmp, uWave, uStandK, uWidth, uDepth;
-out vec3 vWorld; out vec3 vN; out vec3 vT; out float vK; out float vS;
+out vec3 vWorld; out vec3 vN; out vec3 vT; out float vK; out float vS; out vec2 vUV;
 void main() {
   vec3 p = aPos;
-  vN = aNrm; vT = aTan; vK = aK; vS = 0.0;
+  vN = aNrm; vT = aTan; vK = aK; vS = 0.0; vUV = vec2(0.0);
   if (uSurf == 1) {          // sine sheet: z = A sin(2 pi x / L)
     float x = (aPos.x - 0.5) * uWidth;
     p = vec3(x, (aPos.y - 0.5) * uDepth, uAmp * sin(6.283185307179586 * x / uWave));
     vS = x;
+    vUV = vec2(x + 0.5 * uWidth, aPos.y * uDepth);  // the renderer's UVs times uv_scale = (width, depth), mm
   } else if (uSurf == 2) {   // a stand of constant curvature: arc length s across
     float span = uWidth;
     if (abs(uStandK) > 1e-6) span = min(uWidth, 0.9 * 3.141592653589793 / abs(uStandK));
@@ -172,6 +251,7 @@ void main() {
     float z = abs(a) < 1e-4 ? -0.5 * uStandK * s * s : (cos(a) - 1.0) / uStandK;
     p = vec3(x, (aPos.y - 0.5) * uDepth, z);
     vS = s;
+    vUV = vec2(s + 0.5 * uWidth, aPos.y * uDepth);  // arc length across: mm of the flat fabric
   }
   vWorld = p;
   gl_Position = uMVP * vec4(p, 1.0);
@@ -179,12 +259,20 @@ void main() {
 
   const SURFACE_FS = `#version 300 es
 ${LOOKUP_GLSL}
-in vec3 vWorld; in vec3 vN; in vec3 vT; in float vK; in float vS;
+in vec3 vWorld; in vec3 vN; in vec3 vT; in float vK; in float vS; in vec2 vUV;
 uniform int uSurf; uniform float uAmp, uWave, uStandK;
+uniform float uWeaveScale;  // BTF: decode the CD-BTF at (u, v) / scale (sheet and stand)
 uniform vec3 uEye; uniform vec3 uLight; uniform float uExpo;  // uExpo = pi * 2^EV (irradiance pi: white = 1)
 uniform int uEnv; uniform vec3 uEnvDir[9]; uniform float uEnvW[9];
 uniform int uMode; uniform float uSplitX; uniform int uOverlay; uniform float uKmax; uniform int uPick;
 out vec4 o;
+vec3 reflectance(vec2 av, vec2 al, float k) {
+#ifdef BTF
+  return lookupBTF(av.x, av.y, al.x, al.y, k, vUV / uWeaveScale);
+#else
+  return lookup(av.x, av.y, al.x, al.y, k);
+#endif
+}
 vec2 angles(vec3 d, vec3 n, vec3 t, vec3 b) {
   vec3 l = vec3(dot(d, t), dot(d, b), dot(d, n));
   float th = degrees(acos(clamp(l.z, -1.0, 1.0)));
@@ -216,13 +304,13 @@ void main() {
     c = vec3(0.02);
   } else if (uEnv == 0) {
     float cl = dot(uLight, n);
-    if (cl > 0.0) { vec2 al = angles(uLight, n, t, b); c = lookup(av.x, av.y, al.x, al.y, kq) * cl * uExpo; }
+    if (cl > 0.0) { vec2 al = angles(uLight, n, t, b); c = reflectance(av, al, kq) * cl * uExpo; }
   } else {
     for (int i = 0; i < 9; i++) {
       float cl = dot(uEnvDir[i], n);
       if (cl <= 0.0) continue;
       vec2 al = angles(uEnvDir[i], n, t, b);
-      c += uEnvW[i] * lookup(av.x, av.y, al.x, al.y, kq) * cl * uExpo;
+      c += uEnvW[i] * reflectance(av, al, kq) * cl * uExpo;
     }
   }
   vec3 s = srgb(c);
@@ -275,7 +363,7 @@ void main() {
     surface: 'sheet', amplitude: NaN, wavelength: NaN, width: NaN, depth: NaN, standKappa: 0.13,
     lightTheta: 45.0, lightPhi: 0.0, env: false, exposure: 0.0, mode: 'cdbrdf', split: 0.5, overlay: false,
     side: false, cam: { elevation: 50.0, azimuth: -90.0, distance: 150.0 }, mosaicTable: 0, mosaicK: 0,
-    pick: null, drawCalls: 0,
+    pick: null, drawCalls: 0, weave: true, weaveScale: 1.0, components: 0,
   };
   const viewer = { errors: [] };
   window.cdbrdfViewer = viewer;
@@ -333,8 +421,38 @@ void main() {
       phi: [L.phi_l0, L.phi_l_step, L.phi_v0, L.phi_v_step], iso: L.isotropic ? 1 : 0,
       invStep: [0, L.theta_l_inv_step, L.theta_v_inv_step], texW: tex.width,
       samples: block(asset, 'samples'), measured: block(asset, 'measured'),
-      fillMethod: block(asset, 'fill_method'), fillSource: block(asset, 'fill_source') };
+      fillMethod: block(asset, 'fill_method'), fillSource: block(asset, 'fill_source'),
+      btf: h.kind === 'btf' ? uploadBTF(asset, index, limits) : null };
   }
+
+  // a CD-BTF's components (1 + rank texels per sample) and per-texel weights: units 8 + 2 index, 9 + 2 index
+  const BTF_UNIT = 8;
+  function uploadBTF(asset, index, limits) {
+    const h = asset.header, b = h.btf, c = b.components, w = b.weights;
+    const over = [];
+    for (const [what, t] of [['components', c], ['weights', w]]) {
+      if (t.width > limits.MAX_TEXTURE_SIZE || t.height > limits.MAX_TEXTURE_SIZE) over.push(`${what} texture ${t.width} x ${t.height} > MAX_TEXTURE_SIZE ${limits.MAX_TEXTURE_SIZE}`);
+      if (t.layers > limits.MAX_ARRAY_TEXTURE_LAYERS) over.push(`${what}: ${t.layers} layers > MAX_ARRAY_TEXTURE_LAYERS ${limits.MAX_ARRAY_TEXTURE_LAYERS}`);
+    }
+    if (over.length) throw fail(`${h.name}: the CD-BTF is too large for this GPU's textures (${over.join('; ')}); use fewer components with cdbrdf view --rank N`);
+    const half = c.type === 'float16';
+    const tex = (unit, width, height, layers, data, f16) => {
+      const t = gl.createTexture();
+      gl.activeTexture(gl.TEXTURE0 + unit);
+      gl.bindTexture(gl.TEXTURE_2D_ARRAY, t);
+      gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+      gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+      gl.texImage3D(gl.TEXTURE_2D_ARRAY, 0, f16 ? gl.RGBA16F : gl.RGBA32F, width, height, layers, 0, gl.RGBA,
+        f16 ? gl.HALF_FLOAT : gl.FLOAT, data);
+    };
+    tex(BTF_UNIT + 2 * index, c.width, c.height, c.layers, block(asset, 'components'), half);
+    tex(BTF_UNIT + 2 * index + 1, w.width, w.height, w.layers, block(asset, 'weights'), false);
+    return { unit: BTF_UNIT + 2 * index, compW: c.width, per: c.per_sample, rank: b.rank, rankTotal: b.rank_total,
+      texels: b.texels, repeat: b.repeat_mm };
+  }
+  // the components a table uses now: the slider's cap, at most what was packed
+  const rankUsed = (tab) => (tab.btf ? Math.max(0, Math.min(tab.btf.rank, state.components)) : 0);
 
   function bindTable(prog, tab) {
     gl.uniform1i(prog.u.uTab, tab.unit);
@@ -345,6 +463,15 @@ void main() {
     gl.uniform1i(prog.u.uIso, tab.iso);
     gl.uniform3f(prog.u.uInvStep, tab.invStep[0], tab.invStep[1], tab.invStep[2]);
     gl.uniform1i(prog.u.uTexW, tab.texW);
+    const b = tab.btf;
+    if (b && 'uComp' in prog.u) {  // a program with the CD-BTF decode (withBTF), drawing a CD-BTF
+      gl.uniform1i(prog.u.uBtf, 1);
+      gl.uniform1i(prog.u.uComp, b.unit); gl.uniform1i(prog.u.uWts, b.unit + 1);
+      gl.uniform1i(prog.u.uCompW, b.compW); gl.uniform1i(prog.u.uPer, b.per);
+      gl.uniform2i(prog.u.uTexels, b.texels[0], b.texels[1]);
+      gl.uniform2f(prog.u.uRepeat, b.repeat[0], b.repeat[1]);
+      gl.uniform1i(prog.u.uRank, rankUsed(tab));
+    }
   }
 
   function gridGeometry(nx, ny) {  // (s, t) in [0, 1]^2 as positions; the vertex shader shapes it
@@ -379,7 +506,8 @@ void main() {
     return { vao, count: idx.length };
   }
 
-  let surfProg, evalProg, polarProg, tables = [], surfaces = {}, emptyVAO;
+  let surfProg, evalProg, polarProg, surfBtfProg = null, evalBtfProg = null, tables = [], surfaces = {}, emptyVAO;
+  const withBTF = (src) => src.replace('#version 300 es', '#version 300 es\n#define BTF 1');
   let pickFBO = null, evalFBO = null, polarFBO = null;
 
   function floatFBO(w, h, depth) {
@@ -421,7 +549,8 @@ void main() {
 
   function drawSurface(vp, pick) {
     const s = surfaces[state.surface];
-    const prog = surfProg, u = prog.u, e = eye();
+    const weave = !!(vp.tab.btf && state.weave && s.kind !== 0);  // meshes carry no UVs: the tile mean
+    const prog = weave ? surfBtfProg : surfProg, u = prog.u, e = eye();
     gl.viewport(vp.x, vp.y, vp.w, vp.h);
     gl.useProgram(prog.p);
     bindTable(prog, vp.tab);
@@ -442,6 +571,7 @@ void main() {
     gl.uniform1i(u.uOverlay, state.overlay ? 1 : 0);
     gl.uniform1f(u.uKmax, KMAX_OVERLAY);
     gl.uniform1i(u.uPick, pick || 0);
+    if (weave) gl.uniform1f(u.uWeaveScale, state.weaveScale);
     gl.bindVertexArray(s.vao);
     gl.drawElements(gl.TRIANGLES, s.count, gl.UNSIGNED_INT, 0);  // one draw call per surface
     state.drawCalls++;
@@ -476,6 +606,24 @@ void main() {
     $('lightTOut').textContent = `${state.lightTheta.toFixed(1)} deg`;
     $('lightPOut').textContent = `${state.lightPhi.toFixed(1)} deg`;
     $('expoOut').textContent = `${state.exposure >= 0 ? '+' : ''}${state.exposure.toFixed(1)}`;
+    $('compsOut').textContent = String(state.components);
+    $('scaleOut').textContent = `${state.weaveScale.toFixed(1)}x`;
+    $('btfInfo').textContent = btfText();
+  }
+
+  // what the weave panel says: per CD-BTF, the components used of the file's rank, and why fewer
+  function btfText() {
+    const mesh = surfaces[state.surface] && surfaces[state.surface].kind === 0;
+    return tables.filter((t) => t.btf).map((t) => {
+      const b = t.btf, used = rankUsed(t), tex = `${b.texels[0]} x ${b.texels[1]} texels over ` +
+        `${b.repeat[0].toPrecision(3)} x ${b.repeat[1].toPrecision(3)} mm`;
+      let why = '';
+      if (b.rank < b.rankTotal) why = `; the export kept the leading ${b.rank} (${t.h.btf.rank < t.h.btf.rank_fits ? '--rank' : 'the GPU texture size'})`;
+      if (used < b.rank) why += `; the leading ${used}${state.software ? ' on software rendering' : ''}, the components slider goes up to ${b.rank}`;
+      const shown = !state.weave ? 'showing the tile mean' : mesh ? 'this mesh has no UVs: tile mean' :
+        `weave at ${state.weaveScale === 1 ? 'true size' : `${state.weaveScale.toFixed(1)}x size`}`;
+      return `${t.h.name}: CD-BTF, rank ${used} used of ${b.rankTotal}${why}; ${tex}; ${shown}`;
+    }).join('\n');
   }
 
   function readFloatPass(fbo, x, y, w, h) {
@@ -542,11 +690,12 @@ void main() {
     queries.forEach((x, i) => {
       // azimuths reduced exactly in float64 (fmod, as cdbrdf.interp.wrap_azimuth) before float32 loses them
       const wrap = (a) => (Math.abs(a) < 360 ? a : a % 360);
-      const [tv, pv0, tl, pl0, k] = x.map(Number);
-      const pv = wrap(pv0), pl = wrap(pl0);
-      ok[i] = [tv, pv, tl, pl, k].every(Number.isFinite) && tv >= 0 && tv <= 90 && tl >= 0 && tl <= 90;
+      const [tv, pv0, tl, pl0, k, u, v] = x.map(Number);
+      const pv = wrap(pv0), pl = wrap(pl0), at = x.length >= 7;  // a position (u, v) in mm: the CD-BTF there
+      ok[i] = [tv, pv, tl, pl, k].every(Number.isFinite) && tv >= 0 && tv <= 90 && tl >= 0 && tl <= 90 &&
+        (!at || (Number.isFinite(u) && Number.isFinite(v)));
       const r = Math.floor(i / per), c = i % per, o = (r * cols * 2 + 2 * c) * 4;
-      if (ok[i]) q.set([tv, pv, tl, pl, k, 0, 0, 0], o);
+      if (ok[i]) q.set([tv, pv, tl, pl, k, at ? u : 0, at ? v : 0, at ? 1 : 0], o);
     });
     const qt = gl.createTexture();
     gl.activeTexture(gl.TEXTURE6);
@@ -558,9 +707,10 @@ void main() {
     gl.bindFramebuffer(gl.FRAMEBUFFER, evalFBO.fb);
     gl.viewport(0, 0, cols, rows);
     gl.disable(gl.DEPTH_TEST);
-    gl.useProgram(evalProg.p);
-    bindTable(evalProg, tab);
-    gl.uniform1i(evalProg.u.uQ, 6);
+    const ep = tab.btf ? evalBtfProg : evalProg;
+    gl.useProgram(ep.p);
+    bindTable(ep, tab);
+    gl.uniform1i(ep.u.uQ, 6);
     gl.bindVertexArray(emptyVAO);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
     gl.bindVertexArray(null);
@@ -745,6 +895,8 @@ void main() {
     $('overlay').addEventListener('change', (e) => { state.overlay = e.target.checked; draw(); });
     $('side').addEventListener('change', (e) => { state.side = e.target.checked; draw(); });
     $('mode').addEventListener('change', (e) => { state.mode = e.target.value; draw(); });
+    num('comps', 'components'); num('scale', 'weaveScale');
+    $('weave').addEventListener('change', (e) => { state.weave = e.target.checked; draw(); });
     $('surface').addEventListener('change', (e) => { state.surface = e.target.value; setDefaultCamera(); draw(); });
     $('mosaicTable').addEventListener('change', (e) => { state.mosaicTable = Number(e.target.value); fillKappaSelect(); drawMosaic(); draw(); });
     $('mosaicK').addEventListener('change', (e) => { state.mosaicK = Number(e.target.value); drawMosaic(); draw(); });
@@ -787,6 +939,17 @@ void main() {
     polarProg = compile(FULLSCREEN_VS, POLAR_FS);
     emptyVAO = gl.createVertexArray();
     tables = DATA.tables.map((a, i) => uploadTable({ header: a.header, buffer: decode(a.data) }, i));
+    const btfs = tables.filter((t) => t.btf);
+    if (btfs.length) { surfBtfProg = compile(SURFACE_VS, withBTF(SURFACE_FS)); evalBtfProg = compile(FULLSCREEN_VS, withBTF(EVAL_FS)); }
+    // software WebGL (SwiftShader, llvmpipe) takes seconds a frame per few dozen components: it starts with
+    // the leading SOFTWARE_COMPONENTS (ordered by energy; the page says so, the slider goes up to all)
+    const dbg = gl.getExtension('WEBGL_debug_renderer_info');
+    state.renderer = String(gl.getParameter(dbg ? dbg.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+    state.software = /swiftshader|llvmpipe|softpipe|software|basic render/i.test(state.renderer);
+    const packed = Math.max(0, ...btfs.map((t) => t.btf.rank));
+    state.components = state.software ? Math.min(packed, SOFTWARE_COMPONENTS) : packed;
+    $('weaveBox').style.display = btfs.length ? '' : 'none';
+    $('comps').max = String(packed); $('comps').value = String(state.components);
     const grid = gridGeometry(480, 8);
     surfaces.sheet = Object.assign(makeVAO(surfProg, grid.pos, null, null, null, grid.idx), { kind: 1, label: 'sine sheet', distance: 150 });
     surfaces.stand = Object.assign(makeVAO(surfProg, grid.pos, null, null, null, grid.idx), { kind: 2, label: 'cylinder stand', distance: 150 });
@@ -800,7 +963,7 @@ void main() {
     for (const [key, s] of Object.entries(surfaces)) { const o = document.createElement('option'); o.value = key; o.textContent = s.label; sel.appendChild(o); }
     const ms = $('mosaicTable');
     tables.forEach((t, i) => { const o = document.createElement('option'); o.value = String(i); o.textContent = t.h.name; ms.appendChild(o); });
-    $('tables').textContent = tables.map((t) => `${t.h.name} (${t.h.material || 'table'}, ${t.h.quantity}, ${t.h.symmetry})`).join('  |  ');
+    $('tables').textContent = tables.map((t) => `${t.h.name} (${t.h.material || 'table'}, ${t.h.quantity}, ${t.h.symmetry}${t.btf ? ', CD-BTF' : ''})`).join('  |  ');
     state.side = tables.length > 1;
     $('side').checked = state.side;
     if (tables.length < 2) $('sideLabel').style.display = 'none';
@@ -847,6 +1010,13 @@ void main() {
     setSplit: redraw((x) => { state.split = Number(x); $('split').value = x; }),
     setOverlay: redraw((on) => { state.overlay = !!on; $('overlay').checked = state.overlay; }),
     setSideBySide: redraw((on) => { state.side = !!on; $('side').checked = state.side; }),
+    // a CD-BTF: the weave (true) or the tile mean (false); the components used; the weave drawn `s` times its size
+    setWeave: redraw((on) => { state.weave = !!on; $('weave').checked = state.weave; }),
+    setComponents: redraw((n) => { state.components = Math.max(0, Math.round(Number(n))); $('comps').value = n; }),
+    setWeaveScale: redraw((x) => {
+      if (!(Number(x) > 0)) throw new Error(`weave scale: expected a positive number, got ${x}`);
+      state.weaveScale = Number(x); $('scale').value = x;
+    }),
     setSize: redraw((w, h) => { canvas.width = w; canvas.height = h; }),
     pick: (x, y) => Promise.resolve(pickAt(x, y)),
     mosaicReadout: (table, k, row, col) => readout(tables[table || 0], k, row, col),
@@ -885,7 +1055,8 @@ void main() {
       return Promise.resolve(ms);
     },
     state: () => JSON.parse(JSON.stringify(Object.assign({}, state, {
-      crestCurvatureText: $('crest').textContent, crestCurvature: crestCurvature(),
+      crestCurvatureText: $('crest').textContent, crestCurvature: crestCurvature(), btfText: $('btfInfo').textContent,
+      btf: tables.map((t) => (t.btf ? { rank: t.btf.rank, rankTotal: t.btf.rankTotal, used: rankUsed(t) } : null)),
       tables: tables.map((t) => t.h.name), surfaces: Object.keys(surfaces) }))),
   });
 
