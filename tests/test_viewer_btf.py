@@ -131,6 +131,10 @@ def test_too_many_components_are_truncated_to_the_leading_ones_and_said():
                                atol=1e-6)
     b = btf_asset(btf, max_rank=2)
     assert (b.header["btf"]["rank"], b.header["btf"]["rank_fits"]) == (2, 9)
+    # the error of what is shown: the truncation's, not the file's
+    used = b.header["btf"]["relative_rms_error_used"]
+    assert used == pytest.approx(btf.truncated(2).compression["relative_rms_error"])
+    assert used > 0.0  # (no error recorded for the full rank: the truncation's own)
     assert btf_asset(btf, max_rank=0).header["btf"]["weights"]["layers"] == 1  # the tile mean alone
 
 
@@ -276,10 +280,12 @@ def test_page_says_the_export_kept_fewer_components(browser, tmp_path):
     try:
         st = page.evaluate("cdbrdfViewer.state()")
         assert st["software"]  # SwiftShader
-        assert st["btfText"].startswith("r10.h5: CD-BTF, rank 8 used of 10; the export kept the leading 9 (--rank); "
+        err = 100 * btf.truncated(9).compression["relative_rms_error"]
+        kept = f"the export kept the leading 9 (--rank, relative RMS error {err:.1f} %)"
+        assert st["btfText"].startswith(f"r10.h5: CD-BTF, rank 8 used of 10; {kept}; "
                                          "the leading 8 on software rendering, the components slider goes up to 9")
         st = page.evaluate("cdbrdfViewer.setComponents(9)")
-        assert st["btfText"].startswith("r10.h5: CD-BTF, rank 9 used of 10; the export kept the leading 9 (--rank); 6")
+        assert st["btfText"].startswith(f"r10.h5: CD-BTF, rank 9 used of 10; {kept}; 6")
         assert messages == []
     finally:
         page.close()

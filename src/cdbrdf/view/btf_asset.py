@@ -106,10 +106,13 @@ def btf_asset(btf: Any, *, name: str = "btf", precision: str = "auto", max_rank:
     total = int(btf.rank)
     fits = btf_rank_that_fits(btf, limits=limits)
     rank = fits if max_rank is None else min(fits, max_rank)
+    err_used = btf.compression.get("relative_rms_error")
     if rank < total:
         why = (f"--rank {max_rank}" if max_rank is not None and max_rank <= fits
                else f"the GPU's guaranteed texture size (MAX_TEXTURE_SIZE {tex}) holds {fits}")
-        _LOG.info("%s: the viewer uses the leading %d of %d components (%s)", name, rank, total, why)
+        err_used = btf.truncated(rank).compression["relative_rms_error"]
+        _LOG.info("%s: the viewer uses the leading %d of %d components (%s; relative RMS error %.2f %%)", name,
+                  rank, total, why, 100 * err_used)
     lg = btf.lookup_grid()
     nc = int(btf.n_channels)
     k = lg.shape[0]
@@ -141,6 +144,7 @@ def btf_asset(btf: Any, *, name: str = "btf", precision: str = "auto", max_rank:
     header["btf"] = {
         "rank": rank, "rank_total": total, "rank_fits": fits, "texels": [nu, nv], "repeat_mm": [su, sv],
         "relative_rms_error": None if err is None else float(err),
+        "relative_rms_error_used": None if err_used is None else float(err_used),
         "components": {"width": width, "height": height, "layers": k, "per_sample": per,
                        "format": "RGBA", "type": prec},
         "weights": {"width": nu, "height": nv, "layers": layers, "format": "RGBA", "type": "float32"},

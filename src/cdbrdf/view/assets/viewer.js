@@ -618,7 +618,8 @@ void main() {
       const b = t.btf, used = rankUsed(t), tex = `${b.texels[0]} x ${b.texels[1]} texels over ` +
         `${b.repeat[0].toPrecision(3)} x ${b.repeat[1].toPrecision(3)} mm`;
       let why = '';
-      if (b.rank < b.rankTotal) why = `; the export kept the leading ${b.rank} (${t.h.btf.rank < t.h.btf.rank_fits ? '--rank' : 'the GPU texture size'})`;
+      const e = t.h.btf.relative_rms_error_used;
+      if (b.rank < b.rankTotal) why = `; the export kept the leading ${b.rank} (${t.h.btf.rank < t.h.btf.rank_fits ? '--rank' : 'the GPU texture size'}${e == null ? '' : `, relative RMS error ${(100 * e).toFixed(1)} %`})`;
       if (used < b.rank) why += `; the leading ${used}${state.software ? ' on software rendering' : ''}, the components slider goes up to ${b.rank}`;
       const shown = !state.weave ? 'showing the tile mean' : mesh ? 'this mesh has no UVs: tile mean' :
         `weave at ${state.weaveScale === 1 ? 'true size' : `${state.weaveScale.toFixed(1)}x size`}`;
