@@ -8,6 +8,7 @@ import pytest
 from cdbrdf import CDBTF, Grid
 from cdbrdf.colour import LUMINANCE_WEIGHTS
 from cdbrdf.errors import OptionError
+from cdbrdf.render import _btf_jit
 
 from .render_helpers import dr, local_si, mi, needs_llvm, unit, vec
 
@@ -260,6 +261,7 @@ def test_spectral_uniform_texels_are_the_cdbrdf(cr, btf, texel_filter):
     b = cr.make_bsdf(flat, curvature=0.1, uv_scale=UV_SCALE, texel_filter=texel_filter)
     got = np.array(b.eval(mi.BSDFContext(), _spectral_si(wi, uv), vec(wo)))
     assert want.max() > 0
+    assert dr.width(b.texels.table.buffer) * 4 == _btf_jit.upload_nbytes(6 * 8, GRID.shape, "spectral")
     np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-7 * want.max())
 
 

@@ -32,6 +32,8 @@ evaluate the exact bilinear blend for ``stochastic`` (:func:`scalar_texels`).
 
 from __future__ import annotations
 
+import logging
+import time
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -41,6 +43,8 @@ from . import _lookup_jit as lj
 
 __all__ = ["DEFAULT_TEXEL_FILTER", "TEXEL_FILTERS", "TexelUpload", "as_pair", "lookup", "scalar_texels",
            "texel_choice", "upload", "upload_nbytes"]
+
+_LOG = logging.getLogger(__name__)
 
 #: Valid values of the plug-in's ``texel_filter``.
 TEXEL_FILTERS: tuple[str, ...] = ("bilinear", "stochastic", "nearest")
@@ -87,6 +91,7 @@ def _prepared(btf: Any) -> np.ndarray:
 def upload(mi: Any, btf: Any, grid: LookupGrid, record: str, *, uv_scale: tuple[float, float],
            texel_filter: str) -> TexelUpload:
     """Decode, prepare and upload every texel of ``btf`` (``record``: ``"rgb"``, ``"one"`` or ``"spectral"``)."""
+    t0 = time.perf_counter()
     v = _prepared(btf)
     nu, nv = btf.texels
     if record == "spectral":
@@ -100,6 +105,8 @@ def upload(mi: Any, btf: Any, grid: LookupGrid, record: str, *, uv_scale: tuple[
         stacked = grid._replace(values=v.reshape((-1,) + v.shape[2:]))  # texel t holds kappa t * nk ...
         del v
         table = lj.pack_table(mi, stacked, record)
+    _LOG.info("CD-BTF: %d x %d texels uploaded as %s records, %.1f MB, in %.1f s", nu, nv, record,
+              upload_nbytes(nu * nv, grid.values.shape[:5], record) / 1e6, time.perf_counter() - t0)
     return TexelUpload(grid, table, nu, nv, btf.repeat_mm, uv_scale, texel_filter)
 
 
