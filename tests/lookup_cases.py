@@ -11,6 +11,8 @@ Implementations, each forced explicitly:
 - ``drjit_float`` / ``drjit_linear``: the same lookup on the float32 packet
   layout, uploaded from the prepared grid / computed in Dr.Jit from the raw
   values by the differentiable sparse maps (``packet_maps``);
+- ``drjit_records``: the same lookup on the ``"records"`` layout (one float32
+  record per sample: the CD-BTF's texels in spectral variants);
 - ``scalar_rgb``: the plug-in's ``eval`` in Mitsuba's ``scalar_rgb`` variant,
   from directions (only where directions are well defined).
 
@@ -155,6 +157,8 @@ def _drjit(layout: str) -> Callable[[CDBRDF, np.ndarray], np.ndarray]:
             up = lj.pack_table(mi, lg)
         elif layout == "float":
             up = lj.float_table(mi, lg, record)
+        elif layout == "records":
+            up = lj.record_table(mi, lg, record)
         else:  # the differentiable upload: raw values through the sparse maps
             maps = lj.packet_maps(t.values.shape, t.grid.theta_l, t.grid.theta_v, record, isotropic=lg.isotropic)
             up = lj.linear_upload(mi, mi.Float(np.asarray(t.values, dtype=np.float32).reshape(-1)), maps, record)
@@ -237,6 +241,8 @@ IMPLS = {
         Impl("numba_generic", _run_numba("generic"), "float64", 1e-12, True, True),
         Impl("drjit", _drjit("packed"), "float32", 3e-5, False, False, needs_mitsuba=True),
         Impl("drjit_float", _drjit("float"), "float32", 3e-5, False, False, needs_mitsuba=True,
+             only_tables=LAYOUT_TABLES),
+        Impl("drjit_records", _drjit("records"), "float32", 3e-5, False, False, needs_mitsuba=True,
              only_tables=LAYOUT_TABLES),
         Impl("drjit_linear", _drjit("linear"), "float32", 3e-5, False, False, needs_mitsuba=True,
              only_tables=LAYOUT_TABLES),

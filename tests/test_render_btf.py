@@ -1,4 +1,4 @@
-"""The plug-in with a CD-BTF: the texel at the UV, in the rgb and mono variants, vectorised and scalar."""
+"""The plug-in with a CD-BTF: the texel at the UV, in the rgb, mono and spectral variants, vectorised and scalar."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import pytest
 from cdbrdf import CDBTF, Grid
 from cdbrdf.colour import LUMINANCE_WEIGHTS
 from cdbrdf.errors import OptionError
+from cdbrdf.render import _btf_jit
 
 from .render_helpers import dr, local_si, mi, needs_llvm, unit, vec
 
@@ -66,7 +67,7 @@ def _reference(btf, tv, pv, tl, pl, uv, kappa):
                                    pytest.param(0.0, marks=pytest.mark.slow)])
 def test_vectorised_eval_is_the_texel_at_the_uv(cr, btf, kappa):
     wi, tv, pv, wo, tl, pl, uv = _queries(3000)
-    b = cr.make_bsdf(btf, curvature=kappa, uv_scale=UV_SCALE)
+    b = cr.make_bsdf(btf, curvature=kappa, uv_scale=UV_SCALE, texel_filter="bilinear")
     got = np.array(b.eval(mi.BSDFContext(), _si(wi, uv), vec(wo))).T
     want = _reference(btf, tv, pv, tl, pl, uv, kappa)
     np.testing.assert_allclose(got, want, rtol=2e-4, atol=2e-5 * want.max())
@@ -84,12 +85,14 @@ def test_nearest_filter_reads_the_texel_centre(cr, btf):
     np.testing.assert_allclose(got[ok], want[ok], rtol=2e-4, atol=2e-5 * want.max())
 
 
-def test_scalar_eval_equals_the_vectorised_one(cr, btf):
+@pytest.mark.parametrize("texel_filter", ["bilinear", "stochastic"])
+def test_scalar_eval_equals_the_vectorised_one(cr, btf, texel_filter):
+    """Scalar variants blend the four texels exactly, for ``stochastic`` too (its expected value)."""
     wi, tv, pv, wo, tl, pl, uv = _queries(8, seed=2)
-    vec_f = np.array(cr.make_bsdf(btf, curvature=0.05, uv_scale=UV_SCALE).eval(
+    vec_f = np.array(cr.make_bsdf(btf, curvature=0.05, uv_scale=UV_SCALE, texel_filter="bilinear").eval(
         mi.BSDFContext(), _si(wi, uv), vec(wo))).T
     cr.set_variant("scalar_rgb")
-    b = cr.make_bsdf(btf, curvature=0.05, uv_scale=UV_SCALE)
+    b = cr.make_bsdf(btf, curvature=0.05, uv_scale=UV_SCALE, texel_filter=texel_filter)
     for i in range(len(wi)):
         si = mi.SurfaceInteraction3f()
         si.wi = mi.Vector3f(*map(float, wi[i]))
@@ -98,12 +101,13 @@ def test_scalar_eval_equals_the_vectorised_one(cr, btf):
         np.testing.assert_allclose(f, vec_f[i], rtol=2e-4, atol=1e-6)
 
 
-def test_mono_is_the_luminance(cr, btf):
+@pytest.mark.parametrize("texel_filter", ["bilinear", "stochastic"])
+def test_mono_is_the_luminance(cr, btf, texel_filter):
     wi, tv, pv, wo, tl, pl, uv = _queries(1000, seed=3)
-    rgb = np.array(cr.make_bsdf(btf, curvature=0.1, uv_scale=UV_SCALE).eval(
+    rgb = np.array(cr.make_bsdf(btf, curvature=0.1, uv_scale=UV_SCALE, texel_filter=texel_filter).eval(
         mi.BSDFContext(), _si(wi, uv), vec(wo))).T
     cr.set_variant("llvm_ad_mono")
-    mono = np.array(cr.make_bsdf(btf, curvature=0.1, uv_scale=UV_SCALE).eval(
+    mono = np.array(cr.make_bsdf(btf, curvature=0.1, uv_scale=UV_SCALE, texel_filter=texel_filter).eval(
         mi.BSDFContext(), _si(wi, uv), vec(wo))).ravel()
     np.testing.assert_allclose(mono, rgb @ LUMINANCE_WEIGHTS, rtol=2e-4, atol=1e-6)
 
@@ -111,7 +115,7 @@ def test_mono_is_the_luminance(cr, btf):
 @pytest.mark.slow
 def test_brdf_mode_is_the_flat_texel(cr, btf):
     wi, tv, pv, wo, tl, pl, uv = _queries(500, seed=4)
-    b = cr.make_bsdf(btf, mode="brdf", uv_scale=UV_SCALE)
+    b = cr.make_bsdf(btf, mode="brdf", uv_scale=UV_SCALE, texel_filter="bilinear")
     got = np.array(b.eval(mi.BSDFContext(), _si(wi, uv), vec(wo))).T
     np.testing.assert_allclose(got, _reference(btf, tv, pv, tl, pl, uv, 0.0), rtol=2e-4, atol=2e-5)
 
@@ -126,9 +130,6 @@ def test_file_and_options(cr, btf, tmp_path):
             cr.make_bsdf(btf, uv_scale=bad)
     with pytest.raises(OptionError, match="texel_filter"):
         cr.make_bsdf(btf, texel_filter="cubic")
-    cr.set_variant("llvm_ad_spectral")
-    with pytest.raises(OptionError, match="rgb and mono"):
-        cr.make_bsdf(btf)
     assert dr is not None
 
 
@@ -146,3 +147,174 @@ def test_render_table_with_a_cdbtf(cr, btf):
     woven = render_table(btf, sheet, **kw).images["cdbrdf"][..., :3]
     assert np.abs(woven - ref).max() > 0.05 * ref.max()  # the texels show
     assert woven.mean() == pytest.approx(ref.mean(), rel=0.02)
+
+
+# -- the stochastic texel filter ----------------------------------------------------------------------
+def _neighbourhood(uv0, n, seed):
+    """``n`` UVs within 1e-4 UV units of ``uv0`` (under 1 % of a texel): nearly one set of bilinear weights.
+
+    Wide enough in float32 steps that the lanes' UVs are (nearly all) distinct
+    points, so the texel choices are ``n`` independent draws.
+    """
+    rng = np.random.default_rng(seed)
+    uv = np.asarray(uv0) + rng.uniform(-1e-4, 1e-4, (n, 2))
+    return uv.astype(np.float32).astype(np.float64)  # the UVs the renderer sees
+
+
+def _bilinear_weights(uv, texels, repeat):
+    """``(n, n_v, n_u)`` texel weights of the periodic bilinear rule (CDBTF.evaluate's)."""
+    (nu, nv), n = texels, uv.shape[0]
+    fu = np.mod(uv[:, 0] * UV_SCALE[0], repeat[0]) / repeat[0] * nu - 0.5
+    fv = np.mod(uv[:, 1] * UV_SCALE[1], repeat[1]) / repeat[1] * nv - 0.5
+    i0, j0 = np.floor(fu).astype(int), np.floor(fv).astype(int)
+    tu, tv = fu - i0, fv - j0
+    w = np.zeros((n, nv, nu))
+    rows = np.arange(n)
+    for dj, wj in ((0, 1 - tv), (1, tv)):
+        for di, wi in ((0, 1 - tu), (1, tu)):
+            np.add.at(w, (rows, (j0 + dj) % nv, (i0 + di) % nu), wj * wi)
+    return w
+
+
+def test_stochastic_texel_probabilities_are_the_bilinear_weights(cr):
+    """Texels of distinct constant values: how often each is read is its bilinear weight (binomial bounds)."""
+    g = Grid.regular(theta_step_deg=30, phi_step_deg=90, kappa=[0.0])
+    nv, nu = 3, 4
+    code = 1.0 + np.arange(nv * nu, dtype=np.float64).reshape(nv, nu)  # texel (j, i) reflects code[j, i]
+    vals = np.broadcast_to(code[:, :, None, None, None, None, None, None], (nv, nu) + g.shape + (3,))
+    flat = CDBTF.from_values(vals, g, repeat_mm=REPEAT, max_error=1e-7)
+    n = 40000
+    wi = np.tile([[0.0, 0.0, 1.0]], (n, 1))
+    b = cr.make_bsdf(flat, curvature=0.0, uv_scale=UV_SCALE, texel_filter="stochastic")
+    for k, uv0 in enumerate(([0.031, 0.047], [0.19, 0.23], [-0.06, 0.11])):
+        uv = _neighbourhood(uv0, n, seed=k)
+        f = np.array(b.eval(mi.BSDFContext(), _si(wi, uv), vec(wi))).T[:, 0]
+        got = np.rint(f).astype(int) - 1  # the texel read (values are exact to ~1e-6)
+        assert np.abs(f - (got + 1)).max() < 1e-3
+        p = _bilinear_weights(uv, (nu, nv), REPEAT).mean(axis=0).reshape(-1)
+        freq = np.bincount(got, minlength=nu * nv) / n
+        # each count is binomial(n, p): 5 standard deviations, fixed UVs (a deterministic test)
+        np.testing.assert_array_less(np.abs(freq - p), 5 * np.sqrt(p * (1 - p) / n) + 1e-12)
+        assert np.all(freq[p == 0] == 0)  # never a texel outside the four
+
+
+def test_stochastic_mean_is_the_bilinear_value(cr, btf):
+    """At fixed directions and a fixed UV neighbourhood the mean of many evaluations is the bilinear one."""
+    rng = np.random.default_rng(7)
+    n = 20000
+    sto = cr.make_bsdf(btf, curvature=0.1, uv_scale=UV_SCALE, texel_filter="stochastic")
+    bil = cr.make_bsdf(btf, curvature=0.1, uv_scale=UV_SCALE, texel_filter="bilinear")
+    for k in range(4):
+        wi = np.tile(unit(rng.uniform(10, 70), rng.uniform(0, 360)), (n, 1))
+        wo = np.tile(unit(rng.uniform(10, 70), rng.uniform(0, 360)), (n, 1))
+        uv = _neighbourhood(rng.uniform(-1, 1, 2), n, seed=10 + k)
+        s = np.array(sto.eval(mi.BSDFContext(), _si(wi, uv), vec(wo))).T
+        want = np.array(bil.eval(mi.BSDFContext(), _si(wi, uv), vec(wo))).T.mean(axis=0)
+        tol = 5 * s.std(axis=0) / np.sqrt(n) + 1e-6 * np.abs(want)  # 5 standard errors of the mean
+        np.testing.assert_array_less(np.abs(s.mean(axis=0) - want), tol)
+        assert s.std(axis=0).max() > 0  # the texels differ here: the test has power
+
+
+@pytest.mark.slow
+def test_stochastic_render_converges_to_the_bilinear_one(cr, btf):
+    """A close-up (texels over several pixels) rendered with both filters: the same picture within noise."""
+    from cdbrdf.mesh import SineSheet
+    from cdbrdf.render import render_table
+
+    sheet = SineSheet(width_mm=6.0, depth_mm=6.0, vertices_per_wavelength=16)
+    imgs = {}
+    for f in ("bilinear", "stochastic"):
+        imgs[f] = render_table(btf, sheet, size=(24, 24), spp=256, exposure=0.0, texel_filter=f).images["cdbrdf"][..., :3].astype(np.float64)
+    a, b = imgs["bilinear"], imgs["stochastic"]
+    assert abs(b.mean() / a.mean() - 1) < 0.01
+    assert np.abs(b - a).mean() < 0.05 * a.mean()
+
+
+# -- spectral variants -------------------------------------------------------------------------------
+LAMBDAS = (420.0, 510.0, 580.0, 660.0)
+
+
+def _spectral_si(wi, uv):
+    si = _si(wi, uv)
+    si.wavelengths = mi.Spectrum(*LAMBDAS)
+    return si
+
+
+def _spectrum(rgb):
+    """Spectra at LAMBDAS of BRDF values ``(n, 3)`` as the plug-in converts a table sample (Mitsuba's model)."""
+    from cdbrdf.render._spectral import spectral_records
+
+    r = spectral_records(rgb).astype(np.float64)
+    lam = np.asarray(LAMBDAS)
+    x = (r[:, :1] * lam + r[:, 1:2]) * lam + r[:, 2:3]
+    return r[:, 3:] * np.maximum(0.0, 0.5 * x / np.sqrt(x * x + 1.0) + 0.5)
+
+
+@pytest.mark.parametrize("texel_filter", [pytest.param("bilinear", marks=pytest.mark.slow), "stochastic",
+                                          pytest.param("nearest", marks=pytest.mark.slow)])
+def test_spectral_uniform_texels_are_the_cdbrdf(cr, btf, texel_filter):
+    """Every texel equal to a CDBRDF: the spectral eval is the CDBRDF's (vectorised)."""
+    flat = CDBTF(btf.mean(), np.zeros((6, 8, 0)), np.zeros(btf.mean().shape[:-1] + (0, 3)), repeat_mm=REPEAT)
+    wi, tv, pv, wo, tl, pl, uv = _queries(2000, seed=5)
+    cr.set_variant("llvm_ad_spectral")
+    want = np.array(cr.make_bsdf(flat.mean(), curvature=0.1).eval(mi.BSDFContext(), _spectral_si(wi, uv), vec(wo)))
+    b = cr.make_bsdf(flat, curvature=0.1, uv_scale=UV_SCALE, texel_filter=texel_filter)
+    got = np.array(b.eval(mi.BSDFContext(), _spectral_si(wi, uv), vec(wo)))
+    assert want.max() > 0
+    assert dr.width(b.texels.table.buffer) * 4 == _btf_jit.upload_nbytes(6 * 8, GRID.shape, "spectral")
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-7 * want.max())
+
+
+def test_spectral_texels_at_the_samples(cr, btf):
+    """At table samples the spectrum is the texels' values (CDBTF.evaluate at their centres) converted and blended."""
+    rng = np.random.default_rng(6)
+    n = 400
+    idx = [rng.integers(1, GRID.theta_v.size, n), rng.integers(0, GRID.phi_v.size, n),
+           rng.integers(1, GRID.theta_l.size, n), rng.integers(0, GRID.phi_l.size, n)]
+    tv, pv, tl, pl = GRID.theta_v[idx[0]], GRID.phi_v[idx[1]], GRID.theta_l[idx[2]], GRID.phi_l[idx[3]]
+    wi, wo = unit(tv, pv), unit(tl, pl)
+    uv = rng.uniform(-1, 1, (n, 2))
+    w = _bilinear_weights(uv, btf.texels, REPEAT)
+    cu, cv = btf.texel_centres_mm()
+    want = np.zeros((n, len(LAMBDAS)))
+    for j, i in zip(*np.nonzero(w.sum(axis=0))):  # every texel some query reads
+        rgb = btf.evaluate(cu[i], cv[j], tv, pv, tl, pl, 0.2)  # the texel's samples (queries at nodes)
+        want += w[:, j, i][:, None] * _spectrum(rgb)
+    want *= np.cos(np.radians(tl))[:, None]
+    cr.set_variant("llvm_ad_spectral")
+    b = cr.make_bsdf(btf, curvature=0.2, uv_scale=UV_SCALE, texel_filter="bilinear")
+    got = np.array(b.eval(mi.BSDFContext(), _spectral_si(wi, uv), vec(wo))).T
+    np.testing.assert_allclose(got, want, rtol=2e-4, atol=2e-5 * want.max())
+
+
+@pytest.mark.parametrize("texel_filter", [pytest.param("bilinear", marks=pytest.mark.slow), "nearest"])
+def test_scalar_spectral_equals_the_vectorised_one(cr, btf, texel_filter):
+    """Between samples too: both blend the texels' spectra (scalar through the reference lookup)."""
+    wi, tv, pv, wo, tl, pl, uv = _queries(8, seed=8)
+    uv[:, 1] += 0.01  # away from texel edges (nearest)
+    cr.set_variant("llvm_ad_spectral")
+    vec_f = np.array(cr.make_bsdf(btf, curvature=-0.05, uv_scale=UV_SCALE, texel_filter=texel_filter).eval(
+        mi.BSDFContext(), _spectral_si(wi, uv), vec(wo))).T
+    cr.set_variant("scalar_spectral")
+    b = cr.make_bsdf(btf, curvature=-0.05, uv_scale=UV_SCALE, texel_filter=texel_filter)
+    for i in range(len(wi)):
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(*map(float, wi[i]))
+        si.uv = mi.Point2f(*map(float, uv[i]))
+        si.wavelengths = mi.Spectrum(*LAMBDAS)
+        f = np.array(b.eval(mi.BSDFContext(), si, mi.Vector3f(*map(float, wo[i]))))
+        np.testing.assert_allclose(f, vec_f[i], rtol=2e-4, atol=1e-7)
+
+
+@pytest.mark.slow
+def test_spectral_render_of_uniform_texels_is_the_cdbrdfs(cr, btf):
+    from cdbrdf.mesh import SineSheet
+    from cdbrdf.render import render_table
+
+    sheet = SineSheet(width_mm=20.0, depth_mm=20.0, vertices_per_wavelength=16)
+    kw = {"size": (24, 16), "spp": 32, "exposure": 0.0, "variant": "llvm_ad_spectral"}
+    flat = CDBTF(btf.mean(), np.zeros((6, 8, 0)), np.zeros(btf.mean().shape[:-1] + (0, 3)), repeat_mm=REPEAT)
+    ref = render_table(btf.mean(), sheet, **kw).images["cdbrdf"][..., :3]
+    same = render_table(flat, sheet, **kw).images["cdbrdf"][..., :3]
+    assert ref.max() > 0
+    np.testing.assert_allclose(same, ref, rtol=1e-4, atol=1e-5 * ref.max())

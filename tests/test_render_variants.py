@@ -66,17 +66,24 @@ def test_available_and_refused_variants(cr):
         cr.register()
 
 
-@pytest.mark.parametrize("name", ["llvm_ad_spectral", "llvm_ad_mono"])
-def test_constant_table_equals_diffuse(cr, name):
+@pytest.mark.parametrize(("name", "kind"), [
+    ("llvm_ad_spectral", "cdbrdf"), ("llvm_ad_mono", "cdbrdf"), ("llvm_ad_mono", "cdbtf"),
+    pytest.param("llvm_ad_spectral", "cdbtf", marks=pytest.mark.slow)])
+def test_constant_table_equals_diffuse(cr, name, kind):
+    """A constant table, or a CD-BTF of constant texels, renders as ``diffuse`` (every variant takes both)."""
+    from cdbrdf import CDBTF
     from cdbrdf.render.picture import render_scene
     from cdbrdf.render.scenes import sine_scene
 
     cr.set_variant(name)
     albedo = np.array([0.2, 0.5, 0.8])
     table = constant_table(albedo / np.pi)
+    entry = {"type": "cdbrdf", "table": table, "sampling": "cosine"}
+    if kind == "cdbtf":  # 3 x 2 texels equal to the table, sampled stochastically
+        entry["table"] = CDBTF(table, np.zeros((2, 3, 0)), np.zeros(table.shape[:-1] + (0, 3)), repeat_mm=(1.0, 1.0))
+        entry["uv_scale"] = 60.0
     kw = dict(size=(24, 16), spp=8, max_depth=3)
-    ours = render_scene(sine_scene(table, bsdf={"type": "cdbrdf", "table": table, "sampling": "cosine"}, **kw),
-                        seed=3)
+    ours = render_scene(sine_scene(table, bsdf=entry, **kw), seed=3)
     diffuse = {"type": "diffuse", "reflectance": {"type": "rgb", "value": albedo.tolist()}}
     ref = render_scene(sine_scene(table, bsdf=diffuse, **kw), seed=3)
     assert ours.mean() > 0.05

@@ -245,6 +245,12 @@ class _LazySpectra:
         return r[3] * np.maximum(0.0, 0.5 * x / np.sqrt(x * x + 1.0) + 0.5)
 
 
+def _lazy(grid: LookupGrid, records: np.ndarray, wavelengths: np.ndarray) -> Any:
+    """A table whose prepared samples are the spectra of ``records`` at ``wavelengths`` (for ``evaluate_reference``)."""
+    spectra: Any = _LazySpectra(records, wavelengths)
+    return SimpleNamespace(lookup_grid=lambda: grid._replace(values=spectra))
+
+
 def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
     import drjit as dr
 
@@ -313,7 +319,9 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             self._upload(np.asarray(self._eval_table.values, dtype=np.float64), differentiable=False)
             self.texels: Any = None
             if self.btf is not None:
-                self._upload_btf(get("uv_scale", 1.0), get("texel_filter", "bilinear"))
+                from ._btf_jit import DEFAULT_TEXEL_FILTER
+
+                self._upload_btf(get("uv_scale", 1.0), get("texel_filter", DEFAULT_TEXEL_FILTER))
             flags = (
                 mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
                 | mi.BSDFFlags.BackSide | mi.BSDFFlags.Anisotropic
@@ -378,9 +386,7 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
 
             self.uv_scale = _btf_jit.as_pair("uv_scale", uv_scale)
             self.texel_filter = _choice("texel_filter", texel_filter, _btf_jit.TEXEL_FILTERS)
-            if self.record == "spectral":
-                raise OptionError("cdbrdf BSDF: a CD-BTF renders in the rgb and mono variants (spectral "
-                                  "variants render its tile mean: cdbrdf.load(file) or btf.mean())")
+            self._texel_cache: dict[tuple[int, int], tuple[LookupGrid, np.ndarray]] = {}
             if not scalar:
                 full = self.grid if self.settings.mode == "cdbrdf" else prepare(self.btf.grid, self.btf.mean().values)
                 self.texels = _btf_jit.upload(mi, self.btf, full, self.record, uv_scale=self.uv_scale,
@@ -458,9 +464,10 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             q = (float(tv), float(pv), float(tl), float(pl), float(kappa))
             if self.record == "spectral":
                 lam = np.array(si.wavelengths, dtype=np.float64).reshape(-1)
-                spectra: Any = _LazySpectra(self._records, lam)
-                lazy = SimpleNamespace(lookup_grid=lambda: self.grid._replace(values=spectra))
-                v = evaluate_reference(lazy, *q)
+                if self.btf is not None:
+                    v = self._btf_scalar_spectrum(si, q, lam)
+                else:
+                    v = evaluate_reference(_lazy(self.grid, self._records, lam), *q)
                 f = mi.UnpolarizedSpectrum(*map(float, v))
             else:
                 if self.btf is not None:
@@ -483,6 +490,28 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                 v = (math.floor(v / sv * nv) + 0.5) * sv / nv
             kappa = 0.0 if self.settings.mode == "brdf" else q[4]
             return np.asarray(self.btf.evaluate(u, v, *q[:4], kappa)).reshape(-1)
+
+        def _btf_scalar_spectrum(self, si: Any, q: tuple[float, ...], lam: np.ndarray) -> np.ndarray:
+            """The CD-BTF's spectrum at one query (scalar spectral variants): the texels' spectra blended.
+
+            Each texel's samples are upsampled (:func:`cdbrdf.render._lookup_jit.records`) and their
+            spectra interpolated, as the vectorised lookup does; ``stochastic`` is the exact bilinear blend.
+            """
+            from ..interp import evaluate_reference
+            from . import _btf_jit
+
+            u, v = float(si.uv.x) * self.uv_scale[0], float(si.uv.y) * self.uv_scale[1]
+            q = q[:4] + ((0.0,) if self.settings.mode == "brdf" else q[4:])
+            out = np.zeros(lam.size)
+            for j, i, w in _btf_jit.scalar_texels(u, v, self.btf.texels, self.btf.repeat_mm, self.texel_filter):
+                if (j, i) not in self._texel_cache:
+                    if not self._texel_cache:  # decode once, keep the texels read
+                        self._dense = self.btf.decode()
+                    g = prepare(self.btf.grid, self._dense[j, i])
+                    self._texel_cache[(j, i)] = (g, lj.records(g.values, "spectral"))
+                g, rec = self._texel_cache[(j, i)]
+                out += w * np.asarray(evaluate_reference(_lazy(g, rec, lam), *q), dtype=np.float64)
+            return out
 
         def _angles(self, d: Any) -> tuple[Any, Any]:
             return (dr.acos(dr.clip(d.z, -1.0, 1.0)) * _RAD2DEG, dr.atan2(d.y, d.x) * _RAD2DEG)

@@ -4,17 +4,36 @@ The plug-in (:mod:`cdbrdf.render._bsdf`) renders a :class:`cdbrdf.CDBTF`
 from its decoded texels: each texel's table with the pole rule of
 :mod:`cdbrdf.interp` applied (:func:`cdbrdf.interp.apply_pole_rule`, the
 texels as leading axes), packed one after the other as one upload of
-:mod:`cdbrdf.render._lookup_jit` (RGB fixed point, or the luminance in mono
-variants), so a lane looks up its texel with :func:`~cdbrdf.render._lookup_jit.lookup_jit`
-and ``block`` = the texel. The texel comes from the surface's UVs: ``u_mm =
-uv.x * uv_scale_u`` (likewise v), periodic over the repeat; ``bilinear``
-blends the four nearest texel centres (four lookups, as
-:meth:`cdbrdf.CDBTF.evaluate`), ``nearest`` reads one. Importance sampling
-uses the tile mean's sampler (the plug-in's table is the tile mean).
+:mod:`cdbrdf.render._lookup_jit` (RGB fixed point, the luminance in mono
+variants, one spectral record per sample in spectral variants: Mitsuba's
+sRGB-model coefficients and a scale, :func:`cdbrdf.render._lookup_jit.records`,
+as the CDBRDF's own upload, in the ``"records"`` layout), so a lane reads its
+texel as one more index (``block``) of the same lookup. The 5-D cell
+(indices and weights, :func:`~cdbrdf.render._lookup_jit.corners_jit`) is
+computed once per lane and only the gathers repeat per texel.
+
+The texel comes from the surface's UVs: ``u_mm = uv.x * uv_scale_u`` (likewise
+v), periodic over the repeat. :data:`TEXEL_FILTERS`:
+
+- ``bilinear``: the four nearest texel centres blended (four texel reads),
+  exactly :meth:`cdbrdf.CDBTF.evaluate`;
+- ``stochastic``: stochastic bilinear filtering (Pharr et al. 2024, "Filtering
+  after shading with stochastic texture filtering"): one of the same four
+  texels per evaluation, texel ``(i, j)`` with probability equal to its
+  bilinear weight (v and u chosen independently, from two uniforms of a TEA
+  hash of the UV's bits, :func:`texel_choice`), so the expected value is the
+  bilinear one and a render converges to the bilinear render; one texel read;
+- ``nearest``: the texel containing the point.
+
+Importance sampling uses the tile mean's sampler (the plug-in's table is the
+tile mean); the texel's value enters through ``eval``. The scalar variants
+evaluate the exact bilinear blend for ``stochastic`` (:func:`scalar_texels`).
 """
 
 from __future__ import annotations
 
+import logging
+import time
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -22,10 +41,23 @@ import numpy as np
 from ..interp import LookupGrid, apply_pole_rule
 from . import _lookup_jit as lj
 
-__all__ = ["TEXEL_FILTERS", "TexelUpload", "as_pair", "upload", "lookup"]
+__all__ = ["DEFAULT_TEXEL_FILTER", "TEXEL_FILTERS", "TexelUpload", "as_pair", "lookup", "scalar_texels",
+           "texel_choice", "upload", "upload_nbytes"]
+
+_LOG = logging.getLogger(__name__)
 
 #: Valid values of the plug-in's ``texel_filter``.
-TEXEL_FILTERS: tuple[str, ...] = ("bilinear", "nearest")
+TEXEL_FILTERS: tuple[str, ...] = ("bilinear", "stochastic", "nearest")
+
+#: The default ``texel_filter``: one texel read per evaluation (the render time of ``nearest``) and a
+#: render that converges to the ``bilinear`` one (``docs/rendering.md``, "CD-BTF").
+DEFAULT_TEXEL_FILTER = "stochastic"
+
+#: Rounds of the TEA hash of :func:`texel_choice`.
+_TEA_ROUNDS = 8
+
+#: Texels whose spectral records are made at a time (bounds the float64 temporaries of the conversion).
+_RECORD_CHUNK = 64
 
 
 class TexelUpload(NamedTuple):
@@ -37,27 +69,67 @@ class TexelUpload(NamedTuple):
     n_v: int
     repeat_mm: tuple[float, float]
     uv_scale: tuple[float, float]
-    bilinear: bool
+    texel_filter: str
 
 
-def upload(mi: Any, btf: Any, grid: LookupGrid, record: str, *, uv_scale: tuple[float, float],
-           texel_filter: str) -> TexelUpload:
-    """Decode, prepare and upload every texel of ``btf`` (``record``: ``"rgb"`` or ``"one"``)."""
+def upload_nbytes(n_texels: int, shape5: tuple[int, ...], record: str) -> int:
+    """Device bytes of :func:`upload` for ``n_texels`` tables of ``shape5`` samples with ``record`` records."""
+    per = {"rgb": 8, "one": 4, "spectral": 16}[record]
+    return int(n_texels * int(np.prod(shape5)) * per)
+
+
+def _prepared(btf: Any) -> np.ndarray:
+    """Every texel's table with the pole rule applied, texel-major: ``(n_v * n_u * n_kappa, ...)``."""
     dense = btf.decode()  # (n_v, n_u, kappa, phi_l, theta_l, phi_v, theta_v, channel)
     nv, nu = dense.shape[:2]
     g = btf.grid
     v, _, _ = apply_pole_rule(dense.reshape((nv * nu,) + dense.shape[2:]), g.theta_l, g.theta_v,
                               isotropic=g.isotropic)
-    stacked = grid._replace(values=v.reshape((-1,) + v.shape[2:]))  # texel-major: texel t holds kappa t * nk ...
-    del dense, v
-    table = lj.pack_table(mi, stacked, record)
-    return TexelUpload(grid, table, nu, nv, btf.repeat_mm, uv_scale, texel_filter == "bilinear")
+    return np.asarray(v)
 
 
-def _wrap(dr: Any, Float: Any, x: Any, size: float, n: int) -> Any:
+def upload(mi: Any, btf: Any, grid: LookupGrid, record: str, *, uv_scale: tuple[float, float],
+           texel_filter: str) -> TexelUpload:
+    """Decode, prepare and upload every texel of ``btf`` (``record``: ``"rgb"``, ``"one"`` or ``"spectral"``)."""
+    t0 = time.perf_counter()
+    v = _prepared(btf)
+    nu, nv = btf.texels
+    if record == "spectral":
+        lj.check_range(v)
+        rec = np.empty(v.shape[:-1] + (4,), dtype=np.float32)
+        for s in range(0, v.shape[0], _RECORD_CHUNK):
+            rec[s : s + _RECORD_CHUNK] = lj.records(v[s : s + _RECORD_CHUNK], "spectral")
+        del v
+        table = lj.TableUpload("records", "spectral", mi.Float(rec.reshape(-1)))
+    else:
+        stacked = grid._replace(values=v.reshape((-1,) + v.shape[2:]))  # texel t holds kappa t * nk ...
+        del v
+        table = lj.pack_table(mi, stacked, record)
+    _LOG.info("CD-BTF: %d x %d texels uploaded as %s records, %.1f MB, in %.1f s", nu, nv, record,
+              upload_nbytes(nu * nv, grid.values.shape[:5], record) / 1e6, time.perf_counter() - t0)
+    return TexelUpload(grid, table, nu, nv, btf.repeat_mm, uv_scale, texel_filter)
+
+
+def _wrap(dr: Any, x: Any, size: float, n: int) -> Any:
     """Texel coordinate of a position (mm) on a periodic axis of ``n`` texels: in [0, n)."""
     t = x * (1.0 / size)
     return (t - dr.floor(t)) * n
+
+
+def texel_choice(mi: Any, uv: Any) -> tuple[Any, Any]:
+    """Two uniforms in [0, 1) per lane: a TEA hash (8 rounds) of the bits of ``uv.x`` and ``uv.y``.
+
+    The same point gives the same texel in ``eval`` and ``sample``; points
+    a float32 step apart give independent choices (4 rounds do not: UVs a
+    few float32 steps apart then read some texels 10 standard deviations too
+    often; 8 rounds pass the binomial test of the texel frequencies).
+    """
+    import drjit as dr
+
+    UInt = mi.UInt32
+    a, b = mi.sample_tea_32(dr.reinterpret_array(UInt, uv.x), dr.reinterpret_array(UInt, uv.y), _TEA_ROUNDS)
+    scale = 1.0 / 16777216.0  # 2^-24: the top 24 bits, exactly representable
+    return mi.Float(a >> 8) * scale, mi.Float(b >> 8) * scale
 
 
 def lookup(mi: Any, up: TexelUpload, uv: Any, theta_v: Any, phi_v: Any, theta_l: Any, phi_l: Any, kappa: Any,
@@ -65,34 +137,60 @@ def lookup(mi: Any, up: TexelUpload, uv: Any, theta_v: Any, phi_v: Any, theta_l:
     """The CD-BTF at the lanes' UVs, directions (degrees) and curvatures, as :func:`lookup_jit` returns it."""
     import drjit as dr
 
-    Float, UInt = mi.Float, mi.UInt32
-    Int = dr.int32_array_t(Float)
-    fu = _wrap(dr, Float, uv.x * up.uv_scale[0], up.repeat_mm[0], up.n_u)
-    fv = _wrap(dr, Float, uv.y * up.uv_scale[1], up.repeat_mm[1], up.n_v)
+    UInt = mi.UInt32
+    Int = dr.int32_array_t(mi.Float)
+    fu = _wrap(dr, uv.x * up.uv_scale[0], up.repeat_mm[0], up.n_u)
+    fv = _wrap(dr, uv.y * up.uv_scale[1], up.repeat_mm[1], up.n_v)
+    cell = lj.corners_jit(mi, up.grid, theta_v, phi_v, theta_l, phi_l, kappa)
 
-    def args(block: Any) -> Any:
-        return lj.lookup_jit(mi, up.grid, up.table, theta_v, phi_v, theta_l, phi_l, kappa, active, wavelengths,
-                             block=block)
+    def at(block: Any) -> Any:
+        return lj.gather_jit(mi, up.grid, up.table, cell, active, wavelengths, block=block)
 
     def wrap(i: Any, n: int) -> Any:  # i in [-1, n]
         i = dr.select(i < 0, i + n, i)
         return dr.select(i >= n, i - n, i)
 
-    if not up.bilinear:
+    if up.texel_filter == "nearest":
         iu = wrap(Int(dr.floor(fu)), up.n_u)
         iv = wrap(Int(dr.floor(fv)), up.n_v)
-        return args(UInt(iv * up.n_u + iu))
+        return at(UInt(iv * up.n_u + iu))
     fu, fv = fu - 0.5, fv - 0.5
     u0, v0 = dr.floor(fu), dr.floor(fv)
     tu, tv = fu - u0, fv - v0
     i0, j0 = wrap(Int(u0), up.n_u), wrap(Int(v0), up.n_v)
     i1, j1 = wrap(i0 + 1, up.n_u), wrap(j0 + 1, up.n_v)
+    if up.texel_filter == "stochastic":
+        xu, xv = texel_choice(mi, uv)
+        i = dr.select(xu < tu, i1, i0)
+        j = dr.select(xv < tv, j1, j0)
+        return at(UInt(j * up.n_u + i))
     out = None
     for j, wj in ((j0, 1.0 - tv), (j1, tv)):
         for i, wi in ((i0, 1.0 - tu), (i1, tu)):
-            f = args(UInt(j * up.n_u + i)) * (wj * wi)
+            f = at(UInt(j * up.n_u + i)) * (wj * wi)
             out = f if out is None else out + f
     return out
+
+
+def scalar_texels(u_mm: float, v_mm: float, texels: tuple[int, int], repeat_mm: tuple[float, float],
+                  texel_filter: str) -> list[tuple[int, int, float]]:
+    """``(j, i, weight)`` of the texels a scalar evaluation blends (``stochastic``: the exact bilinear blend).
+
+    The rule of :meth:`cdbrdf.CDBTF.texel_weights` (periodic bilinear between
+    texel centres) or, for ``nearest``, the texel containing the point.
+    """
+    (nu, nv), (su, sv) = texels, repeat_mm
+    fu = (u_mm % su) / su * nu
+    fv = (v_mm % sv) / sv * nv
+    if texel_filter == "nearest":
+        return [(int(np.floor(fv)) % nv, int(np.floor(fu)) % nu, 1.0)]
+    fu, fv = fu - 0.5, fv - 0.5
+    u0, v0 = np.floor(fu), np.floor(fv)
+    tu, tv = fu - u0, fv - v0
+    i0, j0 = int(u0) % nu, int(v0) % nv
+    i1, j1 = (i0 + 1) % nu, (j0 + 1) % nv
+    out = [(j0, i0, (1 - tu) * (1 - tv)), (j0, i1, tu * (1 - tv)), (j1, i0, (1 - tu) * tv), (j1, i1, tu * tv)]
+    return [(j, i, float(w)) for j, i, w in out if w > 0.0]
 
 
 def as_pair(name: str, value: Any) -> tuple[float, float]:

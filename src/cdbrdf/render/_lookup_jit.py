@@ -48,11 +48,15 @@ __all__ = [
     "PACK_MAX_RELATIVE_STEP",
     "RECORDS",
     "TableUpload",
+    "Corners",
     "check_range",
+    "corners_jit",
     "float_table",
+    "gather_jit",
     "linear_upload",
     "lookup_jit",
     "pack_table",
+    "record_table",
     "packet_index",
     "packing_is_fine",
     "packet_maps",
@@ -143,7 +147,8 @@ class TableUpload(NamedTuple):
         channel as float32); ``"float"``: float32 *packets*, one per sample
         ``(k, pl, tl, pv, tv)`` holding the records of ``(pv, tv)``,
         ``(pv, tv + 1)``, ``(pv + 1, tv)`` and ``(pv + 1, tv + 1)`` (``pv``
-        periodic, ``tv + 1`` clamped), so one gather fetches four samples.
+        periodic, ``tv + 1`` clamped), so one gather fetches four samples;
+        ``"records"``: float32 records, one per sample (:func:`record_table`).
     record
         What a record holds (:data:`RECORDS`): ``"rgb"`` (R, G, B, 0),
         ``"one"`` (one value: a one-channel table, or luminance in mono
@@ -169,7 +174,7 @@ class TableUpload(NamedTuple):
 
 
 #: Layouts of an upload (``"auto"`` lets the plug-in choose).
-LAYOUTS: tuple[str, ...] = ("packed", "float")
+LAYOUTS: tuple[str, ...] = ("packed", "float", "records")
 
 #: Kinds of record.
 RECORDS: tuple[str, ...] = ("rgb", "one", "spectral")
@@ -288,6 +293,21 @@ def float_table(mi: Any, grid: LookupGrid, record: str) -> TableUpload:
     stride = rec.shape[-1]
     flat = rec.reshape(-1)[packet_index(grid.values.shape[:5], stride)]
     return TableUpload("float", record, mi.Float(np.ascontiguousarray(flat)))
+
+
+def record_table(mi: Any, grid: LookupGrid, record: str) -> TableUpload:
+    """Upload a prepared table in the ``"records"`` layout: one record of kind ``record`` per sample.
+
+    A quarter of the ``"float"`` layout's memory, four times as many gathers
+    (of one record each); the lookup sums the same terms in the same order, so
+    it gives the same values. Used for the texels of a CD-BTF in spectral
+    variants (:mod:`cdbrdf.render._btf_jit`), where the packets would take
+    64 bytes per sample.
+    """
+    if record not in RECORDS:
+        raise ValueError(f"record: {record!r} is not one of {', '.join(RECORDS)}")
+    check_range(grid.values)
+    return TableUpload("records", record, mi.Float(np.ascontiguousarray(records(grid.values, record).reshape(-1))))
 
 
 # -- the differentiable upload: raw table values -> packets, one sparse linear map -------------------
@@ -442,39 +462,32 @@ def _array_x(mi: Any) -> Any:
     return importlib.import_module(mi.Float.__module__).ArrayXf
 
 
-def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_v: Any,
-               theta_l: Any, phi_l: Any, kappa: Any, active: Any = True, wavelengths: Any = None,
-               block: Any = None) -> Any:
-    """Interpolate a prepared table in Dr.Jit (see the module docstring).
+class Corners(NamedTuple):
+    """The 5-D cell of a lookup: what :func:`corners_jit` computes once and :func:`gather_jit` reads with.
 
-    Parameters
+    Attributes
     ----------
-    mi
-        The ``mitsuba`` module, with a variant set.
-    grid
-        The table's prepared grid (``table.lookup_grid()``), 1 or 3 channels.
-    table
-        :func:`pack_table`, :func:`float_table` or :func:`linear_upload` of ``grid``.
-    theta_v, phi_v, theta_l, phi_l
-        View and light elevation and azimuth, degrees (``mi.Float``).
-    kappa
-        Curvature, mm^-1 (``mi.Float``).
-    active
-        Lanes to gather for (the others read nothing and give 0 * weight).
-    wavelengths
-        For ``"spectral"`` records: the lanes' wavelengths (nm, ``mi.Spectrum``).
-    block
-        For an upload of several tables of ``grid``'s shape one after the
-        other (the texels of a CD-BTF, :mod:`cdbrdf.render._btf_jit`): the
-        table each lane reads (``mi.UInt32``); None: the only one.
-
-    Returns
-    -------
-    mi.Color3f, mi.Float or mi.Spectrum
-        ``"rgb"`` records: the RGB value; ``"one"``: the value in all three
-        channels (``mi.Color3f``) or, with ``wavelengths`` given, as
-        ``mi.Float``; ``"spectral"``: the spectrum at ``wavelengths``.
+    outer
+        The (kappa, phi_l, theta_l) corners: ``(row, weight)``, ``row`` the
+        index of the corner's ``(n_phi_v, n_theta_v)`` slice in one table.
+    ipv, wpv, itv, wtv
+        Lower view azimuth and elevation node and their weights.
+    rows
+        Slices per table (``n_kappa * n_phi_l * n_theta_l``): a table of
+        several (the texels of a CD-BTF) starts at ``block * rows``.
     """
+
+    outer: list[tuple[Any, Any]]
+    ipv: Any
+    wpv: Any
+    itv: Any
+    wtv: Any
+    rows: int
+
+
+def corners_jit(mi: Any, grid: LookupGrid, theta_v: Any, phi_v: Any, theta_l: Any, phi_l: Any,
+                kappa: Any) -> Corners:
+    """The interpolation cell of the queries (indices and weights of the rule; see :func:`lookup_jit`)."""
     import drjit as dr
 
     Float, UInt = mi.Float, mi.UInt32
@@ -500,16 +513,75 @@ def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_
     tl_nodes = [(itl, 1.0 - wtl), (itl + 1, wtl)] if ntl > 1 else [(itl, Float(1.0))]
     outer = []
     for ka, wa in k_nodes:
-        if block is not None:  # tables one after the other: table b starts at kappa node b * nk
-            ka = ka + block * nk
         for pb, wb in pl_nodes:
             wab = wa * wb
             base_b = (ka * npl + pb) * ntl
             for td, wd in tl_nodes:
                 outer.append((base_b + td, wab * wd))
+    return Corners(outer, ipv, wpv, itv, wtv, nk * npl * ntl)
+
+
+def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_v: Any,
+               theta_l: Any, phi_l: Any, kappa: Any, active: Any = True, wavelengths: Any = None,
+               block: Any = None) -> Any:
+    """Interpolate a prepared table in Dr.Jit (see the module docstring).
+
+    Parameters
+    ----------
+    mi
+        The ``mitsuba`` module, with a variant set.
+    grid
+        The table's prepared grid (``table.lookup_grid()``), 1 or 3 channels.
+    table
+        :func:`pack_table`, :func:`float_table`, :func:`record_table` or :func:`linear_upload` of ``grid``.
+    theta_v, phi_v, theta_l, phi_l
+        View and light elevation and azimuth, degrees (``mi.Float``).
+    kappa
+        Curvature, mm^-1 (``mi.Float``).
+    active
+        Lanes to gather for (the others read nothing and give 0 * weight).
+    wavelengths
+        For ``"spectral"`` records: the lanes' wavelengths (nm, ``mi.Spectrum``).
+    block
+        For an upload of several tables of ``grid``'s shape one after the
+        other (the texels of a CD-BTF, :mod:`cdbrdf.render._btf_jit`): the
+        table each lane reads (``mi.UInt32``); None: the only one.
+
+    Returns
+    -------
+    mi.Color3f, mi.Float or mi.Spectrum
+        ``"rgb"`` records: the RGB value; ``"one"``: the value in all three
+        channels (``mi.Color3f``) or, with ``wavelengths`` given, as
+        ``mi.Float``; ``"spectral"``: the spectrum at ``wavelengths``.
+    """
+    c = corners_jit(mi, grid, theta_v, phi_v, theta_l, phi_l, kappa)
+    return gather_jit(mi, grid, table, c, active, wavelengths, block=block)
+
+
+def gather_jit(mi: Any, grid: LookupGrid, table: TableUpload, c: Corners, active: Any = True,
+               wavelengths: Any = None, block: Any = None) -> Any:
+    """The table's value in the cell ``c`` (:func:`corners_jit`), of table ``block`` (see :func:`lookup_jit`).
+
+    Several tables of one upload (the texels of a CD-BTF) read with the same
+    cell: the weights and indices are computed once, only the gathers repeat.
+    """
+    import drjit as dr
+
+    Float = mi.Float
+    nk, npl, ntl, npv, ntv, nc = grid.values.shape
+    outer = c.outer
+    if block is not None:  # tables one after the other: table b starts at row b * rows
+        start = block * c.rows
+        outer = [(b + start, w) for b, w in outer]
+    ipv, wpv, itv, wtv = c.ipv, c.wpv, c.itv, c.wtv
     if table.layout == "float":
         return _lookup_packets(mi, table, outer, ipv, wpv, itv, wtv, npv, ntv, active, wavelengths)
     ipv1 = dr.select(ipv + 1 < npv, ipv + 1, 0)
+    if table.layout == "records":  # one record per sample, read in the order of the packets
+        tv1 = dr.select(itv + 1 < ntv, itv + 1, itv)
+        inner = [(ipv, itv, (1.0 - wpv) * (1.0 - wtv)), (ipv, tv1, (1.0 - wpv) * wtv),
+                 (ipv1, itv, wpv * (1.0 - wtv)), (ipv1, tv1, wpv * wtv)]
+        return _lookup_records(mi, table, outer, inner, npv, ntv, active, wavelengths)
     pv_nodes = [(ipv, 1.0 - wpv), (ipv1, wpv)] if npv > 1 else [(ipv, Float(1.0))]
     tv_nodes = [(itv, 1.0 - wtv), (itv + 1, wtv)] if ntv > 1 else [(itv, Float(1.0))]
     Int32 = dr.int32_array_t(Float)
@@ -534,6 +606,40 @@ def lookup_jit(mi: Any, grid: LookupGrid, table: TableUpload, theta_v: Any, phi_
     if rgb:
         return mi.Color3f(acc[0], acc[1], acc[2]) * table.step + table.offset
     return acc[0] if wavelengths is not None else mi.Color3f(acc[0])
+
+
+def _lookup_records(mi: Any, table: TableUpload, outer: list[tuple[Any, Any]], inner: list[tuple[Any, Any, Any]],
+                    npv: int, ntv: int, active: Any, wavelengths: Any) -> Any:
+    """The ``"records"`` layout: one record gather per corner, summed as :func:`_lookup_packets` sums.
+
+    The same terms in the same order as the packet layout of the same
+    records, so both give the same value to the last bit.
+    """
+    import drjit as dr
+
+    ArrayXf = _array_x(mi)
+    stride = table.stride
+    spectral = table.record == "spectral"
+    spec = dr.zeros(mi.Spectrum) if spectral else None
+    acc = [mi.Float(0.0) for _ in range(4 * stride)]
+    for base, w in outer:
+        base = base * npv
+        for j, (pe, tf, wi) in enumerate(inner):
+            r = dr.gather(ArrayXf, table.buffer, (base + pe) * ntv + tf, active, shape=(stride, 1))
+            if spectral:
+                col = mi.Vector3f(r[0], r[1], r[2])
+                spec += (w * wi * r[3]) * mi.srgb_model_eval(col, wavelengths)
+            else:
+                for k in range(stride):
+                    acc[j * stride + k] = dr.fma(w, r[k], acc[j * stride + k])
+    if spectral:
+        return spec
+    wts = [wi for _, _, wi in inner]
+    if table.record == "one":
+        v = acc[0] * wts[0] + acc[1] * wts[1] + acc[2] * wts[2] + acc[3] * wts[3]
+        return v if wavelengths is not None else mi.Color3f(v)
+    return mi.Color3f(*[acc[c] * wts[0] + acc[4 + c] * wts[1] + acc[8 + c] * wts[2] + acc[12 + c] * wts[3]
+                        for c in range(3)])
 
 
 def _lookup_packets(mi: Any, table: TableUpload, outer: list[tuple[Any, Any]], ipv: Any, wpv: Any, itv: Any,

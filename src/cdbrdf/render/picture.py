@@ -334,6 +334,7 @@ def render_table(
     variant: str | None = None,
     curvature: bool = False,
     uv_scale: float | tuple[float, float] | None = None,
+    texel_filter: str | None = None,
     progress: Callable[[str, int, int], None] | None = None,
 ) -> Picture:
     """Render a table on the paper's sine sheet or on a mesh, with the CDBRDF and/or the plain BRDF.
@@ -402,6 +403,8 @@ def render_table(
     uv_scale
         For a CD-BTF: mm per UV unit of the mesh (one number or ``(u, v)``);
         default: the sheet's size for the sine sheet, 1 (UVs in mm) for a mesh.
+    texel_filter
+        For a CD-BTF: the plug-in's ``texel_filter`` (default: the plug-in's default).
     progress
         ``progress(stage, done, total)``: ``"curvature"`` (vertices) while a
         mesh is prepared, ``"rendering MODE"`` (samples per pixel).
@@ -483,7 +486,7 @@ def render_table(
         uv_scale = (sheet.width_mm, sheet.depth_mm) if is_sheet else 1.0
     with variant_context(variant or DEFAULT_VARIANT):
         for mode in modes:
-            bsdf = None if btf is None else _btf_entry(btf, mode, curvature_mode, uv_scale)
+            bsdf = None if btf is None else _btf_entry(btf, mode, curvature_mode, uv_scale, texel_filter)
             if is_sheet:
                 scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, bsdf=bsdf, **common)
             else:
@@ -523,10 +526,13 @@ def _as_btf(table: Any) -> Any:
     return None
 
 
-def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: Any) -> dict[str, Any]:
+def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: Any, texel_filter: str | None) -> dict[str, Any]:
     """The plug-in's dict for a CD-BTF at ``uv_scale`` mm per UV unit."""
     from ..mesh import ATTRIBUTES
 
     su, sv = (uv_scale, uv_scale) if isinstance(uv_scale, (int, float)) else uv_scale
-    return {"type": "cdbrdf", "table": btf, "mode": mode, "curvature": ATTRIBUTES[curvature_mode],
-            "uv_scale": f"{float(su)!r}, {float(sv)!r}"}
+    entry = {"type": "cdbrdf", "table": btf, "mode": mode, "curvature": ATTRIBUTES[curvature_mode],
+             "uv_scale": f"{float(su)!r}, {float(sv)!r}"}
+    if texel_filter is not None:
+        entry["texel_filter"] = texel_filter
+    return entry

@@ -298,7 +298,9 @@ def make_bsdf(
         The plug-in's parameters.
     uv_scale, texel_filter
         For a CD-BTF: mm per UV unit (one number or ``(u, v)``; default 1: UVs
-        in mm) and ``"bilinear"`` or ``"nearest"``.
+        in mm) and ``"stochastic"`` (default: one of the four nearest texels
+        with probability its bilinear weight), ``"bilinear"`` (the four
+        blended, as :meth:`cdbrdf.CDBTF.evaluate`) or ``"nearest"``.
     unit
         The scene's unit (applied by :func:`load_dict` with the shape's
         ``to_world``; ``docs/rendering.md``, "Curvature units").
