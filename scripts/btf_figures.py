@@ -5,8 +5,9 @@ with CD-BTF files (``cdbrdf synth denim --btf 32 -o denim-btf.h5``; the docs use
 32 x 32 texels on the paper's grid).
 
 One row per file: a 20 x 14 mm sine sheet (trough at x = -5 mm, crest at x = +5 mm, seen from
-above at about one pixel per texel) rendered with the CD-BTF (left) and with its tile mean, the
-CDBRDF (right), at the same exposure (the CD-BTF render's grey card).
+above at about one pixel per texel) rendered with the CD-BTF (left, the exact bilinear texel
+filter) and with its tile mean, the CDBRDF (right), at the same exposure (the CD-BTF render's
+grey card).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ def main(argv: list[str] | None = None) -> int:
     with variant("llvm_ad_rgb"):
         for f in a.files:
             btf = load(f)
-            pic = render_table(btf, sheet, size=(640, 448), spp=a.spp, view=(90.0, -90.0))
+            pic = render_table(btf, sheet, size=(640, 448), spp=a.spp, view=(90.0, -90.0), texel_filter="bilinear")
             ev = pic.exposure_ev
             mean = render_table(btf.mean(), sheet, size=(640, 448), spp=a.spp, view=(90.0, -90.0), exposure=ev)
             name = btf.attrs.get("material", Path(f).stem)

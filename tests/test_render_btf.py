@@ -149,6 +149,46 @@ def test_render_table_with_a_cdbtf(cr, btf):
     assert woven.mean() == pytest.approx(ref.mean(), rel=0.02)
 
 
+def test_render_command_takes_uv_scale_and_texel_filter(cr, btf, tmp_path, capsys):
+    """--uv-scale / --texel-filter reach the plug-in for a CD-BTF; a CDBRDF file or a scene file refuses them."""
+    import cdbrdf.render.picture as picture
+    from cdbrdf.cli import main as cli_main
+
+    path = tmp_path / "b.h5"
+    btf.save(path)
+    seen = {}
+    real = picture._btf_entry
+
+    def spy(b, mode, curvature_mode, uv_scale, texel_filter):
+        seen.update(uv_scale=uv_scale, texel_filter=texel_filter)
+        return real(b, mode, curvature_mode, uv_scale, texel_filter)
+
+    small = ["--size", "16x12", "--spp", "2"]
+    try:
+        picture._btf_entry = spy
+        assert cli_main(["--quiet", "render", str(path), "--scene", "sine", "--uv-scale", "3,4", "--texel-filter", "nearest",
+                         "-o", str(tmp_path / "a.png"), *small]) == 0
+        assert seen == {"uv_scale": (3.0, 4.0), "texel_filter": "nearest"}
+        assert cli_main(["--quiet", "render", str(path), "--scene", "sine", "--uv-scale", "2.5", "-o", str(tmp_path / "b.png"),
+                         *small]) == 0
+        assert seen == {"uv_scale": (2.5, 2.5), "texel_filter": None}
+    finally:
+        picture._btf_entry = real
+    assert (tmp_path / "a.png").stat().st_size > 0
+    table = tmp_path / "t.h5"
+    btf.mean().save(table)
+    capsys.readouterr()
+    assert cli_main(["render", str(table), "--scene", "sine", "--texel-filter", "nearest", "-o",
+                     str(tmp_path / "c.png"), *small]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--texel-filter: only for a CD-BTF file" in err[0]
+    with pytest.raises(SystemExit) as exc:  # argparse: one line, exit 2
+        cli_main(["render", str(path), "--scene", "sine", "--uv-scale", "0", "-o", str(tmp_path / "d.png")])
+    assert exc.value.code == 2
+    assert "--uv-scale" in capsys.readouterr().err.strip().splitlines()[-1]
+    assert not (tmp_path / "c.png").exists() and not (tmp_path / "d.png").exists()
+
+
 # -- the stochastic texel filter ----------------------------------------------------------------------
 def _neighbourhood(uv0, n, seed):
     """``n`` UVs within 1e-4 UV units of ``uv0`` (under 1 % of a texel): nearly one set of bilinear weights.

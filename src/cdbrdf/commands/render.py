@@ -52,7 +52,7 @@ _SEED_MAX = 2**32 - 1 - MAX_SPP
 
 def register(sub: argparse._SubParsersAction) -> None:
     from ..mesh import CURVATURE_MODES, MESH_FORMATS, UNITS_MM, UP_AXES
-    from ..render import VARIANTS
+    from ..render import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS, VARIANTS
     from ..render.lighting import LIGHTINGS
     from ..render.picture import DEFAULT_SIZE, DEFAULT_SPP
     from ._args import (
@@ -152,13 +152,21 @@ def register(sub: argparse._SubParsersAction) -> None:
                        default=None, metavar="ELEV,AZIM",
                        help="camera elevation above the ground plane and azimuth, degrees (default: 40,-90 "
                        "for the sheet, 20,-65 for a mesh)")
+    btf = p.add_argument_group("a CD-BTF file (docs/btf.md)")
+    btf.add_argument("--uv-scale", type=float_list(0, 1e9, lo_open=True, min_len=1, max_len=2, example="10,6",
+                                                   unit="mm per UV unit"),
+                     default=None, metavar="SU[,SV]",
+                     help="the fabric's mm per unit of the mesh's UVs (default: the sheet's size on the sine "
+                     "sheet, 1 (UVs in mm) on a mesh)")
+    btf.add_argument("--texel-filter", choices=TEXEL_FILTERS, default=None,
+                     help=f"between texels: {', '.join(TEXEL_FILTERS)} (default {DEFAULT_TEXEL_FILTER})")
     p.set_defaults(func=run)
 
 
 #: Options of the table form (default None: not given), each refused with a scene file.
 _TABLE_ONLY = ("scene", "mesh", "brdf", "compare", "size", "lighting", "light", "irradiance", "no_light", "envmap",
                "neighbourhood", "frame", "curvature", "normal_map", "up", "amplitude", "wavelength", "sheet_size",
-               "max_depth", "view")
+               "max_depth", "view", "uv_scale", "texel_filter")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -187,6 +195,12 @@ def _run_table(args: argparse.Namespace) -> int:
 
     if args.scene is None and args.mesh is None:
         raise OptionError("give --scene sine or --mesh MESH for a CDBRDF file (or render a scene file SCENE.xml)")
+    if args.uv_scale is not None or args.texel_filter is not None:
+        from ..btf import is_btf
+
+        if not is_btf(args.file):
+            opt = "--uv-scale" if args.uv_scale is not None else "--texel-filter"
+            raise OptionError(f"{opt}: only for a CD-BTF file ({args.file} has no texels)")
     out = Path(args.output)
     ext = out.suffix.lower()
     if args.compare:
@@ -218,7 +232,8 @@ def _run_table(args: argparse.Namespace) -> int:
             units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame, up=args.up or "auto",
             normal_map=args.normal_map,
             curvature_mode=args.curvature or "max", exposure=args.exposure or "card", variant=args.variant,
-            progress=progress)
+            uv_scale=None if args.uv_scale is None else tuple(args.uv_scale) * (3 - len(args.uv_scale)),
+            texel_filter=args.texel_filter, progress=progress)
     if pic.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), pic.mesh)
         say(f"{args.mesh}: up axis: {pic.up} ({pic.up_reason}); lighting: {pic.lighting}", err=True)

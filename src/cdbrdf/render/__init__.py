@@ -29,6 +29,7 @@ too:
 from __future__ import annotations
 
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
+from ._btf_jit import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
 from .contrast import CrestContrast, crest_contrast, curvature_image
 from .picture import (
@@ -57,6 +58,7 @@ from .scenes import mesh_scene, mitsuba_mesh, sine_scene
 
 __all__ = [
     "CURVATURE_MODES",
+    "DEFAULT_TEXEL_FILTER",
     "DEFAULT_VARIANT",
     "MODES",
     "PLUGIN_NAME",
@@ -64,6 +66,7 @@ __all__ = [
     "SAMPLINGS",
     "STORAGES",
     "SUPPORTED_VARIANTS",
+    "TEXEL_FILTERS",
     "VARIANTS",
     "INSTALL_HINT",
     "LLVMError",
