@@ -41,6 +41,7 @@ from .. import limits
 from ..errors import CaptureError, TableError
 from ..images import FORMATS
 from ..table import Grid
+from .registration import parse_registration
 from .stands import (
     KAPPA_TOL_PER_MM,
     Stand,
@@ -88,7 +89,7 @@ HIDDEN_NAMES: Mapping[int, str] = {0: "", 1: "view", 2: "light", 3: "view+light"
 ENCODINGS: tuple[str, ...] = ("srgb", "linear")
 #: The top-level keys ``stands.json`` may have (``docs/capture.md``); any other is refused.
 STAND_FILE_KEYS: tuple[str, ...] = ("stands", "grid", "white_albedo", "pixel_mm", "encoding", "material",
-                                    "simulated")
+                                    "simulated", "registration")
 _KNOWN = REQUIRED_COLUMNS + ("exposure", "cx", "cy", "kind", "hidden", "encoding")
 _AXES = ("kappa", "theta_l", "phi_l", "theta_v", "phi_v")
 _ANGLE_DECIMALS = 6
@@ -319,6 +320,8 @@ def _settings(doc: dict[str, Any], stand_path: Path) -> dict[str, Any]:
         out["pixel_mm"] = float(v)
     if "encoding" in out and out["encoding"] not in ENCODINGS:
         raise CaptureError(f"{stand_path}: encoding: {out['encoding']!r:.40} is not one of {', '.join(ENCODINGS)}")
+    if "registration" in out:  # where the fabric's (u, v) lies: cdbrdf.measure.registration
+        out["registration"] = parse_registration(out["registration"], str(stand_path))
     if "material" in out:
         m = out["material"]
         if not isinstance(m, str) or not m.strip() or len(m) > 200 or not m.isprintable():

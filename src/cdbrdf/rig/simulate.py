@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..btf import CDBTF
 from ..errors import CaptureError, OptionError
 from ..frames import direction_from_angles
 from ..images import FORMATS
@@ -34,7 +35,7 @@ from .camera import light_to_world
 from .scenes import stand_scene, white_scene
 from .sensor import IMAGE_KINDS, NoiseModel, encode, extension, write_photograph
 
-__all__ = ["SimulationReport", "simulate_capture", "load_material"]
+__all__ = ["SimulationReport", "simulate_capture", "load_material", "btf_camera", "PX_PER_TEXEL"]
 
 
 @dataclass
@@ -78,27 +79,29 @@ class SimulationReport:
         )
 
 
-def load_material(material: CDBRDF | str | PathLike[str]) -> CDBRDF:
+def load_material(material: CDBRDF | CDBTF | str | PathLike[str]) -> CDBRDF | CDBTF:
     """The table of a material.
 
     Parameters
     ----------
     material
-        A :class:`CDBRDF`, a CDBRDF file or a bundled material's name
-        (:mod:`cdbrdf.materials`).
+        A :class:`CDBRDF` or :class:`~cdbrdf.CDBTF`, a CDBRDF or CD-BTF file, or
+        a bundled material's name (:mod:`cdbrdf.materials`).
 
     Returns
     -------
-    CDBRDF
-        The table.
+    CDBRDF or CDBTF
+        The table (a CD-BTF file gives its CD-BTF).
     """
-    if isinstance(material, CDBRDF):
+    if isinstance(material, (CDBRDF, CDBTF)):
         return material
     p = Path(material)
     if p.suffix.lower() in (".h5", ".hdf5", ".nc") or p.exists():
+        from ..btf import is_btf
+        from ..btf import load as load_btf
         from ..table import load
 
-        return load(p)
+        return load_btf(p) if p.is_file() and is_btf(p) else load(p)
     try:
         from .. import materials
     except ImportError as exc:  # pragma: no cover - the presets module is part of the package
@@ -106,15 +109,54 @@ def load_material(material: CDBRDF | str | PathLike[str]) -> CDBRDF:
     return materials.load(str(material))
 
 
+#: Pixels per texel (along the texel's shorter side) the rig's camera gives a CD-BTF by default.
+PX_PER_TEXEL = 3.0
+
+
+def btf_camera(btf: CDBTF, *, px_per_texel: float = PX_PER_TEXEL, size: int | None = None,
+               field_mm: float | None = None) -> tuple[int, float]:
+    """The image size and field (mm) that photograph a CD-BTF's repeat at ``px_per_texel``.
+
+    The field holds a whole repeat whatever the view's azimuth (1.5 times its
+    diagonal), the pixel is the texel's shorter side over ``px_per_texel``;
+    a given ``size`` or ``field_mm`` is kept (the other follows from it).
+
+    Returns
+    -------
+    size, field_mm
+        Pixels (even) and mm.
+    """
+    (nu, nv), (su, sv) = btf.texels, btf.repeat_mm
+    pixel = min(su / nu, sv / nv) / float(px_per_texel)
+    if field_mm is None:
+        field_mm = 1.5 * math.hypot(su, sv) if size is None else size * pixel
+    if size is None:
+        size = max(8, 2 * math.ceil(0.5 * field_mm / pixel))
+    return int(size), float(field_mm)
+
+
+def _registration(table: CDBRDF | CDBTF, stands: Sequence[Stand], seed: int) -> dict[str, Any] | None:
+    """For a CD-BTF: the fabric's (u, v) at each stand's centre, drawn from ``seed`` (in the repeat)."""
+    if not isinstance(table, CDBTF):
+        return None
+    from ..measure.registration import Registration
+
+    rng = np.random.default_rng([int(seed), 27])
+    su, sv = table.repeat_mm
+    origins = {s.kappa: (round(float(rng.uniform(0, su)), 6), round(float(rng.uniform(0, sv)), 6)) for s in stands}
+    return Registration("orthographic", origins, (su, sv)).to_dict()
+
+
 def simulate_capture(
-    material: CDBRDF | str | PathLike[str],
+    material: CDBRDF | CDBTF | str | PathLike[str],
     folder: str | PathLike[str],
     *,
     plan: str | PathLike[str] | None = None,
     grid: Grid | None = None,
     stands: Sequence[Stand] | None = None,
-    size: int = 64,
-    field_mm: float = 2.0,
+    size: int | None = None,
+    field_mm: float | None = None,
+    px_per_texel: float = PX_PER_TEXEL,
     spp: int = 4,
     noise: NoiseModel = NoiseModel(),
     gain: float = 2.0,
@@ -131,7 +173,12 @@ def simulate_capture(
     Parameters
     ----------
     material
-        A :class:`CDBRDF`, a CDBRDF file, or a preset name.
+        A :class:`CDBRDF`, a :class:`~cdbrdf.CDBTF`, a CDBRDF or CD-BTF file,
+        or a preset name. A CD-BTF is laid on the stands with its ``(u, v)``
+        in mm (arc length along x, length along y) from an origin per stand
+        drawn from ``seed``, recorded as the ``registration`` of
+        ``stands.json`` (:mod:`cdbrdf.measure.registration`), so that
+        ``measure(..., btf=...)`` can rectify the photographs.
     folder
         Output capture folder. It is built as a partial folder beside it and
         swapped in whole once complete (:func:`cdbrdf.outputs.output_folder`):
@@ -151,9 +198,13 @@ def simulate_capture(
     grid, stands
         Without ``plan``: the samples and the stands of the plan.
     size
-        Image width and height in pixels.
+        Image width and height in pixels (default 64; for a CD-BTF, from
+        ``px_per_texel``: :func:`btf_camera`).
+    px_per_texel
+        For a CD-BTF without ``size``: pixels per texel (its shorter side).
     field_mm
-        Width of the camera's field at the stand, mm; ``field_mm / size``
+        Width of the camera's field at the stand, mm (default 2; for a
+        CD-BTF, 1.5 repeat diagonals: :func:`btf_camera`); ``field_mm / size``
         (the pixel size) is written to ``stands.json`` as ``pixel_mm``, so
         that the measurement discards photographs in which any pixel of the
         patch sees a wall or lies in its shadow.
@@ -186,10 +237,14 @@ def simulate_capture(
     """
     if not isinstance(image_kind, str) or image_kind not in IMAGE_KINDS:
         raise OptionError(f"image_kind: {image_kind!r:.40} is not one of {', '.join(IMAGE_KINDS)}")
-    for name, v, lo in (("size", size, 8), ("spp", spp, 1)):
+    if isinstance(px_per_texel, bool) or not isinstance(px_per_texel, (int, float)) \
+            or not 0.5 <= px_per_texel <= 64:
+        raise OptionError(f"px_per_texel: expected a number in [0.5, 64], got {px_per_texel!r:.40}")
+    for name, v, lo in (("size", 64 if size is None else size, 8), ("spp", spp, 1)):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
             raise OptionError(f"{name}: expected a whole number >= {lo}, got {v!r:.40}")
-    for name, x in (("field_mm", field_mm), ("gain", gain), ("white_albedo", white_albedo)):
+    for name, x in (("field_mm", 2.0 if field_mm is None else field_mm), ("gain", gain),
+                    ("white_albedo", white_albedo)):
         if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) \
                 or not (math.isfinite(x) and x > 0):
             raise OptionError(f"{name}: expected a finite positive number, got {x!r:.40}")
@@ -199,6 +254,10 @@ def simulate_capture(
     # the plan is checked by the capture format's own parser before anything is rendered
     the_plan = read_plan(plan) if plan is not None else None
     table = load_material(material)
+    if isinstance(table, CDBTF):
+        size, field_mm = btf_camera(table, px_per_texel=px_per_texel, size=size, field_mm=field_mm)
+    size = 64 if size is None else int(size)
+    field_mm = 2.0 if field_mm is None else float(field_mm)
     from ..render import variant
 
     with output_folder(final) as partial, variant():
@@ -214,7 +273,7 @@ def simulate_capture(
 
 def _fill_capture(
     out: Path,
-    table: CDBRDF,
+    table: CDBRDF | CDBTF,
     *,
     plan: Plan | None,
     grid: Grid | None,
@@ -245,6 +304,9 @@ def _fill_capture(
         write_plan(out, g, stand_list, extension=ext, white=white,
                    pixel_mm=field_mm / size, patch_px=patch_px, exposures=exposures)
         rows = read_plan(out / CAPTURE_FILE).rows
+    reg = _registration(table, stand_list, seed)
+    if reg is not None:
+        extra["registration"] = reg
     write_stands(out / STAND_FILE, stand_list, white_albedo=float(white_albedo),
                  material=str(table.attrs.get("material", "unknown")), simulated=True,
                  pixel_mm=field_mm / size, **extra)
@@ -296,7 +358,11 @@ def _fill_capture(
         if batch.key == "white":
             scene = white_scene(mi, cr, white_albedo, **kw)
         else:
-            scene = stand_scene(mi, cr, table, stand_for(stand_list, float(batch.key)), **kw)
+            st = stand_for(stand_list, float(batch.key))
+            origin = (0.0, 0.0)
+            if reg is not None:
+                origin = next((e["u_mm"], e["v_mm"]) for e in reg["stands"] if e["kappa"] == st.kappa)
+            scene = stand_scene(mi, cr, table, st, origin_uv_mm=origin, **kw)
         params = mi.traverse(scene)
         for light, members in batch.lights.items():
             params["light.to_world"] = light_to_world(mi, direction_from_angles(*light))
