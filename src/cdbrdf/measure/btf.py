@@ -278,6 +278,62 @@ def btf_hidden(cap: Capture, repeat_mm: tuple[float, float], *, repeats: int = 1
 
 
 # --------------------------------------------------------------------------- reading
+def _origin(reg: Registration, r: CaptureRow) -> tuple[float, float]:
+    """The fabric's (u, v) at the stand's centre in the photograph of row ``r`` (its own, else its stand's)."""
+    return r.uv_mm if r.uv_mm is not None else (reg.origin(r.kappa) or (0.0, 0.0))
+
+
+def _condition(cap: Capture, reg: Registration, idx: list[int], got: dict[int, tuple], darks: dict[float, NDArray],
+               texels: tuple[int, int], repeat: tuple[float, float]) -> tuple[str, NDArray | None, int]:
+    """The texels ``(n_texels, C)`` of one sample condition from its photographs: ``(status, texels, used)``.
+
+    The rows of one fabric position (``u_mm``, ``v_mm``; else the stand's
+    registration) are brackets, merged pixel by pixel; each position gives
+    every texel, and each texel is taken from the position that has it
+    nearest the stand's centre along u (a scan). Status ``"ok"``,
+    ``"saturated"`` (a pixel saturated in every bracket of every position) or
+    ``"skipped"`` (no readable photograph).
+    """
+    rows = cap.rows
+    groups: dict[tuple[float, float], list[int]] = {}
+    for i in idx:
+        if i in got and got[i][0] == 0:
+            groups.setdefault(_origin(reg, rows[i]), []).append(i)
+    keys = np.array(sorted(darks)) if darks else None
+    best: NDArray | None = None
+    dist: NDArray | None = None
+    used = 0
+    any_saturated = False
+    (nu, nv), su = texels, repeat[0]
+    u_t = np.tile((np.arange(nu) + 0.5) * su / nu, nv)
+    for (u0, _v0), ok in groups.items():
+        if len({got[i][4].window for i in ok}) > 1:  # brackets framed differently: not one position
+            continue
+        g = got[ok[0]][4]
+        exps = [rows[i].exposure for i in ok]
+        dk = None if keys is None else [darks[float(keys[np.argmin(np.abs(np.log(keys / e)))])] for e in exps]
+        rad, ok_px = merge_exposures([got[i][1][:, None, :] for i in ok], [got[i][2][:, None] for i in ok], exps, dk)
+        used += len(ok)
+        if not ok_px.all():
+            any_saturated = True
+            continue
+        r = rows[ok[0]]
+        cos_l = g.normals @ direction_from_angles(r.theta_l, r.phi_l)
+        if cos_l.min() < 0.5 * GRAZING_COS:  # pragma: no cover - btf_hidden marks these first
+            continue
+        tex = g.texels(rad[:, 0, :] / cos_l[:, None])  # (nt, C)
+        d = np.abs((u_t - u0 + 0.5 * su) % su - 0.5 * su)
+        if best is None or dist is None:
+            best, dist = tex, d
+        else:
+            take = d < dist - 1e-9
+            best = np.where(take[:, None], tex, best)
+            dist = np.where(take, d, dist)
+    if best is None:
+        return ("saturated" if any_saturated else "skipped"), None, used
+    return "ok", best, used
+
+
 class _Geometries:
     """The :class:`ViewGeometry` of each view and image size, made once (thread-safe)."""
 
@@ -287,15 +343,16 @@ class _Geometries:
         self.lock = threading.Lock()
 
     def get(self, r: CaptureRow, info: ImageInfo) -> ViewGeometry:
-        key = (r.kappa, r.theta_v, r.phi_v, info.width, info.height, r.cx, r.cy)
+        origin = _origin(self.reg, r)
+        key = (r.kappa, r.theta_v, r.phi_v, info.width, info.height, r.cx, r.cy, origin)
         with self.lock:
             got = self.done.get(key)
             if got is None:
                 st = stand_for(self.cap.stands or {}, r.kappa)
-                got = view_geometry(st, self.reg.origin(r.kappa) or (0.0, 0.0),
+                got = view_geometry(st, origin,
                                     direction_from_angles(r.theta_v, r.phi_v), width=info.width,
                                     height=info.height, cx=r.cx, cy=r.cy, **self.kw)
-                if len(self.done) > 64:  # the rows come view by view: keep the memory bounded
+                if len(self.done) >= 16:  # the rows come view by view: keep the memory bounded
                     self.done.clear()
                 self.done[key] = got
             return got
@@ -522,32 +579,17 @@ def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat
         good: list[tuple[Any, NDArray, CaptureRow]] = []
         for idx in batch:
             sidx = cap.sample_index[idx[0]]
-            ok = [i for i in idx if i in got and got[i][0] == 0]
             for i in idx:
                 if i in got and got[i][0] != 0:
                     failed[i] = (got[i][0], got[i][3])
-            if not ok or len({got[i][4].window for i in ok}) > 1:  # brackets framed alike, or unusable
-                skipped[sidx] = True
-                continue
-            g = got[ok[0]][4]
-            exps = [rows[i].exposure for i in ok]
-            dk = None
-            if darks:
-                keys = np.array(sorted(darks))
-                dk = [darks[float(keys[np.argmin(np.abs(np.log(keys / e)))])] for e in exps]
-            rad, ok_px = merge_exposures([got[i][1][:, None, :] for i in ok], [got[i][2][:, None] for i in ok],
-                                         exps, dk)
-            n_used += len(ok)
-            if not ok_px.all():
+            status, tex, used = _condition(cap, reg, idx, got, darks, texels, repeat)
+            n_used += used
+            if status == "saturated":
                 saturated[sidx] = True
-                continue
-            r = rows[idx[0]]
-            cos_l = g.normals @ direction_from_angles(r.theta_l, r.phi_l)
-            if cos_l.min() < 0.5 * GRAZING_COS:  # pragma: no cover - btf_hidden marks these first
+            elif tex is None:
                 skipped[sidx] = True
-                continue
-            tex = g.texels(rad[:, 0, :] / cos_l[:, None])  # (nt, C)
-            good.append((sidx, tex, r))
+            else:
+                good.append((sidx, tex, rows[idx[0]]))
         if failed and not skip_bad:
             refuse_bad(cap, failed, paths, out_path, during=True)
         white_of = _nearest_white(cap, [r for *_, r in good], whites) if (whites and good) else None

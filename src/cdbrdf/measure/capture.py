@@ -41,7 +41,7 @@ from .. import limits
 from ..errors import CaptureError, TableError
 from ..images import FORMATS
 from ..table import Grid
-from .registration import parse_registration
+from .registration import ROW_COLUMNS, parse_registration, row_origin
 from .stands import (
     KAPPA_TOL_PER_MM,
     Stand,
@@ -90,7 +90,7 @@ ENCODINGS: tuple[str, ...] = ("srgb", "linear")
 #: The top-level keys ``stands.json`` may have (``docs/capture.md``); any other is refused.
 STAND_FILE_KEYS: tuple[str, ...] = ("stands", "grid", "white_albedo", "pixel_mm", "encoding", "material",
                                     "simulated", "registration")
-_KNOWN = REQUIRED_COLUMNS + ("exposure", "cx", "cy", "kind", "hidden", "encoding")
+_KNOWN = REQUIRED_COLUMNS + ("exposure", "cx", "cy", "kind", "hidden", "encoding") + ROW_COLUMNS
 _AXES = ("kappa", "theta_l", "phi_l", "theta_v", "phi_v")
 _ANGLE_DECIMALS = 6
 #: An axis value used by fewer sample conditions than this fraction of the axis's median is stray.
@@ -119,6 +119,7 @@ class CaptureRow:
     linear: bool | None
     hidden: bool
     extra: dict[str, str]
+    uv_mm: tuple[float, float] | None = None  # the fabric's (u, v) at the stand's centre (registration)
 
 
 @dataclass
@@ -683,6 +684,6 @@ def _parse_row(csv_path: Path, line: int, rec: dict, extra_cols: list[str]) -> C
         exposure=exposure, cx=cxy[0], cy=cxy[1],
         linear=None if not enc else enc == "linear",
         hidden=_bool(where, "hidden", rec.get("hidden", "")),
-        extra={c: rec.get(c, "") or "" for c in extra_cols},
+        extra={c: rec.get(c, "") or "" for c in extra_cols}, uv_mm=row_origin(where, rec),
         **ang,
     )

@@ -25,6 +25,12 @@ the face), ``v`` along the cylinder's axis y (the conventions' local frame).
     length ``s`` from the centre (along x) and ``y`` along the axis has
     ``(u, v) = (u0 + s, v0 + y)``.
 
+A row of ``capture.csv`` may give its own ``u_mm`` and ``v_mm`` (both, or
+neither: :data:`ROW_COLUMNS`, :func:`row_origin`): the fabric's ``(u, v)`` at
+the stand's centre in that photograph, for a rig that moves the fabric over
+the stand between photographs (a scan: on a curved stand each texel is then
+taken near the crest, where the normal is the stand's).
+
 :func:`face_points` maps fabric offsets to points of the face, :func:`face_hits`
 maps camera rays back to the face (the simulated rig's camera uses the same
 geometry); both are exact for the cylinder of the stand.
@@ -43,13 +49,15 @@ from numpy.typing import NDArray
 from ..errors import CaptureError
 from .stands import KAPPA_TOL_PER_MM, Stand
 
-__all__ = ["REGISTRATION_VERSION", "CAMERA_MODELS", "Registration", "parse_registration", "camera_up",
-           "image_axes", "face_points", "face_hits"]
+__all__ = ["ROW_COLUMNS", "row_origin", "REGISTRATION_VERSION", "CAMERA_MODELS", "Registration",
+           "parse_registration", "camera_up", "image_axes", "face_points", "face_hits"]
 
 #: The ``registration`` format version this code writes (its major number must not exceed ours).
 REGISTRATION_VERSION = 1
 #: Camera models a registration may name.
 CAMERA_MODELS: tuple[str, ...] = ("orthographic",)
+#: The columns of ``capture.csv`` that give a photograph's own origin.
+ROW_COLUMNS: tuple[str, ...] = ("u_mm", "v_mm")
 #: Largest fabric coordinate accepted, mm.
 _MAX_MM = 1e6
 
@@ -97,7 +105,7 @@ class Registration:
 def _num(where: str, key: str, v: object) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)) \
             or abs(float(v)) > _MAX_MM:
-        raise CaptureError(f"{where}: registration: {key}: expected a finite number of mm, got {v!r:.40}")
+        raise CaptureError(f"{where}: {key}: expected a finite number of mm, got {v!r:.40}")
     return float(v)
 
 
@@ -142,7 +150,7 @@ def parse_registration(doc: object, where: str) -> Registration:
     if repeat is not None:
         if not isinstance(repeat, list) or len(repeat) != 2:
             raise CaptureError(f"{where}: registration: repeat_mm: expected [size_u, size_v] in mm")
-        repeat = (_num(where, "repeat_mm", repeat[0]), _num(where, "repeat_mm", repeat[1]))
+        repeat = tuple(_num(where, "registration: repeat_mm", x) for x in repeat)
         if min(repeat) <= 0:
             raise CaptureError(f"{where}: registration: repeat_mm: sizes must be positive, got {list(repeat)}")
     items = doc.get("stands", [])
@@ -152,11 +160,35 @@ def parse_registration(doc: object, where: str) -> Registration:
     for i, it in enumerate(items):
         if not isinstance(it, Mapping) or set(it) != {"kappa", "u_mm", "v_mm"}:
             raise CaptureError(f"{where}: registration: stand {i}: expected an object with kappa, u_mm, v_mm")
-        k = _num(where, f"stand {i} kappa", it["kappa"])
+        k = _num(where, f"registration: stand {i} kappa", it["kappa"])
         if any(abs(k - o) <= KAPPA_TOL_PER_MM for o in origins):
             raise CaptureError(f"{where}: registration: stand {i}: a second entry for kappa {k:g}")
-        origins[k] = (_num(where, f"stand {i} u_mm", it["u_mm"]), _num(where, f"stand {i} v_mm", it["v_mm"]))
+        origins[k] = (_num(where, f"registration: stand {i} u_mm", it["u_mm"]),
+                      _num(where, f"registration: stand {i} v_mm", it["v_mm"]))
     return Registration(str(camera), origins, repeat)
+
+
+def row_origin(where: str, rec: Mapping[str, str | None]) -> tuple[float, float] | None:
+    """The ``(u_mm, v_mm)`` of a ``capture.csv`` record, or None when both are blank.
+
+    Raises
+    ------
+    CaptureError
+        When one is given without the other or is not a finite number (names ``where``).
+    """
+    text = [(rec.get(c) or "").strip() for c in ROW_COLUMNS]
+    if not any(text):
+        return None
+    if not all(text):
+        raise CaptureError(f"{where}: give both u_mm and v_mm, or neither")
+    out = []
+    for c, t in zip(ROW_COLUMNS, text):
+        try:
+            x = float(t)
+        except ValueError:
+            raise CaptureError(f"{where}: column {c!r}: {t!r:.40} is not a number") from None
+        out.append(_num(where, c, x))
+    return out[0], out[1]
 
 
 def camera_up(v: NDArray) -> NDArray[np.float64]:

@@ -157,6 +157,7 @@ def simulate_capture(
     size: int | None = None,
     field_mm: float | None = None,
     px_per_texel: float = PX_PER_TEXEL,
+    shifts: int = 1,
     spp: int = 4,
     noise: NoiseModel = NoiseModel(),
     gain: float = 2.0,
@@ -202,6 +203,11 @@ def simulate_capture(
         ``px_per_texel``: :func:`btf_camera`).
     px_per_texel
         For a CD-BTF without ``size``: pixels per texel (its shorter side).
+    shifts
+        For a CD-BTF without ``plan``: photograph every sample with the fabric
+        at ``shifts`` positions along u, ``size_u / shifts`` apart (a scan:
+        the rows' ``u_mm``, ``v_mm`` columns), so that each texel is taken
+        within ``size_u / (2 shifts)`` of a curved stand's crest.
     field_mm
         Width of the camera's field at the stand, mm (default 2; for a
         CD-BTF, 1.5 repeat diagonals: :func:`btf_camera`); ``field_mm / size``
@@ -240,7 +246,7 @@ def simulate_capture(
     if isinstance(px_per_texel, bool) or not isinstance(px_per_texel, (int, float)) \
             or not 0.5 <= px_per_texel <= 64:
         raise OptionError(f"px_per_texel: expected a number in [0.5, 64], got {px_per_texel!r:.40}")
-    for name, v, lo in (("size", 64 if size is None else size, 8), ("spp", spp, 1)):
+    for name, v, lo in (("size", 64 if size is None else size, 8), ("spp", spp, 1), ("shifts", shifts, 1)):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
             raise OptionError(f"{name}: expected a whole number >= {lo}, got {v!r:.40}")
     for name, x in (("field_mm", 2.0 if field_mm is None else field_mm), ("gain", gain),
@@ -265,7 +271,7 @@ def simulate_capture(
             partial, table, plan=the_plan, grid=grid, stands=stands, size=size, field_mm=field_mm,
             spp=spp, noise=noise, gain=gain, exposures=exposures, image_kind=image_kind,
             white_albedo=white_albedo, white=white, patch_px=patch_px, seed=seed,
-            progress=progress,
+            progress=progress, shifts=int(shifts),
         )
     rep.folder = final
     return rep
@@ -290,6 +296,7 @@ def _fill_capture(
     patch_px: int,
     seed: int,
     progress: Callable[[int, int], None] | None,
+    shifts: int = 1,
 ) -> SimulationReport:
     """Write the capture into the (empty, partial) folder ``out``; see :func:`simulate_capture`."""
     ext = extension(image_kind)
@@ -303,8 +310,11 @@ def _fill_capture(
         stand_list = list(stands) if stands is not None else [default_stand(k) for k in g.kappa]
         write_plan(out, g, stand_list, extension=ext, white=white,
                    pixel_mm=field_mm / size, patch_px=patch_px, exposures=exposures)
-        rows = read_plan(out / CAPTURE_FILE).rows
     reg = _registration(table, stand_list, seed)
+    if plan is None:
+        if reg is not None and shifts > 1:
+            _scan(out / CAPTURE_FILE, reg, shifts)
+        rows = read_plan(out / CAPTURE_FILE).rows
     if reg is not None:
         extra["registration"] = reg
     write_stands(out / STAND_FILE, stand_list, white_albedo=float(white_albedo),
@@ -358,9 +368,12 @@ def _fill_capture(
         if batch.key == "white":
             scene = white_scene(mi, cr, white_albedo, **kw)
         else:
-            st = stand_for(stand_list, float(batch.key))
-            origin = (0.0, 0.0)
-            if reg is not None:
+            if isinstance(batch.key, str):  # pragma: no cover - dark and white are handled above
+                continue
+            kappa, uv = batch.key
+            st = stand_for(stand_list, float(kappa))
+            origin = (0.0, 0.0) if uv is None else uv
+            if reg is not None and uv is None:
                 origin = next((e["u_mm"], e["v_mm"]) for e in reg["stands"] if e["kappa"] == st.kappa)
             scene = stand_scene(mi, cr, table, st, origin_uv_mm=origin, **kw)
         params = mi.traverse(scene)
@@ -386,7 +399,7 @@ class _Batch:
     its cameras' ``views`` (``(theta_v, phi_v)``, degrees) and, per light ``(theta_l, phi_l)``,
     the ``(row index, camera slot)`` pairs it photographs."""
 
-    key: float | str
+    key: tuple[float, tuple[float, float] | None] | str
     rows: list[int] = field(default_factory=list)
     views: list[tuple[float, float]] = field(default_factory=list)
     lights: dict[tuple[float, float], list[tuple[int, int]]] = field(default_factory=dict)
@@ -398,9 +411,9 @@ def _batches(rows: Sequence[CaptureRow]) -> list[_Batch]:
     Rows of one scene with the same view and light (exposure brackets) share
     one rendering; each still gets its own exposure and noise.
     """
-    by_scene: dict[float | str, list[int]] = {}
-    for i, r in enumerate(rows):
-        by_scene.setdefault(r.kind if r.kind in ("dark", "white") else float(r.kappa), []).append(i)
+    by_scene: dict[tuple[float, tuple[float, float] | None] | str, list[int]] = {}
+    for i, r in enumerate(rows):  # a stand, and where the fabric lies on it (a scan's rows: u_mm, v_mm)
+        by_scene.setdefault(r.kind if r.kind in ("dark", "white") else (float(r.kappa), r.uv_mm), []).append(i)
     out: list[_Batch] = []
     for key, idx in by_scene.items():
         if key == "dark":
@@ -418,6 +431,32 @@ def _batches(rows: Sequence[CaptureRow]) -> list[_Batch]:
                     b.lights.setdefault((rows[i].theta_l, rows[i].phi_l), []).append((i, j))
             out.append(b)
     return out
+
+
+def _scan(path: Path, reg: dict[str, Any], shifts: int) -> None:
+    """Photograph every sample row of the plan at ``path`` with the fabric at ``shifts`` positions along u.
+
+    Each sample row becomes ``shifts`` rows (files ``NAME_u0.png`` ...) with
+    ``u_mm = u0 + j size_u / shifts`` and ``v_mm = v0`` (``u0, v0``: the
+    registration's origin of the row's stand).
+    """
+    from ..measure.capture import read_rows
+
+    columns, records = read_rows(path)
+    su = float(reg["repeat_mm"][0])
+    origin = {float(e["kappa"]): (float(e["u_mm"]), float(e["v_mm"])) for e in reg["stands"]}
+    out: list[dict[str, str]] = []
+    for rec in records:
+        if rec.get("kind", "sample") not in ("", "sample"):
+            out.append({**rec, "u_mm": "", "v_mm": ""})
+            continue
+        k = float(rec["kappa"])
+        u0, v0 = next(uv for kk, uv in origin.items() if abs(kk - k) <= KAPPA_TOL_PER_MM)
+        name = PurePosixPath(rec["file"])
+        for j in range(shifts):
+            out.append({**rec, "file": str(name.with_name(f"{name.stem}_u{j}{name.suffix}")),
+                        "u_mm": repr(round((u0 + j * su / shifts) % su, 6)), "v_mm": repr(v0)})
+    write_rows(path, out, [*columns, "u_mm", "v_mm"])
 
 
 def _copy_plan(plan: Plan, out: Path, ext: str) -> tuple[list[CaptureRow], list[Stand]]:
