@@ -63,22 +63,27 @@ def errors(truth: CDBTF, got: CDBTF, measured: np.ndarray) -> tuple[float, list[
 
 @pytest.fixture(scope="module")
 def small(tmp_path_factory):
-    btf = texture(SMALL, 4, (0.4, 0.3))
+    btf = texture(SMALL, 4, (0.3, 0.3))
     folder = tmp_path_factory.mktemp("btf") / "cap"
     simulate_capture(btf, folder, seed=1)
     return btf, folder
 
 
 def test_rig_to_measure_btf_recovers_the_texels(small):
-    """The fast end-to-end check: 4 x 4 texels, a flat and a convex stand, within 3 % median."""
+    """The fast end-to-end check: 4 x 4 texels, a flat and a convex stand, within 3 % median; the tile mean
+    is the plain measurement's with a patch of one repeat (12 pixels of 0.3 / 12 mm at the normal view)."""
     btf, folder = small
     got, rep = measure(folder, btf=4)
     assert isinstance(got, CDBTF) and isinstance(rep, BTFReport)
-    assert got.texels == (4, 4) and got.repeat_mm == pytest.approx((0.4, 0.3)) and got.grid == SMALL
-    assert rep.px_per_texel >= 2.5 and rep.measured is not None and rep.measured.sum() == rep.n_measured > 100
+    assert got.texels == (4, 4) and got.repeat_mm == pytest.approx((0.3, 0.3)) and got.grid == SMALL
+    assert rep.px_per_texel >= 2.5 and rep.measured is not None and rep.measured.sum() == rep.n_measured >= 80
     assert got.attrs["quantity"] == "brdf" and got.attrs["provenance"]["method"] == "measured_btf"
     med, per = errors(btf, got, rep.measured)
     assert med <= 0.03 and max(per) <= 0.03, (med, per)
+    pixel_mm = json.loads((folder / "stands.json").read_text())["pixel_mm"]
+    plain, _ = measure(folder, patch=round(0.3 / pixel_mm))
+    diff = np.abs(got.mean().values - plain.values) / plain.values
+    assert np.median(diff[rep.measured]) <= 0.02
 
 
 def test_registration_is_written_and_the_photographs_resolve_the_texels(small):
@@ -87,8 +92,8 @@ def test_registration_is_written_and_the_photographs_resolve_the_texels(small):
     reg = parse_registration(doc["registration"], "stands.json")
     assert reg.camera == "orthographic" and reg.repeat_mm == pytest.approx(btf.repeat_mm)
     assert sorted(reg.origins) == [0.0, 0.22]
-    assert all(0 <= u < 0.4 and 0 <= v < 0.3 for u, v in reg.origins.values())
-    assert doc["pixel_mm"] <= min(0.4, 0.3) / 4 / 3 + 1e-12  # 3 px per texel by default
+    assert all(0 <= u < 0.3 and 0 <= v < 0.3 for u, v in reg.origins.values())
+    assert doc["pixel_mm"] <= 0.3 / 4 / 3 + 1e-12  # 3 px per texel by default
 
 
 @pytest.mark.parametrize("kappa", [0.22, 0.0, -0.22])
@@ -130,9 +135,10 @@ def test_the_camera_model_is_the_rigs_sensor():
 
 
 def test_too_coarse_a_camera_is_one_line():
-    with pytest.raises(CaptureError, match="do not resolve 16 x 16 texels"):
+    with pytest.raises(CaptureError, match="theta_v = 0 degrees .* do not resolve 16 x 16 texels") as e:
         view_geometry(Stand(0.0), (0.0, 0.0), np.array([0.0, 0.0, 1.0]), width=64, height=64, cx=None, cy=None,
                       pixel_mm=0.05, texels=(16, 16), repeat_mm=(0.4, 0.4))
+    assert "\n" not in str(e.value)
 
 
 def test_capture_without_registration_is_refused_in_one_line(small, tmp_path, capsys):
@@ -182,7 +188,7 @@ def test_cli_simulate_and_measure_a_btf_file(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "CD-BTF: 4 x 4 texels" in out
     got = load(tmp_path / "m.h5")
-    assert got.attrs["provenance"]["n_measured"] > 100
+    assert got.attrs["provenance"]["n_measured"] >= 80
     _, rep = measure(tmp_path / "cap", btf=4)  # the file keeps no per-sample mask: the report's
     med, per = errors(btf, got, rep.measured)
     assert med <= 0.03 and max(per) <= 0.03, (med, per)

@@ -237,9 +237,11 @@ def view_geometry(stand: Stand, origin_uv_mm: tuple[float, float], view: NDArray
     gram = (design.T @ design).toarray()
     lam = np.linalg.eigvalsh(gram) if nt <= 2048 else np.array([1.0])
     if pick.size < nt or lam[0] <= 1e-6 * lam[-1]:
-        raise CaptureError(f"the photographs ({pixel_mm:g} mm per pixel) do not resolve {texels[0]} x {texels[1]} "
-                           f"texels of a {repeat_mm[0]:g} x {repeat_mm[1]:g} mm repeat: use fewer texels or a "
-                           "finer camera")
+        tv = math.degrees(math.acos(min(1.0, abs(float(v[2])))))
+        raise CaptureError(f"the photographs at theta_v = {tv:.0f} degrees ({pixel_mm:g} mm per pixel, foreshortened "
+                           f"by cos(theta_v)) do not resolve {texels[0]} x {texels[1]} texels of a {repeat_mm[0]:g} x "
+                           f"{repeat_mm[1]:g} mm repeat: use fewer texels or a finer camera (pixels per texel x "
+                           "cos(theta_v) >= about 1.5)")
     try:
         factor = cho_factor(gram)
     except LinAlgError:
