@@ -217,3 +217,16 @@ def test_denim_sized_repeat_on_the_paper_stands(tmp_path, shifts):
     plain, _ = measure(tmp_path / "cap")
     diff = np.abs(got.mean().values - plain.values) / plain.values
     assert np.median(diff[m]) <= 0.05 and math.isfinite(float(diff.max()))
+
+
+def test_a_scan_interpolates_each_texel_to_the_crest():
+    """Texels linear in their arc length from the crest come back exactly at s = 0; one-sided: the nearest."""
+    from cdbrdf.measure.btf import _at_the_crest
+
+    s = np.array([[0.1, -0.2, 0.3], [-0.3, 0.2, 0.5]])  # two positions, three texels (the last: one side only)
+    truth = np.array([[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]])  # (texels, channels) at s = 0
+    slope = np.array([0.5, -1.0])
+    found = [(truth + s[p][:, None] * slope, s[p]) for p in range(2)]
+    got = _at_the_crest(found)
+    np.testing.assert_allclose(got[:2], truth[:2], rtol=1e-12)
+    np.testing.assert_allclose(got[2], truth[2] + 0.3 * slope, rtol=1e-12)

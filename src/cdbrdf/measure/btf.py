@@ -291,8 +291,8 @@ def _condition(cap: Capture, reg: Registration, idx: list[int], got: dict[int, t
 
     The rows of one fabric position (``u_mm``, ``v_mm``; else the stand's
     registration) are brackets, merged pixel by pixel; each position gives
-    every texel, and each texel is taken from the position that has it
-    nearest the stand's centre along u (a scan). Status ``"ok"``,
+    every texel, and each texel is taken at the stand's crest from the
+    positions that have it nearest on either side (:func:`_at_the_crest`). Status ``"ok"``,
     ``"saturated"`` (a pixel saturated in every bracket of every position) or
     ``"skipped"`` (no readable photograph).
     """
@@ -302,8 +302,7 @@ def _condition(cap: Capture, reg: Registration, idx: list[int], got: dict[int, t
         if i in got and got[i][0] == 0:
             groups.setdefault(_origin(reg, rows[i]), []).append(i)
     keys = np.array(sorted(darks)) if darks else None
-    best: NDArray | None = None
-    dist: NDArray | None = None
+    found: list[tuple[NDArray, NDArray]] = []  # per position: the texels and their signed offsets from the crest
     used = 0
     any_saturated = False
     (nu, nv), su = texels, repeat[0]
@@ -324,16 +323,36 @@ def _condition(cap: Capture, reg: Registration, idx: list[int], got: dict[int, t
         if cos_l.min() < 0.5 * GRAZING_COS:  # pragma: no cover - btf_hidden marks these first
             continue
         tex = g.texels(rad[:, 0, :] / cos_l[:, None])  # (nt, C)
-        d = np.abs((u_t - u0 + 0.5 * su) % su - 0.5 * su)
-        if best is None or dist is None:
-            best, dist = tex, d
-        else:
-            take = d < dist - 1e-9
-            best = np.where(take[:, None], tex, best)
-            dist = np.where(take, d, dist)
-    if best is None:
+        found.append((tex, (u_t - u0 + 0.5 * su) % su - 0.5 * su))
+    if not found:
         return ("saturated" if any_saturated else "skipped"), None, used
-    return "ok", best, used
+    return "ok", _at_the_crest(found), used
+
+
+def _at_the_crest(found: list[tuple[NDArray, NDArray]]) -> NDArray:
+    """Each texel at the stand's crest from the fabric positions that measured it.
+
+    ``found``: per position, the texels ``(n_texels, C)`` and each texel's
+    signed arc length from the crest ``s`` (mm). Where positions lie on both
+    sides of a texel (a scan), the two nearest are interpolated linearly in
+    ``s`` to ``s = 0`` (the turn of the normal is linear in ``s``: its first
+    order cancels); elsewhere the nearest position's value is taken.
+    """
+    tex = np.stack([t for t, _ in found])  # (positions, nt, C)
+    s = np.stack([o for _, o in found])  # (positions, nt)
+    cols = np.arange(s.shape[1])
+    big = np.inf
+    plus = np.where(s >= 0, s, big)
+    minus = np.where(s < 0, -s, big)
+    ip, im = np.argmin(plus, axis=0), np.argmin(minus, axis=0)
+    sp, sm = plus[ip, cols], minus[im, cols]  # distances >= 0
+    near = np.where(sp <= sm, ip, im)
+    out = tex[near, cols]
+    both = np.isfinite(sp) & np.isfinite(sm) & (sp + sm > 0)
+    if both.any():
+        wp = np.where(both, sm / np.where(both, sp + sm, 1.0), 0.0)[:, None]
+        out = np.where(both[:, None], wp * tex[ip, cols] + (1 - wp) * tex[im, cols], out)
+    return out
 
 
 class _Geometries:
