@@ -36,7 +36,7 @@ import numbers
 from collections.abc import Callable
 from os import PathLike
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 from numpy.typing import NDArray
 
@@ -237,7 +237,17 @@ def _run(cap: Any, needed: list[int], bad: dict[int, tuple[int, str]], stats: di
     return results, failed, resumed
 
 
-def measure(
+@overload
+def measure(folder: str | PathLike[str], output: str | PathLike[str] | None = None, *, btf: None = None,
+            **options: Any) -> tuple[CDBRDF, MeasureReport]: ...
+
+
+@overload
+def measure(folder: str | PathLike[str], output: str | PathLike[str] | None = None, *,
+            btf: int | tuple[int, int], **options: Any) -> tuple[CDBTF, BTFReport]: ...
+
+
+def measure(  # type: ignore[misc]  # the overloads give the options as **options
     folder: str | PathLike[str],
     output: str | PathLike[str] | None = None,
     *,
