@@ -64,6 +64,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="camera field width at the stand, mm (2; a CD-BTF: 1.5 repeat diagonals)")
     p.add_argument("--px-per-texel", type=finite_float(0.5, 64), default=3.0,
                    help="a CD-BTF without --size: pixels per texel, 0.5 to 64 (3)")
+    p.add_argument("--shifts", type=int_range(1, 64), default=1,
+                   help="a CD-BTF without --plan: photograph every sample with the fabric at S positions along u, "
+                   "a repeat / S apart (a scan; 1 to 64, default 1)")
     p.add_argument("--spp", type=int_range(1, 65536), default=4, help="samples per pixel (4)")
     p.add_argument("--noise", type=_noise, default="20000,3",
                    help="'none' or FULL_WELL[,READ] electrons (default 20000,3)")
@@ -86,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     with ProgressBars(quiet=args.quiet, unit="img") as bars:
         rep = simulate_capture(
             args.material, args.output, plan=args.plan, size=args.size, field_mm=args.field,
-            px_per_texel=args.px_per_texel,
+            px_per_texel=args.px_per_texel, shifts=args.shifts,
             spp=args.spp, noise=args.noise, gain=args.gain,
             exposures=args.exposures, image_kind=args.image, white_albedo=args.white_albedo,
             seed=args.seed, progress=bars.callback("render"),
