@@ -391,7 +391,7 @@ def test_unknown_stands_json_key_is_refused(tmp_path, capsys):
 
     make_capture(tmp_path / "cap", SMALL, pixel, kind="exr", size=9, settings={"white_albdeo": 0.5})
     with pytest.raises(CaptureError, match=r"stands.json: unknown key 'white_albdeo'; valid keys are stands, grid, "
-                                           r"white_albedo, pixel_mm, encoding, material, simulated"):
+                                           r"white_albedo, pixel_mm, encoding, material, simulated, registration"):
         read_capture(tmp_path / "cap")
     assert main(["-q", "measure", str(tmp_path / "cap"), "-o", str(tmp_path / "m.h5")]) == 2
     err = capsys.readouterr().err
@@ -399,7 +399,8 @@ def test_unknown_stands_json_key_is_refused(tmp_path, capsys):
     assert not (tmp_path / "m.h5").exists()
     # every documented key is accepted
     doc = {"grid": None, "white_albedo": 0.5, "pixel_mm": 0.0, "encoding": "linear", "material": "felt",
-           "simulated": True}
+           "simulated": True, "registration": {"version": 1, "camera": "orthographic", "repeat_mm": [1.0, 2.0],
+                                               "stands": [{"kappa": 0.0, "u_mm": 0.5, "v_mm": 0.25}]}}
     assert set(doc) | {"stands"} == set(STAND_FILE_KEYS)
     doc.pop("grid")
     make_capture(tmp_path / "ok", SMALL, pixel, kind="exr", size=9, settings=doc,

@@ -43,6 +43,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="how invalid samples are filled: "
                    + "; ".join(f"{name}: {text}" for name, text in FILL_METHODS.items())
                    + f" (default {DEFAULT_FILL})")
+    p.add_argument("--btf", type=int_range(1, 256), default=None, metavar="N",
+                   help="measure a CD-BTF of N x N texels per weave repeat instead (the capture's stands.json "
+                   "must register the fabric's (u, v) on the stands): every photograph is rectified onto the "
+                   "texels instead of averaged; the same calibration, hidden samples and fill. Writes a CD-BTF "
+                   "file; no checkpoint")
     p.add_argument("--workers", type=int_range(1, 1024), default=None, help="local threads/processes, 1 to 1024")
     p.add_argument("--force", action="store_true",
                    help="overwrite an existing output file (never one of the capture's own files)")
@@ -60,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
                 args.capture, out, patch=args.patch, linear=args.linear, skip_bad=args.skip_bad,
                 scheduler=args.scheduler, white_albedo=args.white_albedo, material=args.material,
                 num_workers=args.workers, progress=bars.callback("measure"), overwrite=args.force,
-                fill=args.fill,
+                fill=args.fill, btf=args.btf,
             )
     except KeyboardInterrupt:
 

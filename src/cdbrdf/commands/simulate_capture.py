@@ -51,16 +51,22 @@ def register(sub: argparse._SubParsersAction) -> None:
         "`cdbrdf measure`. See docs/capture.md.",
     )
     p.add_argument("material", type=with_role(_material, "input"),
-                   help="preset name (see cdbrdf.materials) or a CDBRDF file")
+                   help="preset name (see cdbrdf.materials), a CDBRDF file or a CD-BTF file (laid on the "
+                   "stands in mm, its registration written to stands.json)")
     p.add_argument("-o", "--output", required=True, metavar="DIR", type=output_folder(replaced=False),
                    help="capture folder to write (new, empty, or an earlier simulated capture, replaced "
                    "whole unless files were added to it since)")
     p.add_argument("--plan", type=existing_file(".csv"), default=None,
                    help="capture.csv to render (default: the material's grid, the paper's stands, white references)")
-    p.add_argument("--size", type=square_size(lo=8, hi=8192), default=64,
-                   help="image size in pixels, 8 to 8192 (64)")
-    p.add_argument("--field", type=finite_float(0, 1e4, lo_open=True, unit="mm"), default=2.0,
-                   help="camera field width at the stand, mm (2)")
+    p.add_argument("--size", type=square_size(lo=8, hi=8192), default=None,
+                   help="image size in pixels, 8 to 8192 (64; a CD-BTF: from --px-per-texel)")
+    p.add_argument("--field", type=finite_float(0, 1e4, lo_open=True, unit="mm"), default=None,
+                   help="camera field width at the stand, mm (2; a CD-BTF: 1.5 repeat diagonals)")
+    p.add_argument("--px-per-texel", type=finite_float(0.5, 64), default=3.0,
+                   help="a CD-BTF without --size: pixels per texel, 0.5 to 64 (3)")
+    p.add_argument("--shifts", type=int_range(1, 64), default=1,
+                   help="a CD-BTF without --plan: photograph every sample with the fabric at S positions along u, "
+                   "a repeat / S apart (a scan; 1 to 64, default 1)")
     p.add_argument("--spp", type=int_range(1, 65536), default=4, help="samples per pixel (4)")
     p.add_argument("--noise", type=_noise, default="20000,3",
                    help="'none' or FULL_WELL[,READ] electrons (default 20000,3)")
@@ -83,6 +89,7 @@ def run(args: argparse.Namespace) -> int:
     with ProgressBars(quiet=args.quiet, unit="img") as bars:
         rep = simulate_capture(
             args.material, args.output, plan=args.plan, size=args.size, field_mm=args.field,
+            px_per_texel=args.px_per_texel, shifts=args.shifts,
             spp=args.spp, noise=args.noise, gain=args.gain,
             exposures=args.exposures, image_kind=args.image, white_albedo=args.white_albedo,
             seed=args.seed, progress=bars.callback("render"),

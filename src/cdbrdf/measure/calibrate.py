@@ -28,7 +28,7 @@ from .fill import DEFAULT_FILL, angle_between_deg, check_fill_method, fill, fill
 from .patch import merge_exposures, patch_statistics
 from .stands import KAPPA_TOL_PER_MM
 
-__all__ = ["MeasureReport", "assemble", "merged"]
+__all__ = ["MeasureReport", "assemble", "merged", "calibration"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -174,6 +174,62 @@ def merged(cap: Capture, idx: list[int], results: dict, darks: dict[float, NDArr
     return mean, std, good, ok
 
 
+def calibration(cap: Capture, results: dict, rep: MeasureReport
+                ) -> tuple[dict[float, NDArray], list[tuple[CaptureRow, NDArray]]]:
+    """The dark frames and the white references of a measurement (counted in ``rep``).
+
+    Parameters
+    ----------
+    cap
+        The parsed capture folder.
+    results
+        Per row index: ``(status, values, saturated, message)`` (the N x N patches).
+    rep
+        The report: ``n_dark``, ``n_white`` and ``quantity`` are set.
+
+    Returns
+    -------
+    darks : dict
+        Exposure -> mean dark patch.
+    whites : list
+        ``(first row, W)`` per white-reference geometry, ``W`` its patch mean
+        over ``cos(theta_l)`` per channel.
+
+    Raises
+    ------
+    CaptureError
+        For a black white reference.
+    """
+    rows = cap.rows
+    # dark frames by exposure (mean of the frames of one exposure)
+    dark_groups: dict[float, list[int]] = {}
+    for i, r in enumerate(rows):
+        if r.kind == "dark" and results.get(i, (1,))[0] == 0:
+            dark_groups.setdefault(r.exposure, []).append(i)
+    darks = {e: np.mean([results[i][1] for i in g], axis=0) for e, g in dark_groups.items()}
+    rep.n_dark = sum(len(g) for g in dark_groups.values())
+
+    # white references: W = mean / cos(theta_l) per geometry
+    whites: list[tuple[CaptureRow, NDArray]] = []
+    for idx in cap.brackets("white").values():
+        m = merged(cap, idx, results, darks)
+        if m is None:
+            continue
+        mean, _std, good, ok = m
+        r = rows[idx[0]]
+        if not good:
+            _LOG.warning("white reference %s is saturated; not used", r.file)
+            continue
+        w = mean / math.cos(math.radians(r.theta_l))
+        if np.any(w <= 0):
+            raise CaptureError(f"{cap.folder / r.file}: white reference is black (after dark subtraction)")
+        whites.append((r, w))
+        rep.n_white += len(ok)
+    if whites:
+        rep.quantity = "brdf"
+    return darks, whites
+
+
 def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: bool,
              material: str | None, fill_method: str = DEFAULT_FILL) -> tuple[CDBRDF, MeasureReport]:
     """The table and the report of a measurement from the patches of its photographs.
@@ -223,32 +279,7 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
         raise CaptureError(f"{cap.folder}: photographs have different channel counts {sorted(chans)}")
     nc = chans.pop() if chans else 3
 
-    # dark frames by exposure (mean of the frames of one exposure)
-    dark_groups: dict[float, list[int]] = {}
-    for i, r in enumerate(rows):
-        if r.kind == "dark" and results.get(i, (1,))[0] == 0:
-            dark_groups.setdefault(r.exposure, []).append(i)
-    darks = {e: np.mean([results[i][1] for i in g], axis=0) for e, g in dark_groups.items()}
-    rep.n_dark = sum(len(g) for g in dark_groups.values())
-
-    # white references: W = mean / cos(theta_l) per geometry
-    whites = []
-    for idx in cap.brackets("white").values():
-        m = merged(cap, idx, results, darks)
-        if m is None:
-            continue
-        mean, _std, good, ok = m
-        r = rows[idx[0]]
-        if not good:
-            _LOG.warning("white reference %s is saturated; not used", r.file)
-            continue
-        w = mean / math.cos(math.radians(r.theta_l))
-        if np.any(w <= 0):
-            raise CaptureError(f"{cap.folder / r.file}: white reference is black (after dark subtraction)")
-        whites.append((r, w))
-        rep.n_white += len(ok)
-    if whites:
-        rep.quantity = "brdf"
+    darks, whites = calibration(cap, results, rep)
 
     values = np.full(grid.shape + (nc,), np.nan)
     std = np.full(grid.shape + (nc,), np.nan)

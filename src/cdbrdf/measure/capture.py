@@ -41,6 +41,7 @@ from .. import limits
 from ..errors import CaptureError, TableError
 from ..images import FORMATS
 from ..table import Grid
+from .registration import ROW_COLUMNS, parse_registration, row_origin
 from .stands import (
     KAPPA_TOL_PER_MM,
     Stand,
@@ -88,8 +89,8 @@ HIDDEN_NAMES: Mapping[int, str] = {0: "", 1: "view", 2: "light", 3: "view+light"
 ENCODINGS: tuple[str, ...] = ("srgb", "linear")
 #: The top-level keys ``stands.json`` may have (``docs/capture.md``); any other is refused.
 STAND_FILE_KEYS: tuple[str, ...] = ("stands", "grid", "white_albedo", "pixel_mm", "encoding", "material",
-                                    "simulated")
-_KNOWN = REQUIRED_COLUMNS + ("exposure", "cx", "cy", "kind", "hidden", "encoding")
+                                    "simulated", "registration")
+_KNOWN = REQUIRED_COLUMNS + ("exposure", "cx", "cy", "kind", "hidden", "encoding") + ROW_COLUMNS
 _AXES = ("kappa", "theta_l", "phi_l", "theta_v", "phi_v")
 _ANGLE_DECIMALS = 6
 #: An axis value used by fewer sample conditions than this fraction of the axis's median is stray.
@@ -118,6 +119,7 @@ class CaptureRow:
     linear: bool | None
     hidden: bool
     extra: dict[str, str]
+    uv_mm: tuple[float, float] | None = None  # the fabric's (u, v) at the stand's centre (registration)
 
 
 @dataclass
@@ -319,6 +321,8 @@ def _settings(doc: dict[str, Any], stand_path: Path) -> dict[str, Any]:
         out["pixel_mm"] = float(v)
     if "encoding" in out and out["encoding"] not in ENCODINGS:
         raise CaptureError(f"{stand_path}: encoding: {out['encoding']!r:.40} is not one of {', '.join(ENCODINGS)}")
+    if "registration" in out:  # where the fabric's (u, v) lies: cdbrdf.measure.registration
+        out["registration"] = parse_registration(out["registration"], str(stand_path))
     if "material" in out:
         m = out["material"]
         if not isinstance(m, str) or not m.strip() or len(m) > 200 or not m.isprintable():
@@ -680,6 +684,6 @@ def _parse_row(csv_path: Path, line: int, rec: dict, extra_cols: list[str]) -> C
         exposure=exposure, cx=cxy[0], cy=cxy[1],
         linear=None if not enc else enc == "linear",
         hidden=_bool(where, "hidden", rec.get("hidden", "")),
-        extra={c: rec.get(c, "") or "" for c in extra_cols},
+        extra={c: rec.get(c, "") or "" for c in extra_cols}, uv_mm=row_origin(where, rec),
         **ang,
     )

@@ -36,10 +36,11 @@ import numbers
 from collections.abc import Callable
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, overload
 
 from numpy.typing import NDArray
 
+from ..btf import CDBTF
 from ..errors import OptionError
 from ..fsutil import check_output_file
 from ..images import ImageError
@@ -60,6 +61,10 @@ from .preflight import (
     refuse_overlap,
     remove_bad_list,
 )
+
+if TYPE_CHECKING:
+    from ..btf import CDBTF
+    from .btf import BTFReport
 
 __all__ = [
     "measure",
@@ -232,7 +237,17 @@ def _run(cap: Any, needed: list[int], bad: dict[int, tuple[int, str]], stats: di
     return results, failed, resumed
 
 
-def measure(
+@overload
+def measure(folder: str | PathLike[str], output: str | PathLike[str] | None = None, *, btf: None = None,
+            **options: Any) -> tuple[CDBRDF, MeasureReport]: ...
+
+
+@overload
+def measure(folder: str | PathLike[str], output: str | PathLike[str] | None = None, *,
+            btf: int | tuple[int, int], **options: Any) -> tuple[CDBTF, BTFReport]: ...
+
+
+def measure(  # type: ignore[misc]  # the overloads give the options as **options
     folder: str | PathLike[str],
     output: str | PathLike[str] | None = None,
     *,
@@ -248,8 +263,9 @@ def measure(
     progress: Callable[[int, int], None] | None = None,
     overwrite: bool = True,
     fill: str = DEFAULT_FILL,
+    btf: int | tuple[int, int] | None = None,
     _interrupt_after: int | None = None,
-) -> tuple[CDBRDF, MeasureReport]:
+) -> tuple[CDBRDF, MeasureReport] | tuple[CDBTF, BTFReport]:
     """Measure a capture folder into a CDBRDF.
 
     Parameters
@@ -300,15 +316,23 @@ def measure(
         ``"nearest-stand"``, or ``"nearest"`` (the paper's rule: the nearest
         measured direction at the same curvature). It does not change what
         is read, so a checkpoint serves every method.
+    btf
+        Texels per repeat side (``n`` or ``(n_u, n_v)``): measure a CD-BTF
+        instead (:func:`cdbrdf.measure.btf.measure_btf`; the capture's
+        ``stands.json`` must have a ``registration``). Every photograph is
+        rectified onto the fabric's texels instead of averaged; the same
+        calibration, hidden samples and fill. No checkpoint; local threads only.
     _interrupt_after
         For the tests: stop as a killed run would once this many photographs are read.
 
     Returns
     -------
     table : CDBRDF
-        ``quantity="brdf"`` with a white reference, else ``"relative"``.
+        ``quantity="brdf"`` with a white reference, else ``"relative"``
+        (a :class:`~cdbrdf.CDBTF` with ``btf``).
     report : MeasureReport
-        What was read, skipped, saturated and filled.
+        What was read, skipped, saturated and filled (a
+        :class:`~cdbrdf.measure.btf.BTFReport` with ``btf``).
 
     Raises
     ------
@@ -343,6 +367,12 @@ def measure(
     _check_options(patch=patch, batch_size=batch_size, num_workers=num_workers, scheduler=scheduler,
                    white_albedo=white_albedo, material=material, progress=progress)
     patch = int(patch)
+    if btf is not None:
+        from .btf import measure_btf
+
+        return measure_btf(folder, output, texels=btf, patch=patch, linear=linear, skip_bad=skip_bad,
+                           scheduler=scheduler, white_albedo=white_albedo, material=material,
+                           num_workers=num_workers, progress=progress, overwrite=overwrite, fill=fill)
     out_path = None if output is None else check_output_file(output)  # a folder, a device: refused now
     fill = check_fill_method(fill)
     if out_path is not None:

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..frames import angles_from_direction, direction_from_angles
+from ..measure.registration import camera_up
 from ..measure.stands import Stand
 from ..table import CDBRDF
 from .stands import surface_hits
@@ -41,11 +42,6 @@ CAMERA_DISTANCE_MM = 60.0
 #: The cameras' near and far clipping distances, mm.
 NEAR_CLIP_MM = 1.0
 FAR_CLIP_MM = 1000.0
-
-
-def camera_up(v: NDArray) -> NDArray[np.float64]:
-    """The image's up vector for a camera in direction ``v``: +z, or +y when ``v`` is the normal."""
-    return np.array([0.0, 0.0, 1.0]) if math.hypot(v[0], v[1]) > 1e-6 else np.array([0.0, 1.0, 0.0])
 
 
 def _up_for(d: NDArray) -> list[float]:

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..btf import CDBTF
 from ..measure.stands import Stand
 from ..table import CDBRDF
 from .camera import camera_row
@@ -60,18 +61,26 @@ def _scene(mi, cr, parts: dict[str, Any], *, views: Sequence[NDArray], size: int
     return cr.load_dict(d)
 
 
-def stand_scene(mi, cr, table: CDBRDF, stand: Stand, **kw: Any):  # noqa: ANN001, ANN201
+def stand_scene(mi, cr, table: CDBRDF | CDBTF, stand: Stand, *,  # noqa: ANN001, ANN201
+                origin_uv_mm: tuple[float, float] = (0.0, 0.0), **kw: Any):
     """The scene of a stand: the fabric (the ``cdbrdf`` BSDF at its curvature), the white body.
 
     ``mi`` is :mod:`mitsuba`, ``cr`` :mod:`cdbrdf.render` (variant set);
     ``kw``: ``views`` (unit view directions, one camera each), ``size``,
-    ``field_mm``, ``spp``.
+    ``field_mm``, ``spp``. The fabric's UVs are its ``(u, v)`` in mm: arc
+    length along x and length along y from the stand's centre, plus
+    ``origin_uv_mm`` (the registration, :mod:`cdbrdf.measure.registration`),
+    which a CD-BTF reads (periodic over its repeat).
     """
     fabric = cr.make_bsdf(table, mode="cdbrdf", curvature=float(stand.kappa))
     white = mi.load_dict({"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {
         "type": "rgb", "value": STAND_REFLECTANCE}}})
     parts = {}
     for name, m in stand_meshes(stand).items():
+        if name == "fabric":  # u, v in [0, 1] across the face's arc and along the axis, linear in length
+            uv = np.asarray(m["uv"], dtype=np.float64)
+            m = {**m, "uv": np.stack([origin_uv_mm[0] + (uv[:, 0] - 0.5) * stand.face_width_mm,
+                                      origin_uv_mm[1] + (uv[:, 1] - 0.5) * stand.length_mm], axis=-1)}
         parts[name] = _mi_mesh(mi, name, m, fabric if name == "fabric" else white)
     return _scene(mi, cr, parts, **kw)
 

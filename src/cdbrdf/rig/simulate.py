@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..btf import CDBTF
 from ..errors import CaptureError, OptionError
 from ..frames import direction_from_angles
 from ..images import FORMATS
@@ -34,7 +35,7 @@ from .camera import light_to_world
 from .scenes import stand_scene, white_scene
 from .sensor import IMAGE_KINDS, NoiseModel, encode, extension, write_photograph
 
-__all__ = ["SimulationReport", "simulate_capture", "load_material"]
+__all__ = ["SimulationReport", "simulate_capture", "load_material", "btf_camera", "PX_PER_TEXEL"]
 
 
 @dataclass
@@ -78,27 +79,29 @@ class SimulationReport:
         )
 
 
-def load_material(material: CDBRDF | str | PathLike[str]) -> CDBRDF:
+def load_material(material: CDBRDF | CDBTF | str | PathLike[str]) -> CDBRDF | CDBTF:
     """The table of a material.
 
     Parameters
     ----------
     material
-        A :class:`CDBRDF`, a CDBRDF file or a bundled material's name
-        (:mod:`cdbrdf.materials`).
+        A :class:`CDBRDF` or :class:`~cdbrdf.CDBTF`, a CDBRDF or CD-BTF file, or
+        a bundled material's name (:mod:`cdbrdf.materials`).
 
     Returns
     -------
-    CDBRDF
-        The table.
+    CDBRDF or CDBTF
+        The table (a CD-BTF file gives its CD-BTF).
     """
-    if isinstance(material, CDBRDF):
+    if isinstance(material, (CDBRDF, CDBTF)):
         return material
     p = Path(material)
     if p.suffix.lower() in (".h5", ".hdf5", ".nc") or p.exists():
+        from ..btf import is_btf
+        from ..btf import load as load_btf
         from ..table import load
 
-        return load(p)
+        return load_btf(p) if p.is_file() and is_btf(p) else load(p)
     try:
         from .. import materials
     except ImportError as exc:  # pragma: no cover - the presets module is part of the package
@@ -106,15 +109,55 @@ def load_material(material: CDBRDF | str | PathLike[str]) -> CDBRDF:
     return materials.load(str(material))
 
 
+#: Pixels per texel (along the texel's shorter side) the rig's camera gives a CD-BTF by default.
+PX_PER_TEXEL = 3.0
+
+
+def btf_camera(btf: CDBTF, *, px_per_texel: float = PX_PER_TEXEL, size: int | None = None,
+               field_mm: float | None = None) -> tuple[int, float]:
+    """The image size and field (mm) that photograph a CD-BTF's repeat at ``px_per_texel``.
+
+    The field holds a whole repeat whatever the view's azimuth (1.5 times its
+    diagonal), the pixel is the texel's shorter side over ``px_per_texel``;
+    a given ``size`` or ``field_mm`` is kept (the other follows from it).
+
+    Returns
+    -------
+    size, field_mm
+        Pixels (even) and mm.
+    """
+    (nu, nv), (su, sv) = btf.texels, btf.repeat_mm
+    pixel = min(su / nu, sv / nv) / float(px_per_texel)
+    if field_mm is None:
+        field_mm = 1.5 * math.hypot(su, sv) if size is None else size * pixel
+    if size is None:
+        size = max(8, 2 * math.ceil(0.5 * field_mm / pixel))
+    return int(size), float(field_mm)
+
+
+def _registration(table: CDBRDF | CDBTF, stands: Sequence[Stand], seed: int) -> dict[str, Any] | None:
+    """For a CD-BTF: the fabric's (u, v) at each stand's centre, drawn from ``seed`` (in the repeat)."""
+    if not isinstance(table, CDBTF):
+        return None
+    from ..measure.registration import Registration
+
+    rng = np.random.default_rng([int(seed), 27])
+    su, sv = table.repeat_mm
+    origins = {s.kappa: (round(float(rng.uniform(0, su)), 6), round(float(rng.uniform(0, sv)), 6)) for s in stands}
+    return Registration("orthographic", origins, (su, sv)).to_dict()
+
+
 def simulate_capture(
-    material: CDBRDF | str | PathLike[str],
+    material: CDBRDF | CDBTF | str | PathLike[str],
     folder: str | PathLike[str],
     *,
     plan: str | PathLike[str] | None = None,
     grid: Grid | None = None,
     stands: Sequence[Stand] | None = None,
-    size: int = 64,
-    field_mm: float = 2.0,
+    size: int | None = None,
+    field_mm: float | None = None,
+    px_per_texel: float = PX_PER_TEXEL,
+    shifts: int = 1,
     spp: int = 4,
     noise: NoiseModel = NoiseModel(),
     gain: float = 2.0,
@@ -131,7 +174,12 @@ def simulate_capture(
     Parameters
     ----------
     material
-        A :class:`CDBRDF`, a CDBRDF file, or a preset name.
+        A :class:`CDBRDF`, a :class:`~cdbrdf.CDBTF`, a CDBRDF or CD-BTF file,
+        or a preset name. A CD-BTF is laid on the stands with its ``(u, v)``
+        in mm (arc length along x, length along y) from an origin per stand
+        drawn from ``seed``, recorded as the ``registration`` of
+        ``stands.json`` (:mod:`cdbrdf.measure.registration`), so that
+        ``measure(..., btf=...)`` can rectify the photographs.
     folder
         Output capture folder. It is built as a partial folder beside it and
         swapped in whole once complete (:func:`cdbrdf.outputs.output_folder`):
@@ -151,9 +199,18 @@ def simulate_capture(
     grid, stands
         Without ``plan``: the samples and the stands of the plan.
     size
-        Image width and height in pixels.
+        Image width and height in pixels (default 64; for a CD-BTF, from
+        ``px_per_texel``: :func:`btf_camera`).
+    px_per_texel
+        For a CD-BTF without ``size``: pixels per texel (its shorter side).
+    shifts
+        For a CD-BTF without ``plan``: photograph every sample with the fabric
+        at ``shifts`` positions along u, ``size_u / shifts`` apart (a scan:
+        the rows' ``u_mm``, ``v_mm`` columns), so that each texel is taken
+        within ``size_u / (2 shifts)`` of a curved stand's crest.
     field_mm
-        Width of the camera's field at the stand, mm; ``field_mm / size``
+        Width of the camera's field at the stand, mm (default 2; for a
+        CD-BTF, 1.5 repeat diagonals: :func:`btf_camera`); ``field_mm / size``
         (the pixel size) is written to ``stands.json`` as ``pixel_mm``, so
         that the measurement discards photographs in which any pixel of the
         patch sees a wall or lies in its shadow.
@@ -186,10 +243,14 @@ def simulate_capture(
     """
     if not isinstance(image_kind, str) or image_kind not in IMAGE_KINDS:
         raise OptionError(f"image_kind: {image_kind!r:.40} is not one of {', '.join(IMAGE_KINDS)}")
-    for name, v, lo in (("size", size, 8), ("spp", spp, 1)):
+    if isinstance(px_per_texel, bool) or not isinstance(px_per_texel, (int, float)) \
+            or not 0.5 <= px_per_texel <= 64:
+        raise OptionError(f"px_per_texel: expected a number in [0.5, 64], got {px_per_texel!r:.40}")
+    for name, v, lo in (("size", 64 if size is None else size, 8), ("spp", spp, 1), ("shifts", shifts, 1)):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
             raise OptionError(f"{name}: expected a whole number >= {lo}, got {v!r:.40}")
-    for name, x in (("field_mm", field_mm), ("gain", gain), ("white_albedo", white_albedo)):
+    for name, x in (("field_mm", 2.0 if field_mm is None else field_mm), ("gain", gain),
+                    ("white_albedo", white_albedo)):
         if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) \
                 or not (math.isfinite(x) and x > 0):
             raise OptionError(f"{name}: expected a finite positive number, got {x!r:.40}")
@@ -199,6 +260,10 @@ def simulate_capture(
     # the plan is checked by the capture format's own parser before anything is rendered
     the_plan = read_plan(plan) if plan is not None else None
     table = load_material(material)
+    if isinstance(table, CDBTF):
+        size, field_mm = btf_camera(table, px_per_texel=px_per_texel, size=size, field_mm=field_mm)
+    size = 64 if size is None else int(size)
+    field_mm = 2.0 if field_mm is None else float(field_mm)
     from ..render import variant
 
     with output_folder(final) as partial, variant():
@@ -206,7 +271,7 @@ def simulate_capture(
             partial, table, plan=the_plan, grid=grid, stands=stands, size=size, field_mm=field_mm,
             spp=spp, noise=noise, gain=gain, exposures=exposures, image_kind=image_kind,
             white_albedo=white_albedo, white=white, patch_px=patch_px, seed=seed,
-            progress=progress,
+            progress=progress, shifts=int(shifts),
         )
     rep.folder = final
     return rep
@@ -214,7 +279,7 @@ def simulate_capture(
 
 def _fill_capture(
     out: Path,
-    table: CDBRDF,
+    table: CDBRDF | CDBTF,
     *,
     plan: Plan | None,
     grid: Grid | None,
@@ -231,6 +296,7 @@ def _fill_capture(
     patch_px: int,
     seed: int,
     progress: Callable[[int, int], None] | None,
+    shifts: int = 1,
 ) -> SimulationReport:
     """Write the capture into the (empty, partial) folder ``out``; see :func:`simulate_capture`."""
     ext = extension(image_kind)
@@ -244,7 +310,13 @@ def _fill_capture(
         stand_list = list(stands) if stands is not None else [default_stand(k) for k in g.kappa]
         write_plan(out, g, stand_list, extension=ext, white=white,
                    pixel_mm=field_mm / size, patch_px=patch_px, exposures=exposures)
+    reg = _registration(table, stand_list, seed)
+    if plan is None:
+        if reg is not None and shifts > 1:
+            _scan(out / CAPTURE_FILE, reg, shifts)
         rows = read_plan(out / CAPTURE_FILE).rows
+    if reg is not None:
+        extra["registration"] = reg
     write_stands(out / STAND_FILE, stand_list, white_albedo=float(white_albedo),
                  material=str(table.attrs.get("material", "unknown")), simulated=True,
                  pixel_mm=field_mm / size, **extra)
@@ -296,7 +368,14 @@ def _fill_capture(
         if batch.key == "white":
             scene = white_scene(mi, cr, white_albedo, **kw)
         else:
-            scene = stand_scene(mi, cr, table, stand_for(stand_list, float(batch.key)), **kw)
+            if isinstance(batch.key, str):  # pragma: no cover - dark and white are handled above
+                continue
+            kappa, uv = batch.key
+            st = stand_for(stand_list, float(kappa))
+            origin = (0.0, 0.0) if uv is None else uv
+            if reg is not None and uv is None:
+                origin = next((e["u_mm"], e["v_mm"]) for e in reg["stands"] if e["kappa"] == st.kappa)
+            scene = stand_scene(mi, cr, table, st, origin_uv_mm=origin, **kw)
         params = mi.traverse(scene)
         for light, members in batch.lights.items():
             params["light.to_world"] = light_to_world(mi, direction_from_angles(*light))
@@ -320,7 +399,7 @@ class _Batch:
     its cameras' ``views`` (``(theta_v, phi_v)``, degrees) and, per light ``(theta_l, phi_l)``,
     the ``(row index, camera slot)`` pairs it photographs."""
 
-    key: float | str
+    key: tuple[float, tuple[float, float] | None] | str
     rows: list[int] = field(default_factory=list)
     views: list[tuple[float, float]] = field(default_factory=list)
     lights: dict[tuple[float, float], list[tuple[int, int]]] = field(default_factory=dict)
@@ -332,9 +411,9 @@ def _batches(rows: Sequence[CaptureRow]) -> list[_Batch]:
     Rows of one scene with the same view and light (exposure brackets) share
     one rendering; each still gets its own exposure and noise.
     """
-    by_scene: dict[float | str, list[int]] = {}
-    for i, r in enumerate(rows):
-        by_scene.setdefault(r.kind if r.kind in ("dark", "white") else float(r.kappa), []).append(i)
+    by_scene: dict[tuple[float, tuple[float, float] | None] | str, list[int]] = {}
+    for i, r in enumerate(rows):  # a stand, and where the fabric lies on it (a scan's rows: u_mm, v_mm)
+        by_scene.setdefault(r.kind if r.kind in ("dark", "white") else (float(r.kappa), r.uv_mm), []).append(i)
     out: list[_Batch] = []
     for key, idx in by_scene.items():
         if key == "dark":
@@ -352,6 +431,32 @@ def _batches(rows: Sequence[CaptureRow]) -> list[_Batch]:
                     b.lights.setdefault((rows[i].theta_l, rows[i].phi_l), []).append((i, j))
             out.append(b)
     return out
+
+
+def _scan(path: Path, reg: dict[str, Any], shifts: int) -> None:
+    """Photograph every sample row of the plan at ``path`` with the fabric at ``shifts`` positions along u.
+
+    Each sample row becomes ``shifts`` rows (files ``NAME_u0.png`` ...) with
+    ``u_mm = u0 + j size_u / shifts`` and ``v_mm = v0`` (``u0, v0``: the
+    registration's origin of the row's stand).
+    """
+    from ..measure.capture import read_rows
+
+    columns, records = read_rows(path)
+    su = float(reg["repeat_mm"][0])
+    origin = {float(e["kappa"]): (float(e["u_mm"]), float(e["v_mm"])) for e in reg["stands"]}
+    out: list[dict[str, str]] = []
+    for rec in records:
+        if rec.get("kind", "sample") not in ("", "sample"):
+            out.append({**rec, "u_mm": "", "v_mm": ""})
+            continue
+        k = float(rec["kappa"])
+        u0, v0 = next(uv for kk, uv in origin.items() if abs(kk - k) <= KAPPA_TOL_PER_MM)
+        name = PurePosixPath(rec["file"])
+        for j in range(shifts):
+            out.append({**rec, "file": str(name.with_name(f"{name.stem}_u{j}{name.suffix}")),
+                        "u_mm": repr(round((u0 + j * su / shifts) % su, 6)), "v_mm": repr(v0)})
+    write_rows(path, out, [*columns, "u_mm", "v_mm"])
 
 
 def _copy_plan(plan: Plan, out: Path, ext: str) -> tuple[list[CaptureRow], list[Stand]]:

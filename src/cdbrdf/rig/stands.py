@@ -15,6 +15,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from ..measure.registration import face_hits
 from ..measure.stands import Stand
 
 __all__ = ["stand_meshes", "surface_hits"]
@@ -148,6 +149,8 @@ def stand_meshes(stand: Stand, *, segments: int = 256) -> dict[str, dict[str, ND
 def surface_hits(stand: Stand, origins: NDArray, v: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """Where rays ``origins - s v`` (from the camera at s = -inf) meet the stand's face.
 
+    The measurement's own geometry (:func:`cdbrdf.measure.registration.face_hits`).
+
     Parameters
     ----------
     stand
@@ -163,29 +166,5 @@ def surface_hits(stand: Stand, origins: NDArray, v: NDArray) -> tuple[NDArray, N
         ``(n, 3)`` each: where the rays meet the face's cylinder (mm), the face
         normals there and the tangents x (dP/du).
     """
-    ox, oz = origins[:, 0], origins[:, 2]
-    vx, vz = v[0], v[2]
-    if stand.kappa == 0:
-        s = oz / vz
-        p = origins - s[:, None] * v
-        n = np.tile([0.0, 0.0, 1.0], (len(p), 1))
-        t = np.tile([1.0, 0.0, 0.0], (len(p), 1))
-        return p, n, t
-    r = stand.radius_mm
-    cz = -r if stand.kappa > 0 else r  # the cylinder's axis (x = 0, z = cz)
-    # |(ox - s vx, oz - s vz - cz)|^2 = r^2  (a quadratic in s)
-    a = vx * vx + vz * vz
-    b = -2.0 * (ox * vx + (oz - cz) * vz)
-    c = ox * ox + (oz - cz) ** 2 - r * r
-    disc = np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))
-    # the camera sits at s -> -inf: convex, the first hit (smaller root); concave, the
-    # ray enters the circle above the trough and meets the face on the way out (larger root)
-    s = (-b - disc) / (2 * a) if stand.kappa > 0 else (-b + disc) / (2 * a)
-    p = origins - s[:, None] * v
-    if stand.kappa > 0:
-        n = np.stack([p[:, 0], np.zeros(len(p)), p[:, 2] + r], axis=-1) / r
-        t = np.stack([n[:, 2], np.zeros(len(p)), -n[:, 0]], axis=-1)
-    else:
-        n = np.stack([-p[:, 0], np.zeros(len(p)), r - p[:, 2]], axis=-1) / r
-        t = np.stack([n[:, 2], np.zeros(len(p)), -n[:, 0]], axis=-1)
+    p, n, t, _s = face_hits(stand, origins, v)
     return p, n, t
