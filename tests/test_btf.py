@@ -225,3 +225,17 @@ def test_truncation_records_its_true_errors(tmp_path):
 def test_truncation_to_a_bad_rank_is_refused(exact, rank):
     with pytest.raises(TableError, match=r"rank: expected an integer in \[0, 2\]"):
         exact[1].truncated(rank)
+
+
+def test_mean_kwargs_reach_the_tile_mean_and_axes_are_refused():
+    """A measured CD-BTF's mask and fill provenance go to its tile mean; what from_values sets cannot be given."""
+    vals = _dense()
+    measured = np.ones(GRID.shape, bool)
+    measured[:, :, -1] = False  # the most grazing light elevation: filled
+    src = np.where(measured, -1, 0)
+    btf = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, mean_kwargs={"measured": measured, "fill_source": src})
+    np.testing.assert_array_equal(btf.mean().measured, measured)
+    np.testing.assert_array_equal(btf.mean().fill_source, src)
+    for key in ("kappa", "attrs", "values"):
+        with pytest.raises(TableError, match=f"mean_kwargs: {key} cannot be given here"):
+            CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, mean_kwargs={key: None})

@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 from cdbrdf import CDBTF, Grid, render
+from cdbrdf.btf import load as load_btf
 from cdbrdf.cli import main
 from cdbrdf.errors import CaptureError, OptionError
 from cdbrdf.frames import direction_from_angles
@@ -80,6 +81,11 @@ def test_rig_to_measure_btf_recovers_the_texels(small):
     assert got.attrs["quantity"] == "brdf" and got.attrs["provenance"]["method"] == "measured_btf"
     med, per = errors(btf, got, rep.measured)
     assert med <= 0.03 and max(per) <= 0.03, (med, per)
+    # the tile mean keeps which samples were measured and how the others were filled, in the file too
+    np.testing.assert_array_equal(got.mean().measured, rep.measured)
+    assert np.all(got.mean().fill_source[~rep.measured] >= 0) and np.all(got.mean().fill_source[rep.measured] == -1)
+    got.save(folder.parent / "m.h5")
+    np.testing.assert_array_equal(load_btf(folder.parent / "m.h5").mean().measured, rep.measured)
     pixel_mm = json.loads((folder / "stands.json").read_text())["pixel_mm"]
     plain, _ = measure(folder, patch=round(0.3 / pixel_mm))
     diff = np.abs(got.mean().values - plain.values) / plain.values

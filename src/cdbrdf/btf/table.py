@@ -113,7 +113,7 @@ class CDBTF:
     @classmethod
     def from_values(cls, values: ArrayLike, grid: Grid, *, repeat_mm: ArrayLike,
                     max_error: float = DEFAULT_MAX_ERROR, max_rank: int = MAX_RANK,
-                    attrs: Mapping[str, Any] | None = None) -> CDBTF:
+                    attrs: Mapping[str, Any] | None = None, mean_kwargs: Mapping[str, Any] | None = None) -> CDBTF:
         """Compress dense texels: the tile mean and the smallest factorisation meeting ``max_error``.
 
         Parameters
@@ -131,6 +131,11 @@ class CDBTF:
             Most components (a warning is logged when the target needs more).
         attrs
             The tile mean's attributes (material, provenance, quantity).
+        mean_kwargs
+            More keyword arguments of the tile mean's :class:`~cdbrdf.CDBRDF`:
+            the measured mask and the fill's per-sample provenance of a
+            measured CD-BTF (``measured``, ``fill_source``, ``fill_method``,
+            ``fill_sources``, ``fill_weights``; the same for every texel).
 
         Returns
         -------
@@ -154,8 +159,12 @@ class CDBTF:
         nc = v.shape[-1]
         dense = v.reshape(nv * nu, -1)
         f = factorise(dense, grid.shape[0], max_error=float(max_error), max_rank=max_rank)
+        extra = dict(mean_kwargs or {})
+        bad = sorted(set(extra) & {"values", "attrs", "symmetry", *grid.axes()})
+        if bad:
+            raise TableError(f"mean_kwargs: {', '.join(bad)} cannot be given here (from_values sets them)")
         mean = CDBRDF(f.mean.reshape(grid.shape + (nc,)).astype(np.float32), **grid.axes(), attrs=attrs,
-                      symmetry=grid.symmetry)
+                      symmetry=grid.symmetry, **extra)
         rank = f.weights.shape[1]
         basis = np.moveaxis(f.basis.reshape((rank,) + grid.shape + (nc,)), 0, -2)
         raw = dense.size * 4

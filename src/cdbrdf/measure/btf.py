@@ -641,6 +641,7 @@ def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat
     rep.n_images = n_used + rep.n_white + rep.n_dark
     rep.measured = valid.copy()
     summary: dict[str, Any] = {}
+    provenance_kwargs: dict[str, Any] = {}
     for c in range(0, values.shape[-1], _FILL_CHANNELS):  # fill is per channel: texels x channels in slices
         try:
             res = fill(values[..., c:c + _FILL_CHANNELS].astype(np.float64), valid, grid, method=fill_method)
@@ -648,6 +649,8 @@ def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat
             raise CaptureError(f"{cap.folder}: {exc}") from None
         values[..., c:c + _FILL_CHANNELS] = res.values
         summary = summary or res.summary
+        if not provenance_kwargs:  # the same for every texel and channel (it depends on the mask and the grid)
+            provenance_kwargs = {k: v for k, v in res.table_kwargs().items() if k not in ("std", "fill_std")}
     rep.fill_method = fill_method
     rep.n_filled_by = {k: v for k, v in summary.get("samples", {}).items() if k != "measured"}
     dense = np.moveaxis(values.reshape(grid.shape + (texels[1], texels[0], nc)), (5, 6), (0, 1))
@@ -665,6 +668,7 @@ def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat
     }
     attrs = {"quantity": rep.quantity, "material": str(mat), "provenance": provenance,
              "channels": ["R", "G", "B"] if nc == 3 else ["Y"]}
-    btf = CDBTF.from_values(dense, grid, repeat_mm=repeat, max_error=max_error, attrs=attrs)
+    btf = CDBTF.from_values(dense, grid, repeat_mm=repeat, max_error=max_error, attrs=attrs,
+                            mean_kwargs=provenance_kwargs)
     rep.compression = btf.compression
     return btf, rep

@@ -72,7 +72,9 @@ def stand_scene(mi, cr, table: CDBRDF | CDBTF, stand: Stand, *,  # noqa: ANN001,
     ``origin_uv_mm`` (the registration, :mod:`cdbrdf.measure.registration`),
     which a CD-BTF reads (periodic over its repeat).
     """
-    fabric = cr.make_bsdf(table, mode="cdbrdf", curvature=float(stand.kappa))
+    # a CD-BTF: the exact bilinear texel filter (the stochastic default adds a texel-choice noise per sample)
+    extra = {"texel_filter": "bilinear"} if isinstance(table, CDBTF) else {}
+    fabric = cr.make_bsdf(table, mode="cdbrdf", curvature=float(stand.kappa), **extra)
     white = mi.load_dict({"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {
         "type": "rgb", "value": STAND_REFLECTANCE}}})
     parts = {}
