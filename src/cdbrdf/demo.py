@@ -474,13 +474,13 @@ def _export_viewer(folder: Path, results: Sequence[MaterialResult], drape: Any) 
     """The interactive viewers of the measured tables (two side by side; one alone beside its ground truth)."""
     from . import materials as mats
     from .table import load
-    from .view.export import viewer_files, write_viewer
+    from .view.export import drape_entry, viewer_files, write_viewer
 
     for sub, pair in viewer_dirs(results):
         tables = [(m.measured_path.name, load(m.measured_path)) for m in pair]
         if len(tables) == 1:
             tables.append((f"{pair[0].name} ground truth", mats.load(pair[0].name)))
-        write_viewer(folder / sub, viewer_files(tables, meshes={"drape": ("draped cloth", drape)},
+        write_viewer(folder / sub, viewer_files(tables, meshes={"drape": drape_entry(drape)},
                                                 exposure_ev=pair[0].render_exposure_ev))
 
 

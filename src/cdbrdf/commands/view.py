@@ -26,7 +26,7 @@ def _grid(text: str) -> tuple[float, float, int | None]:
 def register(sub: argparse._SubParsersAction) -> None:
     from ..mesh import MESH_FORMATS, UP_AXES
     from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
-    from ._args import existing_file, int_range, keyword, output_folder
+    from ._args import existing_file, float_list, int_range, keyword, output_folder
     from .curvature import mesh_options
 
     p = sub.add_parser(
@@ -62,6 +62,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rank", type=int_range(0, 100000), metavar="N",
                    help="for a CD-BTF: use at most its N leading components (default: all that fit the GPU's "
                    "guaranteed texture size; fewer draw faster)")
+    p.add_argument("--uv-scale", type=float_list(0, 1e9, lo_open=True, min_len=1, max_len=2, example="10,6",
+                                                 unit="mm per UV unit"),
+                   default=None, metavar="SU[,SV]",
+                   help="for a CD-BTF on --mesh: the fabric's mm per unit of the mesh's UVs (default 1: UVs in "
+                   "mm, as cdbrdf render --uv-scale); a mesh without UVs shows the tile mean")
     p.add_argument("--precision", type=keyword(("auto", "float32", "float16")), default="auto",
                    help="texture precision: auto (float16 only for very large tables), float32 or float16")
     p.set_defaults(func=run)
@@ -97,6 +102,11 @@ def _user_mesh(args: argparse.Namespace, table: object) -> object:
     return world
 
 
+def _own_uvs(mesh: Any) -> bool:
+    """Whether a prepared mesh has UVs of its own (not the per-face ones prepare_mesh makes without)."""
+    return mesh.uv is not None and mesh.metadata.get("frame", "uv") == "uv"
+
+
 def _btf(args: argparse.Namespace, path: str) -> Any:
     """A CD-BTF file, read; says on standard error when the viewer uses fewer components than it has."""
     from ..btf import load
@@ -121,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
     from ..errors import OptionError
     from ..table import load
     from ..view.asset import resample
-    from ..view.export import MAX_TABLES, default_meshes, export_viewer, viewer_files
+    from ..view.export import MAX_TABLES, drape_entry, export_viewer, viewer_files
 
     if len(args.files) > MAX_TABLES:
         raise OptionError(f"FILE: the viewer shows at most {MAX_TABLES} tables side by side, got {len(args.files)}")
@@ -130,6 +140,12 @@ def run(args: argparse.Namespace) -> int:
         from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
 
         check_output_folder(args.export, maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE)  # before any work
+    if args.uv_scale is not None:
+        plain = [f for f in args.files if not is_btf(f)]
+        if len(plain) == len(args.files):
+            raise OptionError(f"--uv-scale: only for a CD-BTF file ({Path(plain[0]).name} has no texels)")
+        if not args.mesh:
+            raise OptionError("--uv-scale: scales the UVs of --mesh MESH (the draped cloth's UVs span it)")
     tables: list[tuple[str, Any]] = []
     for f in args.files:
         if is_btf(f):
@@ -140,10 +156,14 @@ def run(args: argparse.Namespace) -> int:
             ts, ps, nk = args.grid
             t = resample(t, theta_step_deg=ts, phi_step_deg=ps, n_kappa=nk)
         tables.append((Path(f).name, t))
-    meshes = {"drape": ("draped cloth", default_meshes()["drape"])}
+    meshes: dict[str, tuple[Any, ...]] = {"drape": drape_entry()}
     if args.mesh:
         first = tables[0][1]
-        meshes["user"] = (Path(args.mesh).name, _user_mesh(args, first.mean() if isinstance(first, CDBTF) else first))
+        user = _user_mesh(args, first.mean() if isinstance(first, CDBTF) else first)
+        scale = (1.0, 1.0) if args.uv_scale is None else tuple(args.uv_scale) * (3 - len(args.uv_scale))
+        meshes["user"] = (Path(args.mesh).name, user, scale)
+        if any(isinstance(t, CDBTF) for _, t in tables) and not _own_uvs(user) and not args.quiet:
+            say(f"{Path(args.mesh).name}: no UVs: the viewer shows the CD-BTF's tile mean on it", err=True)
     files = viewer_files(tables, meshes=meshes, precision=args.precision, max_rank=args.rank)
     if args.export:
         index = export_viewer(args.export, files)

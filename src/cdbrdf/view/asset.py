@@ -384,12 +384,19 @@ def table_asset(table: Any, *, name: str = "table", precision: str = "auto") -> 
     return Asset(header, blob.bytes())
 
 
-def mesh_asset(mesh: Any, *, name: str) -> Asset:
+def mesh_asset(mesh: Any, *, name: str, uv_scale_mm: float | tuple[float, float] = 1.0) -> Asset:
     """Pack a mesh with per-vertex curvature (mm^-1) for the viewer: one draw call.
 
     Positions are centred (mm); the tangent is the material's x axis (dP/du
     of the UV map projected into the tangent plane, as in the renderer); a
     vertex without one gets any unit vector perpendicular to its normal.
+    A mesh with its own UVs (all finite; not those :func:`cdbrdf.mesh.prepare_mesh`
+    generates per face for the frames ``"tangent"`` and ``"principal"``)
+    carries them as the block ``uv`` (float32,
+    per vertex) and the header's ``uv_scale_mm`` (mm of fabric per UV unit,
+    u and v): a CD-BTF is decoded at ``(u, v) = uv * uv_scale_mm`` mm, as
+    the renderer's ``uv_scale``. Without UVs the header's ``uv`` is false and
+    the viewer shows a CD-BTF's tile mean there.
 
     Parameters
     ----------
@@ -399,15 +406,24 @@ def mesh_asset(mesh: Any, *, name: str) -> Asset:
         attribute ``"curvature"`` in mm^-1, lengths in mm).
     name
         Its label in the viewer.
+    uv_scale_mm
+        Millimetres of fabric per UV unit: one number for both, or ``(su, sv)``
+        (default 1: the UVs are in mm).
 
     Returns
     -------
     Asset
         The packed mesh.
+
+    Raises
+    ------
+    OptionError
+        For a ``uv_scale_mm`` that is not one or two positive finite numbers.
     """
     from ..mesh.frames import face_uv_tangents, vertex_tangents
     from ..mesh.units import parse_units
 
+    su, sv = _uv_scale_pair(uv_scale_mm)
     scale = float(parse_units(mesh.metadata.get("units", "mm")).mm_per_unit)
     v = np.asarray(mesh.vertices, dtype=np.float64) * scale
     f = np.asarray(mesh.faces, dtype=np.int64)
@@ -430,12 +446,34 @@ def mesh_asset(mesh: Any, *, name: str) -> Asset:
     blob.add("normal", n, "float32")
     blob.add("tangent", t, "float32")
     blob.add("curvature", kappa, "float32")
+    # the mesh's own UVs only: prepare_mesh generates per-face UVs (frame "tangent" or "principal") that
+    # follow no fabric and jump at every edge
+    own = mesh.uv is not None and mesh.metadata.get("frame", "uv") == "uv"
+    uv = np.asarray(mesh.uv, dtype=np.float64) if own else None
+    if uv is not None and not np.isfinite(uv).all():
+        _LOG.warning("%s: the UVs are not all finite; the viewer shows a CD-BTF's tile mean on it", name)
+        uv = None
+    if uv is not None:
+        blob.add("uv", uv, "float32")
     blob.add("index", f, "uint32")
     header = {
         "format": ASSET_FORMAT, "version": ASSET_VERSION, "kind": "mesh", "name": name,
         "n_vertices": int(v.shape[0]), "n_faces": int(f.shape[0]),
+        "uv": uv is not None, "uv_scale_mm": [su, sv],
         "size_mm": (hi - lo).tolist(), "units": "mm",
         "curvature_range": [float(kappa.min()), float(kappa.max())],
         "blocks": blob.blocks,
     }
     return Asset(header, blob.bytes())
+
+
+def _uv_scale_pair(uv_scale_mm: Any) -> tuple[float, float]:
+    """``uv_scale_mm`` as ``(su, sv)``: one or two positive finite numbers."""
+    try:
+        vals = [uv_scale_mm] if isinstance(uv_scale_mm, (int, float, np.number, str)) else list(uv_scale_mm)
+        pair = [float(x) for x in vals if isinstance(x, (int, float, np.number)) and not isinstance(x, bool)]
+    except (TypeError, ValueError):
+        vals, pair = [uv_scale_mm], []
+    if len(pair) != len(vals) or len(pair) not in (1, 2) or not all(math.isfinite(x) and x > 0 for x in pair):
+        raise OptionError(f"uv_scale_mm: expected one or two positive numbers (mm per UV unit), got {uv_scale_mm!r}")
+    return (pair[0], pair[-1])

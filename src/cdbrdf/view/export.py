@@ -29,6 +29,8 @@ from os import PathLike
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..btf import CDBTF
 from ..errors import OptionError
 from ..mesh import SineSheet
@@ -41,6 +43,7 @@ __all__ = [
     "MAX_TABLES",
     "PAGE_FILES",
     "default_meshes",
+    "drape_entry",
     "export_viewer",
     "viewer_files",
     "write_viewer",
@@ -85,6 +88,34 @@ def default_meshes(*, drape: Any = None) -> dict[str, Any]:
     return {"drape": drape}
 
 
+def drape_entry(drape: Any = None) -> tuple[str, Any, tuple[float, float]]:
+    """The draped cloth as a :func:`viewer_files` mesh entry: label, mesh, mm of fabric per UV unit.
+
+    The cloth's UVs run linearly over its plan, 0 to 1 across its size (as
+    the sine sheet's), so one UV unit is the plan's size in mm along x and
+    y: a CD-BTF shows its weave there at true size (stretched a little on
+    the steep slopes of the folds, where the plan is shorter than the cloth).
+
+    Parameters
+    ----------
+    drape
+        The prepared draped-cloth mesh (default: :func:`default_meshes`'s).
+
+    Returns
+    -------
+    tuple
+        ``("draped cloth", mesh, (su, sv))``.
+    """
+    from ..mesh.units import parse_units
+
+    m = default_meshes(drape=drape)["drape"]
+    scale = float(parse_units(m.metadata.get("units", "mm")).mm_per_unit)
+    span = np.ptp(np.asarray(m.vertices, dtype=np.float64)[:, :2], axis=0) * scale
+    uv = np.ptp(np.asarray(m.uv, dtype=np.float64), axis=0) if m.uv is not None else np.zeros(2)
+    su, sv = (float(s / u) if u > 0 else 1.0 for s, u in zip(span, uv, strict=True))
+    return "draped cloth", m, (su, sv)
+
+
 def _label(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name)[:64] or "asset"
 
@@ -92,7 +123,7 @@ def _label(name: str) -> str:
 def viewer_files(
     tables: Sequence[tuple[str, Any]],
     *,
-    meshes: Mapping[str, tuple[str, Any]] | None = None,
+    meshes: Mapping[str, tuple[Any, ...]] | None = None,
     precision: str = "auto",
     exposure_ev: float | None = None,
     max_rank: int | None = None,
@@ -106,9 +137,12 @@ def viewer_files(
         side. A :class:`cdbrdf.CDBTF` is shown with its weave on the sine
         sheet and the stand (:func:`cdbrdf.view.btf_asset.btf_asset`).
     meshes
-        ``{key: (label, prepared Mesh)}``; default: the draped cloth
-        (:func:`default_meshes`). The sine sheet and the stand are drawn by
-        the shader and need no mesh.
+        ``{key: (label, prepared Mesh)}`` or ``{key: (label, prepared Mesh,
+        uv_scale_mm)}`` (mm of fabric per UV unit, one number or ``(su, sv)``;
+        default 1: the UVs in mm, as the renderer's ``uv_scale``): a CD-BTF
+        shows its weave on a mesh with UVs, its tile mean on one without.
+        Default: the draped cloth (:func:`drape_entry`). The sine sheet and
+        the stand are drawn by the shader and need no mesh.
     precision
         Texture precision (:data:`cdbrdf.view.asset.PRECISIONS`).
     exposure_ev
@@ -125,14 +159,14 @@ def viewer_files(
     Raises
     ------
     OptionError
-        For no table or more than :data:`MAX_TABLES`.
+        For no table or more than :data:`MAX_TABLES`, a bad ``uv_scale_mm``.
     LimitError
         For a table too large for WebGL2's textures.
     """
     if not 1 <= len(tables) <= MAX_TABLES:
         raise OptionError(f"tables: the viewer shows 1 or {MAX_TABLES} tables side by side, got {len(tables)}")
     if meshes is None:
-        meshes = {"drape": ("draped cloth", default_meshes()["drape"])}
+        meshes = {"drape": drape_entry()}
     assets: list[tuple[str, Asset]] = []
     for i, (label, table) in enumerate(tables):
         if isinstance(table, CDBTF):
@@ -140,7 +174,8 @@ def viewer_files(
         else:
             a = table_asset(table, name=label, precision=precision)
         assets.append((f"table-{i}", a))
-    mesh_assets = [(key, mesh_asset(m, name=label)) for key, (label, m) in meshes.items()]
+    mesh_assets = [(key, mesh_asset(e[1], name=e[0], uv_scale_mm=e[2] if len(e) > 2 else 1.0))
+                   for key, e in meshes.items()]
     files: dict[str, bytes] = {}
     pkg = resources.files("cdbrdf.view") / "assets"
     for src, dst in PAGE_FILES.items():

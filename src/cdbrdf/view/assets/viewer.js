@@ -234,6 +234,10 @@ void main() {
   const SURFACE_VS = `#version 300 es
 in vec3 aPos; in vec3 aNrm; in vec3 aTan; in float aK;
 uniform mat4 uMVP; uniform int uSurf; uniform float uAmp, uWave, uStandK, uWidth, uDepth;
+#ifdef BTF
+in vec2 aUV;            // a mesh's UVs (zero without)
+uniform vec2 uUvScale;  // mm of fabric per UV unit (cdbrdf view --uv-scale, the renderer's uv_scale)
+#endif
 out vec3 vWorld; out vec3 vN; out vec3 vT; out float vK; out float vS; out vec2 vUV;
 void main() {
   vec3 p = aPos;
@@ -253,6 +257,9 @@ void main() {
     vS = s;
     vUV = vec2(s + 0.5 * uWidth, aPos.y * uDepth);  // arc length across: mm of the flat fabric
   }
+#ifdef BTF
+  else vUV = aUV * uUvScale;  // a mesh: its UVs in mm of fabric
+#endif
   vWorld = p;
   gl_Position = uMVP * vec4(p, 1.0);
 }`;
@@ -261,7 +268,7 @@ void main() {
 ${LOOKUP_GLSL}
 in vec3 vWorld; in vec3 vN; in vec3 vT; in float vK; in float vS; in vec2 vUV;
 uniform int uSurf; uniform float uAmp, uWave, uStandK;
-uniform float uWeaveScale;  // BTF: decode the CD-BTF at (u, v) / scale (sheet and stand)
+uniform float uWeaveScale;  // BTF: decode the CD-BTF at (u, v) / scale (sheet, stand, a mesh with UVs)
 uniform vec3 uEye; uniform vec3 uLight; uniform float uExpo;  // uExpo = pi * 2^EV (irradiance pi: white = 1)
 uniform int uEnv; uniform vec3 uEnvDir[9]; uniform float uEnvW[9];
 uniform int uMode; uniform float uSplitX; uniform int uOverlay; uniform float uKmax; uniform int uPick;
@@ -368,6 +375,7 @@ void main() {
   const viewer = { errors: [] };
   window.cdbrdfViewer = viewer;
 
+  const ATTRIBS = ['aPos', 'aNrm', 'aTan', 'aK', 'aUV'];  // their locations: aUV only in the CD-BTF programs
   function compile(vs, fs) {
     const p = gl.createProgram();
     for (const [type, src] of [[gl.VERTEX_SHADER, vs], [gl.FRAGMENT_SHADER, fs]]) {
@@ -377,7 +385,7 @@ void main() {
       if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw fail('shader: ' + gl.getShaderInfoLog(s));
       gl.attachShader(p, s);
     }
-    ['aPos', 'aNrm', 'aTan', 'aK'].forEach((name, i) => gl.bindAttribLocation(p, i, name));  // one VAO layout for every program
+    ATTRIBS.forEach((name, i) => gl.bindAttribLocation(p, i, name));  // one VAO layout for every program
     gl.linkProgram(p);
     if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw fail('shader link: ' + gl.getProgramInfoLog(p));
     const u = {};
@@ -485,20 +493,23 @@ void main() {
     return { pos, idx };
   }
 
-  function makeVAO(prog, pos, nrm, tan, kap, idx) {
+  function makeVAO(pos, nrm, tan, kap, idx, uv) {  // at the bound locations (ATTRIBS), for every program
     const vao = gl.createVertexArray();
     gl.bindVertexArray(vao);
     const attr = (name, data, size) => {
-      const loc = gl.getAttribLocation(prog.p, name);
-      if (loc < 0) return;
-      if (!data) { gl.disableVertexAttribArray(loc); if (size === 1) gl.vertexAttrib1f(loc, 0); else gl.vertexAttrib3f(loc, 0, 0, 1); return; }
+      const loc = ATTRIBS.indexOf(name);
+      if (!data) {
+        gl.disableVertexAttribArray(loc);
+        if (size === 1) gl.vertexAttrib1f(loc, 0); else if (size === 2) gl.vertexAttrib2f(loc, 0, 0); else gl.vertexAttrib3f(loc, 0, 0, 1);
+        return;
+      }
       const b = gl.createBuffer();
       gl.bindBuffer(gl.ARRAY_BUFFER, b);
       gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW);
       gl.enableVertexAttribArray(loc);
       gl.vertexAttribPointer(loc, size, gl.FLOAT, false, 0, 0);
     };
-    attr('aPos', pos, 3); attr('aNrm', nrm, 3); attr('aTan', tan, 3); attr('aK', kap, 1);
+    attr('aPos', pos, 3); attr('aNrm', nrm, 3); attr('aTan', tan, 3); attr('aK', kap, 1); attr('aUV', uv || null, 2);
     const ib = gl.createBuffer();
     gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ib);
     gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
@@ -549,7 +560,7 @@ void main() {
 
   function drawSurface(vp, pick) {
     const s = surfaces[state.surface];
-    const weave = !!(vp.tab.btf && state.weave && s.kind !== 0);  // meshes carry no UVs: the tile mean
+    const weave = !!(vp.tab.btf && state.weave && (s.kind !== 0 || s.uv));  // a mesh without UVs: the tile mean
     const prog = weave ? surfBtfProg : surfProg, u = prog.u, e = eye();
     gl.viewport(vp.x, vp.y, vp.w, vp.h);
     gl.useProgram(prog.p);
@@ -571,7 +582,7 @@ void main() {
     gl.uniform1i(u.uOverlay, state.overlay ? 1 : 0);
     gl.uniform1f(u.uKmax, KMAX_OVERLAY);
     gl.uniform1i(u.uPick, pick || 0);
-    if (weave) gl.uniform1f(u.uWeaveScale, state.weaveScale);
+    if (weave) { gl.uniform1f(u.uWeaveScale, state.weaveScale); gl.uniform2fv(u.uUvScale, s.uvScale || [1, 1]); }
     gl.bindVertexArray(s.vao);
     gl.drawElements(gl.TRIANGLES, s.count, gl.UNSIGNED_INT, 0);  // one draw call per surface
     state.drawCalls++;
@@ -613,7 +624,8 @@ void main() {
 
   // what the weave panel says: per CD-BTF, the components used of the file's rank, and why fewer
   function btfText() {
-    const mesh = surfaces[state.surface] && surfaces[state.surface].kind === 0;
+    const s = surfaces[state.surface], mesh = s && s.kind === 0;
+    const uvs = mesh && s.uv ? `; UVs x ${s.uvScale.map((x) => x.toPrecision(3)).join(' x ')} mm` : '';
     return tables.filter((t) => t.btf).map((t) => {
       const b = t.btf, used = rankUsed(t), tex = `${b.texels[0]} x ${b.texels[1]} texels over ` +
         `${b.repeat[0].toPrecision(3)} x ${b.repeat[1].toPrecision(3)} mm`;
@@ -621,8 +633,8 @@ void main() {
       const e = t.h.btf.relative_rms_error_used;
       if (b.rank < b.rankTotal) why = `; the export kept the leading ${b.rank} (${t.h.btf.rank < t.h.btf.rank_fits ? '--rank' : 'the GPU texture size'}${e == null ? '' : `, relative RMS error ${(100 * e).toFixed(1)} %`})`;
       if (used < b.rank) why += `; the leading ${used}${state.software ? ' on software rendering' : ''}, the components slider goes up to ${b.rank}`;
-      const shown = !state.weave ? 'showing the tile mean' : mesh ? 'this mesh has no UVs: tile mean' :
-        `weave at ${state.weaveScale === 1 ? 'true size' : `${state.weaveScale.toFixed(1)}x size`}`;
+      const shown = !state.weave ? 'showing the tile mean' : mesh && !s.uv ? 'this mesh has no UVs: tile mean' :
+        `weave at ${state.weaveScale === 1 ? 'true size' : `${state.weaveScale.toFixed(1)}x size`}${uvs}`;
       return `${t.h.name}: CD-BTF, rank ${used} used of ${b.rankTotal}${why}; ${tex}; ${shown}`;
     }).join('\n');
   }
@@ -941,7 +953,7 @@ void main() {
     emptyVAO = gl.createVertexArray();
     tables = DATA.tables.map((a, i) => uploadTable({ header: a.header, buffer: decode(a.data) }, i));
     const btfs = tables.filter((t) => t.btf);
-    if (btfs.length) { surfBtfProg = compile(SURFACE_VS, withBTF(SURFACE_FS)); evalBtfProg = compile(FULLSCREEN_VS, withBTF(EVAL_FS)); }
+    if (btfs.length) { surfBtfProg = compile(withBTF(SURFACE_VS), withBTF(SURFACE_FS)); evalBtfProg = compile(FULLSCREEN_VS, withBTF(EVAL_FS)); }
     // software WebGL (SwiftShader, llvmpipe) takes seconds a frame per few dozen components: it starts with
     // the leading SOFTWARE_COMPONENTS (ordered by energy; the page says so, the slider goes up to all)
     const dbg = gl.getExtension('WEBGL_debug_renderer_info');
@@ -952,13 +964,15 @@ void main() {
     $('weaveBox').style.display = btfs.length ? '' : 'none';
     $('comps').max = String(packed); $('comps').value = String(state.components);
     const grid = gridGeometry(480, 8);
-    surfaces.sheet = Object.assign(makeVAO(surfProg, grid.pos, null, null, null, grid.idx), { kind: 1, label: 'sine sheet', distance: 150 });
-    surfaces.stand = Object.assign(makeVAO(surfProg, grid.pos, null, null, null, grid.idx), { kind: 2, label: 'cylinder stand', distance: 150 });
+    surfaces.sheet = Object.assign(makeVAO(grid.pos, null, null, null, grid.idx), { kind: 1, label: 'sine sheet', distance: 150 });
+    surfaces.stand = Object.assign(makeVAO(grid.pos, null, null, null, grid.idx), { kind: 2, label: 'cylinder stand', distance: 150 });
     for (const [key, m] of Object.entries(DATA.meshes || {})) {
       const a = { header: m.header, buffer: decode(m.data) };
       const size = Math.max(...a.header.size_mm);
-      surfaces[key] = Object.assign(makeVAO(surfProg, block(a, 'position'), block(a, 'normal'), block(a, 'tangent'),
-        block(a, 'curvature'), block(a, 'index')), { kind: 0, label: a.header.name, distance: 2.2 * size });
+      const uv = a.header.uv && a.header.blocks.uv ? block(a, 'uv') : null;  // older assets: no UVs
+      surfaces[key] = Object.assign(makeVAO(block(a, 'position'), block(a, 'normal'), block(a, 'tangent'),
+        block(a, 'curvature'), block(a, 'index'), uv), { kind: 0, label: a.header.name, distance: 2.2 * size,
+        uv: !!uv, uvScale: uv ? a.header.uv_scale_mm.map(Number) : null });
     }
     const sel = $('surface');
     for (const [key, s] of Object.entries(surfaces)) { const o = document.createElement('option'); o.value = key; o.textContent = s.label; sel.appendChild(o); }
