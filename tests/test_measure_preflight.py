@@ -118,7 +118,7 @@ def test_preflight_lists_every_unusable_photograph_before_any_work(tmp_path, cap
     bad = _spoil(tmp_path / "cap", rows)
     out = tmp_path / "out.h5"
     reads = []
-    monkeypatch.setattr(pipeline, "_read_task", lambda *a: reads.append(a))
+    monkeypatch.setattr(pipeline, "read_patch_status", lambda *a: reads.append(a))
     with pytest.raises(UnusablePhotographs) as exc:
         measure(tmp_path / "cap", out)
     msg = str(exc.value)
@@ -148,7 +148,7 @@ def test_preflight_lists_every_unusable_photograph_before_any_work(tmp_path, cap
 
 def test_unreadable_photographs_found_while_decoding(tmp_path, monkeypatch):
     """Failures of the full decode (any exception type) are handled like the pre-flight's."""
-    from cdbrdf.measure import pipeline
+    from cdbrdf.measure import preflight as pipeline  # read_patch_status reads the patch (one owner)
 
     rows = make_capture(tmp_path / "cap", GRID, pixel, kind="png16", white=WHITE)
     ref, _ = measure(tmp_path / "cap")

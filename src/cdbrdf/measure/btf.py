@@ -51,7 +51,8 @@ from ..outputs import output_lock
 from .calibrate import MeasureReport, _nearest_white, calibration
 from .capture import Capture, CaptureRow, read_capture
 from .fill import DEFAULT_FILL, check_fill_method, fill
-from .patch import decode_codes, merge_exposures, read_patch
+from .patch import decode_codes, merge_exposures
+from .preflight import read_patch_status
 from .registration import Registration, face_hits, face_points, image_axes
 from .stands import Stand, stand_for
 
@@ -407,23 +408,6 @@ def _read_footprint(path: Path, r: CaptureRow, linear: bool, geo: _Geometries
     return 0, vals.reshape(-1, vals.shape[-1])[g.pick], sat.reshape(-1)[g.pick], "", g
 
 
-def _read_patch(path: Path, n: int, r: CaptureRow, linear: bool) -> tuple[int, NDArray | None, NDArray | None, str]:
-    """A white reference's or a dark frame's N x N patch: ``(status, values, saturated, message)``."""
-    from .preflight import describe, problem
-
-    try:
-        v, s = read_patch(path, n=n, cx=r.cx, cy=r.cy, linear=linear)
-    except FileNotFoundError:
-        return 1, None, None, "missing"
-    except ImageError as exc:
-        return 2, None, None, problem(path, exc)
-    except OSError as exc:
-        return 2, None, None, f"cannot be read ({exc.strerror or exc})"
-    except Exception as exc:  # noqa: BLE001 - a decoder failing on this file
-        return 2, None, None, f"cannot be decoded ({describe(exc)})"
-    return 0, v, s, ""
-
-
 def _read_all(jobs: list[tuple], scheduler: str, num_workers: int | None) -> list[tuple]:
     """:func:`_read_footprint` of every job, in Dask tasks on a local scheduler."""
     import dask
@@ -575,7 +559,7 @@ def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat
     results: dict[int, tuple] = {i: (st, None, None, why) for i, (st, why) in bad.items()}
     for i in calib:
         if i not in bad:
-            results[i] = _read_patch(paths[i], patch, rows[i], lin(rows[i]))
+            results[i] = read_patch_status(paths[i], patch, rows[i].cx, rows[i].cy, lin(rows[i]))
     done += len(calib)
     if progress is not None:
         progress(done, total)

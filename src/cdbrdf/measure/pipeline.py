@@ -43,20 +43,17 @@ from numpy.typing import NDArray
 from ..btf import CDBTF
 from ..errors import OptionError
 from ..fsutil import check_output_file
-from ..images import ImageError
 from ..outputs import output_lock
 from ..table import CDBRDF
 from .calibrate import MeasureReport, assemble
 from .capture import CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
 from .fill import DEFAULT_FILL, check_fill_method
-from .patch import read_patch
 from .preflight import (
     bad_list_path,
-    describe,
     first_line,
     preflight,
-    problem,
+    read_patch_status,
     refuse_bad,
     refuse_overlap,
     remove_bad_list,
@@ -82,26 +79,6 @@ class MeasurementInterrupted(RuntimeError):
 
 
 # --------------------------------------------------------------------------- tasks
-def _read_task(path: str, n: int, cx: int | None, cy: int | None, linear: bool
-               ) -> tuple[int, NDArray | None, NDArray | None, str]:
-    """One photograph's patch: ``(status, values, saturated, message)``.
-
-    status 0 = read, 1 = missing, 2 = unusable. Every failure to read the
-    photograph is that photograph's problem, whatever its type.
-    """
-    try:
-        v, s = read_patch(path, n=n, cx=cx, cy=cy, linear=linear)
-    except FileNotFoundError:
-        return 1, None, None, "missing"
-    except ImageError as exc:
-        return 2, None, None, problem(path, exc)
-    except OSError as exc:
-        return 2, None, None, f"cannot be read ({exc.strerror or exc})"
-    except Exception as exc:  # noqa: BLE001 - a decoder failing on this file
-        return 2, None, None, f"cannot be decoded ({describe(exc)})"
-    return 0, v, s, ""
-
-
 def _is_client(scheduler: Any) -> bool:
     """Whether ``scheduler`` looks like a :class:`distributed.Client` (it maps and gathers)."""
     return callable(getattr(scheduler, "map", None)) and callable(getattr(scheduler, "gather", None))
@@ -167,8 +144,8 @@ def _check_options(*, patch: Any, batch_size: Any, num_workers: Any, scheduler: 
 
 
 def _read_tasks(jobs: list[tuple]) -> list[tuple[int, NDArray | None, NDArray | None, str]]:
-    """:func:`_read_task` for each of several photographs (one Dask task)."""
-    return [_read_task(*j) for j in jobs]
+    """:func:`~cdbrdf.measure.preflight.read_patch_status` for each of several photographs (one Dask task)."""
+    return [read_patch_status(*j) for j in jobs]
 
 
 #: Photographs one Dask task reads: enough to make the scheduler's cost per task

@@ -26,12 +26,15 @@ from os import PathLike
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from ..errors import CaptureError
 from ..fsutil import atomic_path
 from ..images import ImageError, ImageInfo, image_format, read_window
 from ..outputs import find_overlap
 from .capture import CAPTURE_FILE, STAND_FILE, Capture
-from .patch import patch_window
+from .patch import patch_window, read_patch
 
 __all__ = [
     "UnusablePhotographs",
@@ -43,6 +46,7 @@ __all__ = [
     "first_line",
     "describe",
     "problem",
+    "read_patch_status",
 ]
 
 _LOG = logging.getLogger(__name__)
@@ -79,6 +83,27 @@ class _HeaderRead(BaseException):
     def __init__(self, info: ImageInfo) -> None:
         super().__init__()
         self.info = info
+
+
+def read_patch_status(path: str | Path, n: int, cx: int | None, cy: int | None, linear: bool
+                      ) -> tuple[int, NDArray[np.float64] | None, NDArray[np.bool_] | None, str]:
+    """One photograph's N x N patch: ``(status, values, saturated, message)``.
+
+    status 0 = read, 1 = missing, 2 = unusable. Every failure to read the
+    photograph is that photograph's problem, whatever its type (the message
+    is :func:`problem`'s).
+    """
+    try:
+        v, s = read_patch(path, n=n, cx=cx, cy=cy, linear=linear)
+    except FileNotFoundError:
+        return 1, None, None, "missing"
+    except ImageError as exc:
+        return 2, None, None, problem(path, exc)
+    except OSError as exc:
+        return 2, None, None, f"cannot be read ({exc.strerror or exc})"
+    except Exception as exc:  # noqa: BLE001 - a decoder failing on this file
+        return 2, None, None, f"cannot be decoded ({describe(exc)})"
+    return 0, v, s, ""
 
 
 def _header(path: str) -> tuple[int, int, int | None]:
