@@ -29,3 +29,18 @@ def small_grid() -> cdbrdf.Grid:
         theta_v=[0.0, 30.0, 60.0],
         phi_v=[0.0, 120.0, 240.0],
     )
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium (playwright), one per test module (the viewer's tests; they skip without Chromium)."""
+    from playwright.sync_api import sync_playwright
+
+    from .test_viewer import CHROMIUM, CHROMIUM_ARGS
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
+        try:
+            yield b
+        finally:
+            b.close()

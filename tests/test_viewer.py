@@ -458,17 +458,7 @@ def test_cli_serves_until_interrupted_and_refuses_a_busy_port(tmp_path):
     assert p.returncode == 0 and "Traceback" not in err and "stopped" in err
 
 
-# -- the page in headless Chromium -------------------------------------------------------
-@pytest.fixture(scope="module")
-def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+# -- the page in headless Chromium (the browser fixture: conftest.py) --------------------
 
 
 def open_page(browser, url, *, width=320, height=200):

@@ -22,7 +22,7 @@ from cdbrdf.view.btf_asset import btf_asset, btf_rank_that_fits
 from cdbrdf.view.export import export_viewer, viewer_files
 
 from .conftest import make_table
-from .test_viewer import CHROMIUM, CHROMIUM_ARGS, needs_chromium, open_page, rel_close
+from .test_viewer import needs_chromium, open_page, rel_close
 
 REPEAT_MM = (1.6, 2.2)
 
@@ -177,17 +177,7 @@ def test_cli_refuses_grid_for_a_btf_in_one_line(btf_file, tmp_path, capsys):
     assert "--rank" in err and not (tmp_path / "v").exists()
 
 
-# -- the page in headless Chromium ----------------------------------------------------------
-@pytest.fixture(scope="module")
-def browser():
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+# -- the page in headless Chromium (the browser fixture: conftest.py) --------------------------
 
 
 @pytest.fixture(scope="module")

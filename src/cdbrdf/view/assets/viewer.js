@@ -85,40 +85,45 @@ void periodicNodes(float phi0, float step, int n, float x, out int i0, out int i
   i0 = ((fi % n) + n) % n; i1 = (i0 + 1) % n;
 }
 
-vec3 lookup(float tv, float pv, float tl, float pl, float k) {
+// The 5-D rule (cdbrdf.interp), written once: cell() finds the nodes and weights (the pole rule
+// included); FOR_CORNERS(c, BODY) runs BODY for each corner of non-zero weight with I (the flat
+// sample index, row * n_columns + column), L (the layer: the kappa node) and W (its weight). A
+// macro, not a function filling arrays: the plain lookup stays as fast as a hand-written loop.
+struct Cell { int ik, itl, itv, ipl0, ipl1, ipv0, ipv1; float wk, wtl, wtv, wpl, wpv; };
+Cell cell(float tv, float pv, float tl, float pl, float k) {
+  Cell c;
   if (uIso == 1) { pv = wrapAz(wrapAz(pv) - wrapAz(pl)); pl = 0.0; }
-  int ik, itl, itv, ipl0, ipl1, ipv0, ipv1;
-  float wk, wtl, wtv, wpl, wpv;
-  linearNodes(0, uN.x, uInvStep.x, k, ik, wk);
-  linearNodes(1, uN.y, uInvStep.y, tl, itl, wtl);
-  linearNodes(2, uN.z, uInvStep.z, tv, itv, wtv);
-  periodicNodes(uPhi.x, uPhi.y, uNphi.x, pl, ipl0, ipl1, wpl);
-  periodicNodes(uPhi.z, uPhi.w, uNphi.y, pv, ipv0, ipv1, wpv);
+  linearNodes(0, uN.x, uInvStep.x, k, c.ik, c.wk);
+  linearNodes(1, uN.y, uInvStep.y, tl, c.itl, c.wtl);
+  linearNodes(2, uN.z, uInvStep.z, tv, c.itv, c.wtv);
+  periodicNodes(uPhi.x, uPhi.y, uNphi.x, pl, c.ipl0, c.ipl1, c.wpl);
+  periodicNodes(uPhi.z, uPhi.w, uNphi.y, pv, c.ipv0, c.ipv1, c.wpv);
   // pole rule: on elevation node 0 with weight 1 the azimuth must not matter
-  if (itl == 0 && wtl == 0.0) { wpl = 0.0; if (uIso == 1) wpv = 0.0; }
-  if (itv == 0 && wtv == 0.0) wpv = 0.0;
-  int ntl = uN.y, ntv = uN.z, ncol = uNphi.y * uN.z;
+  if (c.itl == 0 && c.wtl == 0.0) { c.wpl = 0.0; if (uIso == 1) c.wpv = 0.0; }
+  if (c.itv == 0 && c.wtv == 0.0) c.wpv = 0.0;
+  return c;
+}
+#define FOR_CORNERS(c, BODY) \
+  for (int a_ = 0; a_ < 2; a_++) { \
+    float fa_ = a_ == 0 ? 1.0 - c.wk : c.wk; if (fa_ == 0.0) continue; \
+    for (int b_ = 0; b_ < 2; b_++) { \
+      float fb_ = fa_ * (b_ == 0 ? 1.0 - c.wpl : c.wpl); if (fb_ == 0.0) continue; \
+      for (int c_ = 0; c_ < 2; c_++) { \
+        float fc_ = fb_ * (c_ == 0 ? 1.0 - c.wtl : c.wtl); if (fc_ == 0.0) continue; \
+        int row_ = (b_ == 0 ? c.ipl0 : c.ipl1) * uN.y + c.itl + c_; \
+        for (int d_ = 0; d_ < 2; d_++) { \
+          float fd_ = fc_ * (d_ == 0 ? 1.0 - c.wpv : c.wpv); if (fd_ == 0.0) continue; \
+          for (int e_ = 0; e_ < 2; e_++) { \
+            float W = fd_ * (e_ == 0 ? 1.0 - c.wtv : c.wtv); if (W == 0.0) continue; \
+            int I = row_ * uNphi.y * uN.z + (d_ == 0 ? c.ipv0 : c.ipv1) * uN.z + c.itv + e_; \
+            int L = c.ik + a_; \
+            BODY \
+          } } } } }
+
+vec3 lookup(float tv, float pv, float tl, float pl, float k) {
+  Cell c = cell(tv, pv, tl, pl, k);
   vec3 acc = vec3(0.0);
-  for (int a = 0; a < 2; a++) {
-    float fa = a == 0 ? 1.0 - wk : wk; if (fa == 0.0) continue;
-    for (int b = 0; b < 2; b++) {
-      float fb = fa * (b == 0 ? 1.0 - wpl : wpl); if (fb == 0.0) continue;
-      int ipl = b == 0 ? ipl0 : ipl1;
-      for (int c = 0; c < 2; c++) {
-        float fc = fb * (c == 0 ? 1.0 - wtl : wtl); if (fc == 0.0) continue;
-        int row = ipl * ntl + itl + c;
-        for (int d = 0; d < 2; d++) {
-          float fd = fc * (d == 0 ? 1.0 - wpv : wpv); if (fd == 0.0) continue;
-          int ipv = d == 0 ? ipv0 : ipv1;
-          for (int e = 0; e < 2; e++) {
-            float fe = fd * (e == 0 ? 1.0 - wtv : wtv); if (fe == 0.0) continue;
-            int i = row * ncol + ipv * ntv + itv + e;
-            acc += fe * texelFetch(uTab, ivec3(i % uTexW, i / uTexW, ik + a), 0).rgb;
-          }
-        }
-      }
-    }
-  }
+  FOR_CORNERS(c, acc += W * texelFetch(uTab, ivec3(I % uTexW, I / uTexW, L), 0).rgb;)
   return acc;
 }
 
@@ -133,46 +138,14 @@ uniform ivec2 uTexels;            // n_u, n_v
 uniform vec2 uRepeat;             // the repeat's size, mm
 uniform int uRank;                // components used (<= uPer - 1)
 
-// the corners the lookup above reads: flat sample index (row * n_columns + column), layer, weight
-int corners(float tv, float pv, float tl, float pl, float k, out int ci[32], out int cl[32], out float cw[32]) {
-  if (uIso == 1) { pv = wrapAz(wrapAz(pv) - wrapAz(pl)); pl = 0.0; }
-  int ik, itl, itv, ipl0, ipl1, ipv0, ipv1;
-  float wk, wtl, wtv, wpl, wpv;
-  linearNodes(0, uN.x, uInvStep.x, k, ik, wk);
-  linearNodes(1, uN.y, uInvStep.y, tl, itl, wtl);
-  linearNodes(2, uN.z, uInvStep.z, tv, itv, wtv);
-  periodicNodes(uPhi.x, uPhi.y, uNphi.x, pl, ipl0, ipl1, wpl);
-  periodicNodes(uPhi.z, uPhi.w, uNphi.y, pv, ipv0, ipv1, wpv);
-  if (itl == 0 && wtl == 0.0) { wpl = 0.0; if (uIso == 1) wpv = 0.0; }
-  if (itv == 0 && wtv == 0.0) wpv = 0.0;
-  int ntl = uN.y, ntv = uN.z, ncol = uNphi.y * uN.z, n = 0;
-  for (int a = 0; a < 2; a++) {
-    float fa = a == 0 ? 1.0 - wk : wk; if (fa == 0.0) continue;
-    for (int b = 0; b < 2; b++) {
-      float fb = fa * (b == 0 ? 1.0 - wpl : wpl); if (fb == 0.0) continue;
-      int ipl = b == 0 ? ipl0 : ipl1;
-      for (int c = 0; c < 2; c++) {
-        float fc = fb * (c == 0 ? 1.0 - wtl : wtl); if (fc == 0.0) continue;
-        int row = ipl * ntl + itl + c;
-        for (int d = 0; d < 2; d++) {
-          float fd = fc * (d == 0 ? 1.0 - wpv : wpv); if (fd == 0.0) continue;
-          int ipv = d == 0 ? ipv0 : ipv1;
-          for (int e = 0; e < 2; e++) {
-            float fe = fd * (e == 0 ? 1.0 - wtv : wtv); if (fe == 0.0) continue;
-            ci[n] = row * ncol + ipv * ntv + itv + e; cl[n] = ik + a; cw[n] = fe; n++;
-          }
-        }
-      }
-    }
-  }
-  return n;
-}
 vec3 comp(int s, int layer, int j) { int i = s * uPer + j; return texelFetch(uComp, ivec3(i % uCompW, i / uCompW, layer), 0).rgb; }
 vec4 wts(ivec2 t, int g) { return texelFetch(uWts, ivec3(t, g), 0); }
 // p: the position on the fabric, mm (periodic over the repeat)
 vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p) {
   int ci[32]; int cl[32]; float cw[32];
-  int n = corners(tv, pv, tl, pl, k, ci, cl, cw);
+  int n = 0;
+  Cell cc = cell(tv, pv, tl, pl, k);
+  FOR_CORNERS(cc, ci[n] = I; cl[n] = L; cw[n] = W; n++;)
   vec3 acc = vec3(0.0);
   for (int c = 0; c < 32; c++) { if (c >= n) break; acc += cw[c] * comp(ci[c], cl[c], 0); }
   if (uRank == 0) return acc;
