@@ -201,6 +201,12 @@ def simulate_capture(
     size
         Image width and height in pixels (default 64; for a CD-BTF, from
         ``px_per_texel``: :func:`btf_camera`).
+    field_mm
+        Width of the camera's field at the stand, mm (default 2; for a
+        CD-BTF, 1.5 repeat diagonals: :func:`btf_camera`); ``field_mm / size``
+        (the pixel size) is written to ``stands.json`` as ``pixel_mm``, so
+        that the measurement discards photographs in which any pixel of the
+        patch sees a wall or lies in its shadow.
     px_per_texel
         For a CD-BTF without ``size``: pixels per texel (its shorter side).
     shifts
@@ -208,12 +214,6 @@ def simulate_capture(
         at ``shifts`` positions along u, ``size_u / shifts`` apart (a scan:
         the rows' ``u_mm``, ``v_mm`` columns), so that each texel is taken
         within ``size_u / (2 shifts)`` of a curved stand's crest.
-    field_mm
-        Width of the camera's field at the stand, mm (default 2; for a
-        CD-BTF, 1.5 repeat diagonals: :func:`btf_camera`); ``field_mm / size``
-        (the pixel size) is written to ``stands.json`` as ``pixel_mm``, so
-        that the measurement discards photographs in which any pixel of the
-        patch sees a wall or lies in its shadow.
     spp
         Stratified samples per pixel (integrate each pixel's footprint; box filter).
     noise
