@@ -12,7 +12,7 @@ blank) before it is written.
 ``viewer-btf.png``: a CD-BTF of the denim (``cdbrdf.synth.texels.tabulate_btf``,
 8 x 8 texels, the paper's grid; about half a minute, or ``--btf FILE``)
 close up on the sine sheet with its weave, the same view with the tile mean,
-and on the cylinder stand. ``--only btf`` makes only that one.
+on the cylinder stand, and on the draped cloth (a mesh with UVs). ``--only btf`` makes only that one.
 """
 
 from __future__ import annotations
@@ -100,11 +100,11 @@ def main(argv=None) -> int:
 
 
 def _btf_figure(chromium: str, path: str | None, save) -> None:
-    """viewer-btf.png: the weave close up on the sheet, the same view with the tile mean, the stand."""
+    """viewer-btf.png: the weave close up on the sheet, the same view with the tile mean, the stand, the drape."""
     from PIL import Image
     from playwright.sync_api import sync_playwright
 
-    from cdbrdf.view.export import export_viewer, viewer_files
+    from cdbrdf.view.export import drape_entry, export_viewer, viewer_files
 
     if path is None:
         from cdbrdf.synth import presets
@@ -118,7 +118,7 @@ def _btf_figure(chromium: str, path: str | None, save) -> None:
     print(btf)
     panels = []
     with tempfile.TemporaryDirectory() as tmp:
-        index = export_viewer(Path(tmp) / "v", viewer_files([("denim-btf.h5", btf)], meshes={}))
+        index = export_viewer(Path(tmp) / "v", viewer_files([("denim-btf.h5", btf)], meshes={"drape": drape_entry()}))
         with sync_playwright() as p:
             browser = p.chromium.launch(executable_path=chromium, headless=True, args=ARGS)
             try:
@@ -139,6 +139,9 @@ def _btf_figure(chromium: str, path: str | None, save) -> None:
                 page.evaluate(f"{v}.setSurface('stand')")
                 page.evaluate(f"{v}.setStandCurvature(0.22)")
                 page.evaluate(f"{v}.setCamera(35, -60, 30)")
+                panels.append(page.locator("#view").screenshot())
+                page.evaluate(f"{v}.setSurface('drape')")  # a mesh with UVs: the weave at true size on its folds
+                page.evaluate(f"{v}.setCamera(50, -70, 45)")
                 panels.append(page.locator("#view").screenshot())
             finally:
                 browser.close()
