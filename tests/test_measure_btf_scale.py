@@ -160,3 +160,60 @@ def test_unreachable_scheduler_fails_before_the_checkpoint_is_created(capture, t
     with pytest.raises(OSError, match=r"scheduler tcp://127.0.0.1:9: cannot connect \(Timed out"):
         measure(tmp_path / "cap", tmp_path / "m.h5", btf=4, scheduler="tcp://127.0.0.1:9")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cap"]
+
+
+def test_a_changed_photograph_is_read_again(capture, tmp_path):
+    """A condition is reused only while its photographs' sizes and modification times are unchanged."""
+    import os
+
+    from cdbrdf.measure.capture import read_capture
+
+    folder, ref, _ = capture
+    shutil.copytree(folder, tmp_path / "cap")
+    out = tmp_path / "out.h5"
+    with pytest.raises(MeasurementInterrupted):
+        measure(tmp_path / "cap", out, btf=4, batch_size=16, _interrupt_after=16)
+    saved = sorted(int(r) for f in checkpoint_path(out).glob("batch-*.npz") for r in np.load(f)["rows"])
+    cap = read_capture(tmp_path / "cap")
+    size = {idx[0]: len(idx) for idx in cap.brackets("sample").values()}
+    photo = tmp_path / "cap" / cap.rows[saved[0]].file
+    st = photo.stat()
+    os.utime(photo, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))
+    got, rep = measure(tmp_path / "cap", out, btf=4)
+    assert saved and rep.n_images_resumed == sum(size[r] for r in saved) - size[saved[0]]
+    same_btf(got, ref)
+
+
+def test_killed_process_resumes(capture, tmp_path):
+    """SIGKILL a process measuring the CD-BTF after its first checkpointed batch; the rerun resumes, bit for bit."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import cdbrdf
+
+    folder, ref, _ = capture
+    out = tmp_path / "out.h5"
+    script = (
+        "import sys, time\n"
+        "from cdbrdf.measure import measure\n"
+        "measure(sys.argv[1], sys.argv[2], btf=4, batch_size=16, num_workers=1,\n"
+        "        progress=lambda d, t: time.sleep(0.3))\n"
+    )
+    env = dict(os.environ)
+    src = str(__import__("pathlib").Path(cdbrdf.__file__).parents[1])
+    env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
+    proc = subprocess.Popen([sys.executable, "-c", script, str(folder), str(out)], env=env)
+    ck = checkpoint_path(out)
+    deadline = time.monotonic() + 60
+    while not list(ck.glob("batch-*.npz")) and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert not out.exists() and len(list(ck.glob("batch-*.npz"))) >= 1
+    got, rep = measure(folder, out, btf=4)
+    assert rep.n_images_resumed >= 16
+    same_btf(got, ref)
+    same_btf(load_btf(out), ref)
