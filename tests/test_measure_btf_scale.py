@@ -217,3 +217,13 @@ def test_killed_process_resumes(capture, tmp_path):
     assert rep.n_images_resumed >= 16
     same_btf(got, ref)
     same_btf(load_btf(out), ref)
+
+
+@pytest.mark.parametrize("scheduler", ["threads", "processes"])
+def test_an_error_in_a_task_is_one_line_and_leaves_no_checkpoint(capture, tmp_path, scheduler):
+    """Too many texels for the photographs: found in the workers, raised in one line, nothing left behind."""
+    from cdbrdf.errors import CaptureError
+
+    with pytest.raises(CaptureError, match="do not resolve 32 x 32 texels") as e:
+        measure(capture[0], tmp_path / "m.h5", btf=32, scheduler=scheduler, num_workers=2)
+    assert "\n" not in str(e.value) and sorted(p.name for p in tmp_path.iterdir()) == []
