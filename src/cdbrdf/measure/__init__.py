@@ -12,7 +12,10 @@ Modules, one per stage:
 - :mod:`~cdbrdf.measure.calibrate`: dark frames, brackets, white reference, fill: the table;
 - :mod:`~cdbrdf.measure.fill`: filling invalid samples (the fill method registry:
   ``kappa-fit`` along the curvature, ``nearest-stand``, the paper's ``nearest``);
-- :mod:`~cdbrdf.measure.pipeline`: the Dask pipeline (:func:`measure`).
+- :mod:`~cdbrdf.measure.schedulers`: where the Dask tasks run (both measurements);
+- :mod:`~cdbrdf.measure.pipeline`: the Dask pipeline (:func:`measure`);
+- :mod:`~cdbrdf.measure.btf` (with :mod:`~cdbrdf.measure.btf_geometry` and
+  :mod:`~cdbrdf.measure.btf_batches`): ``measure --btf``, a CD-BTF.
 
 The main entry point is :func:`measure`.
 """

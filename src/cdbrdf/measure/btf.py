@@ -29,11 +29,13 @@ convex stand turns the normal by ``repeat / 2R`` at its edge).
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import json
 import logging
 import math
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -48,12 +50,16 @@ from ..frames import direction_from_angles
 from ..fsutil import check_output_file
 from ..images import ImageError, ImageInfo, read_window
 from ..outputs import output_lock
+from .btf_batches import run_conditions
+from .btf_geometry import GRAZING_COS, SUBPIXELS, ViewGeometry, btf_hidden, view_geometry
 from .calibrate import MeasureReport, _nearest_white, calibration
 from .capture import Capture, CaptureRow, read_capture
+from .checkpoint import Checkpoint, checkpoint_path
 from .fill import DEFAULT_FILL, check_fill_method, fill
 from .patch import decode_codes, merge_exposures
 from .preflight import read_patch_status
-from .registration import Registration, face_hits, face_points, image_axes
+from .registration import Registration
+from .schedulers import check_scheduler, open_client
 from .stands import Stand, stand_for
 
 __all__ = ["measure_btf", "BTFReport", "ViewGeometry", "view_geometry", "btf_hidden", "texel_count",
@@ -61,18 +67,14 @@ __all__ = ["measure_btf", "BTFReport", "ViewGeometry", "view_geometry", "btf_hid
 
 _LOG = logging.getLogger(__name__)
 
-#: Rays per pixel side traced to the stand to model a pixel (its footprint's average).
-SUBPIXELS = 3
-#: A sample is hidden when its view or light has a cosine below this at some point of the footprint.
-GRAZING_COS = 0.1
 #: Fewest pixels per texel (along the texel's shorter side, at the view along the normal) accepted.
 MIN_PX_PER_TEXEL = 1.5
 #: Most texels along a side of the repeat.
 MAX_TEXELS = 256
 #: The compression's target relative RMS error of the measured CD-BTF (:meth:`cdbrdf.CDBTF.from_values`).
 DEFAULT_BTF_ERROR = 0.01
-#: Sample conditions read per batch (bounds the memory of the photographs' footprints).
-_CONDITIONS_PER_BATCH = 256
+#: Sample conditions per Dask task (one task computes each view's geometry once: conditions come view by view).
+_CONDITIONS_PER_TASK = 8
 #: Texel-channels filled at once (bounds the float64 copies of :func:`~cdbrdf.measure.fill.fill`).
 _FILL_CHANNELS = 192
 
@@ -135,159 +137,15 @@ class BTFReport(MeasureReport):
             f"{'?' if err is None else f'{100 * err:.2f} %'}; {self.seconds:.1f} s")
 
 
-# --------------------------------------------------------------------------- geometry
-@dataclass(frozen=True)
-class ViewGeometry:
-    """How one view's photographs map to the texels (:func:`view_geometry`).
-
-    Attributes
-    ----------
-    window
-        ``(x0, y0, nx, ny)``: the pixels read.
-    pick
-        Flat indices, into the window, of the pixels used.
-    normals
-        ``(n_pixels, 3)``: the face's mean normal over each pixel.
-    design
-        ``(n_pixels, n_texels)`` sparse: each pixel's texel weights.
-    factor
-        The Cholesky factor of ``design^T design`` (:func:`scipy.linalg.cho_factor`).
-    """
-
-    window: tuple[int, int, int, int]
-    pick: NDArray[np.intp]
-    normals: NDArray[np.float64]
-    design: Any
-    factor: Any
-
-    def texels(self, pixels: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The texels ``(n_texels, C)`` that best explain ``pixels`` ``(n_pixels, C)`` (least squares)."""
-        from scipy.linalg import cho_solve
-
-        return cho_solve(self.factor, self.design.T @ pixels)
-
-
-def _bilinear(u: NDArray, v: NDArray, texels: tuple[int, int], repeat_mm: tuple[float, float]
-              ) -> tuple[NDArray[np.intp], NDArray[np.float64]]:
-    """Texel indices ``j * n_u + i`` and weights ``(m, 4)`` of the periodic bilinear rule at ``(u, v)`` mm."""
-    (nu, nv), (su, sv) = texels, repeat_mm
-    fu = np.mod(u, su) / su * nu - 0.5
-    fv = np.mod(v, sv) / sv * nv - 0.5
-    iu, iv = np.floor(fu), np.floor(fv)
-    tu, tv = fu - iu, fv - iv
-    i0, j0 = iu.astype(np.intp) % nu, iv.astype(np.intp) % nv
-    i1, j1 = (i0 + 1) % nu, (j0 + 1) % nv
-    idx = np.stack([j0 * nu + i0, j0 * nu + i1, j1 * nu + i0, j1 * nu + i1], axis=-1)
-    w = np.stack([(1 - tu) * (1 - tv), tu * (1 - tv), (1 - tu) * tv, tu * tv], axis=-1)
-    return idx, w
-
-
-def _half_extent(repeat_mm: tuple[float, float], repeats: int) -> tuple[float, float]:
-    return 0.5 * repeats * repeat_mm[0], 0.5 * repeats * repeat_mm[1]
-
-
-def view_geometry(stand: Stand, origin_uv_mm: tuple[float, float], view: NDArray, *, width: int, height: int,
-                  cx: int | None, cy: int | None, pixel_mm: float, texels: tuple[int, int],
-                  repeat_mm: tuple[float, float], repeats: int = 1, sub: int = SUBPIXELS) -> ViewGeometry:
-    """The pixels of a photograph that see the footprint, and their texel weights.
-
-    The footprint is ``repeats x repeats`` repeats centred on the stand's
-    centre (arc length ``|s| <= repeats * size_u / 2``, ``|y| <= repeats *
-    size_v / 2``); a pixel is used when all its ``sub x sub`` rays meet the
-    face inside it.
-
-    Raises
-    ------
-    ImageError
-        When the footprint does not lie inside the image.
-    CaptureError
-        When the pixels do not resolve every texel (too coarse a pixel).
-    """
-    from scipy import sparse
-    from scipy.linalg import LinAlgError, cho_factor
-
-    v = np.asarray(view, dtype=np.float64)
-    right, down = image_axes(v)
-    cx = width // 2 if cx is None else int(cx)
-    cy = height // 2 if cy is None else int(cy)
-    hu, hv = _half_extent(repeat_mm, repeats)
-    s = np.linspace(-hu, hu, 33)
-    corners, _n = face_points(stand, np.concatenate([s, s]), np.concatenate([np.full(33, -hv), np.full(33, hv)]))
-    col = cx + corners @ right / pixel_mm
-    row = cy + corners @ down / pixel_mm
-    x0, x1 = int(math.floor(col.min())) - 1, int(math.ceil(col.max())) + 1
-    y0, y1 = int(math.floor(row.min())) - 1, int(math.ceil(row.max())) + 1
-    if x0 < 0 or y0 < 0 or x1 >= width or y1 >= height:
-        raise ImageError(f"the footprint of {repeats} repeat(s) (pixels x {x0}..{x1}, y {y0}..{y1}) does not "
-                         f"lie inside the {width} x {height} image: widen the camera's field")
-    nx, ny = x1 - x0 + 1, y1 - y0 + 1
-    off = (np.arange(sub) + 0.5) / sub - 0.5
-    gy, gx, oy, ox = np.meshgrid(np.arange(y0, y1 + 1), np.arange(x0, x1 + 1), off, off, indexing="ij")
-    px = ((gx + ox - cx) * pixel_mm)[..., None] * right + ((gy + oy - cy) * pixel_mm)[..., None] * down
-    p, n, _t, s_mm = face_hits(stand, px.reshape(-1, 3), v)
-    inside = (np.abs(s_mm) <= hu) & (np.abs(p[:, 1]) <= hv) & (n @ v > 0.0)
-    inside = inside.reshape(ny * nx, sub * sub).all(axis=1)
-    pick = np.flatnonzero(inside)
-    m = sub * sub
-    u = origin_uv_mm[0] + s_mm.reshape(ny * nx, m)[pick]
-    w_ = origin_uv_mm[1] + p[:, 1].reshape(ny * nx, m)[pick]
-    idx, w = _bilinear(u.reshape(-1), w_.reshape(-1), texels, repeat_mm)
-    nt = texels[0] * texels[1]
-    rows = np.repeat(np.arange(pick.size), m * 4)
-    design = sparse.csr_matrix((w.reshape(-1) / m, (rows, idx.reshape(-1))), shape=(pick.size, nt))
-    gram = (design.T @ design).toarray()
-    lam = np.linalg.eigvalsh(gram) if nt <= 2048 else np.array([1.0])
-    if pick.size < nt or lam[0] <= 1e-6 * lam[-1]:
-        tv = math.degrees(math.acos(min(1.0, abs(float(v[2])))))
-        raise CaptureError(f"the photographs at theta_v = {tv:.0f} degrees ({pixel_mm:g} mm per pixel, foreshortened "
-                           f"by cos(theta_v)) do not resolve {texels[0]} x {texels[1]} texels of a {repeat_mm[0]:g} x "
-                           f"{repeat_mm[1]:g} mm repeat: use fewer texels or a finer camera (pixels per texel x "
-                           "cos(theta_v) >= about 1.5)")
-    try:
-        factor = cho_factor(gram)
-    except LinAlgError:
-        raise CaptureError(f"the photographs ({pixel_mm:g} mm per pixel) do not resolve the texels") from None
-    normals = n.reshape(ny * nx, m, 3)[pick].mean(axis=1)
-    return ViewGeometry((x0, y0, nx, ny), pick, normals, design, factor)
-
-
-def btf_hidden(cap: Capture, repeat_mm: tuple[float, float], *, repeats: int = 1) -> NDArray[np.bool_]:
-    """The samples whose footprint a stand hides from the camera or the light, or sees at a grazing angle.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``grid.shape`` booleans (the capture's own hidden marks included).
-    """
-    g = cap.grid
-    hu, _hv = _half_extent(repeat_mm, repeats)
-    pixel = float(cap.settings.get("pixel_mm", 0.0))
-    out = np.array(cap.hidden, dtype=bool, copy=True)
-    for k, kappa in enumerate(g.kappa):
-        st = stand_for(cap.stands or {}, float(kappa))
-        m = hu + pixel
-        view = st.hides(g.theta_v[None, :], g.phi_v[:, None], margin_mm=m)  # (phi_v, theta_v)
-        light = st.hides(g.theta_l[None, :], g.phi_l[:, None], margin_mm=m)  # (phi_l, theta_l)
-        if st.kappa != 0:  # the normal turns by hu / R at the footprint's edges
-            for sign in (-1.0, 1.0):
-                _p, nrm = face_points(st, np.array(sign * hu), np.array(0.0))
-                view |= direction_from_angles(g.theta_v[None, :], g.phi_v[:, None]) @ nrm < GRAZING_COS
-                light |= direction_from_angles(g.theta_l[None, :], g.phi_l[:, None]) @ nrm < GRAZING_COS
-        else:
-            view |= np.cos(np.radians(g.theta_v))[None, :] < GRAZING_COS
-            light |= np.cos(np.radians(g.theta_l))[None, :] < GRAZING_COS
-        out[k] |= view[None, None, :, :] | light[:, :, None, None]
-    return out
-
-
 # --------------------------------------------------------------------------- reading
 def _origin(reg: Registration, r: CaptureRow) -> tuple[float, float]:
     """The fabric's (u, v) at the stand's centre in the photograph of row ``r`` (its own, else its stand's)."""
     return r.uv_mm if r.uv_mm is not None else (reg.origin(r.kappa) or (0.0, 0.0))
 
 
-def _condition(cap: Capture, reg: Registration, idx: list[int], got: dict[int, tuple], darks: dict[float, NDArray],
-               texels: tuple[int, int], repeat: tuple[float, float]) -> tuple[str, NDArray | None, int]:
+def _condition(rows: Mapping[int, CaptureRow], reg: Registration, idx: list[int], got: dict[int, tuple],
+               darks: dict[float, NDArray], texels: tuple[int, int], repeat: tuple[float, float]
+               ) -> tuple[str, NDArray | None, int]:
     """The texels ``(n_texels, C)`` of one sample condition from its photographs: ``(status, texels, used)``.
 
     The rows of one fabric position (``u_mm``, ``v_mm``; else the stand's
@@ -295,9 +153,8 @@ def _condition(cap: Capture, reg: Registration, idx: list[int], got: dict[int, t
     every texel, and each texel is taken at the stand's crest from the
     positions that have it nearest on either side (:func:`_at_the_crest`). Status ``"ok"``,
     ``"saturated"`` (a pixel saturated in every bracket of every position) or
-    ``"skipped"`` (no readable photograph).
+    ``"skipped"`` (no readable photograph). ``rows``: the capture's rows (by index).
     """
-    rows = cap.rows
     groups: dict[tuple[float, float], list[int]] = {}
     for i in idx:
         if i in got and got[i][0] == 0:
@@ -357,12 +214,21 @@ def _at_the_crest(found: list[tuple[NDArray, NDArray]]) -> NDArray:
 
 
 class _Geometries:
-    """The :class:`ViewGeometry` of each view and image size, made once (thread-safe)."""
+    """The :class:`ViewGeometry` of each view and image size, made once (thread-safe).
 
-    def __init__(self, cap: Capture, reg: Registration, **kw: Any) -> None:
-        self.cap, self.reg, self.kw = cap, reg, kw
+    Pickled (the ``processes`` scheduler, a cluster's workers) without what it made.
+    """
+
+    def __init__(self, stands: dict[float, Stand], reg: Registration, **kw: Any) -> None:
+        self.stands, self.reg, self.kw = stands, reg, kw
         self.done: dict[tuple, ViewGeometry] = {}
         self.lock = threading.Lock()
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"stands": self.stands, "reg": self.reg, "kw": self.kw}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__init__(state["stands"], state["reg"], **state["kw"])  # type: ignore[misc]
 
     def get(self, r: CaptureRow, info: ImageInfo) -> ViewGeometry:
         origin = _origin(self.reg, r)
@@ -370,7 +236,7 @@ class _Geometries:
         with self.lock:
             got = self.done.get(key)
             if got is None:
-                st = stand_for(self.cap.stands or {}, r.kappa)
+                st = stand_for(self.stands, r.kappa)
                 got = view_geometry(st, origin,
                                     direction_from_angles(r.theta_v, r.phi_v), width=info.width,
                                     height=info.height, cx=r.cx, cy=r.cy, **self.kw)
@@ -408,19 +274,21 @@ def _read_footprint(path: Path, r: CaptureRow, linear: bool, geo: _Geometries
     return 0, vals.reshape(-1, vals.shape[-1])[g.pick], sat.reshape(-1)[g.pick], "", g
 
 
-def _read_all(jobs: list[tuple], scheduler: str, num_workers: int | None) -> list[tuple]:
-    """:func:`_read_footprint` of every job, in Dask tasks on a local scheduler."""
-    import dask
-    from dask import delayed
+def _condition_tasks(jobs: list[tuple]) -> list[tuple[str, NDArray | None, int, dict[int, tuple[int, str]]]]:
+    """One Dask task: per job, a sample condition read (:func:`_read_footprint`) and rectified (:func:`_condition`).
 
-    def some(part: list[tuple]) -> list[tuple]:
-        return [_read_footprint(*j) for j in part]
-
-    chunks = [jobs[c:c + 16] for c in range(0, len(jobs), 16)]
-    kw: dict[str, Any] = {"scheduler": scheduler}
-    if num_workers and scheduler != "synchronous":
-        kw["num_workers"] = num_workers
-    return [x for part in dask.compute(*[delayed(some, pure=False)(c) for c in chunks], **kw) for x in part]
+    A job is ``(idx, rows, files, geo, darks, texels, repeat)``, ``files``
+    mapping a row to ``(path, linear)`` (its usable photographs). Per job:
+    ``(status, texels, used, failed)``, ``failed`` mapping a row whose
+    photograph failed to read to ``(status, message)``. Only the texels
+    leave the task (the footprints do not).
+    """
+    out = []
+    for idx, rows, files, geo, darks, texels, repeat in jobs:
+        got = {i: _read_footprint(path, rows[i], lin, geo) for i, (path, lin) in files.items()}
+        status, tex, used = _condition(rows, geo.reg, idx, got, darks, texels, repeat)
+        out.append((status, tex, used, {i: (g[0], g[3]) for i, g in got.items() if g[0] != 0}))
+    return out
 
 
 # --------------------------------------------------------------------------- the measurement
@@ -434,14 +302,17 @@ def measure_btf(
     patch: int = 7,
     linear: bool = False,
     skip_bad: bool = False,
-    scheduler: str | None = None,
+    scheduler: Any = None,
     white_albedo: float | None = None,
     material: str | None = None,
+    checkpoint: bool = True,
+    batch_size: int = 1024,
     num_workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
     overwrite: bool = True,
     fill: str = DEFAULT_FILL,
     max_error: float = DEFAULT_BTF_ERROR,
+    _interrupt_after: int | None = None,
 ) -> tuple[CDBTF, BTFReport]:
     """Measure a registered capture folder into a CD-BTF (see the module's description).
 
@@ -457,12 +328,21 @@ def measure_btf(
         Repeats per side of the footprint solved for the texels.
     patch
         The N x N patch (pixels) of the white references and dark frames.
-    linear, skip_bad, white_albedo, material, num_workers, progress, overwrite, fill
+    linear, skip_bad, scheduler, white_albedo, material
+        As :func:`cdbrdf.measure.measure`: a Dask task reads and rectifies
+        :data:`_CONDITIONS_PER_TASK` sample conditions, on any of its schedulers.
+    checkpoint, batch_size
+        As :func:`cdbrdf.measure.measure`: with ``output``, each batch of
+        sample conditions (about ``batch_size`` photographs) keeps its texels
+        in ``<output>.ckpt`` (:mod:`cdbrdf.measure.btf_batches`); a later run
+        with the same capture and options (texels, repeat, footprint, patch,
+        linear, dark frames) reuses them: the same CD-BTF, bit for bit.
+    num_workers, progress, overwrite, fill
         As :func:`cdbrdf.measure.measure`.
-    scheduler
-        ``None``/``"threads"`` or ``"synchronous"`` (local only: no checkpoint, no cluster).
     max_error
         The compression's target relative RMS error.
+    _interrupt_after
+        For the tests: stop as a killed run would once this many photographs are read.
 
     Returns
     -------
@@ -483,9 +363,11 @@ def measure_btf(
     nu, nv = texel_count(texels)
     if isinstance(repeats, bool) or not isinstance(repeats, (int, np.integer)) or not 1 <= repeats <= 16:
         raise OptionError(f"repeats: expected a whole number in [1, 16], got {repeats!r:.40}")
-    if scheduler not in (None, "threads", "synchronous"):
-        raise OptionError(f"scheduler: a CD-BTF is measured on local threads only (threads or synchronous), "
-                          f"got {scheduler!r:.40}")
+    for name, val in (("batch_size", batch_size), ("num_workers", num_workers)):
+        if not (val is None and name == "num_workers") and (
+                isinstance(val, bool) or not isinstance(val, (int, np.integer)) or val < 1):
+            raise OptionError(f"{name}: expected a positive whole number, got {val!r:.40}")
+    check_scheduler(scheduler)
     if isinstance(max_error, bool) or not isinstance(max_error, (int, float)) or not 0 <= max_error < 1:
         raise OptionError(f"max_error: expected a fraction in [0, 1), got {max_error!r:.40}")
     fill = check_fill_method(fill)
@@ -515,25 +397,45 @@ def measure_btf(
             if repeats * su > st.face_width_mm:
                 raise CaptureError(f"{where}: the stand of kappa {st.kappa:g} ({st.face_width_mm:g} mm wide) "
                                    f"is narrower than {repeats} repeat(s) of {su:g} mm")
+        ck_path = checkpoint_path(out_path) if (out_path is not None and checkpoint) else None
         if out_path is not None:
             from .preflight import refuse_overlap
 
-            refuse_overlap(cap, [], [out_path])
-        table, report = _measure(cap, reg, texels=(nu, nv), repeat=(su, sv), repeats=int(repeats), patch=patch,
-                                 linear=linear, skip_bad=skip_bad, scheduler=scheduler or "threads",
-                                 white_albedo=white_albedo, material=material, num_workers=num_workers,
-                                 progress=progress, fill_method=fill, max_error=float(max_error),
-                                 out_path=out_path)
+            refuse_overlap(cap, [ck_path] if ck_path is not None else [], [out_path])
+        table, report, ck = _measure(cap, reg, texels=(nu, nv), repeat=(su, sv), repeats=int(repeats), patch=patch,
+                                     linear=linear, skip_bad=skip_bad, scheduler=scheduler,
+                                     white_albedo=white_albedo, material=material, num_workers=num_workers,
+                                     progress=progress, fill_method=fill, max_error=float(max_error),
+                                     out_path=out_path, ck_path=ck_path, batch_size=int(batch_size),
+                                     interrupt_after=_interrupt_after)
         if out_path is not None:
             table.save(out_path)
+            ck.remove()
         report.seconds = time.perf_counter() - t0
         return table, report
 
 
+def _checkpoint_key(cap: Capture, *, texels: tuple[int, int], repeat: tuple[float, float], repeats: int,
+                    patch: int, linear: bool, darks: dict[float, NDArray], n_conditions: int) -> str:
+    """The checkpoint's key: the capture and every option that changes a condition's texels.
+
+    The dark frames' means (read again by every run) stand for the patch's
+    reading; the white references, the fill and the compression act after
+    the checkpoint and are not in it.
+    """
+    dark = hashlib.sha256(b"".join(np.float64(e).tobytes() + np.asarray(darks[e], dtype=np.float64).tobytes()
+                                   for e in sorted(darks))).hexdigest()
+    doc = {"kind": "btf", "capture": cap.digest, "texels": list(texels), "repeat_mm": list(repeat),
+           "repeats": repeats, "patch": patch, "linear": bool(linear), "subpixels": SUBPIXELS,
+           "darks": dark, "conditions": n_conditions}
+    return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
+
+
 def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat: tuple[float, float],
-             repeats: int, patch: int, linear: bool, skip_bad: bool, scheduler: str, white_albedo: float | None,
+             repeats: int, patch: int, linear: bool, skip_bad: bool, scheduler: Any, white_albedo: float | None,
              material: str | None, num_workers: int | None, progress: Callable[[int, int], None] | None,
-             fill_method: str, max_error: float, out_path: Path | None) -> tuple[CDBTF, BTFReport]:
+             fill_method: str, max_error: float, out_path: Path | None, ck_path: Path | None, batch_size: int,
+             interrupt_after: int | None) -> tuple[CDBTF, BTFReport, Checkpoint]:
     from .preflight import preflight, refuse_bad
 
     grid, rows = cap.grid, cap.rows
@@ -551,18 +453,16 @@ def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat
     needed = calib + [i for idx in conds for i in idx]
     root = cap.folder.resolve()
     paths = {i: root / rows[i].file for i in needed}
-    _stats, bad = preflight(cap, needed, paths, patch)
+    stats, bad = preflight(cap, needed, paths, patch)
     if bad and not skip_bad:
         refuse_bad(cap, bad, paths, out_path, during=False)
     total = len(needed)
-    done = 0
     results: dict[int, tuple] = {i: (st, None, None, why) for i, (st, why) in bad.items()}
     for i in calib:
         if i not in bad:
             results[i] = read_patch_status(paths[i], patch, rows[i].cx, rows[i].cy, lin(rows[i]))
-    done += len(calib)
     if progress is not None:
-        progress(done, total)
+        progress(len(calib), total)
     rep = BTFReport(texels=texels, repeat_mm=repeat, px_per_texel=min(repeat[0] / texels[0],
                                                                       repeat[1] / texels[1]) / pixel_mm)
     darks, whites = calibration(cap, results, rep)
@@ -573,41 +473,63 @@ def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat
     valid = np.zeros(grid.shape, dtype=bool)
     saturated = np.zeros(grid.shape, dtype=bool)
     skipped = np.zeros(grid.shape, dtype=bool)
-    geo = _Geometries(cap, reg, pixel_mm=pixel_mm, texels=texels, repeat_mm=repeat, repeats=repeats)
+    geo = _Geometries(cap.stands or {}, reg, pixel_mm=pixel_mm, texels=texels, repeat_mm=repeat, repeats=repeats)
     failed: dict[int, tuple[int, str]] = {}
     n_used = 0
-    for b in range(0, len(conds), _CONDITIONS_PER_BATCH):
-        batch = conds[b:b + _CONDITIONS_PER_BATCH]
-        todo = [i for idx in batch for i in idx if i not in bad]
-        got = dict(zip(todo, _read_all([(paths[i], rows[i], lin(rows[i]), geo) for i in todo],
-                                       scheduler, num_workers)))
-        good: list[tuple[Any, NDArray, CaptureRow]] = []
-        for idx in batch:
-            sidx = cap.sample_index[idx[0]]
-            for i in idx:
-                if i in got and got[i][0] != 0:
-                    failed[i] = (got[i][0], got[i][3])
-            status, tex, used = _condition(cap, reg, idx, got, darks, texels, repeat)
-            n_used += used
-            if status == "saturated":
-                saturated[sidx] = True
-            elif tex is None:
-                skipped[sidx] = True
-            else:
-                good.append((sidx, tex, rows[idx[0]]))
-        if failed and not skip_bad:
-            refuse_bad(cap, failed, paths, out_path, during=True)
-        white_of = _nearest_white(cap, [r for *_, r in good], whites) if (whites and good) else None
-        for n, (sidx, tex, _r) in enumerate(good):
-            if values is None:
-                nc = tex.shape[-1]
-                values = np.full(grid.shape + (nt * nc,), np.nan, dtype=np.float32)
-            scale = np.ones(tex.shape[-1]) if white_of is None else albedo / math.pi / whites[white_of[n]][1]
-            values[sidx] = (tex * scale).reshape(-1)
-            valid[sidx] = True
-        done += len(todo) + sum(1 for idx in batch for i in idx if i in bad)
+    key = _checkpoint_key(cap, texels=texels, repeat=repeat, repeats=repeats, patch=patch, linear=linear,
+                          darks=darks, n_conditions=len(conds))
+    client, own_client = open_client(scheduler)  # an unreachable scheduler: before the checkpoint exists
+    try:
+        ck = Checkpoint(ck_path, key, shape=(texels[1], texels[0]))
+    except BaseException:
+        if own_client:
+            client.close()
+        raise
+
+    def job(idx: list[int]) -> tuple:
+        return (idx, {i: rows[i] for i in idx}, {i: (paths[i], lin(rows[i])) for i in idx if i not in bad},
+                geo, darks, texels, repeat)
+
+    def tick(n: int) -> None:
         if progress is not None:
-            progress(done, total)
+            progress(len(calib) + n, total)
+
+    size = {idx[0]: len(idx) for idx in conds}
+    first = True
+    try:
+        for part in run_conditions(conds, job, stats, ck, task=_condition_tasks, per_task=_CONDITIONS_PER_TASK,
+                                   batch_size=batch_size, scheduler=scheduler, client=client,
+                                   num_workers=num_workers, failed=failed, progress=tick,
+                                   interrupt_after=interrupt_after):
+            if first:  # the conditions resumed from the checkpoint
+                rep.n_images_resumed = sum(size[r[0]] for r in part)
+                first = False
+            if failed and not skip_bad:
+                refuse_bad(cap, failed, paths, out_path, during=True)
+            good: list[tuple[Any, NDArray, CaptureRow]] = []
+            for i0, status, tex, used in part:
+                sidx = cap.sample_index[i0]
+                n_used += used
+                if status == "saturated":
+                    saturated[sidx] = True
+                elif tex is None:
+                    skipped[sidx] = True
+                else:
+                    good.append((sidx, tex, rows[i0]))
+            white_of = _nearest_white(cap, [r for *_, r in good], whites) if (whites and good) else None
+            for n, (sidx, tex, _r) in enumerate(good):
+                if values is None:
+                    nc = tex.shape[-1]
+                    values = np.full(grid.shape + (nt * nc,), np.nan, dtype=np.float32)
+                scale = np.ones(tex.shape[-1]) if white_of is None else albedo / math.pi / whites[white_of[n]][1]
+                values[sidx] = (tex * scale).reshape(-1)
+                valid[sidx] = True
+    except BaseException:
+        ck.discard_if_empty()  # made by this run and nothing saved: leave nothing behind
+        raise
+    finally:
+        if own_client:
+            client.close()
     for i, (_st, why) in sorted({**bad, **failed}.items()):
         rep.skipped_files.append((rows[i].file, why))
     if values is None or nc is None:
@@ -624,6 +546,18 @@ def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat
     rep.n_not_photographed = int((~photographed).sum())
     rep.n_images = n_used + rep.n_white + rep.n_dark
     rep.measured = valid.copy()
+    btf = _fill_and_compress(cap, reg, rep, values, valid, nc=nc, texels=texels, repeat=repeat, repeats=repeats,
+                             pixel_mm=pixel_mm, whites=bool(whites), albedo=albedo, material=material,
+                             fill_method=fill_method, max_error=max_error)
+    return btf, rep, ck
+
+
+def _fill_and_compress(cap: Capture, reg: Registration, rep: BTFReport, values: NDArray[np.float32],
+                       valid: NDArray[np.bool_], *, nc: int, texels: tuple[int, int], repeat: tuple[float, float],
+                       repeats: int, pixel_mm: float, whites: bool, albedo: float, material: str | None,
+                       fill_method: str, max_error: float) -> CDBTF:
+    """The invalid samples of ``values`` (``grid.shape + (n_texels * C,)``) filled, the CD-BTF compressed."""
+    grid = cap.grid
     summary: dict[str, Any] = {}
     provenance_kwargs: dict[str, Any] = {}
     for c in range(0, values.shape[-1], _FILL_CHANNELS):  # fill is per channel: texels x channels in slices
@@ -655,4 +589,5 @@ def _measure(cap: Capture, reg: Registration, *, texels: tuple[int, int], repeat
     btf = CDBTF.from_values(dense, grid, repeat_mm=repeat, max_error=max_error, attrs=attrs,
                             mean_kwargs=provenance_kwargs)
     rep.compression = btf.compression
-    return btf, rep
+    return btf
+

@@ -59,6 +59,12 @@ def _read_key(folder: Path) -> object:
 class Checkpoint:
     """Results of finished images, one ``.npz`` file per batch (each written atomically).
 
+    A result is ``((size, mtime_ns), status, values, saturated, message)``
+    under a row index: ``values`` of shape ``shape + (C,)`` (float64) and
+    ``saturated`` of ``shape`` (bool) when ``status`` is 0, else None.
+    (:mod:`cdbrdf.measure.btf_batches` keeps a sample condition's texels the
+    same way, with its own meaning of the pair and of the status.)
+
     The folder carries cdbrdf's owner mark (:func:`cdbrdf.outputs.mark_owned`);
     a folder of that name without the mark is refused and never touched,
     whatever it holds (names like ``key.json`` or ``batch-*.npz`` prove
@@ -67,10 +73,12 @@ class Checkpoint:
     """
 
     def __init__(self, folder: Path | None, key: str, *, legacy_keys: tuple[str, ...] = (),
-                 patch: int = 7) -> None:
+                 patch: int = 7, shape: tuple[int, ...] | None = None) -> None:
         self.folder = folder
         self.key = key
-        self.patch = patch
+        #: the shape of each result's values without their channels: ``(patch, patch)`` unless given
+        #: (measure --btf: the texels ``(n_v, n_u)``)
+        self.shape = (patch, patch) if shape is None else tuple(int(x) for x in shape)
         self.done: dict[int, tuple[tuple[int, int], int, NDArray | None, NDArray | None, str]] = {}
         #: the folder was created by this object (not resumed), and batches it saved since
         self.created = False
@@ -139,7 +147,7 @@ class Checkpoint:
 
     def _load(self, f: Path) -> None:
         """Add one batch; an unreadable or inconsistent batch is ignored (and deleted)."""
-        n = self.patch
+        shape = self.shape
         got = {}
         try:
             with open(f, "rb") as fh, np.load(fh, allow_pickle=False) as z:
@@ -155,8 +163,8 @@ class Checkpoint:
                         continue
                     c = int(m[1])
                     prow, v, sat = z[name], z[f"patches_c{c}"], z[f"saturated_c{c}"]
-                    if prow.ndim != 1 or prow.dtype.kind != "i" or v.shape != (prow.size, n, n, c) \
-                            or v.dtype != np.float64 or c < 1 or sat.shape != (prow.size, n, n) \
+                    if prow.ndim != 1 or prow.dtype.kind != "i" or v.shape != (prow.size, *shape, c) \
+                            or v.dtype != np.float64 or c < 1 or sat.shape != (prow.size, *shape) \
                             or sat.dtype != np.bool_:
                         raise ValueError(f"patches {name} of shape {v.shape} {v.dtype}")
                     for q, r in enumerate(prow.tolist()):

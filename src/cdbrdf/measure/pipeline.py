@@ -51,13 +51,13 @@ from .checkpoint import Checkpoint, checkpoint_path
 from .fill import DEFAULT_FILL, check_fill_method
 from .preflight import (
     bad_list_path,
-    first_line,
     preflight,
     read_patch_status,
     refuse_bad,
     refuse_overlap,
     remove_bad_list,
 )
+from .schedulers import LOCAL_SCHEDULERS, MeasurementInterrupted, check_scheduler, compute, open_client
 
 if TYPE_CHECKING:
     from ..btf import CDBTF
@@ -70,52 +70,8 @@ __all__ = [
     "PHOTOS_PER_TASK",
 ]
 
-#: ``scheduler`` values that select one of Dask's local schedulers.
-LOCAL_SCHEDULERS: tuple[str, ...] = ("threads", "processes", "synchronous")
-
-
-class MeasurementInterrupted(RuntimeError):
-    """Raised by the test hook ``_interrupt_after`` (simulates a killed run)."""
-
-
 # --------------------------------------------------------------------------- tasks
-def _is_client(scheduler: Any) -> bool:
-    """Whether ``scheduler`` looks like a :class:`distributed.Client` (it maps and gathers)."""
-    return callable(getattr(scheduler, "map", None)) and callable(getattr(scheduler, "gather", None))
-
-
-def _check_scheduler(scheduler: Any) -> None:
-    """Refuse a ``scheduler`` that is none of the accepted kinds (before any work)."""
-    if scheduler is None or _is_client(scheduler):
-        return
-    if isinstance(scheduler, str):
-        if scheduler in LOCAL_SCHEDULERS:
-            return
-        addr = scheduler.strip()
-        if addr and addr == scheduler and addr.isprintable() and " " not in addr \
-                and ("://" in addr or ":" in addr) and not addr.endswith((":", "://")):
-            return
-    raise OptionError(
-        f"scheduler: {scheduler!r:.60} is neither a scheduler address (tcp://host:port), "
-        f"a distributed.Client nor one of {', '.join(LOCAL_SCHEDULERS)}"
-    )
-
-
-def _open_client(scheduler: Any):  # noqa: ANN202
-    """A distributed client for an address or a Client; None for local schedulers."""
-    if scheduler is None or (isinstance(scheduler, str) and scheduler in LOCAL_SCHEDULERS):
-        return None, False
-    if isinstance(scheduler, str):
-        from distributed import Client
-
-        try:
-            return Client(scheduler, timeout="10s", set_as_default=False), True
-        except (OSError, ValueError, TypeError) as exc:  # unreachable, or an address distributed refuses
-            raise OSError(f"scheduler {scheduler}: cannot connect ({first_line(exc) or type(exc).__name__})"
-                          ) from None
-    return scheduler, False
-
-
+# (the scheduler's handling has one owner, :mod:`cdbrdf.measure.schedulers`, shared with measure --btf)
 def _positive_int(name: str, value: Any, *, none_ok: bool = False) -> None:
     if value is None and none_ok:
         return
@@ -130,7 +86,7 @@ def _check_options(*, patch: Any, batch_size: Any, num_workers: Any, scheduler: 
     _positive_int("patch", patch)
     _positive_int("batch_size", batch_size)
     _positive_int("num_workers", num_workers, none_ok=True)
-    _check_scheduler(scheduler)
+    check_scheduler(scheduler)
     if white_albedo is not None:
         a = white_albedo
         if isinstance(a, bool) or not isinstance(a, numbers.Real) or not 0 < float(a) <= 1.5:
@@ -154,18 +110,8 @@ PHOTOS_PER_TASK = 64
 
 
 def _compute(jobs: list[tuple], scheduler: Any, client: Any, num_workers: int | None) -> list:
-    chunks = [jobs[c:c + PHOTOS_PER_TASK] for c in range(0, len(jobs), PHOTOS_PER_TASK)]
-    if client is not None:
-        futures = client.map(_read_tasks, chunks, pure=False)
-        return [r for part in client.gather(futures) for r in part]
-    import dask
-    from dask import delayed
-
-    tasks = [delayed(_read_tasks, pure=True)(c) for c in chunks]
-    kw = {"scheduler": scheduler or "threads"}
-    if num_workers and kw["scheduler"] != "synchronous":
-        kw["num_workers"] = num_workers
-    return [r for part in dask.compute(*tasks, **kw) for r in part]
+    """:func:`_read_tasks` over the jobs, :data:`PHOTOS_PER_TASK` a task (:func:`.schedulers.compute`)."""
+    return compute(jobs, scheduler, client, num_workers, task=_read_tasks, per_task=PHOTOS_PER_TASK)
 
 
 def _run(cap: Any, needed: list[int], bad: dict[int, tuple[int, str]], stats: dict[int, tuple[int, int]],
@@ -298,7 +244,8 @@ def measure(  # type: ignore[misc]  # the overloads give the options as **option
         instead (:func:`cdbrdf.measure.btf.measure_btf`; the capture's
         ``stands.json`` must have a ``registration``). Every photograph is
         rectified onto the fabric's texels instead of averaged; the same
-        calibration, hidden samples and fill. No checkpoint; local threads only.
+        calibration, hidden samples and fill; the same schedulers, and a
+        checkpoint of each sample condition's texels (its key has the texels).
     _interrupt_after
         For the tests: stop as a killed run would once this many photographs are read.
 
@@ -349,7 +296,8 @@ def measure(  # type: ignore[misc]  # the overloads give the options as **option
 
         return measure_btf(folder, output, texels=btf, patch=patch, linear=linear, skip_bad=skip_bad,
                            scheduler=scheduler, white_albedo=white_albedo, material=material,
-                           num_workers=num_workers, progress=progress, overwrite=overwrite, fill=fill)
+                           checkpoint=checkpoint, batch_size=batch_size, num_workers=num_workers,
+                           progress=progress, overwrite=overwrite, fill=fill, _interrupt_after=_interrupt_after)
     out_path = None if output is None else check_output_file(output)  # a folder, a device: refused now
     fill = check_fill_method(fill)
     if out_path is not None:
@@ -394,7 +342,7 @@ def measure(  # type: ignore[misc]  # the overloads give the options as **option
         # checkpoints of earlier versions also hashed skip_bad (which does not change what is read)
         legacy = hashlib.sha256(json.dumps({**key_doc, "skip_bad": bool(skip_bad)}, sort_keys=True).encode()
                                 ).hexdigest()
-        client, own_client = _open_client(scheduler)  # an unreachable scheduler: before the checkpoint exists
+        client, own_client = open_client(scheduler)  # an unreachable scheduler: before the checkpoint exists
         try:
             ck = Checkpoint(ck_path, key, legacy_keys=(legacy,), patch=patch)
         except BaseException:
