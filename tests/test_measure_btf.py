@@ -236,3 +236,25 @@ def test_a_scan_interpolates_each_texel_to_the_crest():
     got = _at_the_crest(found)
     np.testing.assert_allclose(got[:2], truth[:2], rtol=1e-12)
     np.testing.assert_allclose(got[2], truth[2] + 0.3 * slope, rtol=1e-12)
+
+
+def test_unusable_photographs_are_listed_then_the_list_goes_with_a_good_run(small, tmp_path):
+    """As the CDBRDF path: a damaged photograph stops the run with FILE.bad.txt; once repaired, the
+    successful run removes the stale list; the list beside an input is refused before anything is read."""
+    from cdbrdf.measure.preflight import UnusablePhotographs
+
+    cap = tmp_path / "cap"
+    shutil.copytree(small[1], cap)
+    victims = [p for p in sorted((cap / "k0").rglob("*")) if p.suffix in (".png", ".tif", ".tiff", ".exr")][:2]
+    good = [v.read_bytes() for v in victims]
+    for v in victims:
+        v.write_bytes(b"not an image")
+    out = tmp_path / "b.h5"
+    with pytest.raises(UnusablePhotographs, match="2 photographs cannot be used .*b.h5.bad.txt"):
+        measure(cap, out, btf=4)
+    listing = tmp_path / "b.h5.bad.txt"
+    assert all(v.name in listing.read_text() for v in victims) and not out.exists()
+    for v, data in zip(victims, good):
+        v.write_bytes(data)
+    measure(cap, out, btf=4)
+    assert out.exists() and not listing.exists()

@@ -57,7 +57,7 @@ from .capture import Capture, CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
 from .fill import DEFAULT_FILL, check_fill_method, fill
 from .patch import decode_codes, merge_exposures
-from .preflight import read_patch_status
+from .preflight import bad_list_path, read_patch_status, remove_bad_list
 from .registration import Registration
 from .schedulers import check_scheduler, open_client
 from .stands import Stand, stand_for
@@ -372,8 +372,10 @@ def measure_btf(
         raise OptionError(f"max_error: expected a fraction in [0, 1), got {max_error!r:.40}")
     fill = check_fill_method(fill)
     out_path = None if output is None else check_output_file(output)
-    if out_path is not None and not overwrite and (out_path.exists() or out_path.is_symlink()):
-        raise FileExistsError(f"{out_path}: already exists (use --force to overwrite)")
+    if out_path is not None:
+        check_output_file(bad_list_path(out_path))  # what refuse_bad writes beside it
+        if not overwrite and (out_path.exists() or out_path.is_symlink()):
+            raise FileExistsError(f"{out_path}: already exists (use --force to overwrite)")
     with output_lock(out_path) if out_path is not None else contextlib.nullcontext():
         cap = read_capture(folder, patch=patch)
         where = cap.folder / "stands.json"
@@ -401,7 +403,7 @@ def measure_btf(
         if out_path is not None:
             from .preflight import refuse_overlap
 
-            refuse_overlap(cap, [ck_path] if ck_path is not None else [], [out_path])
+            refuse_overlap(cap, [ck_path] if ck_path is not None else [], [out_path, bad_list_path(out_path)])
         table, report, ck = _measure(cap, reg, texels=(nu, nv), repeat=(su, sv), repeats=int(repeats), patch=patch,
                                      linear=linear, skip_bad=skip_bad, scheduler=scheduler,
                                      white_albedo=white_albedo, material=material, num_workers=num_workers,
@@ -411,6 +413,7 @@ def measure_btf(
         if out_path is not None:
             table.save(out_path)
             ck.remove()
+            remove_bad_list(out_path)  # an earlier run's list of unusable photographs is stale now
         report.seconds = time.perf_counter() - t0
         return table, report
 
