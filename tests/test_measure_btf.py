@@ -19,7 +19,7 @@ import shutil
 import numpy as np
 import pytest
 
-from cdbrdf import CDBTF, Grid, render
+from cdbrdf import CDBTF, Grid
 from cdbrdf.btf import load as load_btf
 from cdbrdf.cli import main
 from cdbrdf.errors import CaptureError, OptionError
@@ -29,10 +29,9 @@ from cdbrdf.measure.btf import BTFReport, view_geometry
 from cdbrdf.measure.registration import face_hits, face_points, image_axes, parse_registration
 from cdbrdf.measure.stands import Stand
 
-try:
-    render.check_llvm()
-except Exception as exc:  # noqa: BLE001 - no usable LLVM: the rig cannot run here
-    pytest.skip(f"Mitsuba's LLVM backend unavailable: {exc}", allow_module_level=True)
+from .render_helpers import require_llvm_module  # noqa: E402
+
+require_llvm_module()
 
 from cdbrdf.rig import simulate_capture  # noqa: E402
 

@@ -14,17 +14,16 @@ import shutil
 import numpy as np
 import pytest
 
-from cdbrdf import CDBTF, render
+from cdbrdf import CDBTF
 from cdbrdf.btf import load as load_btf
 from cdbrdf.cli import main
 from cdbrdf.errors import OptionError
 from cdbrdf.measure import MeasurementInterrupted, measure
 from cdbrdf.measure.checkpoint import checkpoint_path
 
-try:
-    render.check_llvm()
-except Exception as exc:  # noqa: BLE001 - no usable LLVM: the rig cannot run here
-    pytest.skip(f"Mitsuba's LLVM backend unavailable: {exc}", allow_module_level=True)
+from .render_helpers import require_llvm_module  # noqa: E402
+
+require_llvm_module()
 
 from cdbrdf.rig import simulate_capture  # noqa: E402
 

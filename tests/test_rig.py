@@ -27,10 +27,9 @@ from cdbrdf import CDBRDF, Grid, render
 from cdbrdf.cli import main
 from cdbrdf.measure import Stand, hidden_mask, measure
 
-try:
-    render.check_llvm()
-except Exception as exc:  # noqa: BLE001 - no usable LLVM: the rig cannot run here
-    pytest.skip(f"Mitsuba's LLVM backend unavailable: {exc}", allow_module_level=True)
+from .render_helpers import require_llvm_module  # noqa: E402
+
+require_llvm_module()
 
 from cdbrdf.rig import (  # noqa: E402
     NoiseModel,
