@@ -53,10 +53,9 @@ BRDFs", Journal of Computer Graphics Techniques 3(2), 2014.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -67,6 +66,7 @@ from ..errors import OptionError, QueryError
 from ..frames import direction_from_angles
 from . import _trace
 from ._model import SampledModel
+from ._params import NOT_SPECIAL, ModelParams, is_real
 from .bending import Bend, bend
 from .fibre import FibreLobes
 from .surface import SurfacePoints, surface_points
@@ -92,7 +92,7 @@ RGB = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
-class ClothParams:
+class ClothParams(ModelParams):
     """Parameters of a woven cloth. Lengths in mm, angles in degrees.
 
     Attributes
@@ -148,6 +148,8 @@ class ClothParams:
     tilt_samples
         Patches across the footprint on a bent cloth.
     """
+
+    _KIND = "cloth"
 
     name: str = "cloth"
     weave: str | tuple[tuple[int, ...], ...] = "plain"
@@ -208,26 +210,26 @@ class ClothParams:
         )
         for f in positive:
             v = getattr(self, f)
-            if not _is_real(v) or not v > 0:
+            if not is_real(v) or not v > 0:
                 raise OptionError(f"{f}: must be a positive number, got {v!r}")
             object.__setattr__(self, f, float(v))
         for f in ("crimp_share_warp", "neutral_fraction", "warp_isotropic", "weft_isotropic"):
             v = getattr(self, f)
-            if not _is_real(v) or not 0 <= v <= 1:
+            if not is_real(v) or not 0 <= v <= 1:
                 raise OptionError(f"{f}: must lie in [0, 1], got {v!r}")
             object.__setattr__(self, f, float(v))
         v = self.crimp_transition
-        if not _is_real(v) or not 0.05 <= v <= 1:
+        if not is_real(v) or not 0.05 <= v <= 1:
             raise OptionError(f"crimp_transition: must lie in [0.05, 1], got {v!r}")
         object.__setattr__(self, "crimp_transition", float(v))
         for f in ("footprint_mm", "warp_specular", "weft_specular"):
             v = getattr(self, f)
-            if not _is_real(v) or not v >= 0:
+            if not is_real(v) or not v >= 0:
                 raise OptionError(f"{f}: must be a non-negative number, got {v!r}")
             object.__setattr__(self, f, float(v))
         for f in ("warp_twist_deg", "weft_twist_deg"):
             v = getattr(self, f)
-            if not _is_real(v) or not -60 <= v <= 60:
+            if not is_real(v) or not -60 <= v <= 60:
                 raise OptionError(f"{f}: must lie in [-60, 60] degrees, got {v!r}")
             object.__setattr__(self, f, float(v))
         if self.ior < 1.0:
@@ -242,72 +244,14 @@ class ClothParams:
             object.__setattr__(self, f, int(v))
 
     @classmethod
-    def names(cls) -> list[str]:
-        """Valid parameter names."""
-        return [f.name for f in fields(cls)]
-
-    def replace(self, **changes: Any) -> ClothParams:
-        """A copy with some parameters changed (validated).
-
-        Raises
-        ------
-        ValueError
-            For an unknown parameter name (the message lists the valid ones)
-            or an invalid value.
-        """
-        unknown = sorted(set(changes) - set(self.names()))
-        if unknown:
-            raise OptionError(
-                f"unknown cloth parameter(s) {', '.join(map(repr, unknown))}; "
-                f"valid names: {', '.join(self.names())}"
-            )
-        return dataclasses.replace(self, **changes)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-friendly parameters (tuples become lists)."""
-        out: dict[str, Any] = {}
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, tuple):
-                v = [list(x) if isinstance(x, tuple) else x for x in v]
-            out[f.name] = v
-        return out
-
-    @classmethod
-    def parse_value(cls, name: str, text: str) -> Any:
-        """Convert a command-line value ``text`` for parameter ``name``.
-
-        Colours are ``r,g,b``; a weave is a registered name or rows of 0/1
-        separated by commas or semicolons (``1110,0111,1011,1101``).
-
-        Raises
-        ------
-        ValueError
-            For an unknown name (listing the valid ones) or unreadable text.
-        """
-        if name not in cls.names():
-            raise OptionError(
-                f"unknown cloth parameter {name!r}; valid names: {', '.join(cls.names())}"
-            )
-        default = next(f.default for f in fields(cls) if f.name == name)
-        t = text.strip()
-        try:
-            if name == "weave":
-                if t.replace(",", "").replace(";", "").replace(" ", "").isdigit():
-                    rows = [r.strip() for r in t.replace(";", ",").split(",") if r.strip()]
-                    return tuple(tuple(int(c) for c in r) for r in rows)
-                return t
-            if isinstance(default, tuple):
-                return tuple(float(x) for x in t.split(","))
-            if isinstance(default, bool):
-                raise ValueError
-            if isinstance(default, int):
-                return int(t)
-            if isinstance(default, float):
-                return float(t)
-            return t
-        except ValueError:
-            raise OptionError(f"{name}: cannot read {text!r} as a value of this parameter") from None
+    def _parse_special(cls, name: str, text: str) -> Any:
+        """A weave is a registered name or rows of 0/1 separated by commas or semicolons (``1110,0111,...``)."""
+        if name != "weave":
+            return NOT_SPECIAL
+        if text.replace(",", "").replace(";", "").replace(" ", "").isdigit():
+            rows = [r.strip() for r in text.replace(";", ",").split(",") if r.strip()]
+            return tuple(tuple(int(c) for c in r) for r in rows)
+        return text
 
     @property
     def weave_matrix(self) -> NDArray[np.int8]:
@@ -334,10 +278,6 @@ class ClothParams:
             transition=self.crimp_transition,
         )
         return warp, weft
-
-
-def _is_real(v: Any) -> bool:
-    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and math.isfinite(v)
 
 
 class ClothModel(SampledModel):

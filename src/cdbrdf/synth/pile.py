@@ -61,11 +61,10 @@ Interactions, Springer, 1991.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
@@ -77,6 +76,7 @@ from ..errors import OptionError, QueryError
 from ..frames import direction_from_angles
 from . import _pile
 from ._model import SampledModel
+from ._params import ModelParams, is_real
 
 __all__ = ["PILE_KINDS", "PileParams", "PileModel", "PILE_MODEL_NAME", "PILE_MODEL_VERSION"]
 
@@ -104,7 +104,7 @@ RGB = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
-class PileParams:
+class PileParams(ModelParams):
     """Parameters of a pile fabric. Lengths in mm, angles in degrees.
 
     Attributes
@@ -150,6 +150,8 @@ class PileParams:
         Tilt samples of the orientation quadrature.
     """
 
+    _KIND = "pile"
+
     name: str = "pile"
     kind: str = "cut"
     pile_height_mm: float = 1.5
@@ -189,13 +191,13 @@ class PileParams:
         }
         for f, (lo, hi) in bounds.items():
             v = getattr(self, f)
-            if not _is_real(v) or not lo < v <= hi:
+            if not is_real(v) or not lo < v <= hi:
                 raise OptionError(f"{f}: must be a number in ({lo:g}, {hi:g}], got {v!r}")
             object.__setattr__(self, f, float(v))
         for f, lo, hi in (("lean_deg", 0.0, 80.0), ("spread_deg", 0.0, 60.0), ("fibre_specular", 0.0, 1.0),
                           ("brush_deg", -360.0, 360.0), ("ior", 1.0, 3.0)):
             v = getattr(self, f)
-            if not _is_real(v) or not lo <= v <= hi:
+            if not is_real(v) or not lo <= v <= hi:
                 raise OptionError(f"{f}: must lie in [{lo:g}, {hi:g}], got {v!r}")
             object.__setattr__(self, f, float(v))
         for f, lo, hi in (("layers", 2, 256), ("azimuths", 1, 256), ("rings", 1, 64)):
@@ -203,87 +205,6 @@ class PileParams:
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
                 raise OptionError(f"{f}: must be an integer in [{lo}, {hi}], got {v!r}")
             object.__setattr__(self, f, int(v))
-
-    @classmethod
-    def names(cls) -> list[str]:
-        """Valid parameter names."""
-        return [f.name for f in fields(cls)]
-
-    def replace(self, **changes: Any) -> PileParams:
-        """A copy with some parameters changed (validated).
-
-        Parameters
-        ----------
-        **changes
-            New values by parameter name.
-
-        Returns
-        -------
-        PileParams
-            The copy.
-
-        Raises
-        ------
-        OptionError
-            For an unknown parameter name (the message lists the valid ones)
-            or an invalid value.
-        """
-        unknown = sorted(set(changes) - set(self.names()))
-        if unknown:
-            raise OptionError(
-                f"unknown pile parameter(s) {', '.join(map(repr, unknown))}; valid names: {', '.join(self.names())}"
-            )
-        return dataclasses.replace(self, **changes)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-friendly parameters.
-
-        Returns
-        -------
-        dict
-            Every parameter by name (tuples become lists).
-        """
-        return {f.name: list(v) if isinstance(v := getattr(self, f.name), tuple) else v for f in fields(self)}
-
-    @classmethod
-    def parse_value(cls, name: str, text: str) -> Any:
-        """Convert a command-line value for a parameter.
-
-        Parameters
-        ----------
-        name
-            The parameter.
-        text
-            Its value as typed (colours as ``r,g,b``).
-
-        Returns
-        -------
-        Any
-            The value, of the parameter's type.
-
-        Raises
-        ------
-        OptionError
-            For an unknown name (listing the valid ones) or unreadable text.
-        """
-        if name not in cls.names():
-            raise OptionError(f"unknown pile parameter {name!r}; valid names: {', '.join(cls.names())}")
-        default = next(f.default for f in fields(cls) if f.name == name)
-        t = text.strip()
-        try:
-            if isinstance(default, tuple):
-                return tuple(float(x) for x in t.split(","))
-            if isinstance(default, int):
-                return int(t)
-            if isinstance(default, float):
-                return float(t)
-            return t
-        except ValueError:
-            raise OptionError(f"{name}: cannot read {text!r} as a value of this parameter") from None
-
-
-def _is_real(v: Any) -> bool:
-    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and math.isfinite(v)
 
 
 def _lean_matrix(p: PileParams) -> NDArray[np.float64]:
