@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..errors import QueryError
 from ..frames import direction_from_angles
 from ..table import CDBRDF, Grid
 
@@ -45,6 +46,34 @@ class SampledModel(ABC):
     def evaluate(self, theta_v: ArrayLike, phi_v: ArrayLike, theta_l: ArrayLike, phi_l: ArrayLike,
                  kappa: ArrayLike = 0.0) -> NDArray[np.float64]:
         """The BRDF at directions in degrees and a curvature in mm^-1 (broadcast), ``(..., 3)``."""
+
+    @staticmethod
+    def _by_kappa(pairs: Callable[[NDArray[np.float64], NDArray[np.float64], float], NDArray[np.float64]],
+                  width: int, theta_v: ArrayLike, phi_v: ArrayLike, theta_l: ArrayLike, phi_l: ArrayLike,
+                  kappa: ArrayLike) -> NDArray[np.float64]:
+        """``pairs(v, l, kappa)`` (``(n, width)`` per curvature) at broadcast angles (degrees) and curvatures.
+
+        The one query rule of the models' ``evaluate``: every argument finite,
+        elevations in [0, 90] degrees (else :class:`~cdbrdf.errors.QueryError`),
+        azimuths reduced to [0, 360) first (equal directions give equal values).
+        Returns ``broadcast shape + (width,)``.
+        """
+        arrs = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (theta_v, phi_v, theta_l, phi_l, kappa)))
+        shape = arrs[0].shape
+        tv, pv, tl, pl, kk = (a.reshape(-1) for a in arrs)
+        for name, a in (("theta_v", tv), ("phi_v", pv), ("theta_l", tl), ("phi_l", pl), ("kappa", kk)):
+            if not np.all(np.isfinite(a)):
+                raise QueryError(f"{name}: must be finite")
+        for name, a in (("theta_v", tv), ("theta_l", tl)):
+            if np.any((a < 0) | (a > 90)):
+                raise QueryError(f"{name}: elevations must lie in [0, 90] degrees")
+        v = direction_from_angles(tv, np.mod(pv, 360.0))
+        l = direction_from_angles(tl, np.mod(pl, 360.0))
+        out = np.zeros((tv.size, width))
+        for k in np.unique(kk):
+            sel = np.flatnonzero(kk == k)
+            out[sel] = pairs(v[sel], l[sel], float(k))
+        return out.reshape(shape + (width,))
 
     def tabulate(
         self,

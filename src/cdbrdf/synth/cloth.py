@@ -62,8 +62,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._jit import run_split
-from ..errors import OptionError, QueryError
-from ..frames import direction_from_angles
+from ..errors import OptionError
 from . import _trace
 from ._model import SampledModel
 from ._params import NOT_SPECIAL, ModelParams, is_real
@@ -486,23 +485,7 @@ class ClothModel(SampledModel):
         ValueError
             For a curvature tighter than the cloth's thickness allows.
         """
-        arrs = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (theta_v, phi_v, theta_l, phi_l, kappa)))
-        shape = arrs[0].shape
-        tv, pv, tl, pl, kk = (a.reshape(-1) for a in arrs)
-        for name, a in (("theta_v", tv), ("phi_v", pv), ("theta_l", tl), ("phi_l", pl), ("kappa", kk)):
-            if not np.all(np.isfinite(a)):
-                raise QueryError(f"{name}: must be finite")
-        for name, a in (("theta_v", tv), ("theta_l", tl)):
-            if np.any((a < 0) | (a > 90)):
-                raise QueryError(f"{name}: elevations must lie in [0, 90] degrees")
-        # Azimuths reduced to [0, 360) first: equal directions give equal values.
-        v = direction_from_angles(tv, np.mod(pv, 360.0))
-        l = direction_from_angles(tl, np.mod(pl, 360.0))
-        out = np.zeros((tv.size, 3))
-        for k in np.unique(kk):
-            sel = np.flatnonzero(kk == k)
-            out[sel] = self._pairs(v[sel], l[sel], float(k))
-        return out.reshape(shape + (3,))
+        return self._by_kappa(self._pairs, 3, theta_v, phi_v, theta_l, phi_l, kappa)
 
     def _sample(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float) -> NDArray[np.float64]:
         return self._pairs(v, l, kappa)

@@ -72,8 +72,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._jit import run_split
-from ..errors import OptionError, QueryError
-from ..frames import direction_from_angles
+from ..errors import OptionError
 from . import _pile
 from ._model import SampledModel
 from ._params import ModelParams, is_real
@@ -415,22 +414,8 @@ class PileModel(SampledModel):
             ``(pile, ground)``, each ``broadcast shape + (3,)``, sr^-1; their
             sum is :meth:`evaluate`.
         """
-        arrs = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (theta_v, phi_v, theta_l, phi_l, kappa)))
-        shape = arrs[0].shape
-        tv, pv, tl, pl, kk = (a.reshape(-1) for a in arrs)
-        for name, a in (("theta_v", tv), ("phi_v", pv), ("theta_l", tl), ("phi_l", pl), ("kappa", kk)):
-            if not np.all(np.isfinite(a)):
-                raise QueryError(f"{name}: must be finite")
-        for name, a in (("theta_v", tv), ("theta_l", tl)):
-            if np.any((a < 0) | (a > 90)):
-                raise QueryError(f"{name}: elevations must lie in [0, 90] degrees")
-        v = direction_from_angles(tv, np.mod(pv, 360.0))
-        l = direction_from_angles(tl, np.mod(pl, 360.0))
-        out = np.zeros((tv.size, 6))
-        for k in np.unique(kk):
-            sel = np.flatnonzero(kk == k)
-            out[sel] = self._pairs(v[sel], l[sel], float(k))
-        return out[:, :3].reshape(shape + (3,)), out[:, 3:].reshape(shape + (3,))
+        out = self._by_kappa(self._pairs, 6, theta_v, phi_v, theta_l, phi_l, kappa)
+        return out[..., :3], out[..., 3:]
 
     def evaluate(
         self,
