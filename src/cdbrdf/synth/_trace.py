@@ -51,19 +51,22 @@ def _segment(x, xmap):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _cell(fx, fy, nx, ny):
+    """The periodic bilinear cell of ``(fx, fy)`` (texel-centre coordinates): corner indices and weights."""
+    x0 = math.floor(fx)
+    y0 = math.floor(fy)
+    i0 = int(x0) % nx
+    j0 = int(y0) % ny
+    return i0, (i0 + 1) % nx, j0, (j0 + 1) % ny, fx - x0, fy - y0
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def _height(H, x, y, xmap, dy):
     """Bilinear, periodic interpolation of texel-centre heights."""
     ny, nx = H.shape
     fx = _segment(x, xmap)[0] - 0.5
     fy = y / dy - 0.5
-    x0 = math.floor(fx)
-    y0 = math.floor(fy)
-    tx = fx - x0
-    ty = fy - y0
-    i0 = int(x0) % nx
-    j0 = int(y0) % ny
-    i1 = (i0 + 1) % nx
-    j1 = (j0 + 1) % ny
+    i0, i1, j0, j1, tx, ty = _cell(fx, fy, nx, ny)
     a = H[j0, i0] * (1.0 - tx) + H[j0, i1] * tx
     b = H[j1, i0] * (1.0 - tx) + H[j1, i1] * tx
     return a * (1.0 - ty) + b * ty
@@ -78,14 +81,7 @@ def _surface(H, xi, y, dy, rate):
     ny, nx = H.shape
     fx = xi - 0.5
     fy = y / dy - 0.5
-    x0 = math.floor(fx)
-    y0 = math.floor(fy)
-    tx = fx - x0
-    ty = fy - y0
-    i0 = int(x0) % nx
-    j0 = int(y0) % ny
-    i1 = (i0 + 1) % nx
-    j1 = (j0 + 1) % ny
+    i0, i1, j0, j1, tx, ty = _cell(fx, fy, nx, ny)
     h00 = H[j0, i0]
     h01 = H[j0, i1]
     h10 = H[j1, i0]
