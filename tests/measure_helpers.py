@@ -118,3 +118,33 @@ def truth(grid=GRID):
 def same_tables(a, b):
     assert a == b  # values, mask, fill source, std, attrs: exactly equal
     np.testing.assert_array_equal(a.values, b.values)
+
+
+def kill_after_first_batch(folder: Path, out: Path, **measure_kwargs) -> int:
+    """Run ``measure(folder, out, **measure_kwargs)`` in a child process, SIGKILL it once its checkpoint holds a
+    batch, and return how many batches were saved (the child is slowed by a progress callback that sleeps)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import cdbrdf
+    from cdbrdf.measure.checkpoint import checkpoint_path
+
+    script = (
+        "import sys, time, json\n"
+        "from cdbrdf.measure import measure\n"
+        "measure(sys.argv[1], sys.argv[2], **json.loads(sys.argv[3]), progress=lambda d, t: time.sleep(0.3))\n"
+    )
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(Path(cdbrdf.__file__).parents[1]) + os.pathsep + env.get("PYTHONPATH", "")
+    proc = subprocess.Popen([sys.executable, "-c", script, str(folder), str(out), json.dumps(measure_kwargs)],
+                            env=env)
+    ck = checkpoint_path(out)
+    deadline = time.monotonic() + 60
+    while not list(ck.glob("batch-*.npz")) and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    return len(list(ck.glob("batch-*.npz")))

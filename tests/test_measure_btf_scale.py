@@ -27,6 +27,7 @@ require_llvm_module()
 
 from cdbrdf.rig import simulate_capture  # noqa: E402
 
+from .measure_helpers import kill_after_first_batch  # noqa: E402
 from .test_measure_btf import SMALL, texture  # noqa: E402
 
 
@@ -185,33 +186,10 @@ def test_a_changed_photograph_is_read_again(capture, tmp_path):
 
 def test_killed_process_resumes(capture, tmp_path):
     """SIGKILL a process measuring the CD-BTF after its first checkpointed batch; the rerun resumes, bit for bit."""
-    import os
-    import signal
-    import subprocess
-    import sys
-    import time
-
-    import cdbrdf
-
     folder, ref, _ = capture
     out = tmp_path / "out.h5"
-    script = (
-        "import sys, time\n"
-        "from cdbrdf.measure import measure\n"
-        "measure(sys.argv[1], sys.argv[2], btf=4, batch_size=16, num_workers=1,\n"
-        "        progress=lambda d, t: time.sleep(0.3))\n"
-    )
-    env = dict(os.environ)
-    src = str(__import__("pathlib").Path(cdbrdf.__file__).parents[1])
-    env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
-    proc = subprocess.Popen([sys.executable, "-c", script, str(folder), str(out)], env=env)
-    ck = checkpoint_path(out)
-    deadline = time.monotonic() + 60
-    while not list(ck.glob("batch-*.npz")) and time.monotonic() < deadline and proc.poll() is None:
-        time.sleep(0.02)
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
-    assert not out.exists() and len(list(ck.glob("batch-*.npz"))) >= 1
+    assert kill_after_first_batch(folder, out, btf=4, batch_size=16, num_workers=1) >= 1
+    assert not out.exists()
     got, rep = measure(folder, out, btf=4)
     assert rep.n_images_resumed >= 16
     same_btf(got, ref)

@@ -14,6 +14,7 @@ from .measure_helpers import (
     GRID,
     SMALL,
     WHITE,
+    kill_after_first_batch,
     make_capture,
     pixel,
     same_tables,
@@ -57,34 +58,11 @@ def test_changed_image_is_read_again(tmp_path):
 
 def test_killed_process_resumes(tmp_path):
     """SIGKILL a measuring process after its first checkpointed batch; the rerun resumes."""
-    import os
-    import signal
-    import subprocess
-    import sys
-    import time
-
     make_capture(tmp_path / "cap", GRID, pixel, kind="png16", white=WHITE)
     ref, _ = measure(tmp_path / "cap")
     out = tmp_path / "out.h5"
-    script = (
-        "import sys, time\n"
-        "from cdbrdf.measure import measure\n"
-        "measure(sys.argv[1], sys.argv[2], batch_size=6, num_workers=1,\n"
-        "        progress=lambda d, t: time.sleep(0.3))\n"
-    )
-    env = dict(os.environ)
-    src = str(__import__("pathlib").Path(cdbrdf.__file__).parents[1])
-    env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
-    proc = subprocess.Popen([sys.executable, "-c", script, str(tmp_path / "cap"), str(out)], env=env)
-    ck = checkpoint_path(out)
-    deadline = time.monotonic() + 60
-    while not list(ck.glob("batch-*.npz")) and time.monotonic() < deadline and proc.poll() is None:
-        time.sleep(0.02)
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
+    assert kill_after_first_batch(tmp_path / "cap", out, batch_size=6, num_workers=1) >= 1
     assert not out.exists()
-    done = len(list(ck.glob("batch-*.npz")))
-    assert done >= 1
     table, rep = measure(tmp_path / "cap", out)
     assert rep.n_images_resumed >= 6
     same_tables(table, ref)

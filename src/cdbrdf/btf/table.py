@@ -266,7 +266,9 @@ class CDBTF:
         components themselves: the energy of the dropped part (exactly, from
         the weights' and the components' Gram matrices) added to the error
         recorded for the full rank (the residual is orthogonal to the
-        components, as it is for a PCA). ``max_error`` is kept (the target
+        components, as it is for a PCA; a CD-BTF built from its parts
+        without recorded errors is taken as exact at its full rank, so the
+        errors are those of the truncation alone). ``max_error`` is kept (the target
         the full rank was chosen for), and ``truncated_from`` records the
         full rank.
 
