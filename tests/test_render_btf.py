@@ -358,3 +358,19 @@ def test_spectral_render_of_uniform_texels_is_the_cdbrdfs(cr, btf):
     same = render_table(flat, sheet, **kw).images["cdbrdf"][..., :3]
     assert ref.max() > 0
     np.testing.assert_allclose(same, ref, rtol=1e-4, atol=1e-5 * ref.max())
+
+
+def test_a_mesh_without_its_own_uvs_renders_the_tile_mean_and_says_so(cr, btf):
+    """prepare_mesh's per-face UVs follow no fabric: the CD-BTF is not laid by them (as in the viewer)."""
+    from cdbrdf.render import render_table
+
+    from .test_viewer_btf_mesh import flat_grid
+
+    kw = {"size": (32, 24), "spp": 16, "exposure": 0.0, "units": "mm", "light": (50.0, 0.0), "view": (60.0, -90.0)}
+    bare = render_table(btf, flat_grid(20.0, 20.0, uv=False), **kw)
+    mean = render_table(btf.mean(), flat_grid(20.0, 20.0, uv=False), **kw)
+    np.testing.assert_array_equal(bare.images["cdbrdf"], mean.images["cdbrdf"])
+    assert "no UVs of its own: the CD-BTF's tile mean is rendered on it" in bare.mesh.metadata["notes"]
+    woven = render_table(btf, flat_grid(20.0, 20.0), **kw)  # UVs of its own: the texels show
+    assert np.abs(woven.images["cdbrdf"] - mean.images["cdbrdf"]).max() > 0.02 * mean.images["cdbrdf"].max()
+    assert not any("tile mean" in n for n in woven.mesh.metadata.get("notes", []))

@@ -6,9 +6,12 @@ import argparse
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ._text import say
+
+if TYPE_CHECKING:
+    from ..mesh import Mesh
 
 __all__ = ["register", "run"]
 
@@ -84,7 +87,7 @@ def _browser_available() -> bool:
     return True
 
 
-def _user_mesh(args: argparse.Namespace, table: object) -> object:
+def _user_mesh(args: argparse.Namespace, table: object) -> Mesh:
     """``--mesh`` prepared as ``cdbrdf render`` prepares it, in the viewer's z-up frame; reported."""
     from ..mesh import prepare_mesh, read_mesh, z_up_mesh
     from ._progress import ProgressBars
@@ -100,11 +103,6 @@ def _user_mesh(args: argparse.Namespace, table: object) -> object:
         print_mesh_report(str(args.mesh), mesh)
         say(f"{args.mesh}: up axis: {up} ({why})", err=True)
     return world
-
-
-def _own_uvs(mesh: Any) -> bool:
-    """Whether a prepared mesh has UVs of its own (not the per-face ones prepare_mesh makes without)."""
-    return mesh.uv is not None and mesh.metadata.get("frame", "uv") == "uv"
 
 
 def _btf(args: argparse.Namespace, path: str) -> Any:
@@ -129,6 +127,7 @@ def _btf(args: argparse.Namespace, path: str) -> Any:
 def run(args: argparse.Namespace) -> int:
     from ..btf import CDBTF, is_btf
     from ..errors import OptionError
+    from ..mesh import has_own_uv
     from ..table import load
     from ..view.asset import resample
     from ..view.export import MAX_TABLES, drape_entry, export_viewer, viewer_files
@@ -162,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
         user = _user_mesh(args, first.mean() if isinstance(first, CDBTF) else first)
         scale = (1.0, 1.0) if args.uv_scale is None else tuple(args.uv_scale) * (3 - len(args.uv_scale))
         meshes["user"] = (Path(args.mesh).name, user, scale)
-        if any(isinstance(t, CDBTF) for _, t in tables) and not _own_uvs(user) and not args.quiet:
+        if any(isinstance(t, CDBTF) for _, t in tables) and not has_own_uv(user) and not args.quiet:
             say(f"{Path(args.mesh).name}: no UVs: the viewer shows the CD-BTF's tile mean on it", err=True)
     files = viewer_files(tables, meshes=meshes, precision=args.precision, max_rank=args.rank)
     if args.export:

@@ -42,7 +42,7 @@ from .frames import FRAMES
 from .garments import Garment, bust_mesh, garment_mesh
 from .io import CURVATURE_PLY_PROPERTY, MESH_FORMATS, read_mesh, read_obj, read_ply, write_ply
 from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, read_normal_map
-from .prepare import UP_AXES, check_up, detect_up, prepare_mesh, to_z_up, z_up_mesh
+from .prepare import UP_AXES, check_up, detect_up, has_own_uv, prepare_mesh, to_z_up, z_up_mesh
 from .repair import WELD_TOLERANCE, RepairedMesh, repair, weld
 from .surfaces import (
     DrapedCloth,
@@ -92,6 +92,7 @@ __all__ = [
     "check_neighbourhood",
     "neighbourhood_from_table",
     "prepare_mesh",
+    "has_own_uv",
     "detect_up",
     "to_z_up",
     "z_up_mesh",

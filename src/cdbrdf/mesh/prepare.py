@@ -38,7 +38,7 @@ from .io import read_mesh
 from .normalmap import NormalMap, add_normal_map, read_normal_map
 from .units import check_kappa_range, check_size, parse_units
 
-__all__ = ["UP_AXES", "prepare_mesh", "detect_up", "to_z_up", "z_up_mesh", "check_up"]
+__all__ = ["UP_AXES", "prepare_mesh", "has_own_uv", "detect_up", "to_z_up", "z_up_mesh", "check_up"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -55,6 +55,25 @@ BASE_SHARE = 0.02
 EXTENT_RATIO = 1.2
 
 _Y_TO_Z = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+
+
+def has_own_uv(mesh: Mesh) -> bool:
+    """Whether a mesh's UVs are its own (read from its file), not the per-face ones :func:`prepare_mesh` makes.
+
+    Without UVs of its own a prepared mesh gets per-face UVs carrying its
+    frame (``"tangent"`` or ``"principal"``); they follow no fabric and jump
+    at every edge, so a texture laid by UV (a CD-BTF's texels) must not use them.
+
+    Parameters
+    ----------
+    mesh
+        A mesh, prepared or not.
+
+    Returns
+    -------
+    bool
+    """
+    return mesh.uv is not None and mesh.metadata.get("frame", "uv") == "uv"
 
 
 def prepare_mesh(

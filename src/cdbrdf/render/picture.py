@@ -424,7 +424,7 @@ def render_table(
         environment map.
     """
     from ..limits import check as check_limit
-    from ..mesh import ATTRIBUTES, Mesh, SineSheet, detect_up, prepare_mesh, read_mesh
+    from ..mesh import ATTRIBUTES, Mesh, SineSheet, detect_up, has_own_uv, prepare_mesh, read_mesh
     from ..table import CDBRDF
     from ..table import load as load_table
     from .camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW
@@ -480,6 +480,11 @@ def render_table(
         mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=tbl,
                             normal_map=normal_map, progress=cb)
         up_axis, why = (up, "given") if up != "auto" else detect_up(mesh)
+        if btf is not None and not has_own_uv(mesh):  # the per-face UVs prepare_mesh makes follow no fabric
+            mesh = mesh.copy()  # the note is this picture's, not the caller's mesh's
+            mesh.metadata["notes"] = [*mesh.metadata.get("notes", []),
+                                      "no UVs of its own: the CD-BTF's tile mean is rendered on it"]
+            btf = None
     images: dict[str, NDArray[np.float32]] = {}
     kappa_image = None
     if btf is not None and uv_scale is None:  # the sheet's UVs span it; a mesh's UVs are in mm

@@ -421,6 +421,7 @@ def mesh_asset(mesh: Any, *, name: str, uv_scale_mm: float | tuple[float, float]
         For a ``uv_scale_mm`` that is not one or two positive finite numbers.
     """
     from ..mesh.frames import face_uv_tangents, vertex_tangents
+    from ..mesh.prepare import has_own_uv
     from ..mesh.units import parse_units
 
     su, sv = _uv_scale_pair(uv_scale_mm)
@@ -446,9 +447,7 @@ def mesh_asset(mesh: Any, *, name: str, uv_scale_mm: float | tuple[float, float]
     blob.add("normal", n, "float32")
     blob.add("tangent", t, "float32")
     blob.add("curvature", kappa, "float32")
-    # the mesh's own UVs only: prepare_mesh generates per-face UVs (frame "tangent" or "principal") that
-    # follow no fabric and jump at every edge
-    own = mesh.uv is not None and mesh.metadata.get("frame", "uv") == "uv"
+    own = has_own_uv(mesh)  # not the per-face UVs prepare_mesh makes without
     uv = np.asarray(mesh.uv, dtype=np.float64) if own else None
     if uv is not None and not np.isfinite(uv).all():
         _LOG.warning("%s: the UVs are not all finite; the viewer shows a CD-BTF's tile mean on it", name)
