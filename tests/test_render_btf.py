@@ -369,7 +369,8 @@ def test_a_mesh_without_its_own_uvs_renders_the_tile_mean_and_says_so(cr, btf):
     kw = {"size": (32, 24), "spp": 16, "exposure": 0.0, "units": "mm", "light": (50.0, 0.0), "view": (60.0, -90.0)}
     bare = render_table(btf, flat_grid(20.0, 20.0, uv=False), **kw)
     mean = render_table(btf.mean(), flat_grid(20.0, 20.0, uv=False), **kw)
-    np.testing.assert_array_equal(bare.images["cdbrdf"], mean.images["cdbrdf"])
+    # the same scene and table: equal up to the order of float32 sums in the render (1e-7 seen)
+    np.testing.assert_allclose(bare.images["cdbrdf"], mean.images["cdbrdf"], rtol=1e-5, atol=1e-6)
     assert "no UVs of its own: the CD-BTF's tile mean is rendered on it" in bare.mesh.metadata["notes"]
     woven = render_table(btf, flat_grid(20.0, 20.0), **kw)  # UVs of its own: the texels show
     assert np.abs(woven.images["cdbrdf"] - mean.images["cdbrdf"]).max() > 0.02 * mean.images["cdbrdf"].max()
