@@ -72,6 +72,7 @@ def has_own_uv(mesh: Mesh) -> bool:
     Returns
     -------
     bool
+        True when the mesh has UVs and they are not ones prepare_mesh made.
     """
     return mesh.uv is not None and mesh.metadata.get("frame", "uv") == "uv"
 
