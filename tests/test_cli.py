@@ -193,8 +193,25 @@ def _aliased_cases(tmp_path, table_file):
     with output_folder(tmp_path / "demo", maker="demo", signature=("report.html",)) as d:
         (d / "report.html").write_text("r")
         (d / "denim.h5").write_bytes(p.read_bytes())
+    obj = tmp_path / "shirt"  # an OBJ whose MTL names a normal map; a glTF whose image is a PNG
+    obj.mkdir()
+    (obj / "shirt.obj").write_text("mtllib shirt.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                   "usemtl cloth\nf 1/1 2/2 3/3\n")
+    (obj / "shirt.mtl").write_text("newmtl cloth\nKd 0.5 0.5 0.5\nmap_Kd -s 1 1 1 diffuse.png\nnorm -bm 1 normal.png\n")
+    (obj / "normal.png").write_bytes(b"the shirt's normal map")
+    (obj / "diffuse.png").write_bytes(b"the shirt's colour")
+    (obj / "tri.gltf").write_text(json.dumps({
+        "asset": {"version": "2.0"}, "buffers": [{"uri": "tri%20data.ply", "byteLength": 36}],
+        "images": [{"uri": "wrinkles.png"}]}))
+    (obj / "tri data.ply").write_bytes(bytes(36))  # a buffer (whatever its name)
+    (obj / "wrinkles.png").write_bytes(b"the glTF's normal map")
     s = str
     return {
+        "render-mtl-norm": ["render", s(p), "--mesh", s(obj / "shirt.obj"), "-o", s(obj / "normal.png")],
+        "render-mtl-map": ["render", s(p), "--mesh", s(obj / "shirt.obj"), "-o", s(obj / "diffuse.png")],
+        "render-mtl": ["render", s(p), "--mesh", s(obj / "shirt.obj"), "--compare", "-o", s(obj / "shirt.mtl")],
+        "render-gltf-image": ["render", s(p), "--mesh", s(obj / "tri.gltf"), "-o", s(obj / "wrinkles.png")],
+        "curvature-gltf-buffer": ["curvature", s(obj / "tri.gltf"), "-o", s(obj / "tri data.ply")],
         "curvature": ["curvature", s(tmp_path / "scan.ply"), "-o", s(tmp_path / "scan.ply")],
         "import": ["import", s(one), "-o", s(one), "--grid", "regular:45,120"],
         "stack": ["stack", "--kappa", "0", s(one), "--kappa", "0.13", s(tmp_path / "k13.h5"), "-o",
@@ -214,7 +231,8 @@ def _snapshot(folder):
 
 
 @pytest.mark.parametrize("command", ["curvature", "import", "stack", "render", "render-table", "mosaic", "view",
-                                     "simulate-capture"])
+                                     "simulate-capture", "render-mtl-norm", "render-mtl-map", "render-mtl",
+                                     "render-gltf-image", "curvature-gltf-buffer"])
 def test_an_output_that_is_or_holds_an_input_is_refused_by_every_command(tmp_path, table_file, capsys, command):
     """The one output rule: scan.ply -o scan.ply, import flat.h5 -o flat.h5, --export over the inputs' folder..."""
     argv = _aliased_cases(tmp_path, table_file)[command]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -403,6 +404,86 @@ def test_output_lock_leaves_no_lock_file(tmp_path):
     with outputs.output_lock(tmp_path / "x.png"):
         assert (tmp_path / ".x.png.lock").read_text().strip() == str(__import__("os").getpid())
     assert list(tmp_path.iterdir()) == []
+
+
+def test_output_lock_reuses_a_killed_runs_lock_file(tmp_path):
+    lock = tmp_path / ".x.png.lock"
+    lock.write_text(f"{_dead_pid()}\n")
+    with outputs.output_lock(tmp_path / "x.png"):
+        assert lock.read_text().strip() == str(__import__("os").getpid())
+    assert list(tmp_path.iterdir()) == []
+
+
+def _lock_cases(tmp_path):
+    """Lock files that are not cdbrdf's: each must be refused, and nothing they reach changed."""
+    import os
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    cases = {}
+    d = tmp_path / "symlink"
+    d.mkdir()
+    (d / ".m.png.lock").symlink_to(victim)
+    cases["symlink"] = (d / "m.png", "is a symbolic link")
+    d = tmp_path / "dangling"
+    d.mkdir()
+    (d / ".m.png.lock").symlink_to(tmp_path / "created-by-nobody")
+    cases["dangling"] = (d / "m.png", "is a symbolic link")
+    d = tmp_path / "hardlink"
+    d.mkdir()
+    os.link(victim, d / ".m.png.lock")
+    cases["hardlink"] = (d / "m.png", "other name")
+    d = tmp_path / "fifo"
+    d.mkdir()
+    os.mkfifo(d / ".m.png.lock")
+    cases["fifo"] = (d / "m.png", "is a FIFO")
+    d = tmp_path / "folder"
+    d.mkdir()
+    (d / ".m.png.lock").mkdir()
+    cases["folder"] = (d / "m.png", "is a folder")
+    d = tmp_path / "content"
+    d.mkdir()
+    (d / ".m.png.lock").write_text("a user's notes, not a process id\n")
+    cases["content"] = (d / "m.png", "not a lock file")
+    return victim, cases
+
+
+@pytest.mark.parametrize("case", ["symlink", "dangling", "hardlink", "fifo", "folder", "content"])
+def test_output_lock_never_writes_through_a_link_or_over_another_file(tmp_path, case):
+    victim, cases = _lock_cases(tmp_path)
+    out, words = cases[case]
+    lock = out.with_name(f".{out.name}.lock")
+    before = lock.read_bytes() if lock.is_file() and not lock.is_symlink() else None
+    with pytest.raises(OutputError, match=rf"m\.png: its lock file .*\.m\.png\.lock .*{words}.*remove it"):
+        with outputs.output_lock(out):
+            pytest.fail("the lock was taken")
+    assert victim.read_text() == "precious"
+    assert not (tmp_path / "created-by-nobody").exists()
+    assert os.path.lexists(lock)  # left as it was, for the user to look at
+    if before is not None:
+        assert lock.read_bytes() == before
+
+
+def test_a_lock_linked_to_a_victim_is_refused_by_the_command_line(tmp_path, capsys, small_grid):
+    """``.m.png.lock -> victim.txt`` made ``cdbrdf mosaic t.h5 -o m.png`` overwrite the victim (exit 0)."""
+    from cdbrdf.cli import main
+
+    from .conftest import make_table
+
+    t = tmp_path / "t.h5"
+    make_table(small_grid).save(t)
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    (tmp_path / ".m.png.lock").symlink_to(victim)
+    assert main(["mosaic", str(t), "-o", str(tmp_path / "m.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is a symbolic link" in err, err
+    assert victim.read_text() == "precious" and not (tmp_path / "m.png").exists()
+    os.link(t, tmp_path / ".n.png.lock")  # a hard link to the command's own input
+    size = t.stat().st_size
+    assert main(["mosaic", str(t), "-o", str(tmp_path / "n.png")]) == 2
+    assert "other name" in capsys.readouterr().err
+    assert t.stat().st_size == size
 
 
 def test_atomic_path_keeps_the_mode_of_the_file_it_replaces(tmp_path):

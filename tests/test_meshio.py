@@ -485,3 +485,70 @@ def test_a_mesh_with_a_vertex_kilometres_away_is_refused(far):
         prepare_mesh(Mesh(v, f, None, uv, {}, None, {}))
     with pytest.raises(MeshError, match=r"unit m\), beyond 1e\+06 mm"):  # a wrong unit: 1 km in metres is 1e6 mm
         prepare_mesh(Mesh(v[:n] * 1e4, f[:-1], None, uv[:n], {}, None, {}), units="m")
+
+
+# -- the files a mesh pulls in --------------------------------------------------------------------------
+_TRI_OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl cloth\nf 1/1 2/2 3/3\n"
+
+
+def test_referenced_files_of_obj_mtl_and_gltf(tmp_path):
+    import json
+
+    from cdbrdf.mesh import referenced_files
+
+    (tmp_path / "a.obj").write_text("mtllib a.mtl\n" + _TRI_OBJ)
+    (tmp_path / "a.mtl").write_text("newmtl cloth\nmap_Kd -o 0.5 0.5 -clamp on tex/diffuse map.png\n"
+                                    "map_Bump -bm 0.3 bump.png\nnorm normal.png\ndisp -mm 0 1 height.exr\n")
+    refs = referenced_files(tmp_path / "a.obj")
+    assert [(r.role, r.path.relative_to(tmp_path).as_posix()) for r in refs] == [
+        ("mtllib", "a.mtl"), ("map_Kd", "tex/diffuse map.png"), ("map_Bump", "bump.png"), ("norm", "normal.png"),
+        ("disp", "height.exr")]
+    (tmp_path / "b.gltf").write_text(json.dumps({"asset": {"version": "2.0"},
+                                                 "buffers": [{"uri": "b%20c.bin"}, {"uri": "data:,abc"}],
+                                                 "images": [{"uri": "img/n.png"}, {"bufferView": 0}]}))
+    assert [(r.role, r.path.relative_to(tmp_path).as_posix()) for r in referenced_files(tmp_path / "b.gltf")] == [
+        ("buffer", "b c.bin"), ("image", "img/n.png")]
+    assert referenced_files(tmp_path / "x.ply") == []
+
+
+@pytest.mark.parametrize("where", ["mtllib", "map", "gltf-image", "gltf-buffer"])
+def test_a_fifo_named_by_a_mesh_is_refused_before_anything_opens_it(tmp_path, where):
+    """trimesh opened an OBJ's mtllib, an MTL's map and a glTF's uri itself: a FIFO there hung the run."""
+    import json
+    import os
+
+    if where in ("mtllib", "map"):
+        (tmp_path / "a.obj").write_text("mtllib a.mtl\n" + _TRI_OBJ)
+        if where == "mtllib":
+            os.mkfifo(tmp_path / "a.mtl")
+        else:
+            (tmp_path / "a.mtl").write_text("newmtl cloth\nmap_Kd pipe.png\n")
+            os.mkfifo(tmp_path / "pipe.png")
+        mesh = tmp_path / "a.obj"
+    else:
+        doc = {"asset": {"version": "2.0"}, "buffers": [{"uri": "pipe.bin" if where == "gltf-buffer" else "b.bin",
+                                                          "byteLength": 4}],
+               "images": [{"uri": "pipe.png" if where == "gltf-image" else "ok.png"}]}
+        (tmp_path / "a.gltf").write_text(json.dumps(doc))
+        os.mkfifo(tmp_path / ("pipe.bin" if where == "gltf-buffer" else "pipe.png"))
+        mesh = tmp_path / "a.gltf"
+    with pytest.raises(MeshError, match=r"its (mtllib|map_Kd|buffer|image) .*pipe|its mtllib .*a\.mtl.*FIFO"):
+        read_mesh(mesh)
+
+
+@pytest.mark.parametrize("uri", ["file:///etc/passwd", "http://example.com/n.png", "/etc/passwd"])
+def test_a_gltf_uri_that_is_no_relative_file_is_refused(tmp_path, uri):
+    import json
+
+    (tmp_path / "a.gltf").write_text(json.dumps({"asset": {"version": "2.0"}, "images": [{"uri": uri}]}))
+    with pytest.raises(MeshError, match=r"a\.gltf: glTF images\[0\]\.uri .* is not a relative file name"):
+        read_mesh(tmp_path / "a.gltf")
+
+
+def test_a_missing_normal_map_named_by_the_mtl_is_said(tmp_path):
+    (tmp_path / "a.obj").write_text("mtllib a.mtl\n" + _TRI_OBJ)
+    (tmp_path / "a.mtl").write_text("newmtl cloth\nnorm wrinkles.png\n")
+    mesh = read_mesh(tmp_path / "a.obj")
+    assert "normal_map" not in mesh.metadata
+    assert any("names the normal map" in n and "wrinkles.png" in n and "does not exist" in n
+               for n in mesh.metadata["notes"])

@@ -39,6 +39,7 @@ __all__ = [
     "check_output_file",
     "check_regular",
     "read_regular",
+    "kind_of",
     "temp_sibling",
     "sweep_stale",
 ]
@@ -125,8 +126,8 @@ def sweep_stale(dest: str | PathLike[str]) -> list[Path]:
     return removed
 
 
-def _kind_of(mode: int) -> str:
-    """What a file that is not a regular file is, for messages."""
+def kind_of(mode: int) -> str:
+    """What a file that is not a regular file is, for messages (``"a FIFO"``, ``"a folder"``...)."""
     for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO"),
                        (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
                        (stat.S_ISSOCK, "a socket")):
@@ -168,7 +169,7 @@ def check_output_file(path: str | PathLike[str]) -> Path:
         raise IsADirectoryError(f"{dest}: is a folder; give a file name")
     if not stat.S_ISREG(mode):
         raise FileExistsError(
-            f"{dest}: exists and is not a regular file ({_kind_of(mode)}); "
+            f"{dest}: exists and is not a regular file ({kind_of(mode)}); "
             "it is never replaced, choose another output name"
         )
     return dest
@@ -210,7 +211,7 @@ def check_regular(path: str | PathLike[str]) -> Path:
     if stat.S_ISDIR(mode):
         raise IsADirectoryError(f"{p}: not a regular file (a folder)")
     if not stat.S_ISREG(mode):
-        raise OSError(f"{p}: not a regular file ({_kind_of(mode)}); it is not read: reading it could block or "
+        raise OSError(f"{p}: not a regular file ({kind_of(mode)}); it is not read: reading it could block or "
                       "never end")
     return p
 
@@ -236,7 +237,7 @@ def read_regular(path: str | PathLike[str], *, max_bytes: int) -> bytes:
     with os.fdopen(fd, "rb") as fh:
         mode = os.fstat(fh.fileno()).st_mode
         if not stat.S_ISREG(mode):  # replaced since the check
-            raise OSError(f"{p}: not a regular file ({_kind_of(mode)})")
+            raise OSError(f"{p}: not a regular file ({kind_of(mode)})")
         return fh.read(max(int(max_bytes), 0) + 1)
 
 

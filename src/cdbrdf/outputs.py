@@ -25,6 +25,7 @@ import errno
 import json
 import logging
 import os
+import re
 import shutil
 import stat
 from collections.abc import Iterable, Iterator
@@ -167,12 +168,72 @@ def check_not_input(outputs: Iterable[tuple[str | PathLike[str], bool]],
     raise OutputError(f"{out}: lies inside the input folder {inp}; choose an output outside it")
 
 
+#: Largest lock file content accepted (a process id and a newline); anything longer is not a lock.
+_LOCK_MAX_BYTES = 32
+
+
 def _lock_holder(fd: int) -> int | None:
     try:
-        text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+        text = os.pread(fd, _LOCK_MAX_BYTES, 0).decode("ascii", "replace").strip()
     except OSError:  # pragma: no cover - a vanished descriptor
         return None
     return int(text) if text.isdigit() else None
+
+
+def _refuse_lock(dest: Path, lock: Path, problem: str) -> OutputError:
+    return OutputError(f"{dest}: its lock file {lock} {problem}; remove it (cdbrdf never writes through it) "
+                       "or choose another output")
+
+
+def _open_lock(dest: Path, lock: Path) -> int:
+    """A descriptor of the lock file, created or reused; never through a link, never over another file.
+
+    A new lock file is created with ``O_EXCL | O_NOFOLLOW``. An existing one
+    (left by a killed run) is reused only when it is a regular file with no
+    other name (hard link) holding nothing but a process id: a symbolic link,
+    a FIFO, a device, a folder, a file with other names or with other
+    content is refused, never opened for writing or truncated.
+    """
+    flags = os.O_RDWR | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0) \
+        | getattr(os, "O_NOCTTY", 0)
+    try:
+        return os.open(lock, flags | os.O_CREAT | os.O_EXCL, 0o666 & ~umask())
+    except FileExistsError:
+        pass
+    except OSError as exc:
+        raise _refuse_lock(dest, lock, f"cannot be created ({exc.strerror or exc})") from None
+    try:
+        st = os.lstat(lock)
+    except FileNotFoundError:
+        return _open_lock(dest, lock)  # removed by its holder in between: create it
+    except OSError as exc:
+        raise _refuse_lock(dest, lock, f"cannot be examined ({exc.strerror or exc})") from None
+    if stat.S_ISLNK(st.st_mode):
+        raise _refuse_lock(dest, lock, "is a symbolic link")
+    if not stat.S_ISREG(st.st_mode):
+        from .fsutil import kind_of
+
+        raise _refuse_lock(dest, lock, f"is {kind_of(st.st_mode)}, not a lock file")
+    try:
+        fd = os.open(lock, flags)
+    except FileNotFoundError:
+        return _open_lock(dest, lock)
+    except OSError as exc:
+        raise _refuse_lock(dest, lock, f"cannot be opened ({exc.strerror or exc})") from None
+    try:
+        fst = os.fstat(fd)
+        if (fst.st_dev, fst.st_ino) != (st.st_dev, st.st_ino) or not stat.S_ISREG(fst.st_mode):
+            raise _refuse_lock(dest, lock, "was replaced while it was opened")
+        if fst.st_nlink > 1:
+            raise _refuse_lock(dest, lock, f"has {fst.st_nlink - 1} other name(s) (hard links), so it is "
+                               "another file")
+        head = os.pread(fd, _LOCK_MAX_BYTES + 1, 0)
+        if fst.st_size > _LOCK_MAX_BYTES or not re.fullmatch(rb"\s*\d*\s*", head):
+            raise _refuse_lock(dest, lock, "holds something other than a process id, so it is not a lock file")
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
 
 
 @contextmanager
@@ -184,14 +245,17 @@ def output_lock(path: str | PathLike[str]) -> Iterator[Path]:
     when the run ends and released by the system when the process dies
     (SIGKILL included), so a killed run never blocks the next. Nested use in
     one process (a command and the library function it calls) is allowed.
-    On systems without ``fcntl`` nothing is locked.
+    The lock file is never reached through a link and never replaces or
+    truncates another file (:func:`_open_lock`). On systems without
+    ``fcntl`` nothing is locked.
 
     Raises
     ------
     OutputError
         When another process holds the lock: ``"out.h5: another cdbrdf run
         (process 1234) is writing it; wait for it to end or choose another
-        output"``.
+        output"``; when ``.NAME.lock`` is a link, a special file, a file
+        with other names or another file's content.
     """
     dest = Path(path)
     try:
@@ -201,14 +265,14 @@ def output_lock(path: str | PathLike[str]) -> Iterator[Path]:
         return
     lock = dest.with_name(f".{dest.name}.lock")
     while True:
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o666 & ~umask())
+        fd = _open_lock(dest, lock)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as exc:
             holder = _lock_holder(fd)
             os.close(fd)
             if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                raise
+                raise _refuse_lock(dest, lock, f"cannot be locked ({exc.strerror or exc})") from None
             if holder == os.getpid():  # this process holds it (nested): the outer use releases it
                 yield dest
                 return
@@ -216,14 +280,14 @@ def output_lock(path: str | PathLike[str]) -> Iterator[Path]:
             raise OutputError(f"{dest}: another cdbrdf run{who} is writing it; wait for it to end or choose "
                               "another output") from None
         try:  # the holder before us may have removed the file after we opened it: lock the one that is there
-            same = os.fstat(fd).st_ino == os.stat(lock).st_ino
+            same = os.fstat(fd).st_ino == os.lstat(lock).st_ino
         except OSError:
             same = False
         if same:
             break
         os.close(fd)
     try:
-        os.ftruncate(fd, 0)
+        os.ftruncate(fd, 0)  # a lock file: empty or a dead holder's process id (checked by _open_lock)
         os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
         yield dest
     finally:

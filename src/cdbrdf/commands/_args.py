@@ -46,6 +46,7 @@ __all__ = [
     "output_file",
     "output_folder",
     "with_role",
+    "mesh_file",
     "guarded",
     "seed",
     "name_or_index",
@@ -327,6 +328,30 @@ def existing_file(*kinds: str) -> _Type:
     return _named(parse, "file", "input")
 
 
+def mesh_file() -> _Type:
+    """A mesh file (:data:`cdbrdf.mesh.MESH_FORMATS`), an input with every file it pulls in.
+
+    The material libraries, maps, buffers and images the mesh names
+    (:func:`cdbrdf.mesh.referenced_files`) are inputs too: :func:`guarded`
+    refuses an output over any of them.
+    """
+    from ..mesh import MESH_FORMATS
+
+    base = existing_file(*MESH_FORMATS)
+
+    def parse(text: str) -> str:
+        return base(text)
+
+    def pulls_in(path: str) -> list[str]:
+        from ..mesh import referenced_files
+
+        return [str(r.path) for r in referenced_files(path)]
+
+    func = _named(parse, "mesh", "input")
+    setattr(func, "pulls_in", pulls_in)  # noqa: B010 - an attribute functions do not declare
+    return func
+
+
 def with_role(func: _Type, role: str) -> _Type:
     """``func`` (an argparse type) marked as parsing a path of ``role`` (:data:`ROLES`) for :func:`guarded`."""
     if role not in ROLES:
@@ -439,6 +464,9 @@ def guarded(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Iterat
             if role == "input":
                 if os.path.lexists(value):  # a stand's K in `stack --kappa K FILE` is no path
                     inputs.append(value)
+                    pulls_in = getattr(action.type, "pulls_in", None)
+                    if pulls_in is not None:  # a mesh's material libraries and maps, a glTF's buffers
+                        inputs.extend(pulls_in(value))
             elif value.strip():
                 outputs.append((value, role == "output_folder"))
     check_not_input(outputs, inputs)

@@ -62,7 +62,7 @@ def print_mesh_report(label: str, mesh: object) -> None:
 
 def register(sub: argparse._SubParsersAction) -> None:
     from ..mesh import MESH_FORMATS
-    from ._args import existing_file, output_file
+    from ._args import existing_file, mesh_file, output_file
 
     p = sub.add_parser(
         "curvature",
@@ -73,7 +73,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "mm), then write binary PLY with 'curvature_x' and 'curvature_dir_x' (Mitsuba attributes "
         "'vertex_curvature', 'vertex_curvature_dir'), keeping UVs and normals.",
     )
-    p.add_argument("mesh", metavar="IN", type=existing_file(*MESH_FORMATS),
+    p.add_argument("mesh", metavar="IN", type=mesh_file(),
                    help=f"input mesh ({', '.join(MESH_FORMATS)})")
     p.add_argument("-o", "--output", required=True, metavar="OUT.ply", type=output_file(".ply"),
                    help="output PLY file")

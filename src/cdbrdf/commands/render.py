@@ -63,6 +63,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         int_range,
         key_value,
         keyword,
+        mesh_file,
         output_file,
         seed,
         size_wxh,
@@ -106,7 +107,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                  "the table form's; none of these apply to a scene file)")
     what = table.add_mutually_exclusive_group()
     what.add_argument("--scene", choices=["sine"], help="built-in scene: the paper's sine sheet")
-    what.add_argument("--mesh", metavar="MESH", type=existing_file(*MESH_FORMATS),
+    what.add_argument("--mesh", metavar="MESH", type=mesh_file(),
                       help=f"a mesh ({', '.join(MESH_FORMATS)}), lengths in --units")
     mode = table.add_mutually_exclusive_group()
     mode.add_argument("--brdf", action="store_true", default=None, help="render the plain BRDF (kappa = 0 slice)")

@@ -29,7 +29,7 @@ def _grid(text: str) -> tuple[float, float, int | None]:
 def register(sub: argparse._SubParsersAction) -> None:
     from ..mesh import MESH_FORMATS, UP_AXES
     from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
-    from ._args import existing_file, float_list, int_range, keyword, output_folder
+    from ._args import existing_file, float_list, int_range, keyword, mesh_file, output_folder
     from .curvature import mesh_options
 
     p = sub.add_parser(
@@ -53,7 +53,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--port", type=int_range(1, 65535), default=0, metavar="N",
                    help="TCP port on 127.0.0.1 (default: a free one)")
     p.add_argument("--no-browser", dest="browser", action="store_false", help="do not open a browser")
-    p.add_argument("--mesh", type=existing_file(*MESH_FORMATS), metavar="MESH",
+    p.add_argument("--mesh", type=mesh_file(), metavar="MESH",
                    help=f"your own mesh ({', '.join(MESH_FORMATS)}; repaired, its curvature computed in "
                    "1/mm from --units unless the file has it, e.g. one written by cdbrdf curvature)")
     mesh_options(p)

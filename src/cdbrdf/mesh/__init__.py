@@ -43,6 +43,7 @@ from .garments import Garment, bust_mesh, garment_mesh
 from .io import CURVATURE_PLY_PROPERTY, MESH_FORMATS, read_mesh, read_obj, read_ply, write_ply
 from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, read_normal_map
 from .prepare import UP_AXES, check_up, detect_up, has_own_uv, prepare_mesh, to_z_up, z_up_mesh
+from .references import Reference, check_references, referenced_files
 from .repair import WELD_TOLERANCE, RepairedMesh, repair, weld
 from .surfaces import (
     DrapedCloth,
@@ -65,6 +66,9 @@ __all__ = [
     "read_ply",
     "read_obj",
     "write_ply",
+    "Reference",
+    "referenced_files",
+    "check_references",
     "ATTRIBUTES",
     "PLY_PROPERTIES",
     "MESH_ATTRIBUTES",

@@ -228,7 +228,10 @@ def _check_obj_indices(p: Path, data: bytes) -> None:
 def _read_trimesh(p: Path, fmt: str) -> Mesh:
     import trimesh
 
+    from .references import check_references
+
     data = _read_bytes(p)
+    refs = check_references(p, data)  # a FIFO or device named by the file would hang trimesh's reader
     if fmt == "obj":
         check("mesh_faces", _count_obj_faces(data), what=f"{p}: OBJ faces")
         _check_obj_indices(p, data)
@@ -267,31 +270,24 @@ def _read_trimesh(p: Path, fmt: str) -> Mesh:
     if uv_all is None and any(u is not None for u in uvs):
         meta["notes"] = [f"{sum(u is None for u in uvs)} of {len(uvs)} parts have no UVs: the UVs are not used"]
     n_all = np.concatenate(ns) if all(n is not None for n in ns) else None
-    nmap = _obj_normal_map(p, data) if fmt == "obj" else _gltf_normal_map(scene, p) if fmt in ("gltf", "glb") \
+    notes: list[str] = list(meta.get("notes", []))
+    nmap = _obj_normal_map(refs, notes) if fmt == "obj" else _gltf_normal_map(scene, p) if fmt in ("gltf", "glb") \
         else None
+    if notes:
+        meta["notes"] = notes
     if nmap is not None:
         meta["normal_map"] = nmap
     return Mesh(v_all, f_all, n_all, uv_all, {}, None, meta)
 
 
-_MTLLIB = re.compile(rb"(?m)^[ \t]*mtllib[ \t]+([^\r\n]+?)[ \t]*$")
-_NORM = re.compile(r"(?m)^[ \t]*norm[ \t]+(?:-\S+[ \t]+\S+[ \t]+)*([^\r\n]+?)[ \t]*$")
-
-
-def _obj_normal_map(p: Path, data: bytes) -> str | None:
-    """The tangent-space normal map an OBJ's material library names (``norm FILE``), if it exists."""
-    from ..fsutil import read_regular
-
-    for m in _MTLLIB.finditer(data):
-        mtl = p.parent / m.group(1).decode("utf-8", "replace")
-        try:
-            text = read_regular(mtl, max_bytes=1 << 20).decode("utf-8", "replace")
-        except OSError:
+def _obj_normal_map(refs: list[Any], notes: list[str]) -> str | None:
+    """The tangent-space normal map an OBJ's material library names (``norm FILE``), if it can be read."""
+    for r in refs:
+        if r.role.lower() != "norm":
             continue
-        for n in _NORM.finditer(text):
-            tex = mtl.parent / n.group(1)
-            if tex.is_file():
-                return str(tex)
+        if r.path.is_file():
+            return str(r.path)
+        notes.append(f"{r.named_by}: names the normal map {r.path}, which does not exist: not used")
     return None
 
 
