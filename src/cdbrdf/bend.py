@@ -72,7 +72,7 @@ def fit_flat(source: Any, *, model: str = "auto", fit_pairs: int = FIT_PAIRS, te
     fit_pairs, test_pairs
         Direction pairs of the fit and of its error (:mod:`cdbrdf.fit.data`).
     max_evaluations
-        Model evaluations per fit (default :data:`cdbrdf.fit.DEFAULT_MAX_EVALUATIONS`).
+        Model evaluations per fit (default each model's own, :attr:`cdbrdf.fit.FitModel.max_evaluations`).
 
     Returns
     -------
@@ -86,8 +86,7 @@ def fit_flat(source: Any, *, model: str = "auto", fit_pairs: int = FIT_PAIRS, te
     data = F.sample(source.evaluate, isotropic=source.isotropic, n=fit_pairs, seed=0)
     test = F.sample(source.evaluate, isotropic=source.isotropic, n=test_pairs, seed=1)
     names = ("woven", "pile") if model == "auto" else (model,)
-    budget = F.DEFAULT_MAX_EVALUATIONS if max_evaluations is None else max_evaluations
-    results = [F.fit(data, name, test=test, max_evaluations=budget) for name in names]
+    results = [F.fit(data, name, test=test, max_evaluations=max_evaluations) for name in names]
     best = min(results, key=lambda r: r.errors["test"]["delta_e_median"])
     return best, {r.model: r.errors["test"] for r in results}
 
@@ -231,7 +230,7 @@ def bend(
     fit_pairs
         Direction pairs of the fit.
     max_evaluations
-        Model evaluations per fit (default :data:`cdbrdf.fit.DEFAULT_MAX_EVALUATIONS`).
+        Model evaluations per fit (default each model's own, :attr:`cdbrdf.fit.FitModel.max_evaluations`).
     progress
         ``progress(stage, done, total)``, stages ``"fit"``, ``"model"``.
 

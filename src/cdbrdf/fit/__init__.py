@@ -17,13 +17,12 @@ their public parameter sets and ``evaluate`` only; it imports nothing above
 
 from __future__ import annotations
 
-from .core import DEFAULT_MAX_EVALUATIONS, FitResult, errors, fit
+from .core import FitResult, errors, fit
 from .data import ISOTROPIC_TURNS_DEG, THETA_MAX_DEG, FitData, directions, sample
 from .models import FIT_MODELS, WEAVE_CHOICES, FitModel, Parameter, fit_model
 from .sheen import SheenParams, sheen_brdf
 
 __all__ = [
-    "DEFAULT_MAX_EVALUATIONS",
     "FIT_MODELS",
     "ISOTROPIC_TURNS_DEG",
     "THETA_MAX_DEG",

@@ -43,15 +43,12 @@ from ..errors import OptionError
 from .data import FitData
 from .models import FitModel, Parameter, fit_model
 
-__all__ = ["FitResult", "fit", "errors", "lab_jacobian", "DEFAULT_MAX_EVALUATIONS"]
+__all__ = ["FitResult", "fit", "errors", "lab_jacobian"]
 
 log = logging.getLogger(__name__)
 
-#: Model evaluations one fit may take by default (a Jacobian by finite differences costs one per
-#: parameter and one per colour; Broyden's updates between them none).
-DEFAULT_MAX_EVALUATIONS = 40
 #: Broyden updates of the Jacobian between two by finite differences.
-_REFRESH = 8
+_REFRESH = 3
 _LAB_EPSILON = 216.0 / 24389.0
 _LAB_KAPPA = 24389.0 / 27.0
 
@@ -124,6 +121,10 @@ class FitResult:
                 "space": "CIE 1976 L*a*b* of pi f (white = 1), least squares within physical bounds"}
 
 
+class _BudgetSpent(Exception):
+    """The solver asked for a model evaluation beyond the budget (internal: the best point so far is kept)."""
+
+
 class _Problem:
     """The residuals and their Jacobian for one model and one measurement, with a cache of model evaluations."""
 
@@ -140,7 +141,13 @@ class _Problem:
         self.target = linear_to_lab(math.pi * data.values)
         self._cache: dict[bytes, NDArray[np.float64]] = {}
         self.evaluations = 0
+        #: Evaluations after which Jacobians are Broyden's only (the solver's own budget is the caller's).
+        self.budget = 1 << 30
+        self.width = 1 + sum(1 if p.channels == 1 or fm.channels_independent else p.channels for p in fm.parameters)
         self.broyden_steps = 0
+        #: Whether the solver may still evaluate the model (the finite differences of restart() always may).
+        self.capped = False
+        self.best: tuple[float, NDArray[np.float64]] | None = None
         self._last: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]] | None = None
 
     def pack(self, values: Mapping[str, Any]) -> NDArray[np.float64]:
@@ -160,6 +167,8 @@ class _Problem:
         key = np.round(np.asarray(x, dtype=np.float64), 12).tobytes()
         hit = self._cache.get(key)
         if hit is None:
+            if self.capped and self.evaluations >= self.budget - self.width:
+                raise _BudgetSpent
             hit = np.maximum(self.fm.evaluate(self.values(x), self.data, quality="fit"), 0.0)
             self.evaluations += 1
             if len(self._cache) > 256:
@@ -168,7 +177,11 @@ class _Problem:
         return hit
 
     def residuals(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
-        return (linear_to_lab(math.pi * self.rgb(x)) - self.target).ravel()
+        r = (linear_to_lab(math.pi * self.rgb(x)) - self.target).ravel()
+        cost = 0.5 * float(r @ r)
+        if self.best is None or cost < self.best[0]:
+            self.best = (cost, np.array(x, dtype=np.float64))
+        return r
 
     def _step(self, p: Parameter, x: NDArray[np.float64], sl: slice) -> NDArray[np.float64]:
         lo, hi = p.bounds()
@@ -182,16 +195,24 @@ class _Problem:
         g = np.zeros((n, 3, self.size))
         for p, sl in self.layout:
             h = self._step(p, x, sl)
-            x1 = x.copy()
-            x1[sl] += h
-            d = self.rgb(x1) - rgb0
-            if p.channels == 3:  # each channel of the colour changes its own channel only
+            if p.channels == 3 and self.fm.channels_independent:  # each channel changes its own channel only
+                x1 = x.copy()
+                x1[sl] += h
+                d = self.rgb(x1) - rgb0
                 for c in range(3):
                     g[:, c, sl.start + c] = d[:, c] / h[c]
-            else:
-                g[:, :, sl.start] = d / h[0]
+                continue
+            for j in range(p.channels):
+                x1 = x.copy()
+                x1[sl.start + j] += h[j]
+                g[:, :, sl.start + j] = (self.rgb(x1) - rgb0) / h[j]
         jl = lab_jacobian(math.pi * rgb0) * math.pi  # (n, 3 lab, 3 rgb)
         return np.einsum("nkc,ncp->nkp", jl, g).reshape(3 * n, self.size)
+
+    def restart(self, x: NDArray[np.float64]) -> None:
+        """Take the finite-difference Jacobian at ``x`` as the next one the solver gets."""
+        self._last = (x.copy(), self.residuals(x), self.finite_differences(x))
+        self.broyden_steps = -1
 
     def jacobian(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
         """The solver's Jacobian: finite differences first and every :data:`_REFRESH` steps, Broyden's update between.
@@ -201,10 +222,14 @@ class _Problem:
         finite differences cost one per parameter and colour.
         """
         r = self.residuals(x)
-        if self._last is not None and self.broyden_steps < _REFRESH:
+        spent = self.evaluations + 2 * self.width > self.budget  # one Jacobian is kept for the uncertainty
+        if self._last is not None and (self.broyden_steps < _REFRESH or spent):
             x0, r0, j0 = self._last
             dx = x - x0
             dd = float(dx @ dx)
+            if dd == 0 and self.broyden_steps == -1:  # the finite differences of restart() at this very point
+                self.broyden_steps = 0
+                return j0
             if dd > 0:
                 j = j0 + np.outer(r - r0 - j0 @ dx, dx) / dd
                 self.broyden_steps += 1
@@ -259,8 +284,46 @@ def _uncertainty(prob: _Problem, x: NDArray[np.float64], jac: NDArray[np.float64
     return sigma, tuple(at_bound)
 
 
+def _solve(prob: _Problem, x0: NDArray[np.float64], budget: int) -> tuple[NDArray[np.float64], NDArray[np.int_], str]:
+    """Trust-region least squares, restarted from its solution with a fresh Jacobian while that still helps.
+
+    Broyden's updates (:meth:`_Problem.jacobian`) can make the solver stop
+    early on a stale Jacobian; the finite differences at its solution (which
+    the uncertainty needs anyway) restart it, until the cost falls by less
+    than 1 % or the budget of model evaluations is spent.
+    """
+    from scipy.optimize import least_squares
+
+    width = prob.width
+    prob.budget = budget
+    x = x0
+    cost = 0.5 * float(np.sum(prob.residuals(x) ** 2))
+    active = np.zeros(x.size, dtype=int)
+    message = "no step taken: the budget of model evaluations is spent"
+    for _ in range(8):
+        if budget - prob.evaluations - width < 2:
+            break
+        prob.capped = True
+        try:
+            sol = least_squares(prob.residuals, x, jac=prob.jacobian, bounds=(prob.lower, prob.upper), method="trf",
+                                x_scale="jac", ftol=1e-3, xtol=1e-4, gtol=1e-6)
+            x, active, message, new_cost = sol.x, np.asarray(sol.active_mask), str(sol.message), float(sol.cost)
+        except _BudgetSpent:
+            assert prob.best is not None
+            new_cost, x = prob.best
+            span = prob.upper - prob.lower
+            active = np.where(x <= prob.lower + 1e-9 * span, -1, np.where(x >= prob.upper - 1e-9 * span, 1, 0))
+            message = "the budget of model evaluations is spent"
+        prob.capped = False
+        prob.restart(x)
+        if new_cost > 0.99 * cost or message.startswith("the budget"):
+            break
+        cost = new_cost
+    return x, active, message
+
+
 def fit(data: FitData, model: str | FitModel = "woven", *, test: FitData | None = None,
-        max_evaluations: int = DEFAULT_MAX_EVALUATIONS, start: Mapping[str, Any] | None = None) -> FitResult:
+        max_evaluations: int | None = None, start: Mapping[str, Any] | None = None) -> FitResult:
     """Fit a model's free parameters to a flat measurement (see the module's description).
 
     Parameters
@@ -272,8 +335,10 @@ def fit(data: FitData, model: str | FitModel = "woven", *, test: FitData | None 
     test
         Other pairs of the same measurement for the error; default: ``data``.
     max_evaluations
-        Most model evaluations (each Jacobian costs one per parameter and
-        colour); the solver stops there (the message says so).
+        Most model evaluations (a Jacobian by finite differences costs one
+        per parameter and colour); default the model's own
+        (:attr:`~cdbrdf.fit.FitModel.max_evaluations`). The solver stops
+        there (the message says so).
     start
         Starting values (default: the model's guess from the measurement).
 
@@ -282,23 +347,19 @@ def fit(data: FitData, model: str | FitModel = "woven", *, test: FitData | None 
     FitResult
         The values, their uncertainties, the errors and what was fixed.
     """
-    from scipy.optimize import least_squares
-
     fm = fit_model(model) if isinstance(model, str) else model
     if not isinstance(fm, FitModel):
         raise OptionError(f"model: expected a fit model name or FitModel, got {type(model).__name__}")
+    if max_evaluations is None:
+        max_evaluations = fm.max_evaluations
     if not (isinstance(max_evaluations, int) and max_evaluations >= 2):
         raise OptionError(f"max_evaluations: expected an integer >= 2, got {max_evaluations!r}")
     t0 = time.perf_counter()
     prob = _Problem(fm, data)
-    x0 = prob.pack(start if start is not None else fm.initial(data))
-    width = len(fm.parameters) + 1  # evaluations of one Jacobian by finite differences
-    nfev = max(2, max_evaluations - 2 * width)
-    sol = least_squares(prob.residuals, x0, jac=prob.jacobian, bounds=(prob.lower, prob.upper), method="trf",
-                        x_scale="jac", max_nfev=nfev, ftol=1e-3, xtol=1e-4, gtol=1e-6)
-    values = prob.values(sol.x)
-    jac = prob.finite_differences(sol.x)  # the uncertainty needs the true Jacobian at the optimum
-    sigma, at_bound = _uncertainty(prob, sol.x, jac, prob.residuals(sol.x), np.asarray(sol.active_mask))
+    x, active, message = _solve(prob, prob.pack(start if start is not None else fm.initial(data)), max_evaluations)
+    jac = prob.finite_differences(x)  # the uncertainty needs the true Jacobian at the optimum (cached if fresh)
+    sigma, at_bound = _uncertainty(prob, x, jac, prob.residuals(x), active)
+    values = prob.values(x)
     errs = {"fit": errors(fm, values, data, quality="fit"),
             "test": errors(fm, values, test if test is not None else data)}
     bounds = {p.name: {"lower": p.lower, "upper": p.upper, "unit": p.unit, "why": p.why} for p in fm.parameters}
@@ -307,4 +368,4 @@ def fit(data: FitData, model: str | FitModel = "woven", *, test: FitData | None 
              prob.evaluations, errs["test"]["delta_e_median"], errs["test"]["relative_rms"])
     return FitResult(model=fm.name, description=fm.description, values=values, sigma=sigma, bounds=bounds,
                      at_bound=at_bound, fixed=fm.fixed, model_params=fm.model_params(values), errors=errs,
-                     evaluations=prob.evaluations, seconds=dt, message=str(sol.message), fit_model=fm)
+                     evaluations=prob.evaluations, seconds=dt, message=message, fit_model=fm)

@@ -108,6 +108,12 @@ class FitModel(ABC):
     description: str = ""
     #: The free parameters.
     parameters: tuple[Parameter, ...] = ()
+    #: Whether each channel of a colour changes only its own channel of the BRDF (then the Jacobian steps the
+    #: three channels together, one evaluation per colour; ``tests/test_fit.py`` checks the claim).
+    channels_independent: bool = True
+    #: Model evaluations a fit takes at most by default (a Jacobian by finite differences costs one per
+    #: parameter and one per colour, Broyden's updates between them none).
+    max_evaluations: int = 60
 
     @property
     def fixed(self) -> dict[str, Any]:
@@ -166,10 +172,13 @@ class WovenFit(FitModel):
                   why="width of the fibre's surface reflection: polished filament (2) to rough staple (40)"),
         Parameter("sheen_deg", 3.0, 60.0, "degree", why="width of the forward-scattered sheen of the fibres"),
         Parameter("isotropic", 0.0, 1.0, "", why="share of the volume scattering that is isotropic"),
-        Parameter("cover", 0.5, 1.0, "", why="yarn width over spacing: open weave (0.5) to touching yarns (1)"),
         Parameter("flatness", 0.25, 1.0, "",
                   why="yarn height over width: flattened 4:1 (0.25) to round (1), sets the crimp angle"),
     )
+    #: A model evaluation costs about 0.5 s (the fibres' lobe normalisation), so the budget is small.
+    max_evaluations = 30
+    #: Yarn width over spacing, held: the gaps show at grazing angles only, a flat measurement hardly sees them.
+    cover = 0.9
 
     def __init__(self, weave: str = "plain") -> None:
         from ..synth.weave import WEAVES
@@ -186,24 +195,25 @@ class WovenFit(FitModel):
         return {
             "weave": self.weave,
             "warp_pitch_mm": p.warp_pitch_mm, "weft_pitch_mm": p.weft_pitch_mm, "thickness_mm": p.thickness_mm,
-            "warp_along": p.warp_along, "ior": p.ior, "footprint_mm": p.footprint_mm,
+            "warp_along": p.warp_along, "ior": p.ior, "footprint_mm": p.footprint_mm, "cover": self.cover,
             "reason": "a flat BRDF does not change when every length is scaled together: the counts and the "
                       "thickness of a typical plain-woven fabric (33 ends/cm, 0.5 mm) are kept; they set how "
-                      "strongly bending acts",
+                      "strongly bending acts; the cover (yarn width over spacing) is held at 0.9: the gaps show at "
+                      "grazing angles only",
         }
 
     def initial(self, data: FitData) -> dict[str, Any]:
         c = _start_colour(data, 1.6)
         return {"warp_rgb": c, "weft_rgb": c, "specular": 0.3, "gloss_deg": 12.0, "sheen_deg": 20.0,
-                "isotropic": 0.7, "cover": 0.9, "flatness": 0.5}
+                "isotropic": 0.7, "flatness": 0.5}
 
     def cloth_params(self, values: Mapping[str, Any], *, quality: str = "full") -> Any:
         """The :class:`~cdbrdf.synth.cloth.ClothParams` of ``values``."""
         from ..synth.cloth import ClothParams
 
         base = ClothParams(name="fitted woven", weave=self.weave)
-        ww = float(values["cover"]) * base.warp_pitch_mm
-        wf = float(values["cover"]) * base.weft_pitch_mm
+        ww = self.cover * base.warp_pitch_mm
+        wf = self.cover * base.weft_pitch_mm
         fl = float(values["flatness"])
         extra = _WOVEN_FIT_QUALITY if quality == "fit" else {}
         return base.replace(
@@ -228,6 +238,10 @@ class PileFit(FitModel):
     """The pile model (:class:`cdbrdf.synth.pile.PileModel`), cut fibres."""
 
     name = "pile"
+    #: The fibres' energy normalisation depends on their brightest channel.
+    channels_independent = False
+    #: A model evaluation costs about 0.05 s.
+    max_evaluations = 80
     description = ("pile fabric (cdbrdf.synth.pile): fibres standing on a ground, a fibre medium with "
                    "correlated shadowing (single scattering and one ground bounce in model 1.0)")
     parameters = (
