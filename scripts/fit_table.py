@@ -49,8 +49,9 @@ def fit_one(path: Path) -> dict:
         d = r.to_dict()
         d["seconds"] = round(time.perf_counter() - t0, 1)
         out["models"][m] = d
-        print(f"  {path.stem}: {m:5s} dE {r.errors['test']['delta_e_median']:6.2f} rms {r.errors['test']['relative_rms']:.3f}"
-              f"  {d['seconds']:5.1f} s ({r.evaluations} evaluations)", flush=True)
+        e = r.errors["test"]
+        print(f"  {path.stem}: {m:5s} dE {e['delta_e_median']:6.2f} rms {e['relative_rms']:.3f}  {d['seconds']:5.1f} s "
+              f"({r.evaluations} evaluations)", flush=True)
     return out
 
 

@@ -94,6 +94,20 @@ def fit_flat(source: Any, *, model: str = "auto", fit_pairs: int = FIT_PAIRS, te
 def bend_grid(grid: str | Grid | None, source: Any, kappa: ArrayLike | None) -> Grid:
     """The anisotropic grid of a bent table: ``grid``'s directions (default the paper's), ``kappa`` with 0 in it.
 
+    Parameters
+    ----------
+    grid
+        ``"paper"``, ``"native"``, ``"regular:THETA_STEP,PHI_STEP[,THETA_MAX]"``, a Grid, or None (the paper's).
+    source
+        The flat measurement (:class:`cdbrdf.importers.Source`), for ``"native"``.
+    kappa
+        Curvatures, 1/mm (default the paper's).
+
+    Returns
+    -------
+    Grid
+        Anisotropic, the same light and view axes.
+
     Raises
     ------
     TableError
@@ -116,17 +130,25 @@ def bend_grid(grid: str | Grid | None, source: Any, kappa: ArrayLike | None) -> 
 
 
 def _flat_slice(source: Any, grid: Grid) -> Any:
-    """The measurement on ``grid``'s directions at kappa = 0 (an isotropic source through its isotropic layout)."""
-    from .importers.convert import table_from
+    """The measurement on ``grid``'s directions at kappa = 0 (an isotropic source through its isotropic layout).
 
+    Cell means as ``cdbrdf import`` makes them, with quadrature points an
+    eighth of the finest step apart (at least 1 degree: the import's default
+    spacing, at most 8 points per interval of every axis).
+    """
+    from .importers.convert import table_from
+    from .importers.resample import DEFAULT_SPACING_DEG
+
+    steps = np.concatenate([np.diff(grid.theta_l), [360.0 / grid.phi_v.size]])
+    spacing = max(DEFAULT_SPACING_DEG, float(steps.min()) / 8.0)
     g0 = Grid(kappa=[0.0], phi_l=grid.phi_l, theta_l=grid.theta_l, phi_v=grid.phi_v, theta_v=grid.theta_v)
     if source.isotropic and grid.phi_l[0] == 0.0 and grid.phi_v[0] == 0.0:
         iso = Grid(kappa=[0.0], phi_l=[0.0], theta_l=grid.theta_l, phi_v=grid.phi_v, theta_v=grid.theta_v,
                    symmetry="isotropic")
-        t = table_from(source, iso).expanded()
+        t = table_from(source, iso, spacing_deg=spacing).expanded()
         if np.array_equal(t.phi_l, grid.phi_l) and np.array_equal(t.phi_v, grid.phi_v):
             return t
-    return table_from(source, g0)
+    return table_from(source, g0, spacing_deg=spacing)
 
 
 def _mirror(a: NDArray[Any]) -> NDArray[Any]:

@@ -54,7 +54,18 @@ _LAB_KAPPA = 24389.0 / 27.0
 
 
 def lab_jacobian(rgb: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``d(L*, a*, b*) / d(R, G, B)`` of :func:`cdbrdf.colour.linear_to_lab` at linear RGB ``(n, 3)``: ``(n, 3, 3)``."""
+    """The derivative of :func:`cdbrdf.colour.linear_to_lab` with respect to linear RGB.
+
+    Parameters
+    ----------
+    rgb
+        Linear Rec. 709 RGB, ``(n, 3)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``d(L*, a*, b*) / d(R, G, B)``, ``(n, 3, 3)``.
+    """
     t = (np.asarray(rgb, dtype=np.float64) @ RGB_TO_XYZ.T) / D65_WHITE_XYZ
     df = np.where(t > _LAB_EPSILON, np.cbrt(np.maximum(t, _LAB_EPSILON)) ** -2 / 3.0, _LAB_KAPPA / 116.0)
     df = df / D65_WHITE_XYZ  # d f(X/Xn) / dX, per component
@@ -109,11 +120,24 @@ class FitResult:
     fit_model: FitModel = field(repr=False)
 
     def build(self) -> Any:
-        """The fitted model at its full integration quality."""
+        """The fitted model at its full integration quality.
+
+        Returns
+        -------
+        object
+            A :class:`~cdbrdf.synth.ClothModel`, :class:`~cdbrdf.synth.PileModel` or the baseline
+            (each with ``evaluate`` and, the fabric models, ``tabulate``).
+        """
         return self.fit_model.build(self.values, quality="full")
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready record (for a file's provenance)."""
+        """JSON-ready record (for a file's provenance).
+
+        Returns
+        -------
+        dict
+            Every attribute but the fit model, and the fit's space.
+        """
         return {"model": self.model, "description": self.description, "values": self.values, "sigma": self.sigma,
                 "bounds": self.bounds, "at_bound": list(self.at_bound), "fixed": self.fixed,
                 "model_params": self.model_params, "errors": self.errors, "evaluations": self.evaluations,
@@ -243,6 +267,17 @@ class _Problem:
 
 def errors(fm: FitModel, values: Mapping[str, Any], data: FitData, *, quality: str = "full") -> dict[str, Any]:
     """How far the model with ``values`` is from the measurement at ``data``'s pairs.
+
+    Parameters
+    ----------
+    fm
+        The fit model.
+    values
+        Its free parameters' values.
+    data
+        The measurement at direction pairs.
+    quality
+        ``"full"`` (the model's own integration) or ``"fit"`` (the coarse setting of the fit).
 
     Returns
     -------

@@ -57,11 +57,28 @@ class FitData:
         return int(self.theta_v.size)
 
     def angles(self) -> tuple[NDArray[np.float64], ...]:
-        """``(theta_v, phi_v, theta_l, phi_l)``."""
+        """The direction pairs.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(theta_v, phi_v, theta_l, phi_l)``, degrees.
+        """
         return self.theta_v, self.phi_v, self.theta_l, self.phi_l
 
     def subset(self, n: int) -> FitData:
-        """The first ``n`` pairs (a Sobol sequence's prefix is itself well spread)."""
+        """The first ``n`` pairs (a Sobol sequence's prefix is itself well spread).
+
+        Parameters
+        ----------
+        n
+            Number of pairs.
+
+        Returns
+        -------
+        FitData
+            The first ``n`` pairs and their values.
+        """
         k = min(int(n), self.n)
         return FitData(self.theta_v[:k], self.phi_v[:k], self.theta_l[:k], self.phi_l[:k], self.values[:k],
                        self.isotropic)

@@ -83,15 +83,43 @@ class Parameter:
     why: str = ""
 
     def to_internal(self, v: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Physical value(s) -> the fit's variable(s)."""
+        """Physical value(s) -> the fit's variable(s).
+
+        Parameters
+        ----------
+        v
+            Physical value(s).
+
+        Returns
+        -------
+        numpy.ndarray
+            Their logarithm for a logarithmic parameter, else themselves.
+        """
         return np.log(v) if self.log else np.asarray(v, dtype=np.float64)
 
     def to_physical(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The fit's variable(s) -> physical value(s)."""
+        """The fit's variable(s) -> physical value(s).
+
+        Parameters
+        ----------
+        u
+            The fit's variable(s).
+
+        Returns
+        -------
+        numpy.ndarray
+            The physical value(s).
+        """
         return np.exp(u) if self.log else np.asarray(u, dtype=np.float64)
 
     def bounds(self) -> tuple[float, float]:
-        """Bounds of the fit's variable."""
+        """Bounds of the fit's variable.
+
+        Returns
+        -------
+        tuple of float
+            ``(lower, upper)`` (their logarithms for a logarithmic parameter).
+        """
         lo, hi = (math.log(self.lower), math.log(self.upper)) if self.log else (self.lower, self.upper)
         return lo, hi
 
@@ -122,15 +150,50 @@ class FitModel(ABC):
 
     @abstractmethod
     def initial(self, data: FitData) -> dict[str, Any]:
-        """A start for the fit from the measurement (values by parameter name)."""
+        """A start for the fit from the measurement.
+
+        Parameters
+        ----------
+        data
+            The measurement.
+
+        Returns
+        -------
+        dict
+            A value per free parameter.
+        """
 
     @abstractmethod
     def build(self, values: Mapping[str, Any], *, quality: str = "full") -> Any:
-        """The model with these values: an object with ``evaluate(theta_v, phi_v, theta_l, phi_l, kappa)``."""
+        """The model with these values.
+
+        Parameters
+        ----------
+        values
+            A value per free parameter.
+        quality
+            One of :data:`QUALITIES`.
+
+        Returns
+        -------
+        object
+            An object with ``evaluate(theta_v, phi_v, theta_l, phi_l, kappa)``.
+        """
 
     @abstractmethod
     def model_params(self, values: Mapping[str, Any]) -> dict[str, Any]:
-        """The model's whole parameter set with these values (JSON-ready)."""
+        """The model's whole parameter set with these values.
+
+        Parameters
+        ----------
+        values
+            A value per free parameter.
+
+        Returns
+        -------
+        dict
+            JSON-ready, every parameter of the model.
+        """
 
     @property
     def bends(self) -> bool:
@@ -139,7 +202,24 @@ class FitModel(ABC):
 
     def evaluate(self, values: Mapping[str, Any], data: FitData, *, quality: str = "fit",
                  kappa: float = 0.0) -> NDArray[np.float64]:
-        """The model at the pairs of ``data`` ``(n, 3)``, averaged over turns when ``data`` is isotropic."""
+        """The model at the pairs of ``data``, averaged over turns when ``data`` is isotropic.
+
+        Parameters
+        ----------
+        values
+            A value per free parameter.
+        data
+            The direction pairs (and whether the measurement is isotropic).
+        quality
+            One of :data:`QUALITIES`.
+        kappa
+            Curvature, 1/mm.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(n, 3)``, sr^-1.
+        """
         m = self.build(values, quality=quality)
         tv, pv, tl, pl = data.angles()
         turns = ISOTROPIC_TURNS_DEG if data.isotropic else (0.0,)
@@ -208,7 +288,20 @@ class WovenFit(FitModel):
                 "isotropic": 0.7, "flatness": 0.5}
 
     def cloth_params(self, values: Mapping[str, Any], *, quality: str = "full") -> Any:
-        """The :class:`~cdbrdf.synth.cloth.ClothParams` of ``values``."""
+        """The :class:`~cdbrdf.synth.cloth.ClothParams` of ``values``.
+
+        Parameters
+        ----------
+        values
+            A value per free parameter.
+        quality
+            One of :data:`QUALITIES`.
+
+        Returns
+        -------
+        ClothParams
+            The cloth.
+        """
         from ..synth.cloth import ClothParams
 
         base = ClothParams(name="fitted woven", weave=self.weave)
@@ -277,7 +370,18 @@ class PileFit(FitModel):
                 "fibre_gloss_deg": 8.0, "fibre_specular": 0.5, "correlation_mm": 0.1}
 
     def pile_params(self, values: Mapping[str, Any]) -> Any:
-        """The :class:`~cdbrdf.synth.pile.PileParams` of ``values``."""
+        """The :class:`~cdbrdf.synth.pile.PileParams` of ``values``.
+
+        Parameters
+        ----------
+        values
+            A value per free parameter.
+
+        Returns
+        -------
+        PileParams
+            The pile fabric.
+        """
         from ..synth.pile import PileParams
 
         return PileParams(name="fitted pile").replace(
@@ -342,6 +446,18 @@ FIT_MODELS: Mapping[str, str] = MappingProxyType({
 
 def fit_model(name: str, *, weave: str = "plain") -> FitModel:
     """The :class:`FitModel` of a registered name (:data:`FIT_MODELS`).
+
+    Parameters
+    ----------
+    name
+        ``"woven"``, ``"pile"`` or ``"sheen"``.
+    weave
+        The weave of the woven model (:data:`cdbrdf.synth.WEAVES`).
+
+    Returns
+    -------
+    FitModel
+        The fit model.
 
     Raises
     ------

@@ -69,13 +69,32 @@ class SheenParams:
         object.__setattr__(self, "roughness", float(r))
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-ready parameters."""
+        """JSON-ready parameters.
+
+        Returns
+        -------
+        dict
+            The parameters by name (colours as lists).
+        """
         return {"diffuse_rgb": list(self.diffuse_rgb), "sheen_rgb": list(self.sheen_rgb), "roughness": self.roughness}
 
 
 def sheen_brdf(params: SheenParams, theta_v: ArrayLike, phi_v: ArrayLike, theta_l: ArrayLike,
                phi_l: ArrayLike) -> NDArray[np.float64]:
-    """The baseline's BRDF (sr^-1) at direction pairs in degrees (broadcast), ``(..., 3)``."""
+    """The baseline's BRDF at direction pairs.
+
+    Parameters
+    ----------
+    params
+        The baseline's parameters.
+    theta_v, phi_v, theta_l, phi_l
+        View and light elevations and azimuths, degrees (broadcast together).
+
+    Returns
+    -------
+    numpy.ndarray
+        The BRDF in sr^-1, ``broadcast shape + (3,)``.
+    """
     tv, pv, tl, pl = np.broadcast_arrays(*(np.radians(np.asarray(a, dtype=np.float64))
                                            for a in (theta_v, phi_v, theta_l, phi_l)))
     cv, cl = np.cos(tv), np.cos(tl)
