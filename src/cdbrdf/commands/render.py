@@ -175,7 +175,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     table.add_argument("--view", type=float_list(-360, 360, min_len=2, max_len=2, example="40,-90", unit="deg"),
                        default=None, metavar="ELEV,AZIM",
                        help="camera elevation above the ground plane (-90 to 90) and azimuth, degrees "
-                       "(default: 40,-90 for the sheet, 35,-80 for the swatch, 20,-65 for a mesh)")
+                       "(default: 40,-90 for the sheet, 45,-75 for the swatch, 20,-65 for a mesh)")
     table.add_argument("--zoom", type=finite_float(*ZOOM_RANGE, unit="x"), default=None, metavar="F",
                        help=f"magnification about the framed view, {ZOOM_RANGE[0]:g} to {ZOOM_RANGE[1]:g}: 2 halves "
                        "the visible extent, the camera stays where it frames the whole object (default: 1)")

@@ -440,15 +440,17 @@ class Swatch:
     """
 
     radii_mm: tuple[float, ...] = (20.0, 10.0, 5.0, 3.0)
-    slope_deg: float = 30.0
+    slope_deg: float = 35.0
     flank_mm: float = 2.0
     gap_mm: float = 6.0
-    depth_mm: float = 60.0
+    depth_mm: float = 80.0
     step_mm: float = 0.25
     row_mm: float = 1.0
 
     def __post_init__(self) -> None:
         try:
+            if isinstance(self.radii_mm, (str, bytes)):
+                raise TypeError
             radii = tuple(float(r) for r in self.radii_mm)
         except (TypeError, ValueError):
             raise OptionError(f"radii_mm: expected signed radii in mm, got {self.radii_mm!r:.60}") from None

@@ -52,7 +52,7 @@ DEFAULT_MESH_VIEW: tuple[float, float] = (20.0, -65.0)
 DEFAULT_SINE_VIEW: tuple[float, float] = (40.0, -90.0)
 
 #: Default camera for the swatch (:class:`cdbrdf.mesh.Swatch`): along its folds, a little from the side.
-DEFAULT_SWATCH_VIEW: tuple[float, float] = (35.0, -80.0)
+DEFAULT_SWATCH_VIEW: tuple[float, float] = (45.0, -75.0)
 
 #: Default field of view of a mesh's lens (smaller side of the picture), degrees.
 DEFAULT_MESH_FOV_DEG = 30.0

@@ -89,8 +89,12 @@ def _build(mesh: Mesh, table: Any, *, mode: str, scale: float, size: tuple[int, 
         bsdf = _bsdf_entry(table, mode, scale, curvature_mode)
     if not lights and envmap is None:
         raise OptionError("the scene needs a light: give a directional light or an environment map")
-    target = look_at_point(camera, mesh.vertices, to_world=to_world, normals=mesh.normals,
-                           curvature=mesh.attributes.get(MESH_ATTRIBUTES.get(curvature_mode, "")))
+    kappa = mesh.attributes.get(MESH_ATTRIBUTES.get(curvature_mode, ""))
+    target = look_at_point(camera, mesh.vertices, to_world=to_world, normals=mesh.normals, curvature=kappa)
+    if target is not None and isinstance(camera.look_at, str) and camera.look_at != "centre" and kappa is not None:
+        i = int(np.argmin(np.linalg.norm(mesh.vertices - target, axis=1)))
+        _LOG.info("look-at %s: vertex %d at %s (z-up world), curvature %.3g / mm", camera.look_at, i,
+                  np.round(target, 3).tolist(), float(kappa[i]))
     d: dict[str, Any] = {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": int(max_depth), "hide_emitters": bool(hide_env)},
