@@ -139,3 +139,24 @@ def test_swatch_renders_with_the_curvature_of_its_folds():
     assert np.mean(seen == 0.0) > 0.2  # the flat cloth between the folds
     with pytest.raises(ValueError, match="normal_map: only for meshes"):
         render_table(table, "swatch", size=(8, 8), spp=1, normal_map="x.png")
+
+
+@needs_llvm
+def test_render_command_swatch_close_up_and_compare(tmp_path, capsys):
+    from cdbrdf.cli import main
+
+    g = cdbrdf.Grid(kappa=[-0.2, 0.0, 0.2], theta_l=[0, 45, 75], phi_l=[0, 180], theta_v=[0, 45, 75],
+                    phi_v=[0, 180])
+    k = np.asarray(g.kappa)[:, None, None, None, None, None]
+    cdbrdf.CDBRDF(np.broadcast_to(0.2 + k, g.shape + (3,)).copy(), **g.axes(),
+                  attrs={"quantity": "brdf", "material": "ramp"}).save(tmp_path / "t.h5")
+    common = ["render", str(tmp_path / "t.h5"), "--scene", "swatch", "--size", "32x24", "--spp", "1"]
+    assert main([*common, "--fold-radii", "10,-4", "--look-at", "crest", "--zoom", "3", "--fov", "30",
+                 "-o", str(tmp_path / "a.png")]) == 0
+    err = capsys.readouterr().err
+    assert "swatch: ridge 10 mm (kappa +-0.1 / mm), groove 4 mm (kappa +-0.25 / mm); lighting: studio" in err
+    import matplotlib.image as mpimg
+
+    assert mpimg.imread(tmp_path / "a.png").shape[:2] == (24, 32)
+    assert main(["-q", *common, "--compare", "--delta-e", "ab", "-o", str(tmp_path / "c.png")]) == 0
+    assert (tmp_path / "c.png").stat().st_size > 1000

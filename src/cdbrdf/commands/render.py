@@ -292,6 +292,10 @@ def _run_table(args: argparse.Namespace) -> int:
     if pic.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), pic.mesh)
         say(f"{args.mesh}: up axis: {pic.up} ({pic.up_reason}); lighting: {pic.lighting}", err=True)
+    if isinstance(surface, Swatch) and not args.quiet:
+        folds = ", ".join(f"{'ridge' if r > 0 else 'groove'} {abs(r):g} mm (kappa +-{1 / abs(r):.3g} / mm)"
+                          for r in surface.radii_mm)
+        say(f"swatch: {folds}; lighting: {pic.lighting}", err=True)
     if args.compare:
         from ..table import load
 
