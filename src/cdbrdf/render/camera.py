@@ -375,7 +375,8 @@ def perspective_camera(mi: Any, points: NDArray[np.float64], width: int, height:
         origin = aim + dist * d
     up0 = [0.0, 0.0, 1.0] if abs(d[2]) < 0.999 else [0.0, 1.0, 0.0]
     extent = float(np.linalg.norm(p.max(0) - p.min(0)))
-    reach = extent + float(np.linalg.norm(aim - 0.5 * (p.min(0) + p.max(0))))
+    # every point lies within `reach` of the point looked at (the framed view: the object's extent)
+    reach = extent if target is None else extent + float(np.linalg.norm(aim - 0.5 * (p.min(0) + p.max(0))))
     near = max(dist - reach, dist * 1e-3)
     return {
         "type": "perspective",
