@@ -85,7 +85,7 @@ def test_energy_and_the_provenance_arrays(felt):
     assert all(a <= max(1.0, prov["albedo_max"][1]) + 1e-6 for a in prov["albedo_max"])
     assert prov["albedo_limit"] >= 1.0 and all(0 < s <= 1 for s in prov["energy_scale"])
     bent = np.arange(table.kappa.size) != 1
-    assert (table.fill_method[bent] == FILL_METHOD_CODES["model_bend"]).all()
+    assert (table.fill_method[bent] == FILL_METHOD_CODES["model"]).all()
     assert (table.fill_method[1] == FILL_METHOD_CODES["measured"]).all()
     # sources: the flat sample of the same direction and of its mirror, 1/2 each
     flat = np.arange(table.measured.size).reshape(table.measured.shape)[1]

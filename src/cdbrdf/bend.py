@@ -20,7 +20,7 @@ turns one into a CDBRDF:
    directional albedo exceeds ``max(1, the flat slice's)`` for some view is
    scaled down as a whole (which keeps it reciprocal; the factor is recorded).
 4. **The file says so**: those samples are marked not measured, with the
-   fill method ``model_bend`` (code 5 of ``fill_method``), their sources the
+   fill method ``model`` (code 5 of ``fill_method``), their sources the
    flat samples of the same direction and of its mirror (weights 1/2 each,
    the value being their mean times the model's ratio); the provenance holds
    the fitted model, its parameters with their uncertainties, the fit's
@@ -194,7 +194,7 @@ def _provenance_arrays(grid: Grid, measured0: NDArray[np.bool_], i0: int) -> dic
     """``measured``, ``fill_source``, ``fill_method``, ``fill_sources``, ``fill_weights`` of a bent table.
 
     At kappa = 0 the flat slice's own mask (its unmeasured samples: method
-    ``unknown``); elsewhere ``model_bend`` with the flat samples of the same
+    ``unknown``); elsewhere ``model`` with the flat samples of the same
     direction and of its mirror as sources, 1/2 each (those measured, used
     slots first).
     """
@@ -213,7 +213,7 @@ def _provenance_arrays(grid: Grid, measured0: NDArray[np.bool_], i0: int) -> dic
     sources = np.broadcast_to(src, shape + (2,)).copy()
     weights = np.broadcast_to(wts, shape + (2,)).copy()
     sources[i0], weights[i0] = -1, 0.0
-    method = np.full(shape, FILL_METHOD_CODES["model_bend"], dtype=np.uint8)
+    method = np.full(shape, FILL_METHOD_CODES["model"], dtype=np.uint8)
     method[i0] = np.where(measured0, FILL_METHOD_CODES["measured"], FILL_METHOD_CODES["unknown"])
     first = sources[..., 0]
     fill_source = np.where(measured, -1, np.where(first >= 0, first, -2))
@@ -308,7 +308,7 @@ def bend(
                  "resampling": flat_prov.get("resampling"), "expected_error": flat_prov.get("expected_error")},
         "model": best.to_dict(),
         "candidates": candidates,
-        "bending": {"method": "model_bend", "ratio": ratio_info, "reciprocity": "averaged with its light <-> view "
+        "bending": {"method": "model", "ratio": ratio_info, "reciprocity": "averaged with its light <-> view "
                     "mirror", "albedo_max": [round(float(a), 5) for a in alb],
                     "energy_scale": [round(float(s), 6) for s in scale], "albedo_limit": round(limit, 5)},
         "seconds": round(time.perf_counter() - t0, 1),

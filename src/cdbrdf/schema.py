@@ -148,16 +148,16 @@ FILL_SLOT = "fill_slot"
 #: nearest measured direction at the same curvature (the paper's rule);
 #: ``nearest_stand``: copied from the same direction on the nearest stand that
 #: measured it; ``kappa_fit``: a line fitted along the curvature to the same
-#: direction on the stands that measured it (``docs/capture.md``); ``model_bend`` (since 1.5): not
-#: measured at this curvature, predicted from the flat measurement of the same direction (and of the
-#: reciprocal one) by a fitted model's change from flat (``cdbrdf bend``, :mod:`cdbrdf.bend`).
+#: direction on the stands that measured it (``docs/capture.md``); ``model`` (since 1.5): a fitted
+#: fabric model's change with curvature applied to the same direction measured at another curvature
+#: (``cdbrdf bend``: the flat measurement of the direction and of its mirror, :mod:`cdbrdf.bend`).
 FILL_METHOD_CODES: Mapping[str, int] = MappingProxyType({
     "measured": 0,
     "unknown": 1,
     "nearest": 2,
     "nearest_stand": 3,
     "kappa_fit": 4,
-    "model_bend": 5,
+    "model": 5,
 })
 #: Data variables and their dimensions, in the order they are written.
 DATA_VARIABLES: Mapping[str, tuple[str, ...]] = MappingProxyType({

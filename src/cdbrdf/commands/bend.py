@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             "slice is the measurement and whose other curvatures are the measurement times the fitted model's "
             "change from flat (reciprocal, energy-conserving). The file records the model, its fitted parameters "
             "with their uncertainties, the fit's error, and that the bending is predicted, not measured "
-            "(fill method model_bend). See docs/guide.md."),
+            "(fill method model). See docs/guide.md."),
         epilog="example: cdbrdf bend acrylic_felt_white_rgb.h5 -o felt-cdbrdf.h5 --kappa=-0.2,0,0.1,0.2",
     )
     p.add_argument("flat", metavar="FLAT", type=brdf_file(),
