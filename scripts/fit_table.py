@@ -31,7 +31,7 @@ def _settings() -> dict:
     from cdbrdf.synth.pile import PILE_MODEL_VERSION
 
     return {"woven": MODEL_VERSION, "pile": PILE_MODEL_VERSION, "fit_pairs": FIT_PAIRS, "test_pairs": TEST_PAIRS,
-            "max_evaluations": {m: fit_model(m).max_evaluations for m in MODELS}, "fit": 4}
+            "max_evaluations": {m: fit_model(m).max_evaluations for m in MODELS}, "fit": 5}
 
 
 def fit_one(path: Path) -> dict:

@@ -109,6 +109,41 @@ def test_a_parameter_at_its_bound_has_no_sigma():
     assert r.sigma["sheen_rgb"][1] is not None
 
 
+class _Narrow(F.FitModel):
+    """The baseline with its roughness held in a narrow range: variants of one model, as the woven weaves are."""
+
+    def __init__(self, lo=0.02, hi=1.0):
+        base = F.fit_model("sheen")
+        self.name, self.description = "narrow", base.description
+        self.parameters = base.parameters[:2] + (F.Parameter("roughness", lo, hi, log=True),)
+        self.lo, self._base = lo, base
+
+    @property
+    def label(self):
+        return f"{self.parameters[2].lower:g}-{self.parameters[2].upper:g}"
+
+    def variants(self):
+        return [_Narrow(0.02, 0.05), _Narrow(0.3, 0.4), _Narrow(0.8, 1.0)] if self.lo == 0.02 and len(
+            self.parameters) == 3 and self.parameters[2].upper == 1.0 else [self]
+
+    def initial(self, data):
+        return dict(self._base.initial(data), roughness=self.parameters[2].lower)
+
+    def build(self, values, *, quality="full"):
+        return self._base.build(values, quality=quality)
+
+    def model_params(self, values):
+        return self._base.model_params(values)
+
+
+def test_a_fit_probes_its_variants_and_fits_the_best():
+    r = F.fit(_sheen_data(TRUTH), _Narrow(), max_evaluations=60)
+    probes = r.fixed["probes"]  # each variant's median Delta E*ab after its short fit
+    assert set(probes) == {"0.02-0.05", "0.3-0.4", "0.8-1"} and min(probes, key=probes.get) == "0.3-0.4"
+    assert 0.3 <= r.values["roughness"] <= 0.4 and r.errors["fit"]["delta_e_median"] < 0.05
+    assert r.evaluations <= 60
+
+
 def test_a_pile_fit_recovers_its_colours():
     fm = F.fit_model("pile")
     truth = {"fibre_rgb": (0.6, 0.2, 0.1), "ground_rgb": (0.1, 0.3, 0.5), "strands_per_mm2": 120.0,
@@ -124,7 +159,7 @@ def test_a_pile_fit_recovers_its_colours():
 
 @pytest.mark.parametrize("name", ["woven", "pile"])
 def test_a_model_that_claims_independent_channels_has_them(name):
-    fm = F.fit_model(name)
+    fm = F.fit_model(name, weave="plain")
     tv, pv, tl, pl = F.directions(64, seed=3)
     data = F.FitData(tv, pv, tl, pl, np.full((64, 3), 0.1), isotropic=True)
     base = fm.initial(data)

@@ -167,7 +167,7 @@ class _Problem:
         self.evaluations = 0
         #: Evaluations after which Jacobians are Broyden's only (the solver's own budget is the caller's).
         self.budget = 1 << 30
-        self.width = 1 + sum(1 if p.channels == 1 or fm.channels_independent else p.channels for p in fm.parameters)
+        self.width = _width(fm)
         self.broyden_steps = 0
         #: Whether the solver may still evaluate the model (the finite differences of restart() always may).
         self.capped = False
@@ -357,6 +357,53 @@ def _solve(prob: _Problem, x0: NDArray[np.float64], budget: int) -> tuple[NDArra
     return x, active, message
 
 
+def _width(fm: FitModel) -> int:
+    """Model evaluations of one Jacobian by finite differences (the point itself included)."""
+    return 1 + sum(1 if p.channels == 1 or fm.channels_independent else p.channels for p in fm.parameters)
+
+
+def _probe(prob: _Problem, x0: NDArray[np.float64], budget: int) -> NDArray[np.float64]:
+    """The best point of one short solver run within ``budget`` model evaluations (no restarts)."""
+    from scipy.optimize import least_squares
+
+    prob.budget = budget + prob.width  # the cap of rgb() is budget - width
+    prob.capped = True
+    try:
+        x = least_squares(prob.residuals, x0, jac=prob.jacobian, bounds=(prob.lower, prob.upper), method="trf",
+                          x_scale="jac", ftol=1e-3, xtol=1e-4, gtol=1e-6).x
+    except _BudgetSpent:
+        assert prob.best is not None
+        x = prob.best[1]
+    prob.capped = False
+    return x
+
+
+def _choose(fm: FitModel, data: FitData, start: Mapping[str, Any] | None,
+            budget: int) -> tuple[FitModel, _Problem, NDArray[np.float64], NDArray[np.int_], str, int, dict[str, Any]]:
+    """The model's variant to fit in full: each probed with a short fit (half the budget over them all).
+
+    Returns the variant, its problem and the probe's result, the evaluations
+    the other probes spent, and each probe's median Delta E*ab (at the fit's
+    pairs) by the variant's distinguishing name.
+    """
+    variants = fm.variants()
+    if len(variants) == 1:
+        prob = _Problem(variants[0], data)
+        x0 = prob.pack(start if start is not None else variants[0].initial(data))
+        return variants[0], prob, x0, np.zeros(x0.size, dtype=int), "", 0, {}
+    share = max(_width(variants[0]) + 2, budget // (2 * len(variants)))
+    trials = []
+    for v in variants:
+        prob = _Problem(v, data)
+        x = _probe(prob, prob.pack(start if start is not None else v.initial(data)), share)
+        trials.append((0.5 * float(np.sum(prob.residuals(x) ** 2)), v, prob, x, np.zeros(x.size, dtype=int), ""))
+    cost, v, prob, x, active, message = min(trials, key=lambda t: t[0])
+    spent = sum(t[2].evaluations for t in trials) - prob.evaluations
+    probes = {t[1].label: round(float(np.median(delta_e_ab(
+        linear_to_lab(math.pi * t[2].rgb(t[3])), t[2].target))), 3) for t in trials}
+    return v, prob, x, active, message, spent, probes
+
+
 def fit(data: FitData, model: str | FitModel = "woven", *, test: FitData | None = None,
         max_evaluations: int | None = None, start: Mapping[str, Any] | None = None) -> FitResult:
     """Fit a model's free parameters to a flat measurement (see the module's description).
@@ -390,8 +437,11 @@ def fit(data: FitData, model: str | FitModel = "woven", *, test: FitData | None 
     if not (isinstance(max_evaluations, int) and max_evaluations >= 2):
         raise OptionError(f"max_evaluations: expected an integer >= 2, got {max_evaluations!r}")
     t0 = time.perf_counter()
-    prob = _Problem(fm, data)
-    x, active, message = _solve(prob, prob.pack(start if start is not None else fm.initial(data)), max_evaluations)
+    fm, prob, x, active, message, spent, probes = _choose(fm, data, start, max_evaluations)
+    if max_evaluations - spent - prob.evaluations - prob.width >= 2:
+        x, active, message = _solve(prob, x, max_evaluations - spent)
+    elif not message:
+        message = "the budget of model evaluations is spent"
     jac = prob.finite_differences(x)  # the uncertainty needs the true Jacobian at the optimum (cached if fresh)
     sigma, at_bound = _uncertainty(prob, x, jac, prob.residuals(x), active)
     values = prob.values(x)
@@ -401,6 +451,9 @@ def fit(data: FitData, model: str | FitModel = "woven", *, test: FitData | None 
     dt = time.perf_counter() - t0
     log.info("fitted %s in %.1f s (%d evaluations): median Delta E*ab %.2f, relative RMS %.3f", fm.name, dt,
              prob.evaluations, errs["test"]["delta_e_median"], errs["test"]["relative_rms"])
+    fixed = fm.fixed
+    if probes:
+        fixed = dict(fixed, probes=probes)
     return FitResult(model=fm.name, description=fm.description, values=values, sigma=sigma, bounds=bounds,
-                     at_bound=at_bound, fixed=fm.fixed, model_params=fm.model_params(values), errors=errs,
-                     evaluations=prob.evaluations, seconds=dt, message=message, fit_model=fm)
+                     at_bound=at_bound, fixed=fixed, model_params=fm.model_params(values), errors=errs,
+                     evaluations=spent + prob.evaluations, seconds=dt, message=message, fit_model=fm)

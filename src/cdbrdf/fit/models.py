@@ -211,6 +211,21 @@ class FitModel(ABC):
         """Whether the model depends on curvature (can bend a measurement)."""
         return True
 
+    @property
+    def label(self) -> str:
+        """What tells this variant from the others (:meth:`variants`): the name, the woven model's weave."""
+        return self.name
+
+    def variants(self) -> list[FitModel]:
+        """The discrete choices a fit tries before it fits one of them in full (default: only this model).
+
+        Returns
+        -------
+        list of FitModel
+            The woven model with ``weave="auto"``: one per weave of :data:`WEAVE_CHOICES`.
+        """
+        return [self]
+
     def evaluate(self, values: Mapping[str, Any], data: FitData, *, quality: str = "fit",
                  kappa: float = 0.0) -> NDArray[np.float64]:
         """The model at the pairs of ``data``, averaged over turns when ``data`` is isotropic.
@@ -250,7 +265,11 @@ def _start_colour(data: FitData, gain: float = 1.0) -> tuple[float, float, float
 
 
 class WovenFit(FitModel):
-    """The woven-cloth model (:class:`cdbrdf.synth.cloth.ClothModel`) with one weave (:data:`WEAVE_CHOICES`)."""
+    """The woven-cloth model (:class:`cdbrdf.synth.cloth.ClothModel`) with one weave, or ``"auto"``.
+
+    With ``weave="auto"`` a fit probes every weave of :data:`WEAVE_CHOICES`
+    briefly and fits the best one in full (:meth:`variants`).
+    """
 
     name = "woven"
     description = ("woven cloth (cdbrdf.synth.cloth): yarns of fibres on a weave, microcylinder fibre scattering "
@@ -266,17 +285,27 @@ class WovenFit(FitModel):
         Parameter("flatness", 0.25, 1.0, "",
                   why="yarn height over width: flattened 4:1 (0.25) to round (1), sets the crimp angle"),
     )
-    # a model evaluation costs about 0.5 s (the fibres' lobe normalisation), so the budget is small
-    max_evaluations = 30
+    # a model evaluation costs about 0.5 s (the fibres' lobe normalisation): 12 for each weave's probe,
+    # 36 for the chosen one
+    max_evaluations = 72
     # yarn width over spacing, held: the gaps show at grazing angles only, a flat measurement hardly sees them
     cover = 0.9
 
-    def __init__(self, weave: str = "plain") -> None:
+    def __init__(self, weave: str = "auto") -> None:
         from ..synth.weave import WEAVES
 
-        if weave not in WEAVES:
-            raise OptionError(f"weave: {weave!r} is not one of {', '.join(WEAVES)}")
+        if weave != "auto" and weave not in WEAVES:
+            raise OptionError(f"weave: {weave!r} is not one of auto, {', '.join(WEAVES)}")
         self.weave = weave
+
+    @property
+    def label(self) -> str:
+        return self.weave
+
+    def variants(self) -> list[FitModel]:
+        if self.weave != "auto":
+            return [self]
+        return [WovenFit(w) for w in WEAVE_CHOICES]
 
     @property
     def fixed(self) -> dict[str, Any]:
@@ -315,6 +344,8 @@ class WovenFit(FitModel):
         """
         from ..synth.cloth import ClothParams
 
+        if self.weave == "auto":
+            raise OptionError("weave: 'auto' is chosen by the fit; give a weave to build the model")
         base = ClothParams(name="fitted woven", weave=self.weave)
         ww = self.cover * base.warp_pitch_mm
         wf = self.cover * base.weft_pitch_mm
@@ -455,7 +486,7 @@ FIT_MODELS: Mapping[str, str] = MappingProxyType({
 })
 
 
-def fit_model(name: str, *, weave: str = "plain") -> FitModel:
+def fit_model(name: str, *, weave: str = "auto") -> FitModel:
     """The :class:`FitModel` of a registered name (:data:`FIT_MODELS`).
 
     Parameters
@@ -463,7 +494,8 @@ def fit_model(name: str, *, weave: str = "plain") -> FitModel:
     name
         ``"woven"``, ``"pile"`` or ``"sheen"``.
     weave
-        The weave of the woven model (:data:`cdbrdf.synth.WEAVES`).
+        The weave of the woven model (:data:`cdbrdf.synth.WEAVES`), or ``"auto"``: the fit probes each of
+        :data:`WEAVE_CHOICES` and keeps the best.
 
     Returns
     -------
