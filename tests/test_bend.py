@@ -163,6 +163,8 @@ def test_bad_arguments_are_refused():
         bend(path, model="knit")
     with pytest.raises(TableError, match="kappa: must be finite"):
         bend(path, model="pile", kappa=[0.1, float("nan")])
+    with pytest.raises(OptionError, match="kappa: -0.9 1/mm cannot bend the pile model: .*concave bend tighter"):
+        bend(path, model="pile", kappa=[-0.9, 0.1])
 
 
 def test_the_command_line(tmp_path, capsys):

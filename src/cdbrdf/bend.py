@@ -129,6 +129,28 @@ def bend_grid(grid: str | Grid | None, source: Any, kappa: ArrayLike | None) -> 
     return Grid(kappa=ks, phi_l=g.phi_l, theta_l=g.theta_l, phi_v=g.phi_v, theta_v=g.theta_v)
 
 
+def _check_curvatures(model: str, kappa: NDArray[np.float64]) -> None:
+    """Refuse, before any fit, a curvature the model's fixed geometry cannot be bent to (one line).
+
+    The fits keep each model's lengths (the cloth's thickness, the pile's
+    height), so their limits are known beforehand: the typical fabric of each
+    kind is bent to every curvature at one direction pair.
+    """
+    from .fit import FitData, fit_model
+
+    names = ("woven", "pile") if model == "auto" else (model,)
+    probe = FitData(*(np.array([30.0]) for _ in range(4)), values=np.full((1, 3), 0.1), isotropic=False)
+    for name in names:
+        fm = fit_model(name, weave="plain")
+        m = fm.build(fm.initial(probe))
+        for k in kappa:
+            try:
+                m.evaluate(30.0, 0.0, 30.0, 180.0, float(k))
+            except (OptionError, ValueError) as exc:
+                why = str(exc).splitlines()[0].removeprefix("kappa: ")
+                raise OptionError(f"kappa: {float(k):g} 1/mm cannot bend the {name} model: {why}") from None
+
+
 def _flat_slice(source: Any, grid: Grid) -> Any:
     """The measurement on ``grid``'s directions at kappa = 0 (an isotropic source through its isotropic layout).
 
@@ -276,6 +298,9 @@ def bend(
         raise TableError(f"{source.path}: holds curvature {float(source.table.kappa[0]):g} 1/mm; bend needs a flat "
                          "measurement (kappa = 0)")
     g = bend_grid(grid, source, kappa)
+    if model not in BEND_MODELS:
+        raise OptionError(f"model: {model!r} is not one of {', '.join(BEND_MODELS)}")
+    _check_curvatures(model, g.kappa)
     i0 = int(np.flatnonzero(g.kappa == 0.0)[0])
     if progress is not None:
         progress("fit", 0, 1)
