@@ -139,7 +139,8 @@ def _check_curvatures(model: str, kappa: NDArray[np.float64]) -> None:
     from .fit import FitData, fit_model
 
     names = ("woven", "pile") if model == "auto" else (model,)
-    probe = FitData(*(np.array([30.0]) for _ in range(4)), values=np.full((1, 3), 0.1), isotropic=False)
+    a = np.array([30.0])
+    probe = FitData(a, a, a, a, np.full((1, 3), 0.1), isotropic=False)
     for name in names:
         fm = fit_model(name, weave="plain")
         m = fm.build(fm.initial(probe))

@@ -51,6 +51,8 @@ QUALITIES: tuple[str, ...] = ("fit", "full")
 #: The woven model's integration points and texels while fitting (its own defaults: 4181 and 192;
 #: the coarse setting differs from them by a median 1 %, 90th percentile 2 %, at random direction pairs).
 _WOVEN_FIT_QUALITY = {"points": 1000, "texels": 96}
+#: Woven models a fit keeps to recolour (its structures last evaluated).
+_WOVEN_CACHE = 8
 
 
 @dataclass(frozen=True)
@@ -297,6 +299,9 @@ class WovenFit(FitModel):
         if weave != "auto" and weave not in WEAVES:
             raise OptionError(f"weave: {weave!r} is not one of auto, {', '.join(WEAVES)}")
         self.weave = weave
+        # models by everything but the colours: a colour change recolours one of them (its geometry and
+        # lobes kept, ClothModel.recoloured) instead of building the cloth again
+        self._models: dict[tuple[Any, ...], Any] = {}
 
     @property
     def label(self) -> str:
@@ -363,7 +368,16 @@ class WovenFit(FitModel):
     def build(self, values: Mapping[str, Any], *, quality: str = "full") -> Any:
         from ..synth.cloth import ClothModel
 
-        return ClothModel(self.cloth_params(values, quality=quality))
+        p = self.cloth_params(values, quality=quality)
+        key = (quality, *(float(values[k]) for k in ("specular", "gloss_deg", "sheen_deg", "isotropic", "flatness")))
+        base = self._models.get(key)
+        if base is None or not hasattr(base, "recoloured"):
+            base = ClothModel(p)
+            if len(self._models) >= _WOVEN_CACHE:
+                self._models.pop(next(iter(self._models)))
+            self._models[key] = base
+            return base
+        return base.recoloured(warp_rgb=p.warp_rgb, weft_rgb=p.weft_rgb, backing_rgb=p.backing_rgb)
 
     def model_params(self, values: Mapping[str, Any]) -> dict[str, Any]:
         return self.cloth_params(values).to_dict()
