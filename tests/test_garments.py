@@ -50,10 +50,10 @@ def test_garment_is_made_of_sewn_panels():
 
 
 @pytest.mark.parametrize(("make", "axis", "reason"), [
-    (cad_garment, "z", "open boundaries"),
-    (blender_garment, "y", "open boundaries"),
+    (cad_garment, "z", "openings"),
+    (blender_garment, "y", "openings"),
     (lambda p: scan_bust(p, "closed"), "y", "flat base"),
-    (lambda p: scan_bust(p, "open"), "y", "open boundary points"),
+    (lambda p: scan_bust(p, "open"), "y", "1 opening"),
 ])
 def test_up_axis_comes_from_the_geometry(tmp_path, caplog, make, axis, reason):
     mesh = read_mesh(make(tmp_path))

@@ -44,7 +44,7 @@ from .io import CURVATURE_PLY_PROPERTY, MESH_FORMATS, read_mesh, read_obj, read_
 from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, read_normal_map
 from .prepare import UP_AXES, check_up, detect_up, has_own_uv, prepare_mesh, to_z_up, z_up_mesh
 from .references import Reference, check_references, referenced_files
-from .repair import WELD_TOLERANCE, RepairedMesh, repair, weld
+from .repair import SEAM_TOLERANCE, WELD_TOLERANCE, RepairedMesh, repair, weld, weld_seams
 from .surfaces import (
     DrapedCloth,
     SineSheet,
@@ -79,6 +79,7 @@ __all__ = [
     "DEFAULT_NEIGHBOURHOOD_MM",
     "NEIGHBOURHOOD_RANGE_MM",
     "WELD_TOLERANCE",
+    "SEAM_TOLERANCE",
     "MAX_SIZE_MM",
     "Units",
     "parse_units",
@@ -93,6 +94,7 @@ __all__ = [
     "max_curvature",
     "repair",
     "weld",
+    "weld_seams",
     "check_neighbourhood",
     "neighbourhood_from_table",
     "prepare_mesh",

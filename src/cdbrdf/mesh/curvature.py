@@ -66,6 +66,10 @@ ADAPT_EDGES = 2.0
 #: Where a vertex lies, for the report of curvature outside a table's range (:attr:`SurfaceCurvature.location`).
 LOCATIONS: tuple[str, ...] = ("interior", "boundary", "seam")
 
+#: Smallest panel, in faces: the boundary of a smaller UV chart is no seam (a UV atlas cut at nearly
+#: every edge, as some remeshing tools leave it, has charts of 1-20 faces; a garment's panels have hundreds).
+PANEL_FACES = 20
+
 #: Largest neighbourhood, as a share of the mesh's size (bounding-box diagonal): a larger one is
 #: reduced to it, with a note (a wrong unit?); beyond it a quadric cannot follow the surface.
 MAX_NEIGHBOURHOOD_SHARE = 0.5
@@ -212,6 +216,31 @@ def _boundary_vertices(faces: NDArray[np.int64], n: int) -> NDArray[np.bool_]:
     edges, count = np.unique(e, axis=0, return_counts=True)
     out = np.zeros(n, np.bool_)
     out[edges[count == 1].reshape(-1)] = True
+    return out
+
+
+def _seam_vertices(faces: NDArray[np.int64], n: int) -> NDArray[np.bool_]:
+    """Vertices on the boundary of a panel: a piece of the file's mesh (faces joined through shared
+    vertices) of at least :data:`PANEL_FACES` faces.
+
+    A UV map cut at nearly every edge (an atlas of a few faces per chart) has no panels, so no seams.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = faces.shape[0]
+    if m == 0:
+        return np.zeros(n, np.bool_)
+    inc = coo_matrix((np.ones(3 * m), (np.repeat(np.arange(m), 3), faces.reshape(-1))), shape=(m, n)).tocsr()
+    _, chart = connected_components(inc @ inc.T, directed=False)
+    big = np.bincount(chart)[chart] >= PANEL_FACES
+    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    owner = np.tile(np.arange(m), 3)
+    key = np.sort(e, axis=1)
+    _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    one = (count[inv.reshape(-1)] == 1) & big[owner]
+    out = np.zeros(n, np.bool_)
+    out[e[one].reshape(-1)] = True
     return out
 
 
@@ -385,8 +414,7 @@ def surface_curvature(  # noqa: C901 - the steps in order
     areas = _vertex_areas(positions_o, out_faces, n_o)
     # a seam: a panel's (or UV chart's) boundary in the file that the analysis surface closes
     f_in = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    location = np.where(boundary_a[rep.out_vertex[src_first]], 1,
-                        np.where(_boundary_vertices(f_in, v.shape[0])[src], 2, 0))
+    location = np.where(boundary_a[rep.out_vertex[src_first]], 1, np.where(_seam_vertices(f_in, v.shape[0])[src], 2, 0))
     for note in notes:
         _LOG.info("%s: %s", name, note)
     return SurfaceCurvature(src, out_faces, normals_o, uv_o, pc.kappa, directional, pc.k1, pc.k2, pc.d1, pc.d2,

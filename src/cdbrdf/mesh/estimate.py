@@ -298,6 +298,23 @@ def fit_curvatures(
                   np.ascontiguousarray(idx, np.int64), np.ascontiguousarray(dist), float(radius),
                   MIN_NEIGHBOURS, cos_max, r1, r2, e1, e2, en, rs, grain=GRAIN)
         k1[retry], k2[retry], d1[retry], d2[retry], fitted_n[retry], status[retry] = r1, r2, e1, e2, en, rs
+    unresolved = np.flatnonzero(status == 3)
+    if unresolved.size:  # a spike (no height field the samples resolve): the fits around it, averaged
+        ok = status == 0
+        kt = int(min(TRANSFER_NEIGHBOURS, sp.shape[0]))
+        dist, idx = tree.query(q_pos[unresolved], k=kt, workers=-1)
+        dist, idx = dist.reshape(unresolved.size, kt), idx.reshape(unresolved.size, kt)
+        spacing = max(float(np.median(dist[:, 1:])) if kt > 1 else radius, 1e-300)
+        r1, r2 = np.zeros(unresolved.size), np.zeros(unresolved.size)
+        e1, e2 = np.zeros((unresolved.size, 3)), np.zeros((unresolved.size, 3))
+        rs = np.zeros(unresolved.size, np.int8)
+        # the query points are the samples (the vertices of a mesh fitted at its vertices)
+        run_split(transfer_tensors, unresolved.size, np.ascontiguousarray(q_nrm[unresolved]),
+                  np.ascontiguousarray(q_comp[unresolved]), sn, sc, ok, fitted_n, k1, k2, d1, d2,
+                  np.ascontiguousarray(idx, np.int64), np.ascontiguousarray(dist), spacing, cos_max,
+                  r1, r2, e1, e2, rs, grain=GRAIN)
+        k1[unresolved], k2[unresolved], d1[unresolved], d2[unresolved] = r1, r2, e1, e2
+        status[unresolved] = np.where(rs == 0, 0, 1)
     if thinned:
         spacing = radius * math.sqrt(math.pi / SAMPLES_PER_NEIGHBOURHOOD)
         ok = status == 0
