@@ -21,11 +21,9 @@ FIT_ITERATIONS = 3
 #: Fewest vertices worth a thread of their own (:func:`cdbrdf._jit.run_split`).
 GRAIN = 256
 
-#: A fit is resolved when its samples spread across the tangent plane: the smaller second moment of
-#: their positions at least this share of the larger (not all along a rim, a ledge or a seam line),
-SPREAD_MIN = 0.0
-
-#: and when the fitted surface turns by at most this many radians over the samples' rms distance.
+#: A fit is resolved when the fitted surface turns by at most this many radians over its samples' rms
+#: distance: the samples' normals are within 60 degrees of the vertex's, so a circle through them turns
+#: by about 1 radian at most; the ill-conditioned fits along a collar's rim or a ledge turn by tens.
 BEND_MAX = 1.5
 
 #: Tukey biweight constant (95 % efficiency under Gaussian noise), in robust standard deviations.
@@ -304,24 +302,16 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
     half = math.sqrt(0.25 * (ka - kc) * (ka - kc) + kb * kb)
     k1[i] = mean + half
     k2[i] = mean - half
-    # resolved: samples spread across the tangent plane (not along a rim or a ledge), and a surface that
-    # turns by less than BEND_MAX radians over their distance (else it is no height field there)
+    # resolved: a fitted surface that turns by at most BEND_MAX radians over the samples' rms distance
+    # (every sample's normal is within the cone of the vertex's: more is a fit the samples do not show)
     sxx = 0.0
-    sxy = 0.0
-    syy = 0.0
     ws = 0.0
     for j in range(cnt):
         if w[j] > 0.0:
-            sxx += w[j] * x[j] * x[j]
-            sxy += w[j] * x[j] * y[j]
-            syy += w[j] * y[j] * y[j]
+            sxx += w[j] * (x[j] * x[j] + y[j] * y[j])
             ws += w[j]
-    tr = sxx + syy
-    disc = math.sqrt(max(0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy, 0.0))
-    lam_min = 0.5 * tr - disc
-    lam_max = 0.5 * tr + disc
     kmax = max(abs(k1[i]), abs(k2[i])) * sigma
-    resolved = ws > 0.0 and lam_min >= SPREAD_MIN * lam_max and kmax * math.sqrt(tr / ws) <= BEND_MAX
+    resolved = ws > 0.0 and kmax * math.sqrt(sxx / ws) <= BEND_MAX
     # eigenvector of k1: angle th with tan(2 th) = 2 kb / (ka - kc)
     th = 0.5 * math.atan2(2.0 * kb, ka - kc)
     ct = math.cos(th)
@@ -365,8 +355,8 @@ def fit_vertices(
     its folds), the test is dropped for that vertex.
 
     ``status``: 0 fitted, 1 too few samples (curvature 0), 2 no normal, 3
-    unresolved (the samples lie along a line, or the fit turns by more than
-    :data:`BEND_MAX` radians over them: no height field at that scale).
+    unresolved (the fit turns by more than :data:`BEND_MAX` radians over
+    the samples: a spike, no surface they show).
     Releases the GIL: :func:`cdbrdf._jit.run_split` runs ranges in threads.
     """
     kk = nbr.shape[1]
@@ -476,105 +466,3 @@ def transfer_tensors(q_nrm, q_comp, s_nrm, s_comp, s_ok, s_fn, s_k1, s_k2, s_d1,
         d2[i, 2] = -st * t12 + ct * t22
         status[i] = 0
 
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def fit_normal_variation(q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, radius,
-                         k1, k2, d1, d2, status, start, stop):
-    """Shape operators from the variation of the normals, where the height fit is unresolved (status 3).
-
-    At query ``i`` the symmetric 2x2 operator ``S`` in its tangent plane
-    is fitted by weighted least squares (Gaussian weights, sigma = half the
-    radius used) to ``S (p_j - p_i) = n_j - n_i`` (both projected into the
-    plane) over the samples of its component within ``radius`` (or its
-    ``MIN`` nearest), of any normal: across a fold's rim (a collar, a turned
-    cuff, a pleat) the two layers' normals turn by up to 180 degrees over
-    the fold's width, and the operator says so (the height fit cannot: it
-    is no height field there). A sphere of radius R gives ``I / R``
-    exactly. ``status``: 0 fitted, 1 too few samples (left as it was).
-    """
-    kk = nbr.shape[1]
-    ns = s_pos.shape[0]
-    for i in range(start, stop):
-        n0 = q_nrm[i, 0]
-        n1 = q_nrm[i, 1]
-        n2 = q_nrm[i, 2]
-        ln = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
-        if not ln > 0.0:
-            status[i] = 1
-            continue
-        n0, n1, n2 = n0 / ln, n1 / ln, n2 / ln
-        t10, t11, t12, t20, t21, t22 = _frame(n0, n1, n2)
-        r_use = radius
-        cnt = 0
-        for j in range(kk):
-            s = nbr[i, j]
-            if s >= ns or (nbr_d[i, j] > radius and cnt >= 6):
-                break
-            if s_comp[s] == q_comp[i]:
-                cnt += 1
-                if nbr_d[i, j] > r_use:
-                    r_use = nbr_d[i, j]
-        if cnt < 4:
-            status[i] = 1
-            continue
-        inv2 = 0.5 / (0.25 * r_use * r_use)
-        m00 = m01 = m02 = m11 = m12 = m22 = 0.0
-        b0 = b1 = b2 = 0.0
-        seen = 0
-        for j in range(kk):
-            s = nbr[i, j]
-            if s >= ns or seen >= cnt:
-                break
-            if s_comp[s] != q_comp[i]:
-                continue
-            seen += 1
-            dx = s_pos[s, 0] - q_pos[i, 0]
-            dy = s_pos[s, 1] - q_pos[i, 1]
-            dz = s_pos[s, 2] - q_pos[i, 2]
-            u1 = dx * t10 + dy * t11 + dz * t12
-            u2 = dx * t20 + dy * t21 + dz * t22
-            e0 = s_nrm[s, 0] - n0
-            e1 = s_nrm[s, 1] - n1
-            e2 = s_nrm[s, 2] - n2
-            g1 = e0 * t10 + e1 * t11 + e2 * t12
-            g2 = e0 * t20 + e1 * t21 + e2 * t22
-            w = s_w[s] * math.exp(-(dx * dx + dy * dy + dz * dz) * inv2)
-            # unknowns (a, b, c) of S = [[a, b], [b, c]]: rows (u1, u2, 0) -> g1 and (0, u1, u2) -> g2
-            m00 += w * u1 * u1
-            m01 += w * u1 * u2
-            m11 += w * (u2 * u2 + u1 * u1)
-            m12 += w * u1 * u2
-            m22 += w * u2 * u2
-            b0 += w * u1 * g1
-            b1 += w * (u2 * g1 + u1 * g2)
-            b2 += w * u2 * g2
-        tr = m00 + m11 + m22
-        if not tr > 0.0:
-            status[i] = 1
-            continue
-        reg = 1e-6 * tr
-        m00 += reg
-        m11 += reg
-        m22 += reg
-        # solve the symmetric 3x3 system [[m00, m01, m02], [m01, m11, m12], [m02, m12, m22]] by Cramer's rule
-        det = (m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02))
-        if not abs(det) > 0.0:
-            status[i] = 1
-            continue
-        a = (b0 * (m11 * m22 - m12 * m12) - m01 * (b1 * m22 - m12 * b2) + m02 * (b1 * m12 - m11 * b2)) / det
-        b = (m00 * (b1 * m22 - m12 * b2) - b0 * (m01 * m22 - m12 * m02) + m02 * (m01 * b2 - b1 * m02)) / det
-        c = (m00 * (m11 * b2 - b1 * m12) - m01 * (m01 * b2 - b1 * m02) + b0 * (m01 * m12 - m11 * m02)) / det
-        mean = 0.5 * (a + c)
-        half = math.sqrt(0.25 * (a - c) * (a - c) + b * b)
-        k1[i] = mean + half
-        k2[i] = mean - half
-        th = 0.5 * math.atan2(2.0 * b, a - c)
-        ct = math.cos(th)
-        st = math.sin(th)
-        d1[i, 0] = ct * t10 + st * t20
-        d1[i, 1] = ct * t11 + st * t21
-        d1[i, 2] = ct * t12 + st * t22
-        d2[i, 0] = -st * t10 + ct * t20
-        d2[i, 1] = -st * t11 + ct * t21
-        d2[i, 2] = -st * t12 + ct * t22
-        status[i] = 0

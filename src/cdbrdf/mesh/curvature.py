@@ -43,6 +43,7 @@ __all__ = [
     "CURVATURE_MODES",
     "LOCATIONS",
     "outside_by_location",
+    "dihedral_curvature",
     "ATTRIBUTES",
     "PLY_PROPERTIES",
     "MESH_ATTRIBUTES",
@@ -219,26 +220,33 @@ def _boundary_vertices(faces: NDArray[np.int64], n: int) -> NDArray[np.bool_]:
     return out
 
 
-def _seam_vertices(faces: NDArray[np.int64], n: int) -> NDArray[np.bool_]:
-    """Vertices on the boundary of a panel: a piece of the file's mesh (faces joined through shared
-    vertices) of at least :data:`PANEL_FACES` faces.
-
-    A UV map cut at nearly every edge (an atlas of a few faces per chart) has no panels, so no seams.
-    """
+def _chart_sizes(faces: NDArray[np.int64], n: int) -> NDArray[np.int64]:
+    """Per face, the number of faces of its piece of the file's mesh (faces joined through shared vertices:
+    a panel, a UV chart)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
     m = faces.shape[0]
     if m == 0:
-        return np.zeros(n, np.bool_)
+        return np.zeros(0, np.int64)
     inc = coo_matrix((np.ones(3 * m), (np.repeat(np.arange(m), 3), faces.reshape(-1))), shape=(m, n)).tocsr()
-    _, chart = connected_components(inc @ inc.T, directed=False)
-    big = np.bincount(chart)[chart] >= PANEL_FACES
+    _, piece = connected_components(inc @ inc.T, directed=False)
+    return np.bincount(piece)[piece].astype(np.int64)
+
+
+def _seam_vertices(faces: NDArray[np.int64], chart: NDArray[np.int64], n: int) -> NDArray[np.bool_]:
+    """Vertices on the boundary of a panel: a piece of the file's mesh of at least :data:`PANEL_FACES`
+    faces (``chart``: :func:`_chart_sizes`).
+
+    A UV map cut at nearly every edge (an atlas of a few faces per chart) has no panels, so no seams.
+    """
+    m = faces.shape[0]
+    if m == 0:
+        return np.zeros(n, np.bool_)
     e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     owner = np.tile(np.arange(m), 3)
-    key = np.sort(e, axis=1)
-    _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    one = (count[inv.reshape(-1)] == 1) & big[owner]
+    _, inv, count = np.unique(np.sort(e, axis=1), axis=0, return_inverse=True, return_counts=True)
+    one = (count[inv.reshape(-1)] == 1) & (chart[owner] >= PANEL_FACES)
     out = np.zeros(n, np.bool_)
     out[e[one].reshape(-1)] = True
     return out
@@ -328,14 +336,20 @@ def surface_curvature(  # noqa: C901 - the steps in order
     if frame == "tangent" and tan_in is None:
         raise MeshError(f"{name}: the mesh has no tangent attribute for frame 'tangent'")
     notes: list[str] = []
-    if frame == "auto":
-        frame = "uv" if uv_in is not None else "tangent" if tan_in is not None else "principal"
-        if frame == "tangent":
-            notes.append("no UV coordinates: the material's x axis is the file's tangent attribute")
-        elif frame == "principal":
-            notes.append("no UV coordinates: the material's x axis is the bending direction "
-                         "(of the principal curvature of larger magnitude)")
     rep = repair(v, faces, normals=normals, uv=uv_in, name=name)
+    f_in = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    chart = _chart_sizes(f_in, v.shape[0])
+    if frame == "auto":
+        scraps = uv_in is not None and float(np.mean(chart < PANEL_FACES)) > 0.5
+        frame = "uv" if uv_in is not None and not scraps else "tangent" if tan_in is not None else "principal"
+        why = (f"the UV map is cut at nearly every edge ({int(np.count_nonzero(chart < PANEL_FACES))} of "
+               f"{chart.size} faces in pieces of fewer than {PANEL_FACES}), so it follows no fabric"
+               if scraps else "no UV coordinates")
+        if frame == "tangent":
+            notes.append(f"{why}: the material's x axis is the file's tangent attribute")
+        elif frame == "principal":
+            notes.append(f"{why}: the material's x axis is the bending direction "
+                         "(of the principal curvature of larger magnitude)")
     pos_in = np.asarray(rep.vertices)
     diag = float(np.linalg.norm(pos_in.max(0) - pos_in.min(0)))
     radius = 0.5 * nb / u.mm_per_unit
@@ -413,8 +427,8 @@ def surface_curvature(  # noqa: C901 - the steps in order
         directional = np.where(undefined, pc.kappa, directional)
     areas = _vertex_areas(positions_o, out_faces, n_o)
     # a seam: a panel's (or UV chart's) boundary in the file that the analysis surface closes
-    f_in = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    location = np.where(boundary_a[rep.out_vertex[src_first]], 1, np.where(_seam_vertices(f_in, v.shape[0])[src], 2, 0))
+    location = np.where(boundary_a[rep.out_vertex[src_first]], 1,
+                        np.where(_seam_vertices(f_in, chart, v.shape[0])[src], 2, 0))
     for note in notes:
         _LOG.info("%s: %s", name, note)
     return SurfaceCurvature(src, out_faces, normals_o, uv_o, pc.kappa, directional, pc.k1, pc.k2, pc.d1, pc.d2,
@@ -430,6 +444,70 @@ def outside_by_location(kappa: NDArray[np.float64], location: NDArray[np.int8],
     out = (kappa < lo - tol) | (kappa > hi + tol)
     return {name: (int(np.count_nonzero(out & (location == i))), int(np.count_nonzero(location == i)))
             for i, name in enumerate(LOCATIONS)}
+
+
+def dihedral_curvature(vertices: ArrayLike, faces: ArrayLike, *, units: str | float | Units = "mm",
+                       name: str = "mesh") -> NDArray[np.float64]:
+    """The sharpest bend the tessellation itself shows at each vertex, mm^-1, unsigned: a check of the fit.
+
+    For every edge of the surface (seams closed, :func:`cdbrdf.mesh.repair.weld_seams`)
+    the angle between its two faces' planes over the mean height of the
+    two triangles on it: the normal curvature across that edge a circle
+    through the faces would have (a cylinder of radius R tessellated along
+    its axis gives 1 / R). A vertex gets the largest of its edges'. It uses
+    no neighbourhood: where a fitted curvature (:func:`surface_curvature`)
+    exceeds it several times, the fit shows more than the mesh does (a
+    spike); where both exceed a table's range, the cloth bends that tightly.
+
+    Parameters
+    ----------
+    vertices, faces
+        ``(n, 3)`` positions in ``units`` and ``(m, 3)`` triangles.
+    units
+        Their length unit.
+    name
+        For messages.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n,)`` per input vertex, mm^-1 (0 on a vertex of no two-face edge).
+    """
+    from .repair import check_arrays, weld_seams
+
+    v, f = check_arrays(vertices, faces, name=name)
+    u = parse_units(units)
+    out = np.zeros(v.shape[0])
+    if f.size == 0:
+        return out
+    wid = weld_seams(v, f)
+    pos = np.zeros((int(wid.max()) + 1, 3))
+    pos[wid] = v * u.mm_per_unit
+    fw = wid[f]
+    cr = np.cross(pos[fw[:, 1]] - pos[fw[:, 0]], pos[fw[:, 2]] - pos[fw[:, 0]])
+    a2 = np.linalg.norm(cr, axis=1)
+    good = a2 > 0
+    fn = np.divide(cr, a2[:, None], out=np.zeros_like(cr), where=good[:, None])
+    a = fw.reshape(-1)
+    b = fw[:, [1, 2, 0]].reshape(-1)
+    face = np.repeat(np.arange(fw.shape[0]), 3)
+    key = np.minimum(a, b) * np.int64(pos.shape[0]) + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    pair = np.flatnonzero(ks[1:] == ks[:-1])  # the two faces of an edge (more on a non-manifold one: pairwise)
+    f1, f2 = face[order][pair], face[order][pair + 1]
+    ea, eb = a[order][pair], b[order][pair]
+    ok = good[f1] & good[f2]
+    f1, f2, ea, eb = f1[ok], f2[ok], ea[ok], eb[ok]
+    length = np.linalg.norm(pos[ea] - pos[eb], axis=1)
+    height = 0.5 * (a2[f1] + a2[f2]) / np.maximum(length, 1e-300)
+    # the faces' windings are the file's: the angle between their planes, not their sides
+    angle = np.arccos(np.clip(np.abs(np.einsum("ij,ij->i", fn[f1], fn[f2])), 0.0, 1.0))
+    bend = np.divide(angle, height, out=np.zeros_like(angle), where=height > 0)
+    per = np.zeros(pos.shape[0])
+    np.maximum.at(per, ea, bend)
+    np.maximum.at(per, eb, bend)
+    return per[wid]
 
 
 #: Mitsuba mesh attribute of each curvature mode (what the ``cdbrdf`` BSDF reads), mm^-1.

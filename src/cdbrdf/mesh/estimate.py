@@ -23,7 +23,13 @@ given in mm and converted to the mesh's unit, whatever the tessellation:
    the ball;
 3. a weighted (Gaussian, sigma = radius / 2) robust fit (Tukey's biweight)
    of a height quadric, then of the normal-section model, which is exact for
-   spheres at any radius (:func:`cdbrdf.mesh._kernels.fit_vertices`).
+   spheres at any radius (:func:`cdbrdf.mesh._kernels.fit_vertices`);
+4. a fit that turns by more than :data:`cdbrdf.mesh._kernels.BEND_MAX`
+   radians over its samples' rms distance, which samples within the normal
+   cone cannot show, is a spike (on a coarse mesh, the samples along a
+   collar's rim, a turned-up cuff or a waistband's ledge fit curvatures of
+   10 to 100 mm^-1 at 17 mm edges): it is replaced by the Gaussian-weighted
+   mean of the shape operators fitted around it.
 
 Measured (``tests/test_curvature.py``, ``docs/rendering.md``): a cylinder
 of radius 1/0.22 mm at the default 5 mm neighbourhood is within 0.86 %

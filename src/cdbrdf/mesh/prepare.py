@@ -49,8 +49,9 @@ UP_AXES: tuple[str, ...] = ("auto", "y", "z")
 #: A flat object (its extent along y or z below this share of the other two) lies on that axis.
 FLAT_SHARE = 0.2
 
-#: A flat base decides when its normal is within this angle of y or z, degrees.
-BASE_TILT_DEG = 30.0
+#: A flat base decides when its normal's component along y or z is this many times that along the other
+#: (a cut slanting up to 40 degrees, from under a chin to the nape).
+BASE_RATIO = 1.15
 
 #: The mirror plane's axis is the left-right axis when its asymmetry is below this share of the next axis's.
 SYMMETRY_RATIO = 0.6
@@ -200,8 +201,10 @@ def prepare_mesh(
     else:
         if "curvature" in mesh.attributes and not recompute:
             notes.append("curvature: computed again (the file's has no recorded unit, or other settings)")
+        mapped = mesh.uv is not None and (normal_map is not None or meta.get("normal_map") is not None)
         s = surface_curvature(mesh.vertices, mesh.faces, uv=mesh.uv, normals=mesh.normals, tangents=mesh.tangents,
-                              units=u, neighbourhood_mm=nb, frame=frame or "auto", name=name, progress=progress)
+                              units=u, neighbourhood_mm=nb, frame=frame or ("uv" if mapped else "auto"), name=name,
+                              progress=progress)
         repairs = list(s.repairs)
         notes.extend(s.notes)
         attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in ("curvature", "curvature_dir")}
@@ -325,9 +328,9 @@ def _geometry_up(mesh: Mesh, shape: Shape | None = None) -> tuple[str, str] | No
     shape = describe(mesh) if shape is None else shape
     if shape.base is not None:
         nrm, share = shape.base
-        a = int(np.argmax(np.abs(nrm)))
-        if a > 0 and abs(nrm[a]) >= math.cos(math.radians(BASE_TILT_DEG)):
-            return "xyz"[a], f"a flat base across {'xyz'[a]} ({share:.0%} of the surface: a scan's cut, a plinth)"
+        pick = _axis_pair(np.abs(nrm), BASE_RATIO)
+        if pick is not None and abs(nrm[0]) < abs(nrm["xyz".index(pick[0])]):
+            return pick[0], f"a flat base across {pick[0]} ({share:.0%} of the surface: a scan's cut, a plinth)"
     sym = shape.symmetry
     lateral = int(np.argmin(sym))
     others = np.delete(sym, lateral)

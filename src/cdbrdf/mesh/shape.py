@@ -180,10 +180,9 @@ class Shape:
 
 def _faces_welded(mesh: Mesh) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Positions and non-degenerate faces of the mesh with its seams closed."""
-    from .repair import weld_seams
+    from .repair import check_arrays, weld_seams
 
-    v = np.asarray(mesh.vertices, dtype=np.float64)
-    f = np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
+    v, f = check_arrays(mesh.vertices, mesh.faces, name=str(mesh.metadata.get("source", "mesh")))
     wid = weld_seams(v, f)
     pos = np.zeros((int(wid.max()) + 1 if wid.size else 0, 3))
     pos[wid] = v
@@ -353,6 +352,11 @@ def describe(mesh: Mesh) -> Shape:
     -------
     Shape
         What the geometry says.
+
+    Raises
+    ------
+    MeshError
+        For vertices or faces the repair would refuse (:func:`cdbrdf.mesh.repair.check_arrays`).
     """
     pos, fw = _faces_welded(mesh)
     n = pos.shape[0]

@@ -82,7 +82,7 @@ def header_comments(data: bytes, *, max_lines: int = 200) -> list[str]:
 
 def _quote(line: str, start: int) -> str:
     """The words of a comment from a match on, for a message."""
-    text = line[max(0, start - 20):].strip()
+    text = line[start:].strip()
     return repr(text if len(text) <= 60 else text[:57] + "...")
 
 
