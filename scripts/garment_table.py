@@ -92,10 +92,9 @@ def shared_garments(data: Path | None) -> Path:
 
 
 def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) -> Row:
-    from cdbrdf.colour import delta_e_ab, ev_to_factor, linear_to_lab
     from cdbrdf.mesh import detect_up, prepare_mesh, read_mesh
     from cdbrdf.mesh.curvature import LOCATIONS, dihedral_curvature
-    from cdbrdf.render import curvature_image, mesh_scene, render_table, variant
+    from cdbrdf.render import curvature_image, delta_e_image, mesh_scene, render_table, variant
     from cdbrdf.render.plugin import DEFAULT_VARIANT
 
     log = _Collect()
@@ -119,9 +118,7 @@ def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) ->
     h = prep.vertices[:, a]
     where = f"{LOCATIONS[loc[i]]}, {100 * (h[i] - h.min()) / max(np.ptp(h), 1e-300):.0f} % up"
     pic = render_table(table, prep, modes=("brdf", "cdbrdf"), size=size, spp=spp, up=up)
-    factor = ev_to_factor(pic.exposure_ev)
-    shown = {m: np.clip(np.nan_to_num(pic.display(m) * factor), 0.0, 1.0) for m in ("brdf", "cdbrdf")}
-    d = delta_e_ab(linear_to_lab(shown["brdf"]), linear_to_lab(shown["cdbrdf"]))
+    d = delta_e_image(pic)
     marked = prep.copy()
     marked.attributes = {**prep.attributes, "seam": (loc == LOCATIONS.index("seam")).astype(np.float64)}
     with variant(DEFAULT_VARIANT):

@@ -21,10 +21,16 @@ FIT_ITERATIONS = 3
 #: Fewest vertices worth a thread of their own (:func:`cdbrdf._jit.run_split`).
 GRAIN = 256
 
-#: A fit is resolved when the fitted surface turns by at most this many radians over its samples' rms
-#: distance: the samples' normals are within 60 degrees of the vertex's, so a circle through them turns
-#: by about 1 radian at most; the ill-conditioned fits along a collar's rim or a ledge turn by tens.
+#: A fit is resolved when the fitted surface turns its normal, from the vertex to its samples, by at
+#: most this many radians (rms): the samples' normals are within 60 degrees of the vertex's, so a surface
+#: through them turns by about 1 radian at most; ill-conditioned fits along a collar's rim or a
+#: waistband's ledge (samples nearly on a line) turn by tens.
 BEND_MAX = 1.5
+
+#: and when its samples span the neighbourhood in both directions: the smaller second moment of their
+#: positions in the tangent plane at least this share of the larger (a curvature across a line of
+#: vertices, a crease or a seam line, would be measured at the scale of their jitter).
+SPREAD_MIN = 0.05
 
 #: Tukey biweight constant (95 % efficiency under Gaussian noise), in robust standard deviations.
 TUKEY_C = 4.685
@@ -302,16 +308,27 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
     half = math.sqrt(0.25 * (ka - kc) * (ka - kc) + kb * kb)
     k1[i] = mean + half
     k2[i] = mean - half
-    # resolved: a fitted surface that turns by at most BEND_MAX radians over the samples' rms distance
-    # (every sample's normal is within the cone of the vertex's: more is a fit the samples do not show)
-    sxx = 0.0
+    # resolved: the fitted surface turns its normal, between the vertex and its samples, by at most
+    # BEND_MAX radians (rms): their normals are within the cone of the vertex's, so a fit that turns by
+    # more shows what they do not (a spike, along a rim or a ledge where they are nearly collinear)
+    turn = 0.0
     ws = 0.0
+    sxx = 0.0
+    sxy = 0.0
+    syy = 0.0
     for j in range(cnt):
         if w[j] > 0.0:
-            sxx += w[j] * (x[j] * x[j] + y[j] * y[j])
+            sx = (ka * x[j] + kb * y[j]) * sigma
+            sy = (kb * x[j] + kc * y[j]) * sigma
+            turn += w[j] * (sx * sx + sy * sy)
             ws += w[j]
-    kmax = max(abs(k1[i]), abs(k2[i])) * sigma
-    resolved = ws > 0.0 and kmax * math.sqrt(sxx / ws) <= BEND_MAX
+            sxx += w[j] * x[j] * x[j]
+            sxy += w[j] * x[j] * y[j]
+            syy += w[j] * y[j] * y[j]
+    # and the samples span the neighbourhood across as well as along (not a line of vertices)
+    disc = math.sqrt(0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy)
+    spread = 0.5 * (sxx + syy) - disc >= SPREAD_MIN * (0.5 * (sxx + syy) + disc)
+    resolved = ws > 0.0 and turn <= BEND_MAX * BEND_MAX * ws and spread
     # eigenvector of k1: angle th with tan(2 th) = 2 kb / (ka - kc)
     th = 0.5 * math.atan2(2.0 * kb, ka - kc)
     ct = math.cos(th)

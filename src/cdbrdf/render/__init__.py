@@ -17,7 +17,7 @@ too:
   :func:`render_table`; :mod:`~cdbrdf.render.output`: image files;
 - :mod:`~cdbrdf.render.contrast`: the curvature seen in each pixel and the
   colour difference of two renders at the crests and where the surface is
-  flat (:func:`crest_contrast`).
+  flat (:func:`crest_contrast`), Delta E*ab per pixel as shown (:func:`delta_e_image`).
 
 .. code-block:: python
 
@@ -31,7 +31,7 @@ from __future__ import annotations
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._btf_jit import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
-from .contrast import CrestContrast, crest_contrast, curvature_image
+from .contrast import CrestContrast, crest_contrast, curvature_image, delta_e_image
 from .picture import (
     RENDER_MODES,
     Picture,
@@ -95,4 +95,5 @@ __all__ = [
     "CrestContrast",
     "crest_contrast",
     "curvature_image",
+    "delta_e_image",
 ]
