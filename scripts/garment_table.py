@@ -7,7 +7,8 @@ exports: a knife-pleat dress as CAD panels and draped, two MakeHuman suits,
 a simulated and a worn T-shirt, Khronos' SheenCloth; see its README), with
 the defaults of ``cdbrdf render --mesh`` and the bundled denim:
 
-- the unit and the up axis cdbrdf decides, with the rule that decided;
+- the unit and the up axis cdbrdf decides, with the rule that decided, and
+  the up axis the geometry alone gives (the file's statements left out);
 - the vertices, and those whose curvature is outside the table's kappa range,
   by location (interior, an opening or another open boundary, a seam), with
   the share of them where the tessellation itself bends at least half as
@@ -62,6 +63,7 @@ class Row:
     vertices: int
     units: str
     up: str
+    up_geometry: str
     outside: dict[str, tuple[int, int]]
     true_share: float
     kappa_max: float
@@ -92,7 +94,7 @@ def shared_garments(data: Path | None) -> Path:
 
 
 def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) -> Row:
-    from cdbrdf.mesh import detect_up, prepare_mesh, read_mesh
+    from cdbrdf.mesh import Mesh, detect_up, prepare_mesh, read_mesh
     from cdbrdf.mesh.curvature import LOCATIONS, dihedral_curvature
     from cdbrdf.render import curvature_image, delta_e_image, mesh_scene, render_table, variant
     from cdbrdf.render.plugin import DEFAULT_VARIANT
@@ -104,6 +106,8 @@ def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) ->
         mesh.metadata.pop("normal_map", None)  # the geometry's curvature only
         prep = prepare_mesh(mesh, table=table)
         up, why = detect_up(prep)
+        bare = Mesh(mesh.vertices, mesh.faces, None, mesh.uv, {}, None, {"format": "obj"})
+        up_geometry = detect_up(bare)
     finally:
         logging.getLogger("cdbrdf").removeHandler(log)
     meta = prep.metadata
@@ -129,7 +133,8 @@ def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) ->
     noticeable = seen & (d > JND)
     n_seen = max(int(seen.sum()), 1)
     return Row(name=name, vertices=prep.n_vertices, units=meta["units_note"].removeprefix("units: "),
-               up=f"{up} ({why})", outside=dict(meta["outside_by_location"]), true_share=true_share,
+               up=f"{up} ({why})", up_geometry=f"{up_geometry[0]} ({up_geometry[1]})",
+               outside=dict(meta["outside_by_location"]), true_share=true_share,
                kappa_max=float(np.abs(k[i])), kappa_where=where,
                noticeable=float(noticeable.sum()) / n_seen,
                on_seams=float((noticeable & on_seam).sum()) / max(int(noticeable.sum()), 1),
@@ -142,23 +147,38 @@ def _pct(x: float) -> str:
     return "-" if not np.isfinite(x) else f"{100 * x:.2f} %"
 
 
+#: Short names of the rules in the notes, for the table's columns (the notes follow it in full).
+_RULES = (("inferred", "inferred from the size"), ("the file's header", "the file's header"),
+          ("MakeHuman", "MakeHuman's"), ("glTF", "glTF's specification"), ("recorded", "recorded"),
+          ("given", "given"), ("opening", "its openings"), ("separate panels", "separate panels"),
+          ("one sheet", "one sheet"), ("flat base", "a flat base"), ("mirror", "its mirror plane"),
+          ("tallest", "its tallest axis"), ("convention", "the format's convention"))
+
+
+def _rule(text: str) -> str:
+    return next((short for key, short in _RULES if key in text), text)
+
+
 def markdown(rows: list[Row], table_name: str, kappa_range: tuple[float, float]) -> str:
-    lines = [f"| garment | vertices | unit (rule) | up (rule) | outside [{kappa_range[0]:g}, {kappa_range[1]:g}] "
-             "mm^-1: interior / opening / seam | of those, where the mesh bends as tight | max abs(kappa) "
-             "mm^-1 (where) | pixels with Delta E*ab > 2.3 | of those on a seam (seam pixels) |",
+    lines = [f"| garment | vertices | unit | up (the geometry alone) | outside [{kappa_range[0]:g}, "
+             f"{kappa_range[1]:g}] mm^-1 (interior / opening / seam) | of those, the mesh bends as tightly | "
+             "largest abs(kappa), mm^-1 | pixels with Delta E*ab > 2.3 | of those on a seam (seam pixels) |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         o = r.outside
         n_out = sum(x for x, _ in o.values())
         by = " / ".join(f"{o[k][0]} of {o[k][1]}" for k in ("interior", "boundary", "seam"))
-        lines.append(f"| {r.name} | {r.vertices} | {r.units} | {r.up} | {_pct(n_out / r.vertices)} ({by}) | "
-                     f"{_pct(r.true_share)} | {r.kappa_max:.3g} ({r.kappa_where}) | {_pct(r.noticeable)} | "
-                     f"{_pct(r.on_seams)} ({_pct(r.seam_pixels)}) |")
-    lines.append("")
-    lines.append(f"Table: bundled {table_name}. Warnings:")
+        unit, up = r.units.split(" ", 1)[0] if not r.units.startswith("inferred") else r.units.split()[1], r.up[0]
+        lines.append(f"| {r.name} | {r.vertices} | {unit} ({_rule(r.units)}) | {up} ({_rule(r.up)}; the geometry: "
+                     f"{r.up_geometry[0]}, {_rule(r.up_geometry)}) | "
+                     f"{_pct(n_out / r.vertices)} ({by}) | {_pct(r.true_share)} | {r.kappa_max:.3g} "
+                     f"({r.kappa_where}) | {_pct(r.noticeable)} | {_pct(r.on_seams)} ({_pct(r.seam_pixels)}) |")
+    lines += ["", f"Bundled {table_name}. What cdbrdf says of each:", ""]
     for r in rows:
+        lines.append(f"- {r.name}: units: {r.units}; up axis: {r.up}; from the geometry alone (an OBJ "
+                     f"saying nothing): {r.up_geometry}")
         for w in r.warnings:
-            lines.append(f"- {r.name}: {w.split(': ', 1)[-1] if w.startswith('/') else w}")
+            lines.append(f"  - warning: {w.split(': ', 1)[-1] if w.startswith('/') else w}")
     return "\n".join(lines)
 
 

@@ -1,22 +1,40 @@
-"""A user's mesh made ready to render: repaired, in mm, framed, upright, with its curvature.
+"""A user's mesh made ready to render: repaired, in its unit, framed, upright, with its curvature.
 
 :func:`prepare_mesh` reads a mesh file (or takes a :class:`~cdbrdf.mesh.Mesh`),
 repairs it, gives it the material's frame and its curvatures in mm^-1
 (:mod:`cdbrdf.mesh.curvature`) and checks them against a table's kappa range.
 
-**Up axis** (:func:`detect_up`), from the geometry first: the axis a PLY
-written by cdbrdf records; else a flat object (its extent along y or z
-below a fifth of the other two) lies on that axis; else the direction the
-open boundaries point (a garment's neck, hem and sleeves, a figure's neck
-and base: the boundaries after the seams are closed, each weighted by its
-perimeter, decide when y or z has 1.5 times the other's share); else a flat
-base (a planar cap at one end of an axis holding at least 2 % of the
-surface, as scans are cut); else the taller of y and z (by 1.2 times). The
-format's convention (Y for OBJ, glTF and OFF, Z for PLY and STL) decides
-only when the geometry does not, and a geometry that disagrees with it is
-logged as a warning. ``up="y"`` or ``"z"`` overrides it. :func:`z_up_mesh`
-turns a mesh into the z-up world frame by ``(x, y, z) -> (x, -z, y)``, so a
-Y-up mesh's front (+z) faces a camera at azimuth -90 degrees.
+**Unit**: given, recorded by cdbrdf or stated by the file
+(:mod:`cdbrdf.mesh.statements`), else inferred from the size of a garment or
+a sheet (:func:`cdbrdf.mesh.units.infer_units`), else mm; the note
+``units_note`` says which (``units: inferred dm from the size: 1.14 m tall,
+1.05 m across as a garment (0.2-2.5 m)``). A stated unit that makes a garment
+implausibly large or small is followed, with a warning.
+
+**Up axis** (:func:`detect_up`): what the file states first (a PLY written by
+cdbrdf, glTF's specification, a header comment such as ``# Y-up``, a
+MakeHuman asset), else the geometry (:mod:`cdbrdf.mesh.shape`), by the first
+rule that decides:
+
+1. a flat object (its extent along y or z below a fifth of the other two)
+   lies on that axis (a pattern laid out, a swatch);
+2. a flat base (a plane capping the surface at its extreme across a crease:
+   a scan's cut, a plinth, slanting up to 40 degrees);
+3. the left-right mirror plane: when it is across y or z, the other is up;
+4. the openings (a garment's neck, hem and cuffs, a scan's open base, with
+   the seams closed: each points away from the cloth, weighted by its
+   length) point along y or z 1.5 times as much as along the other;
+5. separate panels (a CAD stage) hang around a body, so they face across
+   the up axis 1.5 times less; one sheet (a drape) faces up 1.25 times more;
+6. the taller of y and z (by 1.2 times).
+
+Else the tool's default (Blender's, Maya's and 3ds Max's OBJ exports are
+Y-up), else the format's convention (Y for OBJ, glTF and OFF, Z for PLY and
+STL). A geometry that disagrees with the convention or with what the file
+states is logged as a warning. ``up="y"`` or ``"z"`` overrides it.
+:func:`z_up_mesh` turns a mesh into the z-up world frame by ``(x, y, z) ->
+(x, -z, y)``, so a Y-up mesh's front (+z) faces a camera at azimuth -90
+degrees.
 """
 
 from __future__ import annotations
@@ -115,9 +133,11 @@ def prepare_mesh(
         A mesh file (any of :data:`cdbrdf.mesh.MESH_FORMATS`) or a
         :class:`~cdbrdf.mesh.Mesh` (not modified).
     units
-        The mesh's length unit (``mm``, ``cm``, ``m``, ``in`` or mm per unit);
-        default: the one the file records (a PLY written by cdbrdf, glTF's
-        metre), else mm.
+        The mesh's length unit (``mm``, ``cm``, ``dm``, ``m``, ``in`` or mm
+        per unit); default: the one the file records or states (a PLY written
+        by cdbrdf, glTF's metre, a header comment, MakeHuman's decimetre),
+        else the one a garment's or a sheet's size makes plausible, else mm
+        (the metadata's ``"units_note"`` says which).
     neighbourhood_mm
         Diameter of the neighbourhood the curvature is fitted over, mm;
         default: the table's measured patch when its provenance records it
@@ -301,19 +321,17 @@ def _vertex_areas(v: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.fl
     return np.bincount(f.reshape(-1), weights=np.repeat(a / 3.0, 3), minlength=v.shape[0]).astype(np.float64)
 
 
-def _axis_pair(score: NDArray[np.float64], ratio: float, *, most: bool = True) -> tuple[str, float] | None:
+def _axis_pair(score: NDArray[np.float64], ratio: float, *, most: bool = True) -> tuple[str, str] | None:
     """``"y"`` or ``"z"``, whichever ``score`` (per axis x, y, z) favours by ``ratio`` (the larger, or with
-    ``most=False`` the smaller), and by how much; None when neither does."""
+    ``most=False`` the smaller), and how much more the larger is, in words; None when neither does."""
     y, z = float(score[1]), float(score[2])
     hi, lo = max(y, z), min(y, z)
     if not hi > 0 or hi < ratio * lo:
         return None
+    r = hi / lo if lo > 0 else math.inf
+    times = "more than 10 times" if not r <= 10 else f"{r:.1f} times"
     pick = ("y" if y > z else "z") if most else ("z" if y > z else "y")
-    return pick, hi / lo if lo > 0 else math.inf
-
-
-def _times(r: float) -> str:
-    return "more than 10 times" if not r <= 10 else f"{r:.1f} times"
+    return pick, times
 
 
 def _geometry_up(mesh: Mesh, shape: Shape | None = None) -> tuple[str, str] | None:
@@ -343,22 +361,25 @@ def _geometry_up(mesh: Mesh, shape: Shape | None = None) -> tuple[str, str] | No
         score = np.sum([np.abs(lp.direction) for lp in openings], axis=0)
         pick = _axis_pair(score, OPENINGS_RATIO)
         if pick is not None:
-            n = len(openings)
+            n, other = len(openings), "yz".replace(pick[0], "")
             return pick[0], (f"its {n} opening{'s' if n > 1 else ''} (a garment's neck, hem and cuffs, a scan's open "
-                             f"base) point along {pick[0]} {_times(pick[1])} as much as along the other axis")
+                             f"base) point along {pick[0]} {pick[1]} as much as along {other}")
     n_sheets = sum(c.kind in ("panel", "sheet") for c in shape.components)
     if n_sheets >= 2 and shape.share("panel", "sheet") >= 0.5:
         pick = _axis_pair(shape.normals, PANELS_RATIO, most=False)
         if pick is not None:
-            return pick[0], (f"it is {n_sheets} separate panels, which hang around a body: they face across "
-                             f"{pick[0]} {_times(pick[1])} less than across the other axis")
+            other = "yz".replace(pick[0], "")
+            return pick[0], (f"it is {n_sheets} separate panels hung around a body: they face along {other} "
+                             f"{pick[1]} as much as along {pick[0]}")
     elif n_sheets == 1 and shape.share("panel", "sheet") >= 0.5:
         pick = _axis_pair(shape.normals, SHEET_RATIO)
         if pick is not None:
-            return pick[0], f"it is one sheet, facing {pick[0]} {_times(pick[1])} as much as the other axis"
+            other = "yz".replace(pick[0], "")
+            return pick[0], f"it is one sheet, facing along {pick[0]} {pick[1]} as much as along {other}"
     pick = _axis_pair(e, EXTENT_RATIO)
     if pick is not None:
-        return pick[0], f"the object is tallest along {pick[0]} ({_times(pick[1])} its extent along the other axis)"
+        other = "yz".replace(pick[0], "")
+        return pick[0], f"the object is tallest along {pick[0]}, {pick[1]} its extent along {other}"
     return None
 
 
