@@ -160,7 +160,7 @@ def _rule(text: str) -> str:
 
 
 def markdown(rows: list[Row], table_name: str, kappa_range: tuple[float, float]) -> str:
-    lines = [f"| garment | vertices | unit | up (the geometry alone) | outside [{kappa_range[0]:g}, "
+    lines = [f"| garment | vertices rendered | unit | up (the geometry alone) | outside [{kappa_range[0]:g}, "
              f"{kappa_range[1]:g}] mm^-1 (interior / opening / seam) | of those, the mesh bends as tightly | "
              "largest abs(kappa), mm^-1 | pixels with Delta E*ab > 2.3 | of those on a seam (seam pixels) |",
              "|---|---|---|---|---|---|---|---|---|"]

@@ -6,8 +6,11 @@ renderer and the viewer, which use it:
 - :class:`Mesh` (:mod:`~cdbrdf.mesh.core`), read and written by
   :func:`read_mesh` / :func:`write_ply` (:mod:`~cdbrdf.mesh.io`: PLY by
   cdbrdf's reader, OBJ, glTF/GLB, STL and OFF through trimesh);
-- :func:`repair` (:mod:`~cdbrdf.mesh.repair`), units and the check against a
-  table's kappa range (:mod:`~cdbrdf.mesh.units`), the material's x axis
+- :func:`repair` (:mod:`~cdbrdf.mesh.repair`; seams closed for the fit:
+  :func:`weld_seams`), units, the unit a garment's size makes plausible and
+  the check against a table's kappa range (:mod:`~cdbrdf.mesh.units`), what
+  a file states of its unit and up axis (:mod:`~cdbrdf.mesh.statements`) and
+  what its geometry says (:mod:`~cdbrdf.mesh.shape`), the material's x axis
   (:mod:`~cdbrdf.mesh.frames`);
 - the curvature in mm^-1 (:mod:`~cdbrdf.mesh.curvature`, the fit in
   :mod:`~cdbrdf.mesh.estimate`): as in the paper, the principal curvature of
@@ -18,7 +21,7 @@ renderer and the viewer, which use it:
   ready to render, and its up axis (:func:`detect_up`, :func:`z_up_mesh`);
 - the analytic surfaces with their sizes (:mod:`~cdbrdf.mesh.surfaces`): the
   paper's sine sheet, a draped cloth, a skirt; garments as their makers
-  export them (:mod:`~cdbrdf.mesh.garments`: sewn panels, a scanned bust);
+  export them (:mod:`~cdbrdf.mesh.garments`: sewn panels, a scanned bust and head);
 - the curvature a normal map draws (:mod:`~cdbrdf.mesh.normalmap`).
 """
 
@@ -32,6 +35,7 @@ from .curvature import (
     PLY_PROPERTIES,
     SurfaceCurvature,
     check_neighbourhood,
+    dihedral_curvature,
     max_curvature,
     neighbourhood_from_table,
     principal_curvatures,
@@ -39,7 +43,7 @@ from .curvature import (
 )
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, PrincipalCurvatures
 from .frames import FRAMES
-from .garments import Garment, bust_mesh, garment_mesh
+from .garments import Garment, bust_mesh, garment_mesh, head_mesh
 from .io import CURVATURE_PLY_PROPERTY, MESH_FORMATS, read_mesh, read_obj, read_ply, write_ply
 from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, read_normal_map
 from .prepare import UP_AXES, check_up, detect_up, has_own_uv, prepare_mesh, to_z_up, z_up_mesh
@@ -56,7 +60,17 @@ from .surfaces import (
     sine_sheet_mesh,
     skirt_mesh,
 )
-from .units import MAX_SIZE_MM, UNITS_MM, KappaRangeCheck, Units, check_kappa_range, check_size, parse_units
+from .units import (
+    MAX_SIZE_MM,
+    UNITS_MM,
+    KappaRangeCheck,
+    Units,
+    check_garment_size,
+    check_kappa_range,
+    check_size,
+    infer_units,
+    parse_units,
+)
 
 __all__ = [
     "Mesh",
@@ -86,12 +100,15 @@ __all__ = [
     "KappaRangeCheck",
     "check_kappa_range",
     "check_size",
+    "infer_units",
+    "check_garment_size",
     "PrincipalCurvatures",
     "SurfaceCurvature",
     "RepairedMesh",
     "surface_curvature",
     "principal_curvatures",
     "max_curvature",
+    "dihedral_curvature",
     "repair",
     "weld",
     "weld_seams",
@@ -115,6 +132,7 @@ __all__ = [
     "Garment",
     "garment_mesh",
     "bust_mesh",
+    "head_mesh",
     "NORMAL_MAP_CONVENTIONS",
     "NormalMap",
     "read_normal_map",
