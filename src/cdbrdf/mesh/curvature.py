@@ -229,8 +229,10 @@ def _chart_sizes(faces: NDArray[np.int64], n: int) -> NDArray[np.int64]:
     m = faces.shape[0]
     if m == 0:
         return np.zeros(0, np.int64)
-    inc = coo_matrix((np.ones(3 * m), (np.repeat(np.arange(m), 3), faces.reshape(-1))), shape=(m, n)).tocsr()
-    _, piece = connected_components(inc @ inc.T, directed=False)
+    # one graph of faces and vertices, each face joined to its three (linear in the mesh's size)
+    g = coo_matrix((np.ones(3 * m), (np.repeat(np.arange(m), 3), m + faces.reshape(-1))), shape=(m + n, m + n))
+    _, label = connected_components(g, directed=False)
+    piece = label[:m]
     return np.bincount(piece)[piece].astype(np.int64)
 
 
