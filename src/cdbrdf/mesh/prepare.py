@@ -74,8 +74,8 @@ BASE_RATIO = 1.15
 #: The mirror plane's axis is the left-right axis when its asymmetry is below this share of the next axis's.
 SYMMETRY_RATIO = 0.6
 
-#: and when every other axis is at least this many edge lengths off (a mirror image on two axes tells nothing).
-ASYMMETRIC_EDGES = 0.5
+#: and when every other axis is at least this many vertex spacings off (a mirror image on two axes tells nothing).
+ASYMMETRIC_SPACINGS = 0.5
 
 #: An axis is the openings' when they point along it at least this many times as much as along the other.
 OPENINGS_RATIO = 1.5
@@ -352,10 +352,10 @@ def _geometry_up(mesh: Mesh, shape: Shape | None = None) -> tuple[str, str] | No
     sym = shape.symmetry
     lateral = int(np.argmin(sym))
     others = np.delete(sym, lateral)
-    if lateral > 0 and sym[lateral] <= SYMMETRY_RATIO * others.min() and others.min() >= ASYMMETRIC_EDGES:
+    if lateral > 0 and sym[lateral] <= SYMMETRY_RATIO * others.min() and others.min() >= ASYMMETRIC_SPACINGS:
         up = "z" if lateral == 1 else "y"
-        return up, (f"it is mirror-symmetric across {'xyz'[lateral]} (its left-right axis, {sym[lateral]:.2f} edge "
-                    f"lengths off against {others.min():.2f} for the next axis), so {up} is up")
+        return up, (f"it is mirror-symmetric across {'xyz'[lateral]}, its left-right axis ({sym[lateral]:.2f} "
+                    f"vertex spacings off against {others.min():.2f} for the next axis), so {up} is up")
     openings = shape.openings()
     if openings:
         score = np.sum([np.abs(lp.direction) for lp in openings], axis=0)

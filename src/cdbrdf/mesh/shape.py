@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .core import Mesh
+from .repair import _distinct
 
 __all__ = ["Loop", "Component", "Shape", "describe", "COMPONENT_KINDS", "BAG_DEPTH", "PANEL_FLATNESS"]
 
@@ -133,10 +134,10 @@ class Shape:
     normals
         ``(3,)`` area-weighted mean ``|n_x|, |n_y|, |n_z|`` of the faces.
     symmetry
-        ``(3,)`` per axis: the median distance from the vertices mirrored
-        across the plane through the centroid normal to it to the nearest
-        vertex, over the median edge length (about 0.3-0.5 for a mirror
-        image, many edges for none).
+        ``(3,)`` per axis: the median distance from the vertices (at most
+        :data:`SYMMETRY_SAMPLES` of them) mirrored across the plane through
+        the centroid normal to it to the nearest of them, over their median
+        spacing (under 1 for a mirror image, more for none).
     base
         The flat cap at the surface's extreme, ``(normal, share of the
         area)``, or None.
@@ -180,10 +181,15 @@ class Shape:
 
 def _faces_welded(mesh: Mesh) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Positions and non-degenerate faces of the mesh with its seams closed."""
-    from .repair import check_arrays, weld_seams
+    from .repair import SEAM_TOLERANCE, _close_seams, _unique_rows, check_arrays
 
     v, f = check_arrays(mesh.vertices, mesh.faces, name=str(mesh.metadata.get("source", "mesh")))
-    wid = weld_seams(v, f)
+    # identical positions, then the seams (the repair's near-weld of 1e-7 x the diagonal matters to no loop)
+    first, group = _unique_rows(v)
+    order = np.argsort(first, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    wid = _close_seams(v, f, rank[group], SEAM_TOLERANCE)
     pos = np.zeros((int(wid.max()) + 1 if wid.size else 0, 3))
     pos[wid] = v
     fw = wid[f]
@@ -236,13 +242,13 @@ def _loops(pos: NDArray[np.float64], fw: NDArray[np.int64], inv: NDArray[np.int6
     inward /= np.maximum(np.linalg.norm(inward, axis=1), 1e-300)[:, None]
     out = []
     loop_of = lab[a]
-    for lp in np.unique(loop_of):
+    for lp in _distinct(loop_of, n):
         sel = loop_of == lp
         if sel.sum() < 3:
             continue
         per = float(length[sel].sum())
         d = -(inward[sel] * length[sel][:, None]).sum(axis=0)
-        verts = np.unique(np.r_[a[sel], b[sel]])
+        verts = _distinct(np.r_[a[sel], b[sel]], n)
         out.append(Loop(per, pos[verts].mean(axis=0), d, float(np.linalg.norm(d)) / per if per > 0 else 0.0,
                         int(face_comp[f[sel][0]])))
     out.sort(key=lambda lp: -lp.perimeter)
@@ -303,40 +309,41 @@ def _base(pos: NDArray[np.float64], fw: NDArray[np.int64], inv: NDArray[np.int64
         nrm /= max(float(np.linalg.norm(nrm)), 1e-300)
         if float((f_sel @ nrm).min()) < math.cos(math.radians(BASE_FLAT_DEG)):
             continue  # a gently curved region (the front of a garment), not a plane
-        pv = pos[np.unique(fw[sel])]
+        pv = pos[_distinct(fw[sel], pos.shape[0])]
         off = float(np.median(pv @ nrm))
         if np.abs(pv @ nrm - off).max() > 0.005 * diag:
             continue  # not planar
         rim = sel[i] != sel[j]  # edges between the region and the rest: a cut meets the surface at a crease
         if not rim.any() or float(np.mean(cos_ij[rim] < math.cos(math.radians(BASE_CREASE_DEG)))) < 0.5:
             continue
-        h = pos[np.unique(fw[face_comp == comp])] @ nrm - off
+        h = pos[_distinct(fw[face_comp == comp], pos.shape[0])] @ nrm - off
         for sign in (1.0, -1.0):  # the faces' winding is the file's: try both sides
             if (sign * h).max() <= BASE_TOLERANCE * diag:  # the whole component lies behind it
                 return sign * nrm, share
     return None
 
 
-def _symmetry(pos: NDArray[np.float64], vertex_area: NDArray[np.float64], edge: float) -> NDArray[np.float64]:
-    """Per axis the median distance of the mirrored vertices to the nearest vertex, in edge lengths."""
+def _symmetry(pos: NDArray[np.float64], vertex_area: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per axis the median distance of the mirrored points to the nearest point, in spacings of the points."""
     from scipy.spatial import cKDTree
 
     used = vertex_area > 0
     p, w = pos[used], vertex_area[used]
-    if p.shape[0] < 4 or not edge > 0:
+    if p.shape[0] < 4:
         return np.full(3, np.inf)
-    if p.shape[0] > SYMMETRY_SAMPLES:
-        pick = np.random.default_rng(0).choice(p.shape[0], SYMMETRY_SAMPLES, replace=False)
-    else:
-        pick = np.arange(p.shape[0])
     centre = (p * w[:, None]).sum(axis=0) / w.sum()
+    if p.shape[0] > SYMMETRY_SAMPLES:  # a sample of the vertices, mirrored onto itself
+        p = p[np.random.default_rng(0).choice(p.shape[0], SYMMETRY_SAMPLES, replace=False)]
     tree = cKDTree(p)
+    d, _ = tree.query(p, k=2)
+    spacing = float(np.median(d[:, 1]))
+    if not spacing > 0:
+        return np.full(3, np.inf)
     out = np.empty(3)
     for a in range(3):
-        q = p[pick].copy()
+        q = p.copy()
         q[:, a] = 2 * centre[a] - q[:, a]
-        d, _ = tree.query(q, workers=-1)
-        out[a] = float(np.median(d)) / edge
+        out[a] = float(np.median(tree.query(q)[0])) / spacing
     return out
 
 
@@ -374,8 +381,13 @@ def describe(mesh: Mesh) -> Shape:
     loops = _loops(pos, fw, inv, count, face_comp)
     comp_area = np.bincount(face_comp, weights=area)
     comps = []
+    # the vertices of each component, at once (one sort, not one pass over the faces per component)
+    vc = np.full(n, -1, np.int64)
+    vc[fw.reshape(-1)] = np.repeat(face_comp, 3)
+    by_comp = np.argsort(vc, kind="stable")
+    starts = np.searchsorted(vc[by_comp], np.arange(comp_area.size + 1))
     for ci in range(comp_area.size):
-        verts = np.unique(fw[face_comp == ci])
+        verts = by_comp[starts[ci]:starts[ci + 1]]
         mine = [lp for lp in loops if lp.component == ci]
         comps.append(Component(_kind(pos[verts], mine, float(comp_area[ci])), float(comp_area[ci]), len(mine),
                                np.ptp(pos[verts], axis=0)))
@@ -389,5 +401,5 @@ def describe(mesh: Mesh) -> Shape:
     total = float(area.sum())
     normals = (np.abs(fn) * area[:, None]).sum(axis=0) / total if total > 0 else np.zeros(3)
     v_area = np.bincount(fw.reshape(-1), weights=np.repeat(area / 3.0, 3), minlength=n).astype(np.float64)
-    return Shape(extent, edge, total, loops_out, comps_sorted, normals, _symmetry(pos, v_area, edge),
+    return Shape(extent, edge, total, loops_out, comps_sorted, normals, _symmetry(pos, v_area),
                  _base(pos, fw, inv, count, fn, area, face_comp))
