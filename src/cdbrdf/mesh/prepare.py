@@ -295,7 +295,7 @@ def _mesh_units(mesh: Mesh, units: str | float | None, name: str) -> tuple[Units
         warning = check_garment_size(shape, u, up=up)
         if warning:
             _LOG.warning("%s: %s", name, warning)
-            note += f"; {warning}"
+            note += "; implausible for a garment: see the warning"
         return u, note
     inferred = infer_units(shape, up=up)
     if inferred is not None:
