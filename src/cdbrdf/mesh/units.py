@@ -11,7 +11,7 @@ A mesh's unit is, in this order: given (``--units``), recorded by cdbrdf or
 stated by the file (glTF's metre, a header comment, MakeHuman's decimetre:
 :mod:`cdbrdf.mesh.statements`), inferred from the size of a garment or a
 sheet (:func:`infer_units`: a garment is 0.2-2.5 m across, a sheet or a
-swatch 2 cm to 3 m), or else millimetres, and the notes say which. A stated
+swatch 5 mm to 3 m; millimetres first when they fit), or else millimetres, and the notes say which. A stated
 unit that makes a garment implausibly large or small is followed (it is the
 file's own statement) with a warning (:func:`check_garment_size`).
 
@@ -117,8 +117,9 @@ def check_size(vertices: ArrayLike, units: Units, *, name: str = "mesh") -> floa
 #: The largest extent of a garment or a figure, m (a glove, a child's shirt, ..., a gown in a T-pose).
 GARMENT_SIZE_M: tuple[float, float] = (0.2, 2.5)
 
-#: The largest extent of a sheet of cloth, a swatch or a drape, m.
-SHEET_SIZE_M: tuple[float, float] = (0.02, 3.0)
+#: The largest extent of a sheet of cloth, a swatch (a sample on the paper's stands is 15 mm across) or a
+#: drape, m.
+SHEET_SIZE_M: tuple[float, float] = (0.005, 3.0)
 
 #: Around the smallest of a garment's three or more tube ends (its cuffs, ankles or neck), m: wrists
 #: and ankles are 0.15-0.25 m around, a neck 0.35-0.45 m, a wide sleeve's hem up to 0.8 m.
