@@ -314,7 +314,7 @@ def fit_curvatures(
     unresolved = np.flatnonzero(status == 3)
     if unresolved.size:  # a spike (no height field the samples resolve): the fits around it, averaged
         ok = status == 0
-        kt = int(min(TRANSFER_NEIGHBOURS, sp.shape[0]))
+        kt = int(min(MAX_NEIGHBOURS, sp.shape[0]))  # past a row of unresolved neighbours (a crease's line)
         dist, idx = tree.query(q_pos[unresolved], k=kt, workers=-1)
         dist, idx = dist.reshape(unresolved.size, kt), idx.reshape(unresolved.size, kt)
         spacing = max(float(np.median(dist[:, 1:])) if kt > 1 else radius, 1e-300)
