@@ -96,7 +96,8 @@ def shared_garments(data: Path | None) -> Path:
 def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) -> Row:
     from cdbrdf.mesh import Mesh, detect_up, prepare_mesh, read_mesh
     from cdbrdf.mesh.curvature import LOCATIONS, dihedral_curvature
-    from cdbrdf.render import curvature_image, delta_e_image, mesh_scene, render_table, variant
+    from cdbrdf.plot import displayed_delta_e
+    from cdbrdf.render import curvature_image, mesh_scene, render_table, variant
     from cdbrdf.render.plugin import DEFAULT_VARIANT
 
     log = _Collect()
@@ -122,7 +123,7 @@ def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) ->
     h = prep.vertices[:, a]
     where = f"{LOCATIONS[loc[i]]}, {100 * (h[i] - h.min()) / max(np.ptp(h), 1e-300):.0f} % up"
     pic = render_table(table, prep, modes=("brdf", "cdbrdf"), size=size, spp=spp, up=up)
-    d = delta_e_image(pic)
+    d = displayed_delta_e(pic.display("brdf"), pic.display("cdbrdf"), exposure_ev=pic.exposure_ev, metric="ab")
     marked = prep.copy()
     marked.attributes = {**prep.attributes, "seam": (loc == LOCATIONS.index("seam")).astype(np.float64)}
     with variant(DEFAULT_VARIANT):

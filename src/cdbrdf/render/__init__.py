@@ -19,7 +19,7 @@ are public too:
   :func:`render_table`; :mod:`~cdbrdf.render.output`: image files;
 - :mod:`~cdbrdf.render.contrast`: the curvature seen in each pixel and the
   colour difference of two renders at the crests and where the surface is
-  flat (:func:`crest_contrast`), Delta E*ab per pixel as shown (:func:`delta_e_image`).
+  flat (:func:`crest_contrast`).
 
 .. code-block:: python
 
@@ -34,7 +34,7 @@ from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUP
 from ._btf_jit import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
 from .camera import LOOK_AT_ANCHORS, Camera
-from .contrast import CrestContrast, crest_contrast, curvature_image, delta_e_image
+from .contrast import CrestContrast, crest_contrast, curvature_image
 from .picture import (
     RENDER_MODES,
     Picture,
@@ -102,5 +102,4 @@ __all__ = [
     "CrestContrast",
     "crest_contrast",
     "curvature_image",
-    "delta_e_image",
 ]

@@ -3,7 +3,8 @@
 :func:`curvature_image` asks Mitsuba which surface point each pixel centre
 sees (the scene's first sensor, its rays traced by Mitsuba) and reads the
 curvature attribute the ``cdbrdf`` BSDF reads there, interpolated over the
-triangle as the plug-in interpolates it. :func:`crest_contrast` compares two
+triangle as the plug-in interpolates it (with a curvature map, the
+plug-in's own sum of the mesh's and the map's, :mod:`cdbrdf.render._maps_jit`). :func:`crest_contrast` compares two
 renders of one scene (the plain BRDF and the CDBRDF, as :func:`render_table`
 makes them) where they are seen as a viewer sees them: in sRGB at the
 picture's exposure, converted to CIE 1976 L*a*b* (:func:`cdbrdf.colour.linear_to_lab`,
@@ -26,7 +27,7 @@ from numpy.typing import NDArray
 from ..colour import delta_e_ab, ev_to_factor, linear_to_lab, srgb_encode
 from ..errors import OptionError
 
-__all__ = ["curvature_image", "delta_e_image", "CrestContrast", "crest_contrast"]
+__all__ = ["curvature_image", "CrestContrast", "crest_contrast"]
 
 
 def curvature_image(scene: Any, *, attribute: str = "vertex_curvature") -> NDArray[np.float32]:
@@ -63,44 +64,14 @@ def curvature_image(scene: Any, *, attribute: str = "vertex_curvature") -> NDArr
             continue
         mine = np.asarray(si.shape == mi.ShapePtr(shape), dtype=bool) & hit
         if mine.any():
-            out[mine] = np.asarray(shape.eval_attribute_1(attribute, si, mine), dtype=np.float32)[mine]
+            bsdf = shape.bsdf()
+            if getattr(bsdf, "surface", None) is not None:  # a curvature map's added, as the plug-in looks it up
+                mode = "directional" if attribute.endswith("_dir") else "max"
+                k = bsdf.curvature_at(si, mi.Bool(mine), mode)
+            else:
+                k = shape.eval_attribute_1(attribute, si, mine)
+            out[mine] = np.broadcast_to(np.asarray(k, dtype=np.float32), mine.shape)[mine]
     return out.reshape(h, w)
-
-
-def _shown(picture: Any, modes: tuple[str, ...]) -> dict[str, NDArray[np.float64]]:
-    """Linear RGB of each mode as the screen shows it: at the picture's exposure, clipped to the display's white."""
-    factor = ev_to_factor(picture.exposure_ev)
-    return {m: np.clip(np.nan_to_num(picture.display(m) * factor), 0.0, 1.0) for m in modes}
-
-
-def delta_e_image(picture: Any, *, modes: tuple[str, str] = ("brdf", "cdbrdf")) -> NDArray[np.float64]:
-    """Delta E*ab between two modes of a :class:`~cdbrdf.render.Picture`, per pixel, as a viewer sees them.
-
-    Both are shown at the picture's exposure, clipped to the display's white
-    and converted to CIE 1976 L*a*b* (the rule :func:`crest_contrast` uses).
-
-    Parameters
-    ----------
-    picture
-        Made by :func:`cdbrdf.render.render_table` with both ``modes``.
-    modes
-        The two renders compared.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(H, W)`` Delta E*ab (2.3 is a just-noticeable difference).
-
-    Raises
-    ------
-    OptionError
-        For a picture without one of the modes.
-    """
-    missing = [m for m in modes if m not in picture.images]
-    if missing:
-        raise OptionError(f"picture: has no {' or '.join(missing)} render (it has {', '.join(picture.images)})")
-    shown = _shown(picture, modes)
-    return delta_e_ab(linear_to_lab(shown[modes[0]]), linear_to_lab(shown[modes[1]]))
 
 
 @dataclass(frozen=True)
@@ -188,8 +159,11 @@ def crest_contrast(
     flat = seen & (k_abs <= flat_fraction * k_max)
     convex = bent & (kappa > 0)
     concave = bent & (kappa < 0)
-    shown = _shown(picture, modes)
-    d = delta_e_ab(linear_to_lab(shown[modes[0]]), linear_to_lab(shown[modes[1]]))
+    factor = ev_to_factor(picture.exposure_ev)
+    shown = {m: np.clip(np.nan_to_num(picture.display(m) * factor), 0.0, 1.0) for m in modes}
+    # L*a*b* of what the screen shows: the sRGB code values decoded back to linear light
+    lab = {m: linear_to_lab(v) for m, v in shown.items()}
+    d = delta_e_ab(lab[modes[0]], lab[modes[1]])
 
     def median(sel: NDArray[np.bool_]) -> float:
         return float(np.median(d[sel])) if sel.any() else float("nan")
