@@ -73,15 +73,17 @@ from __future__ import annotations
 import logging
 import math
 import re
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
 
 from ..errors import OptionError, SceneError
+from ..mesh import SHAPE_ATTRIBUTES
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
+from ._maps_jit import MAP_PARAMETERS
 from ._units import curvature_warning, ply_unit_mm, scene_factor, scene_units, uniform_scale
 
 __all__ = [
@@ -108,6 +110,7 @@ __all__ = [
     "mitsuba_message",
     "check_scene",
     "cdbrdf_shapes",
+    "pixel_angle",
 ]
 
 _LOG = logging.getLogger(__name__)
@@ -125,7 +128,11 @@ VARIANTS: tuple[str, ...] = ("llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", 
 _APPLIED = "scene_scale_applied"
 
 _DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_mode", "curvature_scale", "scale",
-                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter", "unit", _APPLIED})
+                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter", "unit", _APPLIED,
+                        *MAP_PARAMETERS})
+
+#: Parameters given to the plug-in as Python values (numbers in pairs, objects), not through Mitsuba's properties.
+_PYTHON_VALUES = ("uv_scale", "map_size", "curvature_map")
 
 
 def available_variants() -> tuple[str, ...]:
@@ -279,6 +286,8 @@ def make_bsdf(
     uv_scale: float | str | tuple[float, float] | None = None,
     texel_filter: str | None = None,
     unit: str | float | None = None,
+    curvature_map: Any = None,
+    map_settings: Mapping[str, Any] | None = None,
 ) -> Any:
     """A ``cdbrdf`` BSDF instance from a table object (or file name).
 
@@ -304,22 +313,35 @@ def make_bsdf(
     unit
         The scene's unit (applied by :func:`load_dict` with the shape's
         ``to_world``; ``docs/rendering.md``, "Curvature units").
+    curvature_map
+        A :class:`cdbrdf.mesh.CurvatureMap` (``prepare_mesh(...).metadata["curvature_map"]``):
+        looked up per shading point, added to the mesh's curvature, tilting the shading normal.
+    map_settings
+        The other map parameters of the table above (``normal_map``,
+        ``height_map``, ``height_scale``, ``map_size``, ``neighbourhood``,
+        ``pixel_angle``, ``map_filter``, ``shading_normals``, ...).
 
     Returns
     -------
     mitsuba.BSDF
         The plug-in instance, in the active variant.
     """
+    extra = dict(map_settings or {})
+    unknown = set(extra) - set(MAP_PARAMETERS)
+    if unknown:
+        raise OptionError(f"map_settings: unknown parameter(s) {sorted(unknown)}; valid: {', '.join(MAP_PARAMETERS)}")
+    if curvature_map is not None:
+        extra["curvature_map"] = curvature_map
     return _make_bsdf(table, mode=mode, curvature=curvature, curvature_mode=curvature_mode,
                       curvature_scale=curvature_scale, scale=scale, sampling=sampling, cosine_weight=cosine_weight,
-                      storage=storage, uv_scale=uv_scale, texel_filter=texel_filter, unit=unit)
+                      storage=storage, uv_scale=uv_scale, texel_filter=texel_filter, unit=unit, **extra)
 
 
 def _make_bsdf(table: Any, *, mode: str = "cdbrdf", curvature: str | float | None = None,
                curvature_mode: str | None = None, curvature_scale: float = 1.0, scale: float | Any = 1.0,
                sampling: str = "table", cosine_weight: float | None = None, storage: str = "auto",
                uv_scale: float | str | tuple[float, float] | None = None, texel_filter: str | None = None,
-               unit: str | float | None = None, scene_scale_applied: bool = False) -> Any:
+               unit: str | float | None = None, scene_scale_applied: bool = False, **maps: Any) -> Any:
     import mitsuba as mi
 
     from ._bsdf import bsdf_class
@@ -344,12 +366,17 @@ def _make_bsdf(table: Any, *, mode: str = "cdbrdf", curvature: str | float | Non
     if cosine_weight is not None:
         props["cosine_weight"] = float(cosine_weight)
     props["storage"] = str(storage)
-    if uv_scale is not None:
-        props["uv_scale"] = (float(uv_scale) if isinstance(uv_scale, (int, float))
-                             else uv_scale if isinstance(uv_scale, str) else ", ".join(map(str, uv_scale)))
     if texel_filter is not None:
         props["texel_filter"] = str(texel_filter)
-    return bsdf_class()(props, table=table)
+    extras: dict[str, Any] = {} if uv_scale is None else {"uv_scale": uv_scale}  # numbers as they are
+    for key, value in maps.items():
+        if value is None:
+            continue
+        if key in _PYTHON_VALUES or not isinstance(value, (str, bool, int, float)):
+            extras[key] = value
+        else:
+            props[key] = value if isinstance(value, (str, bool)) else float(value)
+    return bsdf_class()(props, table=table, extras=extras)
 
 
 def _replace_tables(d: Any) -> Any:
@@ -555,9 +582,67 @@ def check_scene(scene: Any, *, curvature: bool = True) -> None:
                 f"{attr!r}, which the shape does not have ({hint}, or give the BSDF a constant "
                 "curvature); without it the curvature would read as 0"
             )
+        if getattr(bsdf, "surface", None) is not None and isinstance(shape, mi.Mesh) and attr is not None:
+            missing = [f"vertex_{a}" for a in SHAPE_ATTRIBUTES if not shape.has_attribute(f"vertex_{a}")]
+            if missing:
+                raise SceneError(
+                    f"shape {name!r}: the cdbrdf BSDF's map adds to the mesh's shape operator, and the shape has no "
+                    f"{missing[0]} (write the mesh with `cdbrdf curvature`, which stores it, or give the BSDF a "
+                    "constant curvature)")
+    _attach_maps(scene)
     if not curvature:
         return
     shapes = [(shape, bsdf) for shape, bsdf, _ in cdbrdf_shapes(scene) if isinstance(shape, mi.Mesh)]
     msg = curvature_warning(shapes)
     if msg:
         _LOG.warning("%s", msg)
+
+
+def pixel_angle(scene: Any) -> float:
+    """The angle (radians) one pixel of the scene's first sensor spans at its centre; 0 for a sensor without a fov.
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        A loaded scene.
+
+    Returns
+    -------
+    float
+        ``2 tan(x_fov / 2) / width``.
+    """
+    import mitsuba as mi
+
+    if not scene.sensors():
+        return 0.0
+    sensor = scene.sensors()[0]
+    params = mi.traverse(sensor)
+    if "x_fov" not in params:
+        return 0.0
+    fov = float(np.asarray(params["x_fov"], dtype=np.float64).reshape(-1)[0])
+    width = int(sensor.film().crop_size()[0])
+    return 2.0 * math.tan(math.radians(fov) / 2.0) / max(width, 1)
+
+
+def _attach_maps(scene: Any) -> None:
+    """Give every ``cdbrdf`` BSDF with a map the camera's angle per pixel and, unless given, its shape's UV scale."""
+    import mitsuba as mi
+
+    from ..mesh import detect_uv_scale
+
+    angle = None
+    for shape, bsdf, _ in cdbrdf_shapes(scene):
+        m = getattr(bsdf, "surface", None)
+        if m is None:
+            continue
+        if not m.pixel_angle_given:
+            angle = pixel_angle(scene) if angle is None else angle
+            m.pixel_angle = angle
+        if m.uv_scale is None and isinstance(shape, mi.Mesh) and shape.has_vertex_texcoords():
+            p = mi.traverse(shape)
+            v = np.asarray(p["vertex_positions"], dtype=np.float64).reshape(-1, 3)
+            f = np.asarray(p["faces"], dtype=np.int64).reshape(-1, 3)
+            uv = np.asarray(p["vertex_texcoords"], dtype=np.float64).reshape(-1, 2)
+            uvs = detect_uv_scale(v, f, uv, units=bsdf.units.mm_per_unit)
+            m.set_uv_scale(uvs.pair)
+            _LOG.info("shape %r: UV scale of %s: %s", shape.id(), m.name, uvs)

@@ -44,6 +44,17 @@ def _bsdf_entry(table: Any, mode: str, scale: float, curvature_mode: str = "max"
     return {"type": "cdbrdf", "table": table, "mode": mode, "curvature": ATTRIBUTES[curvature_mode], "scale": scale}
 
 
+def _map_entry(mesh: Mesh) -> dict[str, Any]:
+    """The plug-in's parameters of a prepared mesh's curvature map and UV scale (none without them)."""
+    out: dict[str, Any] = {}
+    if mesh.metadata.get("uv_scale") is not None:
+        out["uv_scale"] = tuple(float(x) for x in mesh.metadata["uv_scale"])
+    if mesh.metadata.get("curvature_map") is not None:
+        out["curvature_map"] = mesh.metadata["curvature_map"]
+        out["neighbourhood"] = float(mesh.metadata.get("neighbourhood_mm", 5.0))
+    return out
+
+
 def _build(mesh: Mesh, table: Any, *, mode: str, scale: float, size: tuple[int, int], spp: int,
            lights: list[dict], envmap: Any, hide_env: bool, max_depth: int, elevation_deg: float,
            azimuth_deg: float, fov_deg: float, bsdf: Any = None, curvature_mode: str = "max",
@@ -52,6 +63,8 @@ def _build(mesh: Mesh, table: Any, *, mode: str, scale: float, size: tuple[int, 
 
     if bsdf is None:
         bsdf = _bsdf_entry(table, mode, scale, curvature_mode)
+    if isinstance(bsdf, dict) and bsdf.get("type") == "cdbrdf":
+        bsdf = {**_map_entry(mesh), **bsdf}
     if not lights and envmap is None:
         raise OptionError("the scene needs a light: give a directional light or an environment map")
     d: dict[str, Any] = {
