@@ -382,9 +382,14 @@ def bake_mesh(high: Any, low: Any, *, uv_scale: tuple[float, float], neighbourho
     t3 = np.empty((tex.size, 3, 3))
     for (i, j), c in zip(((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)), range(6), strict=True):
         t3[:, i, j] = t3[:, j, i] = six[:, c]
-    kxx = np.einsum("ni,nij,nj->n", x, t3, x) - s_low[0]
-    kxy = np.einsum("ni,nij,nj->n", x, t3, y) - s_low[1]
-    kyy = np.einsum("ni,nij,nj->n", y, t3, y) - s_low[2]
+    # normal curvatures of the high mesh along the low frame's axes, projected into its tangent plane
+    xh = x - np.einsum("ni,ni->n", x, n_h)[:, None] * n_h
+    yh = y - np.einsum("ni,ni->n", y, n_h)[:, None] * n_h
+    xh /= np.maximum(np.linalg.norm(xh, axis=1, keepdims=True), 1e-300)
+    yh /= np.maximum(np.linalg.norm(yh, axis=1, keepdims=True), 1e-300)
+    kxx = np.einsum("ni,nij,nj->n", xh, t3, xh) - s_low[0]
+    kxy = np.einsum("ni,nij,nj->n", xh, t3, yh) - s_low[1]
+    kyy = np.einsum("ni,nij,nj->n", yh, t3, yh) - s_low[2]
     a, b = np.einsum("ni,ni->n", n_h, x), np.einsum("ni,ni->n", n_h, y)
     c = np.maximum(np.einsum("ni,ni->n", n_h, nrm), _MIN_NZ)
     vals = np.stack([a / c, b / c, kxx * su, kxy * sv, kxy * su, kyy * sv], axis=1)

@@ -26,7 +26,7 @@ The derivatives are stored per UV unit of the *mesh* (the repeat folded
 in), so one UV scale converts every map and the CD-BTF alike.
 
 **Prefiltering** (:func:`pyramid`): level 0 is the map, level ``l + 1`` the
-2 x 2 means of level ``l`` (periodic; an odd size first resampled to the
+2 x 2 means of level ``l`` (an odd size first resampled by area to the
 next even one). Every channel is linear in the height, so a level holds the
 slopes and the shape operator of the height field box-filtered over its
 texels: the exact prefiltered curvature, not a filtered eigenvalue.
@@ -58,6 +58,8 @@ from ..errors import MeshError
 __all__ = [
     "CHANNELS",
     "SHAPE_ATTRIBUTES",
+    "SHAPE_PLY_PROPERTIES",
+    "SHAPE_MESH_ATTRIBUTE",
     "NEIGHBOURHOOD_WIDTH_SHARE",
     "MIN_COS_VIEW",
     "MAP_FILTERS",
@@ -77,8 +79,15 @@ __all__ = [
 CHANNELS: tuple[str, ...] = ("p", "q", "dp_du", "dp_dv", "dq_du", "dq_dv")
 
 #: Per-vertex attributes of a prepared mesh holding its own shape operator (1/mm) in the frame
-#: x = dP/du, y = n x x: what the plug-in adds a map's to (Mitsuba: ``vertex_shape_xx`` ...).
+#: x = dP/du, y = n x x: what the plug-in adds a map's to.
 SHAPE_ATTRIBUTES: tuple[str, str, str] = ("shape_xx", "shape_xy", "shape_yy")
+
+#: The PLY vertex properties of :data:`SHAPE_ATTRIBUTES`: consecutive, so that Mitsuba's PLY loader groups
+#: them into the one three-channel mesh attribute :data:`SHAPE_MESH_ATTRIBUTE` (one read per shading point).
+SHAPE_PLY_PROPERTIES: tuple[str, str, str] = ("shape_x", "shape_y", "shape_z")
+
+#: The three-channel Mitsuba mesh attribute ``(sxx, sxy, syy)`` the plug-in reads.
+SHAPE_MESH_ATTRIBUTE = "vertex_shape"
 
 #: The footprint (mm) below which a map is not resolved, as a share of the curvature's neighbourhood
 #: (its diameter): a mip level of footprint w filters like a Gaussian of sigma ~ w / 2 (box and
@@ -172,18 +181,20 @@ class CurvatureMap:
 
 # -- the pyramid ---------------------------------------------------------------------------------
 def _halve(a: NDArray[np.float64], axis: int) -> NDArray[np.float64]:
-    """Means of pairs along ``axis`` (periodic): an odd length is first resampled to the next even one."""
+    """Means of pairs along ``axis``: an odd length first resampled to the next even one by area (mean kept)."""
     n = a.shape[axis]
     if n == 1:
         return a
-    if n % 2:
-        x = (np.arange(n + 1) + 0.5) * n / (n + 1) - 0.5  # the new texel centres in old texel units
-        i0 = np.floor(x).astype(np.int64)
-        f = x - i0
+    if n % 2:  # cell j of n + 1 covers [j, j + 1) * n / (n + 1) of the old cells: the integral's differences
+        c = np.concatenate([np.zeros_like(np.take(a, [0], axis=axis)), np.cumsum(a, axis=axis)], axis=axis)
+        edges = np.arange(n + 2) * n / (n + 1)
+        i = np.minimum(np.floor(edges).astype(np.int64), n - 1)
+        f = edges - i
         shape = [1] * a.ndim
-        shape[axis] = n + 1
+        shape[axis] = n + 2
         f = f.reshape(shape)
-        a = np.take(a, i0 % n, axis=axis) * (1 - f) + np.take(a, (i0 + 1) % n, axis=axis) * f
+        integral = np.take(c, i, axis=axis) * (1 - f) + np.take(c, i + 1, axis=axis) * f
+        a = np.diff(integral, axis=axis) * ((n + 1) / n)
         n += 1
     return 0.5 * (np.take(a, np.arange(0, n, 2), axis=axis) + np.take(a, np.arange(1, n, 2), axis=axis))
 

@@ -45,6 +45,7 @@ from numpy.typing import NDArray
 from ..errors import CDBRDFError, MeshError
 from ..limits import check
 from .core import Mesh
+from .curvature_map import SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES
 
 __all__ = [
     "MESH_FORMATS",
@@ -153,12 +154,15 @@ def read_ply(path: str | PathLike[str]) -> Mesh:
     tangents = next((np.stack([vert[a] for a in tri], axis=1) for tri in _TANGENT_NAMES
                      if all(a in vert for a in tri)), None)
     attrs = {}
+    shape = all(k in vert for k in SHAPE_PLY_PROPERTIES)
     for k, a in vert.items():
-        if k in _KNOWN:
+        if k in _KNOWN or (shape and k in SHAPE_PLY_PROPERTIES):
             continue
         m = re.fullmatch(r"(.+)_x", k)
         if m:
             attrs[m.group(1)] = a
+    if shape:  # the shape operator's three properties (Mitsuba: one three-channel attribute)
+        attrs.update({a: vert[k] for a, k in zip(SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES, strict=True)})
     faces = ply.faces
     if faces.size and int(faces.max()) >= n:
         raise MeshError(f"{p}: faces refer to vertex {int(faces.max())} but there are {n}")
@@ -411,8 +415,10 @@ def write_ply(path: str | PathLike[str], mesh: Mesh) -> None:
     """Write ``mesh`` as binary little-endian PLY (float32 vertex data), atomically.
 
     Attributes are written as ``NAME_x`` float properties (Mitsuba loads them
-    as ``vertex_NAME``); the metadata ``units``, ``up``, ``curvature_units``,
-    ``neighbourhood_mm`` and ``frame`` as ``comment cdbrdf KEY VALUE`` lines.
+    as ``vertex_NAME``), the shape operator's three as ``shape_x``,
+    ``shape_y``, ``shape_z`` (Mitsuba: one attribute ``vertex_shape``); the
+    metadata ``units``, ``up``, ``curvature_units``, ``neighbourhood_mm`` and
+    ``frame`` as ``comment cdbrdf KEY VALUE`` lines.
 
     Parameters
     ----------
@@ -440,13 +446,15 @@ def write_ply(path: str | PathLike[str], mesh: Mesh) -> None:
         cols += [("u", mesh.uv[:, 0]), ("v", mesh.uv[:, 1])]
     if mesh.tangents is not None:
         cols += [(c, mesh.tangents[:, i]) for i, c in enumerate(_TANGENT_NAMES[0])]
-    for name, a in mesh.attributes.items():
+    ply_name = dict(zip(SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES, strict=True)) if all(
+        k in mesh.attributes for k in SHAPE_ATTRIBUTES) else {}
+    for name, a in sorted(mesh.attributes.items(), key=lambda kv: kv[0] in ply_name):  # the shape's three last
         a = np.asarray(a, dtype=np.float64)
         if a.shape != (n,):
             raise MeshError(f"mesh: attribute {name!r}: expected shape ({n},), got {a.shape}")
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
             raise MeshError(f"mesh: attribute {name!r}: not a valid PLY property name")
-        cols.append((f"{name}_x", a))
+        cols.append((ply_name.get(name, f"{name}_x"), a))
     comments = [f"written by cdbrdf {__version__}"]
     for key in ("units", "up", "curvature_units", "neighbourhood_mm", "frame"):
         val = mesh.metadata.get(key)

@@ -325,8 +325,8 @@ def _check(cmap: CurvatureMap, uvs: UVScale, nb: float, kappa_range: tuple[float
                if "lengths" in uvs.rule else
                "if the map covers more, give its size (--map-size MM) or the UV scale (--uv-scale)")
         msg = (f"{cmap.name}: does nothing at {uvs}: it repeats every {tu:.3g} x {tv:.3g} mm and {1 - share:.0%} of "
-               f"its curvature averages out within the curvature's {nb:g} mm neighbourhood (it still tilts the "
-               f"shading normals); {fix}")
+               f"its curvature averages out within the curvature's {nb:g} mm neighbourhood, the scale the table "
+               f"describes (finer detail is in the table already); {fix}")
         _LOG.warning("%s", msg)
         notes.append(msg)
     elif kappa_range is not None and krms > 5 * max(abs(kappa_range[0]), abs(kappa_range[1])):

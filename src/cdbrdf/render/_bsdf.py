@@ -28,7 +28,8 @@ import numpy as np
 from ..errors import OptionError, TableError
 from ..grid import Grid
 from ..interp import LookupGrid, prepare
-from ..mesh import ATTRIBUTES, SHAPE_ATTRIBUTES
+from ..mesh import ATTRIBUTES
+from ..mesh.curvature_map import SHAPE_MESH_ATTRIBUTE
 from . import _lookup_jit as lj
 from . import _sampling
 from ._units import scene_units
@@ -466,8 +467,8 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
 
             st = self.settings
             if self._mesh_shape:
-                mesh = [si.shape.eval_attribute_1(f"vertex_{n}", si, active) * st.curvature_scale
-                        for n in SHAPE_ATTRIBUTES]
+                a = si.shape.eval_attribute_3(SHAPE_MESH_ATTRIBUTE, si, active)
+                mesh = [a.x * st.curvature_scale, a.y * st.curvature_scale, a.z * st.curvature_scale]
             else:  # a constant: a cylinder bent along x
                 mesh = [mi.Float(st.kappa_const), mi.Float(0.0), mi.Float(0.0)]
             sxx, sxy, syy = (m + k for m, k in zip(mesh, k3, strict=True))

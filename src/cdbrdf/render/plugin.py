@@ -80,7 +80,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import OptionError, SceneError
-from ..mesh import SHAPE_ATTRIBUTES
+from ..mesh.curvature_map import SHAPE_MESH_ATTRIBUTE
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
 from ._maps_jit import MAP_PARAMETERS
@@ -583,12 +583,11 @@ def check_scene(scene: Any, *, curvature: bool = True) -> None:
                 "curvature); without it the curvature would read as 0"
             )
         if getattr(bsdf, "surface", None) is not None and isinstance(shape, mi.Mesh) and attr is not None:
-            missing = [f"vertex_{a}" for a in SHAPE_ATTRIBUTES if not shape.has_attribute(f"vertex_{a}")]
-            if missing:
+            if not shape.has_attribute(SHAPE_MESH_ATTRIBUTE):
                 raise SceneError(
                     f"shape {name!r}: the cdbrdf BSDF's map adds to the mesh's shape operator, and the shape has no "
-                    f"{missing[0]} (write the mesh with `cdbrdf curvature`, which stores it, or give the BSDF a "
-                    "constant curvature)")
+                    f"{SHAPE_MESH_ATTRIBUTE} (write the mesh with `cdbrdf curvature`, which stores it as shape_x, "
+                    "shape_y, shape_z, or give the BSDF a constant curvature)")
     _attach_maps(scene)
     if not curvature:
         return

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import MeshError, OptionError
 from ..mesh import Mesh, SineSheet, check_up, prepare_mesh, sine_sheet_mesh, z_up_mesh
+from ..mesh.curvature_map import SHAPE_ATTRIBUTES, SHAPE_MESH_ATTRIBUTE
 from .camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW, FRAME_FILL, _subsample, perspective_camera
 from .lighting import DEFAULT_IRRADIANCE, LIGHTINGS, STUDIO_KEY, directional_light, environment_map, studio_environment
 from .plugin import check_scene, load_dict
@@ -91,7 +92,8 @@ def mitsuba_mesh(mesh: Mesh, *, bsdf: Any = None, name: str = "object") -> Any:
     Positions, faces, UVs and normals (computed by Mitsuba, smooth, where the
     mesh has none), and every per-vertex attribute ``NAME`` as the
     one-channel mesh attribute ``vertex_NAME`` (the curvatures: what the
-    ``cdbrdf`` BSDF reads, :data:`cdbrdf.mesh.ATTRIBUTES`). Nothing is
+    ``cdbrdf`` BSDF reads, :data:`cdbrdf.mesh.ATTRIBUTES`), but the shape
+    operator's three as the three-channel ``vertex_shape``. Nothing is
     written to a file.
 
     Parameters
@@ -125,9 +127,15 @@ def mitsuba_mesh(mesh: Mesh, *, bsdf: Any = None, name: str = "object") -> Any:
     params.update()
     if mesh.normals is None:
         out.recompute_vertex_normals()
+    shape = all(k in mesh.attributes for k in SHAPE_ATTRIBUTES)
     for key, values in mesh.attributes.items():
+        if shape and key in SHAPE_ATTRIBUTES:
+            continue
         data: Any = np.ascontiguousarray(values, dtype=np.float32)
         out.add_attribute(f"vertex_{key}", 1, data)
+    if shape:  # the shape operator as one three-channel attribute, as Mitsuba's PLY loader makes it
+        three = np.stack([mesh.attributes[k] for k in SHAPE_ATTRIBUTES], axis=1)
+        out.add_attribute(SHAPE_MESH_ATTRIBUTE, 3, np.ascontiguousarray(three, dtype=np.float32).ravel())
     if bsdf is not None:
         out.set_bsdf(bsdf)
     return out
