@@ -28,7 +28,7 @@ from cdbrdf.mesh import (
 )
 from cdbrdf.mesh.curvature_map import lookup, neighbourhood_level, principal, pyramid, shape_operator
 
-from .maps_helpers import A, K, PEAK, S, quad, sine_heights, sine_normals, wrinkled_grid, write_normal_png
+from .maps_helpers import PEAK, A, K, S, quad, sine_heights, sine_normals, wrinkled_grid, write_normal_png
 from .mesh_helpers import write_obj
 from .shared_data import shared_file
 

@@ -22,7 +22,7 @@ from cdbrdf.mesh import Mesh, SurfaceMaps, normal_map_from_normals, prepare_mesh
 from cdbrdf.mesh.curvature_map import footprint_level, lookup, principal, shape_operator
 
 from .maps_helpers import PEAK, S, delta_e, quad, sine_normals, wrinkled_grid, write_normal_png
-from .render_helpers import constant_table, dr, mi, needs_llvm
+from .render_helpers import constant_table, mi, needs_llvm
 
 pytestmark = needs_llvm
 

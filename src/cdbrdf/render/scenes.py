@@ -134,8 +134,9 @@ def mitsuba_mesh(mesh: Mesh, *, bsdf: Any = None, name: str = "object") -> Any:
         data: Any = np.ascontiguousarray(values, dtype=np.float32)
         out.add_attribute(f"vertex_{key}", 1, data)
     if shape:  # the shape operator as one three-channel attribute, as Mitsuba's PLY loader makes it
-        three = np.stack([mesh.attributes[k] for k in SHAPE_ATTRIBUTES], axis=1)
-        out.add_attribute(SHAPE_MESH_ATTRIBUTE, 3, np.ascontiguousarray(three, dtype=np.float32).ravel())
+        three: Any = np.ascontiguousarray(np.stack([mesh.attributes[k] for k in SHAPE_ATTRIBUTES], axis=1),
+                                          dtype=np.float32).ravel()
+        out.add_attribute(SHAPE_MESH_ATTRIBUTE, 3, three)
     if bsdf is not None:
         out.set_bsdf(bsdf)
     return out
