@@ -167,8 +167,8 @@ def test_the_tilted_frame_renders_as_mitsubas_normalmap():
     seen = img["flat"].mean(axis=-1) > 0.05
     d = np.abs(img["ours"] - img["theirs"])[seen].mean() / img["theirs"][seen].mean()
     effect = np.abs(img["flat"] - img["theirs"])[seen].mean() / img["theirs"][seen].mean()
-    assert effect > 0.1  # the map changes the picture
-    assert d < 0.1 * effect  # and ours is Mitsuba's
+    assert effect > 0.1  # the map changes the picture (measured 45 %)
+    assert d < 0.005  # and ours is Mitsuba's (measured 0.01 %)
 
 
 def test_far_away_the_map_averages_out_instead_of_aliasing(shot):

@@ -74,7 +74,20 @@ class HeightMap:
 
 
 def height_map_from_values(values: ArrayLike, *, name: str = "height map") -> HeightMap:
-    """A :class:`HeightMap` from ``(H, W)`` values (an ``(H, W, C)`` image: its Rec. 709 luminance)."""
+    """A :class:`HeightMap` from ``(H, W)`` values (an ``(H, W, C)`` image: its Rec. 709 luminance).
+
+    Parameters
+    ----------
+    values
+        ``(H, W)`` heights in units of the height scale, or an image.
+    name
+        What to call it in messages.
+
+    Returns
+    -------
+    HeightMap
+        The heights, float64.
+    """
     v = np.array(values, dtype=np.float64)
     if v.ndim == 3:
         if v.shape[2] >= 3:

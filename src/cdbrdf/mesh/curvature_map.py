@@ -159,16 +159,45 @@ class CurvatureMap:
         return int(sum(lv.nbytes for lv in self.levels))
 
     def tile_mm(self, uv_scale: tuple[float, float]) -> tuple[float, float]:
-        """The size (mm) one repeat of the map covers at ``uv_scale`` mm per UV unit."""
+        """The size (mm) one repeat of the map covers at ``uv_scale`` mm per UV unit.
+
+        Parameters
+        ----------
+        uv_scale
+            Mm per UV unit along u and v.
+
+        Returns
+        -------
+        tuple of float
+            Along u and v.
+        """
         return abs(uv_scale[0] / self.transform[0]), abs(uv_scale[1] / self.transform[1])
 
     def texel_mm(self, uv_scale: tuple[float, float]) -> float:
-        """The larger side (mm) of a level-0 texel at ``uv_scale``."""
+        """The larger side (mm) of a level-0 texel at ``uv_scale``.
+
+        Parameters
+        ----------
+        uv_scale
+            Mm per UV unit along u and v.
+
+        Returns
+        -------
+        float
+            Mm.
+        """
         (tu, tv), (w, h) = self.tile_mm(uv_scale), self.texels
         return max(tu / w, tv / h)
 
     def stats(self) -> dict[str, float]:
-        """The map's rms slope and rms curvature per level (per UV unit), cached: what the checks use."""
+        """The map's rms slope and rms curvature per level (per UV unit), cached: what the checks use.
+
+        Returns
+        -------
+        dict
+            ``slope{i}``, ``du{i}``, ``dv{i}``, ``dx{i}`` of level ``i``: rms of
+            ``(p, q)``, ``dp/du``, ``dq/dv`` and the symmetrised cross term.
+        """
         if not self._stats:
             for i, lv in enumerate(self.levels):
                 g = lv.astype(np.float64)

@@ -93,6 +93,18 @@ def _pair(name: str, value: Any) -> tuple[float, float] | None:
 def as_uv_scale(value: Any, *, name: str = "uv_scale") -> tuple[float, float]:
     """A UV scale as two numbers (mm per UV unit along u and v): a number for both, or two.
 
+    Parameters
+    ----------
+    value
+        One positive number or two.
+    name
+        What to call it in the message.
+
+    Returns
+    -------
+    tuple of float
+        ``(su, sv)``.
+
     Raises
     ------
     MeshError

@@ -51,7 +51,22 @@ class NormalMap:
 
 
 def normal_map_from_normals(normals: ArrayLike, *, convention: str = "opengl", name: str = "normal map") -> NormalMap:
-    """A :class:`NormalMap` from ``(H, W, 3)`` tangent-space normals (any length; normalised)."""
+    """A :class:`NormalMap` from ``(H, W, 3)`` tangent-space normals (any length; normalised).
+
+    Parameters
+    ----------
+    normals
+        ``(H, W, 3)`` (or more channels: the first three) normals, row 0 at v = 1.
+    convention
+        ``"opengl"`` (green up) or ``"directx"`` (green down: turned to up).
+    name
+        What to call it in messages.
+
+    Returns
+    -------
+    NormalMap
+        Unit normals, OpenGL convention, ``c`` clipped at 0.1.
+    """
     if convention not in NORMAL_MAP_CONVENTIONS:
         raise MeshError(f"normal map convention: {convention!r} is not one of {', '.join(NORMAL_MAP_CONVENTIONS)}")
     n = np.array(normals, dtype=np.float64)

@@ -199,6 +199,18 @@ def check_references(path: str | PathLike[str], data: bytes | None = None) -> li
     is left to the reader (an OBJ's missing material library or map is
     skipped by it, a glTF's missing buffer refused).
 
+    Parameters
+    ----------
+    path
+        The mesh file.
+    data
+        Its bytes, when already read.
+
+    Returns
+    -------
+    list of Reference
+        As :func:`referenced_files` gives them.
+
     Raises
     ------
     MeshError

@@ -23,31 +23,55 @@ itself.
 Plug-in ``cdbrdf`` parameters
 -----------------------------
 
-===================  ================  ================================================
-Parameter            Type              Description
-===================  ================  ================================================
-``filename``         string            A CDBRDF file (HDF5), found through Mitsuba's
-                                       file resolver (relative to the scene file).
-                                       Instead, a table object: ``"table": table`` in a
-                                       dict passed to :func:`load_dict`, or
-                                       :func:`make_bsdf`.
-``mode``             string            ``"cdbrdf"`` (default): 5-D lookup with the
-                                       curvature; ``"brdf"``: the plain BRDF (kappa = 0).
-``curvature``        string or float   Mesh attribute holding the curvature (mm^-1), or a
-                                       constant in mm^-1.
-``curvature_mode``   string            ``"max"`` (default, attribute ``vertex_curvature``)
-                                       or ``"directional"`` (``vertex_curvature_dir``).
-``curvature_scale``  float             Factor on the attribute (to_world scale and scene
-                                       unit; set by :func:`load_file`).
-``scale``            float or texture  Factor on the reflectance (default 1); any Mitsuba
-                                       texture multiplies it per channel.
-``sampling``         string            ``"table"`` (default): importance sampling from
-                                       the table; ``"cosine"``: cosine-weighted.
-``cosine_weight``    float             Share of cosine sampling in the table sampler
-                                       (default 0.1).
-``storage``          string            ``"auto"`` (default), ``"packed"`` (21-bit RGB) or
-                                       ``"float"`` (float32 packets, differentiable).
-===================  ================  ================================================
+=========================  ================  ================================================
+Parameter                  Type              Description
+=========================  ================  ================================================
+``filename``               string            A CDBRDF file (HDF5), found through Mitsuba's
+                                             file resolver (relative to the scene file).
+                                             Instead, a table object: ``"table": table`` in a
+                                             dict passed to :func:`load_dict`, or
+                                             :func:`make_bsdf`.
+``mode``                   string            ``"cdbrdf"`` (default): 5-D lookup with the
+                                             curvature; ``"brdf"``: the plain BRDF (kappa = 0).
+``curvature``              string or float   Mesh attribute holding the curvature (mm^-1), or a
+                                             constant in mm^-1.
+``curvature_mode``         string            ``"max"`` (default, attribute ``vertex_curvature``)
+                                             or ``"directional"`` (``vertex_curvature_dir``).
+``curvature_scale``        float             Factor on the attribute (to_world scale and scene
+                                             unit; set by :func:`load_file`).
+``scale``                  float or texture  Factor on the reflectance (default 1); any Mitsuba
+                                             texture multiplies it per channel.
+``sampling``               string            ``"table"`` (default): importance sampling from
+                                             the table; ``"cosine"``: cosine-weighted.
+``cosine_weight``          float             Share of cosine sampling in the table sampler
+                                             (default 0.1).
+``storage``                string            ``"auto"`` (default), ``"packed"`` (21-bit RGB) or
+                                             ``"float"`` (float32 packets, differentiable).
+``uv_scale``               float or string   Mm per UV unit (``"su, sv"`` in XML; two numbers
+                                             from Python): a map's and a CD-BTF's scale.
+                                             Default: a map's detected from its shape
+                                             (:func:`check_scene`); a CD-BTF's 1.
+``texel_filter``           string            A CD-BTF's: ``"stochastic"`` (default),
+                                             ``"bilinear"`` or ``"nearest"``.
+``normal_map``             string            A tangent-space normal map (next to the scene):
+                                             looked up per shading point, its curvature
+                                             added to the mesh's shape operator
+                                             (``vertex_shape``), its normals tilting the
+                                             shading frame.
+``normal_map_convention``  string            ``"opengl"`` (default, green up) or ``"directx"``.
+``height_map``             string            A height map instead, with ``height_scale``.
+``height_scale``           float             Mm per unit of the height map's values.
+``map_size``               float or string   Mm one repeat of the map covers (default: one
+                                             repeat per UV unit).
+``curvature_map``          object            From Python: a :class:`cdbrdf.mesh.CurvatureMap`.
+``neighbourhood``          float             Mm: the map's finest scale (default: the
+                                             table's measured patch, else 5).
+``pixel_angle``            float             The camera's radians per pixel, for the map's
+                                             level (set by :func:`check_scene`).
+``map_filter``             string            ``"trilinear"`` (default) or ``"none"``.
+``shading_normals``        boolean           Whether the map tilts the shading frame
+                                             (default true).
+=========================  ================  ================================================
 
 The BSDF is diffuse-like (non-delta) and two-sided: seen from the back, the
 local frame is turned 180 degrees about x (normal and y flip) and the curvature
@@ -62,7 +86,11 @@ direction ``wo`` in radiance transport (swapped in importance transport,
 where sampling is cosine). The local x axis is ``si.sh_frame.s`` (dP/du):
 meshes must have UVs; :func:`check_scene` refuses meshes without them or
 without the curvature attribute (Mitsuba's analytic shapes have their own UV
-parametrisation and are accepted, with a constant curvature). Spectral
+parametrisation and are accepted, with a constant curvature). A map (``normal_map``,
+``height_map``, ``curvature_map``; ``docs/rendering.md``, "Maps") is looked up at the
+hit's UV (:mod:`cdbrdf.render._maps_jit`): its curvature is added to the mesh's shape
+operator and its normal tilts the frame the table is read in, as Mitsuba's ``normalmap``
+does. Spectral
 variants blend the spectra of the table samples (Mitsuba's sRGB upsampling of
 pi f), mono variants use the luminance. ``mi.traverse`` exposes ``values``
 (the table) and ``scale``; see ``docs/rendering.md``.
