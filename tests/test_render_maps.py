@@ -177,7 +177,9 @@ def test_far_away_the_map_averages_out_instead_of_aliasing(shot):
 
     # ripples of 0.4 mm at 0.49 / mm (twice the table's range), ten to a pixel
     fine = normal_map_from_normals(sine_normals(2048, period_mm=0.4, amplitude_mm=0.002))
-    mesh = prepare_mesh(quad(), table=shot, maps=SurfaceMaps(normal_map=fine, uv_scale=S))
+    # a neighbourhood of 0.01 mm: every level kept, the pixel's footprint alone chooses (the table's 1 mm
+    # would choose the ripples' own scale: at level 0 the map would alias less)
+    mesh = prepare_mesh(quad(), neighbourhood_mm=0.01, maps=SurfaceMaps(normal_map=fine, uv_scale=S))
     plain = mesh.copy()
     for key in ("curvature_map", "uv_scale"):
         plain.metadata.pop(key)
@@ -185,7 +187,8 @@ def test_far_away_the_map_averages_out_instead_of_aliasing(shot):
     with cr.variant("llvm_ad_rgb"):
         def render(m, **kw):
             b = cr.make_bsdf(shot, curvature_mode="max", curvature_map=cmap if m is mesh else None,
-                             uv_scale=(S, S) if m is mesh else None, map_settings=kw or None)
+                             uv_scale=(S, S) if m is mesh else None,
+                             map_settings={"neighbourhood": 0.01, **kw} if m is mesh else None)
             from cdbrdf.render.plugin import check_scene
 
             sc = _quad_scene(b, size=32, spp=16, mesh=m)

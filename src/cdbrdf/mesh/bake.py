@@ -137,7 +137,9 @@ def _from_slopes(p: NDArray[np.float64], q: NDArray[np.float64], transform: tupl
                  **kw: Any) -> CurvatureMap:
     """A map of slopes ``p, q`` (texels) and their derivatives per mesh UV unit (the repeats folded in)."""
     ru, rv = transform[:2]
-    base = np.stack([p, q, _d_cols(p) * ru, _d_rows(p) * rv, _d_cols(q) * ru, _d_rows(q) * rv], axis=-1)
+    base = np.empty(p.shape + (6,), np.float32)
+    for i, x in enumerate((p, q, _d_cols(p) * ru, _d_rows(p) * rv, _d_cols(q) * ru, _d_rows(q) * rv)):
+        base[..., i] = x
     return CurvatureMap(pyramid(base), transform=transform, **kw)
 
 

@@ -48,7 +48,7 @@ the table already).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -97,8 +97,8 @@ NEIGHBOURHOOD_WIDTH_SHARE = 0.25
 #: Smallest |cos| of the view angle used to stretch the footprint (at most 8 times the pixel's).
 MIN_COS_VIEW = 0.125
 
-#: Filters of the lookup: ``trilinear`` (mip levels from the footprint) or ``none`` (level 0 always:
-#: aliases where the map's features are below a pixel; for comparisons).
+#: Filters of the lookup: ``trilinear`` (mip levels from the footprint) or ``none`` (the finest level kept,
+#: the neighbourhood's, whatever the footprint: aliases where the map's features are below a pixel; for comparisons).
 MAP_FILTERS: tuple[str, ...] = ("trilinear", "none")
 
 
@@ -158,6 +158,22 @@ class CurvatureMap:
         """Bytes of every level."""
         return int(sum(lv.nbytes for lv in self.levels))
 
+    def coarser(self, k: int) -> CurvatureMap:
+        """The same map without its ``k`` finest levels (levels a lookup never reads; what the map then is).
+
+        Parameters
+        ----------
+        k
+            Levels dropped, at most all but the last.
+
+        Returns
+        -------
+        CurvatureMap
+            Level ``k`` is its level 0: the map box-filtered to ``2**k`` texels.
+        """
+        k = min(max(int(k), 0), self.n_levels - 1)
+        return replace(self, levels=self.levels[k:], _stats={}) if k else self
+
     def tile_mm(self, uv_scale: tuple[float, float]) -> tuple[float, float]:
         """The size (mm) one repeat of the map covers at ``uv_scale`` mm per UV unit.
 
@@ -209,13 +225,14 @@ class CurvatureMap:
 
 
 # -- the pyramid ---------------------------------------------------------------------------------
-def _halve(a: NDArray[np.float64], axis: int) -> NDArray[np.float64]:
+def _halve(a: NDArray[np.float32], axis: int) -> NDArray[np.float32]:
     """Means of pairs along ``axis``: an odd length first resampled to the next even one by area (mean kept)."""
     n = a.shape[axis]
     if n == 1:
         return a
     if n % 2:  # cell j of n + 1 covers [j, j + 1) * n / (n + 1) of the old cells: the integral's differences
-        c = np.concatenate([np.zeros_like(np.take(a, [0], axis=axis)), np.cumsum(a, axis=axis)], axis=axis)
+        c = np.cumsum(a, axis=axis, dtype=np.float64)
+        c = np.concatenate([np.zeros_like(np.take(c, [0], axis=axis)), c], axis=axis)
         edges = np.arange(n + 2) * n / (n + 1)
         i = np.minimum(np.floor(edges).astype(np.int64), n - 1)
         f = edges - i
@@ -223,7 +240,7 @@ def _halve(a: NDArray[np.float64], axis: int) -> NDArray[np.float64]:
         shape[axis] = n + 2
         f = f.reshape(shape)
         integral = np.take(c, i, axis=axis) * (1 - f) + np.take(c, i + 1, axis=axis) * f
-        a = np.diff(integral, axis=axis) * ((n + 1) / n)
+        a = (np.diff(integral, axis=axis) * ((n + 1) / n)).astype(np.float32)
         n += 1
     return 0.5 * (np.take(a, np.arange(0, n, 2), axis=axis) + np.take(a, np.arange(1, n, 2), axis=axis))
 
@@ -241,11 +258,11 @@ def pyramid(base: ArrayLike) -> tuple[NDArray[np.float32], ...]:
     tuple of numpy.ndarray
         float32 levels, ``(H, W, C)`` first.
     """
-    a = np.asarray(base, dtype=np.float64)
-    out = [a.astype(np.float32)]
+    a = np.ascontiguousarray(base, dtype=np.float32)  # float32 throughout: a 8k map's levels are 2 GB
+    out = [a]
     while a.shape[0] > 1 or a.shape[1] > 1:
         a = _halve(_halve(a, 0), 1)
-        out.append(a.astype(np.float32))
+        out.append(a)
     return tuple(out)
 
 

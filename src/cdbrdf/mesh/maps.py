@@ -432,6 +432,8 @@ def apply_maps(mesh: Mesh, maps: SurfaceMaps | None, *, name: str = "mesh",
         if cmap.uv_scale is not None and not np.allclose(cmap.uv_scale, uvs.pair, rtol=1e-6):
             raise MeshError(f"{cmap.name}: baked at {cmap.uv_scale} mm per UV unit, not the mesh's {uvs.pair}")
         level = _check(cmap, uvs, nb, kappa_range, notes)
+        cmap = cmap.coarser(int(level))  # the levels finer than the neighbourhood's are never read
+        level -= int(level)
         if maps.bake == "vertex":
             out.attributes.update(_vertex_bake(cmap, mesh, uvs, level, notes))
             notes.append(f"{cmap.name}: baked per vertex (its curvature added at the vertices; it does not shade)")

@@ -235,14 +235,13 @@ class SurfaceMap:
         from ..mesh.curvature_map import neighbourhood_level
 
         pair = (float(uv_scale[0]), float(uv_scale[1]))
-        if not isinstance(self._source, CurvatureMap):
-            self.cmap = self._source(pair)
-        assert self.cmap is not None
+        self.cmap = self._source if isinstance(self._source, CurvatureMap) else self._source(pair)
         baked = self.cmap.uv_scale
         if baked is not None and not np.allclose(baked, pair, rtol=1e-5):
             raise OptionError(f"cdbrdf BSDF: {self.cmap.name} was baked at {baked[0]:g}, {baked[1]:g} mm per UV unit; "
                               f"uv_scale is {pair[0]:g}, {pair[1]:g}")
         self.uv_scale = pair
+        self.cmap = self.cmap.coarser(int(neighbourhood_level(self.cmap, pair, self.neighbourhood_mm)))
         self.min_level = neighbourhood_level(self.cmap, pair, self.neighbourhood_mm)
         self.up = None
 
