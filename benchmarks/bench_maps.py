@@ -10,11 +10,13 @@ rendered by the ``cdbrdf`` plug-in
 - without a map (the mesh's own per-vertex curvature: the reference);
 - with a wrinkle normal map baked per texel (``--texels`` square, sine
   wrinkles of 10 mm and 0.4 mm plus a finer weave-like ripple): the map
-  looked up per shading point (trilinear over its prefiltered levels), its
+  looked up per shading point (the level of the pixel's footprint, one of
+  the two levels around it chosen stochastically: four texel reads), its
   curvature added to the mesh's shape operator, its normal tilting the
-  shading frame;
-- the same map without mip filtering (``map_filter="none"``: one level,
-  four texel reads instead of eight), to show what the filtering costs.
+  shading frame (the default, the target's);
+- the same map with both levels blended (``map_filter="trilinear"``: eight
+  texel reads) and with one fixed level (``"none"``: four, no footprint),
+  to show what the filtering costs.
 
 Every scene is rendered once untimed (tracing, compilation), then
 ``--repeat`` times interleaved; the best CPU time of each counts (wall
@@ -86,10 +88,11 @@ def main(argv=None) -> int:
     scenes = {
         "no map": mesh_scene(table, plain, **kw),
         "curvature map": mesh_scene(table, mapped, **kw),
-        "curvature map, no mip": mesh_scene(table, mapped, bsdf={"type": "cdbrdf", "table": table,
-                                                                 "curvature": "vertex_curvature",
-                                                                 "map_filter": "none"}, **kw),
     }
+    for how in ("trilinear", "none"):
+        scenes[f"curvature map, {how}"] = mesh_scene(table, mapped, bsdf={"type": "cdbrdf", "table": table,
+                                                                          "curvature": "vertex_curvature",
+                                                                          "map_filter": how}, **kw)
     for sc in scenes.values():
         timed(mi, dr, sc, args.spp, 0)
     cpu: dict[str, list[float]] = {name: [] for name in scenes}

@@ -64,8 +64,9 @@ def _hits(scene, xy, height=200.0):
     return scene.ray_intersect(mi.Ray3f(o, mi.Vector3f(0.0, 0.0, -1.0)))
 
 
-def _plugin(cr, table, cmap, **settings):
-    return cr.make_bsdf(table, curvature_mode="max", curvature_map=cmap, uv_scale=(S, S), map_settings=settings)
+def _plugin(cr, table, cmap, **settings):  # trilinear: the same value in every variant (no random level)
+    return cr.make_bsdf(table, curvature_mode="max", curvature_map=cmap, uv_scale=(S, S),
+                        map_settings={"map_filter": "trilinear", **settings})
 
 
 @pytest.mark.parametrize("variant", ["llvm_ad_rgb", "scalar_rgb"])
@@ -335,3 +336,32 @@ def test_cdbrdf_render_takes_a_normal_map_and_says_the_uv_scale(tmp_path, capsys
         assert main(["render", str(tmp_path / "shot.h5"), *argv, "--size", "8x8", "--spp", "1",
                      "-o", str(tmp_path / "x.png")]) == 2
         assert msg in capsys.readouterr().err
+
+
+def test_the_stochastic_level_converges_to_the_trilinear_value(shot, wrinkle_map):
+    """One of the two levels per lane, the coarser with probability the fraction: the trilinear value on average."""
+    import cdbrdf.render as cr
+
+    mesh = prepare_mesh(quad(), neighbourhood_mm=1.0, maps=SurfaceMaps(normal_map=wrinkle_map, uv_scale=S))
+    cmap = mesh.metadata["curvature_map"]
+    n = 20000
+    rng = np.random.default_rng(9)
+    xy = np.array([31.3, 47.0]) + rng.uniform(-1e-3, 1e-3, (n, 2))  # one point, distinct UV bits
+    out = {}
+    with cr.variant("llvm_ad_rgb"):
+        for how in ("stochastic", "trilinear"):
+            bsdf = cr.make_bsdf(shot, curvature_mode="directional", curvature_map=cmap, uv_scale=(S, S),
+                                map_settings={"map_filter": how, "neighbourhood": 1.0, "pixel_angle": 2.6e-3})
+            si = _hits(_scene(mesh, bsdf), xy)
+            out[how] = np.asarray(bsdf.curvature_at(si, True, "directional"), dtype=np.float64)
+        uv, t = np.asarray(si.uv).T, np.asarray(si.t)
+    lv = footprint_level(cmap, t * 2.6e-3 / S, t * 2.6e-3 / S, 0.0)
+    f = lv - np.floor(lv)
+    assert 0.2 < f.mean() < 0.8 and np.ptp(lv) < 1e-3  # one fractional level for all
+    k = [shape_operator(lookup(cmap, uv[:, 0], uv[:, 1], np.floor(lv) + d), (S, S))[2] for d in (0, 1)]
+    coarse = np.abs(out["stochastic"] - k[1]) < 1e-4 * PEAK
+    assert np.all(coarse | (np.abs(out["stochastic"] - k[0]) < 1e-4 * PEAK))  # each lane reads one level
+    sigma = math.sqrt(f.mean() * (1 - f.mean()) / n)
+    assert abs(coarse.mean() - f.mean()) < 5 * sigma  # the coarser one with probability the fraction
+    np.testing.assert_allclose(out["trilinear"], k[0] * (1 - f) + k[1] * f, atol=1e-4 * PEAK)
+    assert abs(out["stochastic"].mean() - out["trilinear"].mean()) < 5 * sigma * np.abs(k[1] - k[0]).mean()

@@ -36,7 +36,8 @@ texels: the exact prefiltered curvature, not a filtered eigenvalue.
 ``w`` in level-0 texels along the map's longer axis, clamped to
 ``[min_level, n_levels - 1]``; bilinear between the four nearest texel
 centres of levels ``floor(L)`` and ``floor(L) + 1``, linear between them
-(trilinear, as a GPU filters a mip-mapped texture). The footprint
+(trilinear, as a GPU filters a mip-mapped texture; the renderer by default
+reads one of the two levels, chosen with those weights: :data:`MAP_FILTERS`). The footprint
 (:func:`footprint_uv`) is the pixel's on the surface, ``distance x
 pixel_angle / max(|cos theta_v|, 1/8)``, in UV units through ``|dP/du|`` and
 ``|dP/dv|``; ``min_level`` (:func:`neighbourhood_level`) keeps the map no
@@ -97,9 +98,11 @@ NEIGHBOURHOOD_WIDTH_SHARE = 0.25
 #: Smallest |cos| of the view angle used to stretch the footprint (at most 8 times the pixel's).
 MIN_COS_VIEW = 0.125
 
-#: Filters of the lookup: ``trilinear`` (mip levels from the footprint) or ``none`` (the finest level kept,
-#: the neighbourhood's, whatever the footprint: aliases where the map's features are below a pixel; for comparisons).
-MAP_FILTERS: tuple[str, ...] = ("trilinear", "none")
+#: Filters of the renderer's lookup, between the two levels around the footprint's: ``stochastic`` (the
+#: default: one of them, the finer with probability 1 - the fraction, so the expected value is the trilinear
+#: one; four texel reads), ``trilinear`` (both blended; eight) or ``none`` (the finest level kept, the
+#: neighbourhood's, whatever the footprint: aliases where the map's features are below a pixel; for comparisons).
+MAP_FILTERS: tuple[str, ...] = ("stochastic", "trilinear", "none")
 
 
 @dataclass(frozen=True)

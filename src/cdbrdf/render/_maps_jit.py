@@ -12,8 +12,14 @@ variants call):
    an integrator computed them (Mitsuba 3.9's ``path`` does not: only
    ``SurfaceInteraction.compute_uv_partials(RayDifferential)`` fills them, and
    only the ``aov`` integrator calls it), never finer than the neighbourhood's level;
-2. trilinear between two levels (:func:`sample`): eight packet gathers of a
-   texel's six values (padded to eight floats);
+2. between the two levels around it (:func:`sample`, ``map_filter``):
+   ``stochastic`` (the default) reads one of them, the coarser with
+   probability equal to the fraction (a TEA hash of the UV's bits, as the
+   CD-BTF's stochastic texel filter: the same point reads the same level in
+   ``eval`` and ``sample``), so the expected value is the trilinear one with
+   four packet gathers of a texel's six values (padded to eight floats);
+   ``trilinear`` blends both (eight gathers); the scalar variants evaluate the
+   trilinear value for both (the expectation);
 3. the shape operator at the UV scale (:func:`detail`), in the shading frame
    (``s`` = dP/du projected, ``t = n x s``; a mirrored UV layout, where
    dP/dv points along ``-t``, flips ``q`` and ``kxy``), added to the mesh's
@@ -35,8 +41,8 @@ import numpy as np
 
 from ..mesh.curvature_map import CHANNELS, MIN_COS_VIEW, CurvatureMap
 
-__all__ = ["MapUpload", "SurfaceMap", "upload", "level", "sample", "detail", "frame", "Frame", "handedness",
-           "principal", "scalar_values"]
+__all__ = ["MapUpload", "SurfaceMap", "upload", "level", "level_choice", "sample", "detail", "frame", "Frame",
+           "handedness", "principal", "scalar_values"]
 
 #: Floats per texel on the device (the six channels, padded for packet gathers).
 _STRIDE = 8
@@ -54,11 +60,11 @@ class MapUpload(NamedTuple):
     transform: tuple[float, float, float, float]
     uv_scale: tuple[float, float]
     min_level: float
-    trilinear: bool
+    map_filter: str
 
 
 def upload(mi: Any, cmap: CurvatureMap, *, uv_scale: tuple[float, float], min_level: float,
-           trilinear: bool = True) -> MapUpload:
+           map_filter: str = "stochastic") -> MapUpload:
     """Every level of ``cmap`` in one device buffer (vectorised variants)."""
     blocks, offsets, widths, heights = [], [], [], []
     n = 0
@@ -74,7 +80,7 @@ def upload(mi: Any, cmap: CurvatureMap, *, uv_scale: tuple[float, float], min_le
     UInt = mi.UInt32
     return MapUpload(mi.Float(np.concatenate(blocks)), UInt(offsets), UInt(widths), UInt(heights), cmap.texels,
                      cmap.n_levels, cmap.transform, (float(uv_scale[0]), float(uv_scale[1])), float(min_level),
-                     bool(trilinear))
+                     str(map_filter))
 
 
 def level(dr: Any, si: Any, texels: tuple[int, int], transform: tuple[float, ...], n_levels: int,
@@ -122,22 +128,31 @@ def _bilinear(mi: Any, up: MapUpload, tu: Any, tv: Any, lvl: Any, active: Any) -
 
 
 def sample(mi: Any, up: MapUpload, uv: Any, lv: Any, active: Any) -> list[Any]:
-    """The six values at the lanes' UVs and levels: trilinear (or level 0 without mip filtering)."""
+    """The six values at the lanes' UVs and levels, by the upload's ``map_filter`` (see the module's description)."""
     import drjit as dr
 
     ru, rv, ou, ov = up.transform
     tu = dr.fma(uv.x, ru, ou)
     tv = dr.fma(uv.y, rv, ov)
     UInt = mi.UInt32
-    if not up.trilinear:
+    if up.map_filter == "none":
         return _bilinear(mi, up, tu, tv, UInt(0), active)
     fl = dr.floor(lv)
     l0 = UInt(fl)
     l1 = dr.minimum(l0 + 1, up.n_levels - 1)
     f = lv - fl
+    if up.map_filter == "stochastic":
+        return _bilinear(mi, up, tu, tv, dr.select(level_choice(mi, uv) < f, l1, l0), active)
     a = _bilinear(mi, up, tu, tv, l0, active)
     b = _bilinear(mi, up, tu, tv, l1, active & (f > 0.0))
     return [dr.fma(f, y - x, x) for x, y in zip(a, b, strict=True)]
+
+
+def level_choice(mi: Any, uv: Any) -> Any:
+    """A uniform in [0, 1) per lane from the UV's bits (the CD-BTF's TEA hash of ``(v, u)``: not its texel's)."""
+    from ._btf_jit import texel_choice
+
+    return texel_choice(mi, mi.Point2f(uv.y, uv.x))[0]
 
 
 def detail(dr: Any, values: list[Any], uv_scale: tuple[float, float], hand: Any) -> tuple[Any, ...]:
@@ -182,11 +197,12 @@ def principal(dr: Any, sxx: Any, sxy: Any, syy: Any) -> Any:
     return dr.select(mean >= 0.0, mean + half, mean - half)
 
 
-def scalar_values(cmap: CurvatureMap, u: float, v: float, lv: float, trilinear: bool) -> list[float]:
-    """The six values at one point (scalar variants): :func:`cdbrdf.mesh.curvature_map.lookup`."""
+def scalar_values(cmap: CurvatureMap, u: float, v: float, lv: float, map_filter: str) -> list[float]:
+    """The six values at one point (scalar variants): :func:`cdbrdf.mesh.curvature_map.lookup`, trilinear
+    for ``stochastic`` too (its expected value)."""
     from ..mesh.curvature_map import lookup
 
-    g = lookup(cmap, u, v, lv if trilinear else 0.0)
+    g = lookup(cmap, u, v, 0.0 if map_filter == "none" else lv)
     return [float(x) for x in np.asarray(g).reshape(-1)]
 
 
@@ -218,7 +234,7 @@ class SurfaceMap:
         self.neighbourhood_mm = float(neighbourhood_mm)
         self.pixel_angle = float(pixel_angle)
         self.pixel_angle_given = self.pixel_angle > 0
-        self.trilinear = map_filter == "trilinear"
+        self.map_filter = map_filter
         self.shading = bool(shading)
         self.uv_scale: tuple[float, float] | None = None
         self.min_level = 0.0
@@ -257,9 +273,9 @@ class SurfaceMap:
         c = self.cmap
         lv = level(dr, si, c.texels, c.transform, c.n_levels, self.min_level, self.pixel_angle)
         if scalar:
-            return scalar_values(c, float(si.uv.x), float(si.uv.y), float(lv), self.trilinear)
+            return scalar_values(c, float(si.uv.x), float(si.uv.y), float(lv), self.map_filter)
         if self.up is None:
-            self.up = upload(mi, c, uv_scale=self.uv_scale, min_level=self.min_level, trilinear=self.trilinear)
+            self.up = upload(mi, c, uv_scale=self.uv_scale, min_level=self.min_level, map_filter=self.map_filter)
         return sample(mi, self.up, si.uv, lv, active)
 
 
@@ -293,7 +309,7 @@ def surface_from_props(get: Any, extras: dict[str, Any], resolve: Any, *, neighb
         raise OptionError(f"cdbrdf BSDF: give one of curvature_map, normal_map, height_map (got {', '.join(given)})")
     if cmap is not None and not isinstance(cmap, CurvatureMap):
         raise OptionError(f"cdbrdf BSDF: curvature_map must be a cdbrdf.mesh.CurvatureMap, got {type(cmap).__name__}")
-    map_filter = str(get("map_filter", "trilinear"))
+    map_filter = str(get("map_filter", MAP_FILTERS[0]))
     if map_filter not in MAP_FILTERS:
         raise OptionError(f"cdbrdf BSDF: map_filter {map_filter!r} is not one of {', '.join(MAP_FILTERS)}")
     nb = float(get("neighbourhood", neighbourhood_mm))
