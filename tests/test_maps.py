@@ -230,3 +230,27 @@ def test_a_gltf_normal_texture_is_read_in_16_bit_with_its_texture_transform():
     assert nm.normals.shape == (256, 256, 3)
     codes = np.unique(np.round((nm.normals[..., 0] + 1) / 2 * 65535))
     assert codes.size > 256  # 16-bit codes, not PIL's 8-bit
+
+
+def test_a_map_far_beyond_the_tables_range_is_said(caplog, tmp_path):
+    png = tmp_path / "steep.png"
+    write_png(png, np.round(sine_heights(512) * 65535).astype(np.uint16))
+    with caplog.at_level(logging.WARNING, logger="cdbrdf.mesh.maps"):
+        mesh = prepare_mesh(quad(), neighbourhood_mm=1.0, kappa_range=(-0.22, 0.22),
+                            maps=SurfaceMaps(height_map=png, height_scale_mm=40 * A))  # 20 x the wrinkles: 3 / mm
+    said = [n for n in mesh.metadata["notes"] if "far beyond the table's range" in n]
+    assert len(said) == 1 and "its height scale" in said[0] and len(caplog.records) == 1
+
+
+def test_a_directx_normal_map_bakes_as_its_opengl_twin(tmp_path):
+    n = sine_normals(256, along="v")
+    dx = n.copy()
+    dx[..., 1] = -dx[..., 1]  # green down
+    write_normal_png(tmp_path / "dx.png", dx)
+    write_normal_png(tmp_path / "gl.png", n)
+    a = prepare_mesh(quad(), neighbourhood_mm=1.0, maps=SurfaceMaps(normal_map=tmp_path / "gl.png"))
+    b = prepare_mesh(quad(), neighbourhood_mm=1.0,
+                     maps=SurfaceMaps(normal_map=tmp_path / "dx.png", normal_map_convention="directx"))
+    la, lb = a.metadata["curvature_map"].levels[0], b.metadata["curvature_map"].levels[0]
+    np.testing.assert_allclose(la, lb, atol=1e-6)
+    assert np.abs(la[..., 5]).max() / S == pytest.approx(PEAK, rel=0.02)  # dq/dv: the wrinkles along v
