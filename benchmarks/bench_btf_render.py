@@ -49,7 +49,7 @@ def main() -> None:
     from cdbrdf.btf import load
     from cdbrdf.colour import LUMINANCE_WEIGHTS
     from cdbrdf.mesh import SineSheet
-    from cdbrdf.render import render_table
+    from cdbrdf.render import Camera, render_table
     from cdbrdf.render._btf_jit import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS
 
     btf = load(a.file)
@@ -60,7 +60,7 @@ def main() -> None:
         close = SineSheet(width_mm=20.0, depth_mm=14.0, vertices_per_wavelength=256)
         size = (640, 448)
         t0 = time.perf_counter()
-        pic = render_table(btf, close, size=size, view=(90.0, -90.0), **kw)
+        pic = render_table(btf, close, size=size, camera=Camera(view=(90.0, -90.0)), **kw)
         out["close_up_seconds"] = round(time.perf_counter() - t0, 1)
         img = pic.images["cdbrdf"][..., :3].astype(np.float64)
         if a.picture:

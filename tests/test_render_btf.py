@@ -8,7 +8,7 @@ import pytest
 from cdbrdf import CDBTF, Grid
 from cdbrdf.colour import LUMINANCE_WEIGHTS
 from cdbrdf.errors import OptionError
-from cdbrdf.render import _btf_jit
+from cdbrdf.render import Camera, _btf_jit
 
 from .render_helpers import dr, local_si, mi, needs_llvm, unit, vec
 
@@ -366,7 +366,8 @@ def test_a_mesh_without_its_own_uvs_renders_the_tile_mean_and_says_so(cr, btf):
 
     from .test_viewer_btf_mesh import flat_grid
 
-    kw = {"size": (32, 24), "spp": 16, "exposure": 0.0, "units": "mm", "light": (50.0, 0.0), "view": (60.0, -90.0)}
+    kw = {"size": (32, 24), "spp": 16, "exposure": 0.0, "units": "mm", "light": (50.0, 0.0),
+          "camera": Camera(view=(60.0, -90.0))}
     bare = render_table(btf, flat_grid(20.0, 20.0, uv=False), **kw)
     mean = render_table(btf.mean(), flat_grid(20.0, 20.0, uv=False), **kw)
     # the same scene and table: equal up to the order of float32 sums in the render (1e-7 seen)

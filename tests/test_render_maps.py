@@ -20,6 +20,7 @@ import pytest
 import cdbrdf.materials
 from cdbrdf.mesh import Mesh, SurfaceMaps, normal_map_from_normals, prepare_mesh
 from cdbrdf.mesh.curvature_map import footprint_level, lookup, principal, shape_operator
+from cdbrdf.render import Camera
 
 from .maps_helpers import PEAK, S, delta_e, quad, sine_normals, wrinkled_grid, write_normal_png
 from .render_helpers import constant_table, mi, needs_llvm
@@ -209,7 +210,8 @@ def test_the_issues_quad_shows_the_wrinkles_and_agrees_with_them_as_geometry(sho
     """The issue's "done when" (view 60 degrees above the quad, 128 x 128, 32 spp)."""
     from cdbrdf.render import render_table
 
-    kw = {"modes": ("brdf", "cdbrdf"), "size": (128, 128), "spp": 32, "lighting": "paper", "view": (60.0, -90.0)}
+    kw = {"modes": ("brdf", "cdbrdf"), "size": (128, 128), "spp": 32, "lighting": "paper",
+          "camera": Camera(view=(60.0, -90.0))}
     mapped = render_table(shot, quad(), maps=SurfaceMaps(normal_map=wrinkle_map, uv_scale=S), **kw)
     bare = render_table(shot, quad(), **kw)
     geometry = render_table(shot, wrinkled_grid(401, 41), **kw)
@@ -224,7 +226,8 @@ def test_the_issues_quad_shows_the_wrinkles_and_agrees_with_them_as_geometry(sho
 def test_maps_render_in_every_variant(shot, wrinkle_map, variant):
     from cdbrdf.render import render_table
 
-    kw = {"modes": ("cdbrdf",), "size": (12, 12), "spp": 2, "lighting": "paper", "view": (60.0, -90.0),
+    kw = {"modes": ("cdbrdf",), "size": (12, 12), "spp": 2, "lighting": "paper",
+          "camera": Camera(view=(60.0, -90.0)),
           "variant": variant, "max_depth": 2}
     mapped = render_table(shot, quad(), maps=SurfaceMaps(normal_map=wrinkle_map, uv_scale=S), **kw)
     bare = render_table(shot, quad(), **kw)

@@ -226,8 +226,9 @@ class CDBRDF:
         if not np.all(np.isfinite(v)):
             bad = int(np.count_nonzero(~np.isfinite(v)))
             raise TableError(f"{name}: contains {bad} NaN or infinite value(s)")
-        if v.size and float(np.max(np.abs(v))) > MAX_ABS_VALUE:
-            bad = int(np.count_nonzero(np.abs(v) > MAX_ABS_VALUE))
+        bound = v.dtype.type(MAX_ABS_VALUE)  # at the values' precision: float32(1e30) is the bound itself
+        if v.size and np.max(np.abs(v)) > bound:
+            bad = int(np.count_nonzero(np.abs(v) > bound))
             top = float(np.max(np.abs(v)))
             raise TableError(f"{name}: {bad} value(s) beyond +-{MAX_ABS_VALUE:g} (up to {top:.3g}): not a "
                              "reflectance, and its sums would overflow")

@@ -17,8 +17,8 @@ renderer and the viewer, which use it:
 - :func:`prepare_mesh` (:mod:`~cdbrdf.mesh.prepare`): a user's mesh made
   ready to render, and its up axis (:func:`detect_up`, :func:`z_up_mesh`);
 - the analytic surfaces with their sizes (:mod:`~cdbrdf.mesh.surfaces`): the
-  paper's sine sheet, a draped cloth, a skirt; garments as their makers
-  export them (:mod:`~cdbrdf.mesh.garments`: sewn panels, a scanned bust);
+  paper's sine sheet, a swatch laid in folds of known radii, a draped cloth,
+  a skirt; garments as their makers export them (:mod:`~cdbrdf.mesh.garments`: sewn panels, a scanned bust);
 - the detail maps laid by a mesh's UVs (:mod:`~cdbrdf.mesh.maps`:
   :class:`SurfaceMaps`, the UV scale): normal maps read as data
   (:mod:`~cdbrdf.mesh.normalmap`), height maps and high-resolution meshes
@@ -57,12 +57,15 @@ from .surfaces import (
     DrapedCloth,
     SineSheet,
     Skirt,
+    Swatch,
     draped_cloth_height,
     draped_cloth_mesh,
     sine_sheet_curvature,
     sine_sheet_height,
     sine_sheet_mesh,
     skirt_mesh,
+    swatch_curvature,
+    swatch_mesh,
 )
 from .units import MAX_SIZE_MM, UNITS_MM, KappaRangeCheck, Units, check_kappa_range, check_size, parse_units
 
@@ -118,6 +121,9 @@ __all__ = [
     "draped_cloth_mesh",
     "Skirt",
     "skirt_mesh",
+    "Swatch",
+    "swatch_mesh",
+    "swatch_curvature",
     "Garment",
     "garment_mesh",
     "bust_mesh",

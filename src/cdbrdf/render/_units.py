@@ -49,6 +49,8 @@ def uniform_scale(matrix: Any, *, what: str = "to_world") -> float:
     """The uniform scale of an affine 4x4 (or 3x3) matrix; a :class:`SceneError` for a non-uniform one."""
     m = np.asarray(matrix, dtype=np.float64)
     m3 = m[:3, :3]
+    if not np.isfinite(m).all():  # SVD of NaN raises LinAlgError naming nothing
+        raise SceneError(f"{what}: the transform has NaN or infinite entries")
     sv = np.linalg.svd(m3, compute_uv=False)
     if not np.all(np.isfinite(sv)) or sv[-1] <= 0.0:
         raise SceneError(f"{what}: the transform is singular or not finite")
