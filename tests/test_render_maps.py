@@ -222,7 +222,7 @@ def test_the_issues_quad_shows_the_wrinkles_and_agrees_with_them_as_geometry(sho
         assert np.median(delta_e(mapped, mode, geometry, mode)) <= 3.0  # measured 0.24 (brdf), 1.6 (cdbrdf)
 
 
-@pytest.mark.parametrize("variant", ["llvm_ad_spectral", "llvm_ad_mono", "scalar_rgb"])
+@pytest.mark.parametrize("variant", ["llvm_ad_spectral", "llvm_ad_mono", "scalar_rgb", "scalar_spectral"])
 def test_maps_render_in_every_variant(shot, wrinkle_map, variant):
     from cdbrdf.render import render_table
 

@@ -110,14 +110,6 @@ def load_source(source: Any) -> tuple[Any, Any]:
     )
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def _choice(name: str, value: Any, choices: tuple[str, ...] | Mapping[str, str]) -> str:
     v = str(value)
     if v not in choices:
@@ -434,11 +426,12 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                                              neighbourhood_mm=nb, uv_scale=pair)
             attr = self.settings.curvature_attribute
             if m is not None and attr not in (None, *CURVATURE_MODES.values()):
-                raise OptionError(f"cdbrdf BSDF: a curvature map adds to the mesh's shape operator (vertex_shape_xx, "
-                                  f"_xy, _yy); the curvature attribute {attr!r} cannot be combined with it")
+                raise OptionError(f"cdbrdf BSDF: a curvature map adds to the mesh's shape operator "
+                                  f"({SHAPE_MESH_ATTRIBUTE}); the curvature attribute {attr!r} cannot be combined "
+                                  "with it")
             self.map_mode = "directional" if attr == CURVATURE_MODES["directional"] else "max"
-            c = get("curvature")  # a number: a constant curvature; else the mesh's (in either render mode)
-            self._mesh_shape = not isinstance(c, (int, float)) and not (isinstance(c, str) and _is_number(c))
+            c = get("curvature")  # a constant curvature (the rule of Settings.parse); else the mesh's, in either mode
+            self._mesh_shape = c is None or Settings.parse(curvature=c).curvature_attribute is not None
             return m
 
         def _shading(self, si: Any, active: Any) -> tuple[Any, Any, Any]:
