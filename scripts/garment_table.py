@@ -104,7 +104,8 @@ def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) ->
     logging.getLogger("cdbrdf").addHandler(log)
     try:
         mesh = read_mesh(path)
-        mesh.metadata.pop("normal_map", None)  # the geometry's curvature only
+        for key in ("normal_map", "height_map"):  # the geometry's curvature only
+            mesh.metadata.pop(key, None)
         prep = prepare_mesh(mesh, table=table)
         up, why = detect_up(prep)
         bare = Mesh(mesh.vertices, mesh.faces, None, mesh.uv, {}, None, {"format": "obj"})

@@ -48,7 +48,8 @@ def _denim():
 def _geometry_only(mesh: Mesh, vertices: np.ndarray) -> Mesh:
     """The mesh without what its file says of its unit and up axis (an OBJ with no header)."""
     meta = {k: v for k, v in mesh.metadata.items()
-            if k not in ("units", "units_source", "up", "up_source", "up_default", "normal_map", "format")}
+            if k not in ("units", "units_source", "up", "up_source", "up_default", "normal_map", "height_map",
+                         "format")}
     return Mesh(vertices, mesh.faces, None, mesh.uv, {}, None, {**meta, "format": "obj"})
 
 
@@ -91,7 +92,8 @@ def test_no_spikes_at_seams_panel_edges_or_openings(path, unit, up, unit_rule, u
     table = _denim()
     lo, hi = float(table.kappa.min()), float(table.kappa.max())
     mesh = read_mesh(shared_file(f"garments/{path}"))
-    mesh.metadata.pop("normal_map", None)  # the geometry's curvature
+    for key in ("normal_map", "height_map"):  # the geometry's curvature
+        mesh.metadata.pop(key, None)
     prepared = prepare_mesh(mesh, table=table)
     by = prepared.metadata["outside_by_location"]
     k = prepared.attributes["curvature"]
