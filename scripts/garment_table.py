@@ -17,7 +17,8 @@ the defaults of ``cdbrdf render --mesh`` and the bundled denim:
   and the largest ``|kappa|`` and where it is;
 - a plain-BRDF and a CDBRDF render (small, studio lighting, the grey-card
   exposure): the share of the garment's pixels that differ noticeably
-  (Delta E*ab > 2.3, the just-noticeable difference) and the share of those
+  (Delta E*ab > 2.3, the just-noticeable difference, as ``cdbrdf render
+  --compare`` shows it: :func:`cdbrdf.plot.displayed_delta_e`) and the share of those
   on a seam (a pixel whose surface point is nearer a seam vertex than the
   other vertices of its triangle: half an edge either side of a seam), beside
   the share of all the garment's pixels on a seam.
