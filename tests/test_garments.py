@@ -354,3 +354,22 @@ def test_a_stated_unit_is_followed_and_an_implausible_garment_warned_of(tmp_path
         assert not msgs
     else:
         assert len(msgs) == 1 and warned in msgs[0] and "implausible for a garment" in mesh.metadata["units_note"]
+
+
+def test_a_uv_map_cut_at_every_edge_follows_no_fabric_but_a_small_whole_chart_does():
+    """A sheet whose UVs are cut at every face (each face its own corners, as some remeshers leave them) takes
+    the material's x axis from the bending, and says so; the same sheet with whole UVs, and a quad of two
+    faces, keep their UV frame."""
+    from cdbrdf.mesh import surface_curvature
+
+    v, f = folded_strip(r=20.0, n_fold=20)
+    uv = v[:, :2] / 100.0
+    whole = surface_curvature(v, f, uv=uv, units="mm")
+    assert whole.frame == "uv"
+    cut_v, cut_uv = v[f.reshape(-1)], uv[f.reshape(-1)] + np.repeat(np.arange(f.shape[0]), 3)[:, None] * 0.01
+    cut = surface_curvature(cut_v, np.arange(3 * f.shape[0]).reshape(-1, 3), uv=cut_uv, units="mm")
+    assert cut.frame == "principal"
+    assert any("the UV map is cut at nearly every edge" in n for n in cut.notes)
+    quad = surface_curvature(np.array([[0.0, 0, 0], [100, 0, 0], [100, 100, 0], [0, 100, 0]]),
+                             np.array([[0, 1, 2], [0, 2, 3]]), uv=np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]]))
+    assert quad.frame == "uv"

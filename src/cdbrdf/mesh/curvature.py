@@ -244,6 +244,19 @@ def _chart_sizes(faces: NDArray[np.int64], n: int) -> NDArray[np.int64]:
     return np.bincount(piece)[piece].astype(np.int64)
 
 
+def _uv_scraps(v: NDArray[np.float64], faces: NDArray[np.int64], chart: NDArray[np.int64]) -> bool:
+    """Whether most faces lie in pieces of fewer than :data:`PANEL_FACES` faces cut out of a larger surface
+    (a UV map cut at nearly every edge; a quad of two faces is one piece, and whole)."""
+    from .repair import weld
+
+    small = chart < PANEL_FACES
+    if not float(np.mean(small)) > 0.5:
+        return False
+    wid = weld(v)
+    whole = _chart_sizes(wid[faces], int(wid.max()) + 1 if wid.size else 0)  # the surface's own pieces
+    return float(np.mean(small & (chart < whole))) > 0.5
+
+
 def _seam_vertices(faces: NDArray[np.int64], chart: NDArray[np.int64], n: int) -> NDArray[np.bool_]:
     """Vertices on the boundary of a panel: a piece of the file's mesh of at least :data:`PANEL_FACES`
     faces (``chart``: :func:`_chart_sizes`).
@@ -348,7 +361,7 @@ def surface_curvature(  # noqa: C901 - the steps in order
     f_in = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     chart = _chart_sizes(f_in, v.shape[0])
     if frame == "auto":
-        scraps = uv_in is not None and float(np.mean(chart < PANEL_FACES)) > 0.5
+        scraps = uv_in is not None and _uv_scraps(v, f_in, chart)
         frame = "uv" if uv_in is not None and not scraps else "tangent" if tan_in is not None else "principal"
         why = (f"the UV map is cut at nearly every edge ({int(np.count_nonzero(chart < PANEL_FACES))} of "
                f"{chart.size} faces in pieces of fewer than {PANEL_FACES}), so it follows no fabric"
