@@ -321,7 +321,8 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             if self.btf is not None:
                 from ._btf_jit import DEFAULT_TEXEL_FILTER
 
-                self._upload_btf(get("uv_scale", 1.0), get("texel_filter", DEFAULT_TEXEL_FILTER))
+                self._upload_btf(get("uv_scale", 1.0), get("texel_filter", DEFAULT_TEXEL_FILTER),
+                                 float(get("pixel_angle", 0.0)))
             flags = (
                 mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
                 | mi.BSDFFlags.BackSide | mi.BSDFFlags.Anisotropic
@@ -380,17 +381,20 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
 
                 self.sampler = _sampling_jit.upload(mi, self.sampler_tables)
 
-        def _upload_btf(self, uv_scale: Any, texel_filter: Any) -> None:
+        def _upload_btf(self, uv_scale: Any, texel_filter: Any, pixel_angle: float) -> None:
             """A CD-BTF: its texels on the device (:mod:`cdbrdf.render._btf_jit`); the tile mean samples."""
             from . import _btf_jit
 
             self.uv_scale = _btf_jit.as_pair("uv_scale", uv_scale)
+            if not (math.isfinite(pixel_angle) and pixel_angle >= 0.0):
+                raise OptionError(f"cdbrdf BSDF: pixel_angle must be finite and >= 0 (radians), got {pixel_angle}")
             self.texel_filter = _choice("texel_filter", texel_filter, _btf_jit.TEXEL_FILTERS)
             self._texel_cache: dict[tuple[int, int], tuple[LookupGrid, np.ndarray]] = {}
             if not scalar:
                 full = self.grid if self.settings.mode == "cdbrdf" else prepare(self.btf.grid, self.btf.mean().values)
                 self.texels = _btf_jit.upload(mi, self.btf, full, self.record, uv_scale=self.uv_scale,
-                                              texel_filter=self.texel_filter)
+                                              texel_filter=self.texel_filter, pixel_angle=pixel_angle,
+                                              mm_per_unit=self.units.mm_per_unit)
 
         def traverse(self, callback: Any) -> None:
             callback.put("values", self.values, mi.ParamFlags.Differentiable)
@@ -449,7 +453,7 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             if self.texels is not None:
                 from . import _btf_jit
 
-                f = _btf_jit.lookup(mi, self.texels, si.uv, tv, pv, tl, pl, kappa, valid, si.wavelengths)
+                f = _btf_jit.evaluate(mi, self.texels, si, tv, pv, tl, pl, kappa, valid, self.record)
             else:
                 f = lj.lookup_jit(mi, self.grid, self.packed, tv, pv, tl, pl, kappa, valid, si.wavelengths)
             if self.record == "one":
@@ -502,6 +506,9 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
 
             u, v = float(si.uv.x) * self.uv_scale[0], float(si.uv.y) * self.uv_scale[1]
             q = q[:4] + ((0.0,) if self.settings.mode == "brdf" else q[4:])
+            if self.btf.neural is not None and self.btf.rank == 0:  # the tile mean's spectrum, modulated
+                m = _btf_jit.scalar_modulation_spectrum(self.btf, u, v, q, lam)
+                return np.asarray(evaluate_reference(_lazy(self.grid, self._records, lam), *q), np.float64) * m
             out = np.zeros(lam.size)
             for j, i, w in _btf_jit.scalar_texels(u, v, self.btf.texels, self.btf.repeat_mm, self.texel_filter):
                 if (j, i) not in self._texel_cache:

@@ -125,7 +125,8 @@ VARIANTS: tuple[str, ...] = ("llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", 
 _APPLIED = "scene_scale_applied"
 
 _DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_mode", "curvature_scale", "scale",
-                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter", "unit", _APPLIED})
+                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter", "pixel_angle", "unit",
+                        _APPLIED})
 
 
 def available_variants() -> tuple[str, ...]:
@@ -279,6 +280,7 @@ def make_bsdf(
     uv_scale: float | str | tuple[float, float] | None = None,
     texel_filter: str | None = None,
     unit: str | float | None = None,
+    pixel_angle: float | None = None,
 ) -> Any:
     """A ``cdbrdf`` BSDF instance from a table object (or file name).
 
@@ -301,6 +303,11 @@ def make_bsdf(
         in mm) and ``"stochastic"`` (default: one of the four nearest texels
         with probability its bilinear weight), ``"bilinear"`` (the four
         blended, as :meth:`cdbrdf.CDBTF.evaluate`) or ``"nearest"``.
+    pixel_angle
+        For a neural CD-BTF: the angle one pixel of the camera subtends,
+        radians; the lookup filters the texels over the pixel's footprint at
+        the hit (``docs/btf.md``, "Filtering"). Default 0: the texels
+        themselves (the pixel filter's samples average them).
     unit
         The scene's unit (applied by :func:`load_dict` with the shape's
         ``to_world``; ``docs/rendering.md``, "Curvature units").
@@ -312,14 +319,16 @@ def make_bsdf(
     """
     return _make_bsdf(table, mode=mode, curvature=curvature, curvature_mode=curvature_mode,
                       curvature_scale=curvature_scale, scale=scale, sampling=sampling, cosine_weight=cosine_weight,
-                      storage=storage, uv_scale=uv_scale, texel_filter=texel_filter, unit=unit)
+                      storage=storage, uv_scale=uv_scale, texel_filter=texel_filter, unit=unit,
+                      pixel_angle=pixel_angle)
 
 
 def _make_bsdf(table: Any, *, mode: str = "cdbrdf", curvature: str | float | None = None,
                curvature_mode: str | None = None, curvature_scale: float = 1.0, scale: float | Any = 1.0,
                sampling: str = "table", cosine_weight: float | None = None, storage: str = "auto",
                uv_scale: float | str | tuple[float, float] | None = None, texel_filter: str | None = None,
-               unit: str | float | None = None, scene_scale_applied: bool = False) -> Any:
+               unit: str | float | None = None, scene_scale_applied: bool = False,
+               pixel_angle: float | None = None) -> Any:
     import mitsuba as mi
 
     from ._bsdf import bsdf_class
@@ -349,6 +358,8 @@ def _make_bsdf(table: Any, *, mode: str = "cdbrdf", curvature: str | float | Non
                              else uv_scale if isinstance(uv_scale, str) else ", ".join(map(str, uv_scale)))
     if texel_filter is not None:
         props["texel_filter"] = str(texel_filter)
+    if pixel_angle is not None:
+        props["pixel_angle"] = float(pixel_angle)
     return bsdf_class()(props, table=table)
 
 
