@@ -492,6 +492,9 @@ def render_table(
     with variant_context(variant or DEFAULT_VARIANT):
         for mode in modes:
             bsdf = None if btf is None else _btf_entry(btf, mode, curvature_mode, uv_scale, texel_filter)
+            if bsdf is not None:  # the pixel's angle: the lookup filters the texels over its footprint
+                fov = (sine_scene if is_sheet else mesh_scene).__kwdefaults__["fov_deg"]
+                bsdf["pixel_angle"] = math.radians(fov) / min(w, h)
             if is_sheet:
                 scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, bsdf=bsdf, **common)
             else:
