@@ -387,7 +387,9 @@ def check(net: Neural, *, texels: tuple[int, int], n_channels: int) -> None:
 
 
 def clamp_query(grid: Grid, theta_v: NDArray[np.float64], phi_v: NDArray[np.float64], theta_l: NDArray[np.float64],
-                phi_l: NDArray[np.float64], kappa: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+                phi_l: NDArray[np.float64], kappa: NDArray[np.float64]
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+                           NDArray[np.float64]]:
     """The query as the lookup rule sees it: elevations and kappa clamped to the axes, an isotropic table's
     azimuths rotated to light azimuth 0."""
     tv = np.clip(theta_v, grid.theta_v[0], grid.theta_v[-1])
@@ -404,7 +406,8 @@ def neural_at(net: Neural, grid: Grid, fu: NDArray[np.float64], fv: NDArray[np.f
     """``max(0, M (1 + fade o))`` at positions (fractions of the repeat), footprints, queries (degrees, mm^-1) and
     the tile mean there."""
     z, fade = codes_at(net, fu, fv, footprint_texels)
-    phi = features(*clamp_query(grid, *query), mean_rgb, net.constants)
+    tv, pv, tl, pl, k = clamp_query(grid, *query)
+    phi = features(tv, pv, tl, pl, k, mean_rgb, net.constants)
     with np.errstate(invalid="ignore"):
         return np.maximum(mean_rgb * (1.0 + fade[:, None] * net.modulation(z, phi)), 0.0)
 

@@ -456,6 +456,7 @@ def lookup_neural(mi: Any, up: NeuralUpload, si: Any, theta_v: Any, phi_v: Any, 
     m = [dr.maximum(1.0 + x, 0.0) for x in o]
     if record == "spectral":
         start, step, buf = up.basis
+        assert up.mean_spectral is not None  # uploaded for spectral records
         spec = lj.gather_jit(mi, up.grid, up.mean_spectral, cell, active, wavelengths)
         mod = []
         for k in range(len(wavelengths)):

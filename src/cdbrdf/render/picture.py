@@ -491,10 +491,11 @@ def render_table(
         uv_scale = (sheet.width_mm, sheet.depth_mm) if is_sheet else 1.0
     with variant_context(variant or DEFAULT_VARIANT):
         for mode in modes:
-            bsdf = None if btf is None else _btf_entry(btf, mode, curvature_mode, uv_scale, texel_filter)
-            if bsdf is not None:  # the pixel's angle: the lookup filters the texels over its footprint
-                fov = (sine_scene if is_sheet else mesh_scene).__kwdefaults__["fov_deg"]
-                bsdf["pixel_angle"] = math.radians(fov) / min(w, h)
+            bsdf = None
+            if btf is not None:  # with the pixel's angle: the lookup filters the texels over its footprint
+                fov = ((sine_scene if is_sheet else mesh_scene).__kwdefaults__ or {})["fov_deg"]
+                bsdf = {**_btf_entry(btf, mode, curvature_mode, uv_scale, texel_filter),
+                        "pixel_angle": math.radians(fov) / min(w, h)}
             if is_sheet:
                 scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, bsdf=bsdf, **common)
             else:
