@@ -165,27 +165,28 @@ def _methods(name: str, a: argparse.Namespace) -> dict:
     nk, d = grid.shape[0], y.shape[1]
     raw = 4.0 * y.size
     rows = []
+    which = set(a.only or ("pca", "clustered_pca", "vq", "neural"))
     f = factorise(y, nk, max_error=0.0, max_rank=min(255, t - 1))
     pca_ranks = [r for r in (0, 1, 2, 4, 9, 19, 39, 79, 159, 237) if r <= f.weights.shape[1]]
-    for r in pca_ranks:
+    for r in pca_ranks if "pca" in which else ():
         rec = f.mean + (f.weights[:, :r].astype(np.float64) @ f.basis[:r].astype(np.float64))
         e, w = _errors(y, rec, nk)
         rows.append({"method": "pca", "setting": f"rank {r}", "ratio": round(raw / (4.0 * (d * (r + 1) + t * r)), 1),
                      "error": e, "worst_kappa_error": w})
-    for k, r in ((10, 0), (2, 4), (4, 4)):
-        rec = _local_pca(y.astype(np.float64), k, r)
+    for k, r in ((10, 0), (2, 4)) if "clustered_pca" in which else ():
+        rec = _local_pca(y.astype(np.float64), k, r, iters=6)
         e, w = _errors(y, rec, nk)
         rows.append({"method": "clustered_pca", "setting": f"{k} clusters x rank {r}",
                      "ratio": round(raw / (4.0 * (d * k * (r + 1) + t * r)), 1), "error": e, "worst_kappa_error": w})
     slices = t * nk * grid.shape[3] * grid.shape[4]
-    for k in (256, 4096):
+    for k in (256, 2048) if "vq" in which else ():
         rec = _vq(y, grid, k)
         size = 4.0 * k * grid.shape[1] * grid.shape[2] * 3 + slices * np.ceil(np.log2(k)) / 8
         rows.append({"method": "vq", "setting": f"{k} codewords", "ratio": round(raw / size, 1),
                      **dict(zip(("error", "worst_kappa_error"), _errors(y, rec, nk)))})
     variants = [FitOptions()] + [FitOptions(latent_dims=int(L), hidden=(int(h), int(h)), steps=int(n))
                                  for L, h, n in (v.split(",") for v in a.fit_variants)]
-    for opts in variants:
+    for opts in variants if "neural" in which else ():
         c0 = time.process_time()
         b = CDBTF.from_values(dense, grid, repeat_mm=(1.0, 1.0), method="neural", max_error=0.99, fit=opts)
         c = b.compression
@@ -203,6 +204,7 @@ def main() -> None:
     ap.add_argument("--texels", type=int, default=32)
     ap.add_argument("--cache", default=None, help="folder keeping the tabulated texels")
     ap.add_argument("--methods", action="store_true", help="compare the representations on the paper's grid")
+    ap.add_argument("--only", action="append", default=None, help="with --methods: pca, clustered_pca, vq, neural")
     ap.add_argument("--fit-variants", nargs="*", default=[], metavar="L,H,STEPS",
                     help="more neural fits: code size, hidden width, steps")
     a = ap.parse_args()

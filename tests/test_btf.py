@@ -290,6 +290,10 @@ def test_neural_meets_the_error_target_with_residual_components():
         assert true <= target and np.all(per_k <= target) and btf.rank > 0
         assert c["relative_rms_error"] == pytest.approx(true, rel=1e-3, abs=1e-6)
         assert c["neural_relative_rms_error"] > target
+        # the decoder plus residual components, or the PCA alone where that takes fewer bytes
+        pca = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, method="pca", max_error=target)
+        assert btf.nbytes_ratio() >= pca.nbytes_ratio()
+        assert btf.method == ("pca" if btf.neural is None else "neural")
 
 
 def test_neural_evaluate_decodes_the_nodes_and_is_the_tile_mean_from_far_away(neural):
@@ -351,3 +355,19 @@ def test_pca_weights_are_filtered_by_the_footprint(exact):
     su, sv = REPEAT
     got = btf.texel_weights((0 + 0.5) * su / 4, (1 + 0.5) * sv / 3, 2.0 * su / 8)
     np.testing.assert_allclose(got, w1[1, 0], rtol=1e-5, atol=1e-7)
+
+
+def test_neural_residual_components_meet_the_target_and_their_errors_are_true():
+    """The decoder plus residual components (what from_values keeps where it takes fewer bytes than a PCA)."""
+    from cdbrdf.btf._neural import compress
+
+    vals = _dense(rank=4, noise=0.01)
+    m, net, res, comp = compress(vals, GRID, max_error=0.02, max_rank=64, options=_fit())
+    btf = CDBTF(CDBRDF(m, **GRID.axes()), res.weights.reshape(6, 8, -1),
+                np.moveaxis(res.basis.reshape((-1,) + GRID.shape + (3,)), 0, -2), repeat_mm=REPEAT,
+                compression=comp, neural=net)
+    true, per_k = _true_errors(vals, btf)
+    assert btf.rank > 0 and comp["neural_relative_rms_error"] > 0.02
+    assert true <= 0.02 and np.all(per_k <= 0.02)
+    assert comp["relative_rms_error"] == pytest.approx(true, rel=1e-3, abs=1e-6)
+    np.testing.assert_allclose(comp["relative_rms_error_per_kappa"], per_k, rtol=1e-3, atol=1e-6)

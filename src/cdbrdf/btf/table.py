@@ -22,6 +22,7 @@ measured in mm of the flat repeat.
 from __future__ import annotations
 
 import copy
+import logging
 from collections.abc import Mapping
 from os import PathLike
 from typing import TYPE_CHECKING, Any
@@ -38,6 +39,8 @@ if TYPE_CHECKING:
     from ._neural import FitOptions, Neural
 
 __all__ = ["CDBTF", "COMPRESSION_ATTRS", "DEFAULT_MAX_ERROR", "DEFAULT_METHOD", "MAX_RANK", "METHODS", "load"]
+
+_LOG = logging.getLogger(__name__)
 
 #: Relative RMS error the compression aims at unless told otherwise.
 DEFAULT_MAX_ERROR = 0.03
@@ -155,7 +158,10 @@ class CDBTF:
             ``"neural"`` (per-texel latent codes and a shared decoder
             modulating the tile mean, plus as many residual components as
             ``max_error`` needs; ``docs/btf.md``; what ``cdbrdf synth --btf``
-            makes, :data:`DEFAULT_METHOD`).
+            makes, :data:`DEFAULT_METHOD`). When the decoder misses
+            ``max_error`` and a PCA alone meets it in fewer bytes than the
+            decoder plus residual components, the PCA is returned (its
+            record keeps the decoder's error, ``neural_relative_rms_error``).
         fit
             How the neural part is fitted (``cdbrdf.btf._neural.FitOptions``;
             default: the measured choice).
@@ -196,7 +202,19 @@ class CDBTF:
                       np.moveaxis(residual.basis.reshape((-1,) + grid.shape + (nc,)), 0, -2),
                       repeat_mm=repeat_mm, compression=comp, neural=net)
             out._compression["compression_ratio"] = out.nbytes_ratio()
-            return out
+            if out.rank == 0:
+                return out
+            # the decoder missed the target: a PCA alone may need fewer bytes than the decoder plus components
+            pca = cls.from_values(v, grid, repeat_mm=repeat_mm, max_error=max_error, max_rank=max_rank, attrs=attrs,
+                                  mean_kwargs=mean_kwargs, method="pca")
+            if pca.nbytes_ratio() <= out.nbytes_ratio():
+                return out
+            for key in ("neural_relative_rms_error", "fit_seconds"):
+                pca._compression[key] = comp[key]
+            _LOG.info("the error target %g needs residual components after the decoder (%d, %.1f:1); the PCA "
+                      "alone is smaller (rank %d, %.1f:1) and is kept", max_error, out.rank, out.nbytes_ratio(),
+                      pca.rank, pca.nbytes_ratio())
+            return pca
         f = factorise(dense, grid.shape[0], max_error=float(max_error), max_rank=max_rank)
         mean = CDBRDF(f.mean.reshape(grid.shape + (nc,)).astype(np.float32), **grid.axes(), attrs=attrs,
                       symmetry=grid.symmetry, **extra)
