@@ -338,6 +338,9 @@ def test_gpu_neural_decode_matches_evaluate_at_every_footprint(neural_page, inde
     btf = btfs[index]
     assert page.messages == []
     assert btf.neural is not None and btf.rank == (0 if index == 0 else 2)
+    text = page.evaluate("cdbrdfViewer.state()")["btfText"]
+    assert "n-aniso.h5: CD-BTF, neural (a 12-8 decoder on 3 levels of codes" in text
+    assert "+ 2 of 2 residual components" in text
     rng = np.random.default_rng(11 + index)
     q = random_queries(rng, 400)
     texel = max(REPEAT_MM[0] / btf.texels[0], REPEAT_MM[1] / btf.texels[1])

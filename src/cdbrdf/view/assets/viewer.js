@@ -563,7 +563,7 @@ void main() {
       gl.uniform1f(prog.u.uFadeLevels, b.fadeLevels);
       gl.uniform1f(prog.u.uTexelSize, Math.max(b.repeat[0] / b.texels[0], b.repeat[1] / b.texels[1]));
       const nn = b.neural;
-      gl.uniform1i(prog.u.uNeural, nn && state.components > 0 ? 1 : 0);
+      gl.uniform1i(prog.u.uNeural, nn ? 1 : 0);
       if (nn) {
         gl.uniform1i(prog.u.uLat, nn.unit); gl.uniform1i(prog.u.uDec, nn.unit + 1);
         gl.uniform1i(prog.u.uLatW, nn.latW); gl.uniform1i(prog.u.uLatG, nn.latG);
@@ -732,7 +732,9 @@ void main() {
       if (used < b.rank) why += `; the leading ${used}${state.software ? ' on software rendering' : ''}, the components slider goes up to ${b.rank}`;
       const shown = !state.weave ? 'showing the tile mean' : mesh && !s.uv ? 'this mesh has no UVs: tile mean' :
         `weave at ${state.weaveScale === 1 ? 'true size' : `${state.weaveScale.toFixed(1)}x size`}${uvs}`;
-      return `${t.h.name}: CD-BTF, rank ${used} used of ${b.rankTotal}${why}; ${tex}; ${shown}`;
+      const nn = b.neural ? `neural (a ${b.neural.layers[1]}-${b.neural.layers[2]} decoder on ${b.neural.levels.length} levels of codes, filtered by the pixel's footprint)` +
+        (b.rankTotal ? ` + ${used} of ${b.rankTotal} residual components` : '') : null;
+      return `${t.h.name}: CD-BTF, ${nn || `rank ${used} used of ${b.rankTotal}`}${why}; ${tex}; ${shown}`;
     }).join('\n');
   }
 
