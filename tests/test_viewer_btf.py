@@ -353,3 +353,27 @@ def test_gpu_neural_decode_matches_evaluate_at_every_footprint(neural_page, inde
     far = fp >= 8 * texel  # beyond the pyramid: the tile mean
     assert far.any()
     np.testing.assert_allclose(gpu[far], btf.mean().evaluate(*q[far, 2:].T), rtol=1e-4, atol=1e-5)
+
+
+def test_neural_export_of_32_by_32_texels_on_the_papers_grid_is_small(tmp_path):
+    """The export carries the tile mean, the codes and the decoder: about a CDBRDF's size, not the texels'."""
+    from cdbrdf.btf._neural import N_FEATURES, Neural, level_shapes
+
+    rng = np.random.default_rng(0)
+    mean = materials.load("denim")
+    dims, hidden = 12, (64, 64)
+    lat = tuple(rng.normal(size=sh + (dims,)).astype(np.float16).astype(np.float32) for sh in level_shapes(32, 32))
+    sizes = [dims + N_FEATURES, *hidden, 3]
+    ws = tuple((0.1 * rng.normal(size=(a, b))).astype(np.float32) for a, b in zip(sizes[:-1], sizes[1:]))
+    bs = tuple(np.zeros(b, np.float32) for b in sizes[1:])
+    net = Neural(lat, ws, bs, (0.22, 1e-3, 0.0))
+    btf = cdbrdf.CDBTF(mean, np.zeros((32, 32, 0)), np.zeros(mean.shape[:-1] + (0, 3), np.float32),
+                       repeat_mm=REPEAT_MM, neural=net)
+    a = btf_asset(btf, name="denim-btf.h5")
+    nn = a.header["btf"]["neural"]
+    assert nn["layers"] == [6, 64, 64, 3] and [lv[:2] for lv in nn["levels"]] == [[32, 32], [16, 16], [8, 8],
+                                                                                   [4, 4], [2, 2]]
+    assert len(a.blob) < 4e6  # the mean twice (table and components) in float32, codes and decoder: 2.6 MB
+    index = export_viewer(tmp_path / "v", viewer_files([("denim-btf.h5", btf)], meshes={}))
+    total = sum(p.stat().st_size for p in index.parent.rglob("*") if p.is_file())
+    assert total < 20e6, total
