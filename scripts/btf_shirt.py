@@ -41,7 +41,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "docs" / "img" / "btf-shirt.png"))
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--size", type=int, default=360)
-    ap.add_argument("--patch", type=float, default=4.0, help="half width of the close-up's box, mesh units")
+    ap.add_argument("--patch", type=float, default=1.5, help="half width of the close-up's box, mesh units")
+    ap.add_argument("--up", default="y", help="the mesh's up axis")
     a = ap.parse_args(argv)
 
     import tempfile
@@ -58,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
 
     btf = load(a.file)
     kw = {"units": a.units, "uv_scale": a.uv_scale, "spp": a.spp, "size": (a.size, a.size),
-          "texel_filter": "bilinear", "view": (10.0, -90.0)}
+          "texel_filter": "bilinear", "view": (10.0, -90.0), "up": a.up}
     panels = []
     with variant("llvm_ad_rgb"), tempfile.TemporaryDirectory() as tmp:
         far = render_table(btf, a.mesh, **kw)
