@@ -18,7 +18,8 @@ from pathlib import Path
 
 
 def _patch(mesh_path: str, out: Path, half_width: float) -> Path:
-    """The faces of ``mesh_path`` within ``half_width`` (mesh units) of the front point nearest the centre."""
+    """The faces of ``mesh_path`` within ``half_width`` (mesh units) of the front point nearest the centre (at least
+    the four nearest)."""
     import numpy as np
     import trimesh
 
@@ -26,8 +27,11 @@ def _patch(mesh_path: str, out: Path, half_width: float) -> Path:
     c = m.bounds.mean(axis=0)
     front = m.vertices[:, 2] > c[2]
     centre = m.vertices[front][np.argmin(np.linalg.norm(m.vertices[front][:, :2] - c[:2], axis=1))]
-    keep = np.all(np.abs(m.triangles_center - centre) < half_width, axis=1)
-    sub = m.submesh([np.flatnonzero(keep)], append=True)
+    d = np.linalg.norm(m.triangles_center - centre, axis=1)
+    keep = np.flatnonzero(d < half_width)
+    if keep.size < 4:  # a coarse mesh: the few faces nearest the point
+        keep = np.argsort(d)[:4]
+    sub = m.submesh([keep], append=True)
     sub.export(out)
     return out
 

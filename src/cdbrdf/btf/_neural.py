@@ -169,6 +169,7 @@ class FitOptions(NamedTuple):
     samples_per_batch: int = 512
     learning_rate: float = 4e-3
     coarse_fraction: float = 0.25
+    between: float = 0.5
     seed: int = 0
 
 
@@ -248,6 +249,34 @@ def _step(ws: list[np.ndarray], bs: list[np.ndarray], z: np.ndarray, phi: np.nda
     return loss, gz_pre @ w0[:nl].T, gw, gb
 
 
+def _positions(rng: np.random.Generator, shape: tuple[int, int], n: int,
+               between: float) -> tuple[NDArray[np.int64], NDArray[np.float32]]:
+    """``n`` positions on a level of ``shape (n_v, n_u)``: its four nearest texels and their bilinear weights.
+
+    A fraction ``1 - between`` are texel centres (distinct, one texel with
+    weight 1); the others uniform over the repeat, so that the decoder also
+    learns the codes blended between centres (what a lookup there decodes)
+    against the texels blended the same way.
+    """
+    nv, nu = shape
+    t = nv * nu
+    n_at = n - int(round(between * n))
+    centre = rng.choice(t, size=min(n_at, t), replace=False)
+    idx = np.repeat(centre[:, None], 4, axis=1)
+    w = np.zeros((centre.size, 4), np.float32)
+    w[:, 0] = 1.0
+    k = n - centre.size
+    if k > 0:
+        x, y = rng.uniform(0, nu, k) - 0.5, rng.uniform(0, nv, k) - 0.5
+        i0, j0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
+        tu, tv = (x - i0).astype(np.float32), (y - j0).astype(np.float32)
+        i0, j0 = i0 % nu, j0 % nv
+        i1, j1 = (i0 + 1) % nu, (j0 + 1) % nv
+        idx = np.concatenate([idx, np.stack([j0 * nu + i0, j0 * nu + i1, j1 * nu + i0, j1 * nu + i1], 1)])
+        w = np.concatenate([w, np.stack([(1 - tu) * (1 - tv), tu * (1 - tv), (1 - tu) * tv, tu * tv], 1)])
+    return idx, w
+
+
 def fit(y: NDArray[np.float32], phi: NDArray[np.float32], mean: NDArray[np.float32], kappa_index: NDArray[np.int64],
         constants: tuple[float, float, float], options: FitOptions | None = None) -> Neural:
     """Fit codes and decoder to texels ``y (n_v, n_u, S, C)`` at samples with features ``phi (S, F)``.
@@ -278,13 +307,15 @@ def fit(y: NDArray[np.float32], phi: NDArray[np.float32], mean: NDArray[np.float
     for it in range(steps):
         lev = 0 if nlev == 1 or rng.random() >= options.coarse_fraction else int(rng.integers(1, nlev))
         tgt = targets[lev]
-        ti = rng.choice(tgt.shape[0], size=min(options.texels_per_batch, tgt.shape[0]), replace=False)
         si = rng.choice(s, size=min(options.samples_per_batch, s), replace=False)
+        idx, wts = _positions(rng, shapes[lev], min(options.texels_per_batch, tgt.shape[0]), options.between)
+        z = np.einsum("bk,bkl->bl", wts, codes[lev][idx])
+        y = np.einsum("bk,bksc->bsc", wts, tgt[idx[:, :, None], si[None, None, :]])
         m = mean[si][None]
-        wk = per_sample[si][None, :, None].astype(np.float32) / (ti.size * si.size)
-        loss, gz, gw, gb = _step(ws, bs, codes[lev][ti], phi[si], m, tgt[ti[:, None], si[None, :]], wk)
-        grads = [np.zeros_like(z) for z in codes] + gw + gb
-        np.add.at(grads[lev], ti, gz)
+        wk = per_sample[si][None, :, None].astype(np.float32) / (idx.shape[0] * si.size)
+        loss, gz, gw, gb = _step(ws, bs, z, phi[si], m, y, wk)
+        grads = [np.zeros_like(c) for c in codes] + gw + gb
+        np.add.at(grads[lev], idx.reshape(-1), (wts[:, :, None] * gz[:, None, :]).reshape(-1, gz.shape[1]))
         adam.step(grads, 0.5 * (1.0 + math.cos(math.pi * it / steps)))
         if it % 200 == 0:
             _LOG.debug("neural fit: step %d, batch relative RMS %.4f (%.1f s)", it, math.sqrt(loss / nk),
