@@ -72,8 +72,8 @@ def main(argv: list[str] | None = None) -> int:
                                                                                                 exposure_ev=ev)))
         patch = _patch(a.mesh, Path(tmp) / "patch.obj", a.patch)
         close = render_table(btf, str(patch), **{**kw, "exposure": ev})
-        panels.append((f"close-up: {2 * a.patch:g} {a.units} of the chest", tonemap_srgb8(close.display("cdbrdf"),
-                                                                                           exposure_ev=ev)))
+        panels.append(("close-up: the faces nearest the chest's centre", tonemap_srgb8(close.display("cdbrdf"),
+                                                                                          exposure_ev=ev)))
     fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 5.2))
     nu, nv = btf.texels
     for (title, im), ax in zip(panels, axes):
