@@ -141,7 +141,7 @@ def _vq(y: np.ndarray, grid: Grid, k: int, seed: int = 0) -> np.ndarray:
     x = y.reshape(t, nk, npl * ntl, npv * ntv, 3).transpose(0, 1, 3, 2, 4).reshape(-1, npl * ntl * 3)
     x = x.astype(np.float32)
     rng = np.random.default_rng(seed)
-    sub = x[rng.choice(len(x), size=min(len(x), 40 * k), replace=False)]
+    sub = x[rng.choice(len(x), size=min(len(x), 20 * k), replace=False)]
     code, _ = kmeans2(sub, k, iter=10, minit="++", seed=seed)
     label = np.empty(len(x), np.int64)
     for s in range(0, len(x), 16384):  # nearest codeword of every slice
@@ -149,6 +149,14 @@ def _vq(y: np.ndarray, grid: Grid, k: int, seed: int = 0) -> np.ndarray:
         label[s:s + 16384] = np.argmin(d, axis=1)
     rec = code[label].reshape(t, nk, npv * ntv, npl * ntl, 3).transpose(0, 1, 3, 2, 4)
     return rec.reshape(t, -1)
+
+
+class _Rows(list):
+    """The rows, each printed (one JSON line, flushed) as it is added: a long run shows its progress."""
+
+    def append(self, row: dict) -> None:  # type: ignore[override]
+        print(json.dumps(row), flush=True)
+        super().append(row)
 
 
 def _methods(name: str, a: argparse.Namespace) -> dict:
@@ -164,7 +172,7 @@ def _methods(name: str, a: argparse.Namespace) -> dict:
     y = dense.reshape(t, -1)
     nk, d = grid.shape[0], y.shape[1]
     raw = 4.0 * y.size
-    rows = []
+    rows = _Rows()
     which = set(a.only or ("pca", "clustered_pca", "vq", "neural"))
     f = factorise(y, nk, max_error=0.0, max_rank=min(255, t - 1))
     pca_ranks = [r for r in (0, 1, 2, 4, 9, 19, 39, 79, 159, 237) if r <= f.weights.shape[1]]
@@ -179,7 +187,7 @@ def _methods(name: str, a: argparse.Namespace) -> dict:
         rows.append({"method": "clustered_pca", "setting": f"{k} clusters x rank {r}",
                      "ratio": round(raw / (4.0 * (d * k * (r + 1) + t * r)), 1), "error": e, "worst_kappa_error": w})
     slices = t * nk * grid.shape[3] * grid.shape[4]
-    for k in (256, 2048) if "vq" in which else ():
+    for k in (256, 1024) if "vq" in which else ():
         rec = _vq(y, grid, k)
         size = 4.0 * k * grid.shape[1] * grid.shape[2] * 3 + slices * np.ceil(np.log2(k)) / 8
         rows.append({"method": "vq", "setting": f"{k} codewords", "ratio": round(raw / size, 1),
