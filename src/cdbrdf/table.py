@@ -665,7 +665,12 @@ def _same_optional(a: NDArray | None, b: NDArray | None) -> bool:
 
 
 def load(path: str | PathLike[str]) -> CDBRDF:
-    """Read a CDBRDF file written by :meth:`CDBRDF.save` (any 1.x version).
+    """Read a CDBRDF file written by :meth:`CDBRDF.save` (any 1.x version), or the table of a glTF export.
+
+    A ``.glb``/``.gltf`` asset written by ``cdbrdf export`` gives back its
+    table from the ``CDBRDF_materials_curvature_brdf`` extension
+    (:func:`cdbrdf.gltf_table.read_gltf`: within the 16-bit quantisation, the
+    pole rings as their mean).
 
     The file is read and checked by
     :func:`cdbrdf.io.read` (files without HDF5 metadata checksums in a child
@@ -693,7 +698,9 @@ def load(path: str | PathLike[str]) -> CDBRDF:
     LimitError
         When the file declares more samples than the ``table_samples`` limit.
     """
-    parts = _io.read(path)
+    from .gltf_table import is_gltf, read_gltf
+
+    parts = read_gltf(path) if is_gltf(path) else _io.read(path)
     try:
         return CDBRDF(parts.values, **parts.table_kwargs())
     except TableError as exc:
