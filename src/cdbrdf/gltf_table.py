@@ -391,6 +391,10 @@ def gltf_document(path: str | PathLike[str]) -> tuple[Any, Any]:
     data = read_regular(p, max_bytes=MAX_GLTF_BYTES)
     if len(data) > MAX_GLTF_BYTES:
         raise FormatError(f"{p}: larger than {MAX_GLTF_BYTES:,} bytes")
+    if data[:4] == _GLB_MAGIC and (len(data) < 12 or int.from_bytes(data[8:12], "little") != len(data)):
+        declared = int.from_bytes(data[8:12], "little") if len(data) >= 12 else 0
+        raise FormatError(f"{p}: not a readable glTF file (the GLB header declares {declared:,} bytes, the file has "
+                          f"{len(data):,}: truncated or damaged)")
     try:
         with warnings.catch_warnings():  # dataclasses_json warns of the fields glTF leaves out (an image's uri)
             warnings.simplefilter("ignore")

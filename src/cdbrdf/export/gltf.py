@@ -87,7 +87,9 @@ class ExportedMesh:
     name
         The surface's name.
     info
-        What was done (units, up axis, neighbourhood, notes), for the report and the asset's ``extras``.
+        What was done (units, up axis, neighbourhood), for the asset's ``extras``.
+    metadata
+        The prepared mesh's metadata (repairs, notes, units and neighbourhood notes, frame), for the report.
     """
 
     positions: NDArray[np.float64]
@@ -99,6 +101,7 @@ class ExportedMesh:
     direction: NDArray[np.float64]
     name: str
     info: Mapping[str, Any] = field(default_factory=dict)
+    metadata: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def n_vertices(self) -> int:
@@ -190,7 +193,7 @@ def export_mesh(
         world, axis, why = z_up_mesh(mesh, up)
         info = {"units": mesh.metadata.get("units"), "up": axis, "up_reason": why,
                 "neighbourhood_mm": mesh.metadata.get("neighbourhood_mm"), "frame": mesh.metadata.get("frame"),
-                "repairs": list(mesh.metadata.get("repairs", [])), "notes": list(mesh.metadata.get("notes", []))}
+                "repairs": list(mesh.metadata.get("repairs", []))}
         if "outside_share" in mesh.metadata:
             info["outside_share"] = float(mesh.metadata["outside_share"])
     mm = float(parse_units(world.metadata.get("units", "mm")).mm_per_unit)
@@ -218,7 +221,7 @@ def export_mesh(
     attrs = {k: np.asarray(a, dtype=np.float64)[src] for k, a in world.attributes.items()}
     return ExportedMesh(positions=np.asarray(world.vertices, dtype=np.float64)[src] * mm, normals=n_src,
                         tangents=tang, uv=uv, faces=np.asarray(faces, dtype=np.int64), attributes=attrs,
-                        direction=_unit_rows(direction), name=name, info=info)
+                        direction=_unit_rows(direction), name=name, info=info, metadata=dict(world.metadata))
 
 
 @dataclass(frozen=True)
@@ -405,7 +408,7 @@ def build_gltf(table: Any, mesh: ExportedMesh, *, curvature_mode: str = "max",
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [{"mesh": 0, "name": mesh.name,
-                   "extras": {"cdbrdf": {k: v for k, v in mesh.info.items() if k != "notes"}}}],
+                   "extras": {"cdbrdf": dict(mesh.info)}}],
         "meshes": [{"name": mesh.name, "primitives": [{"attributes": attrs, "indices": indices, "material": 0,
                                                        "mode": 4}]}],
         "materials": [material],
