@@ -121,7 +121,7 @@ function applyState() {
     u.uShadowOn.value = 0;
   }
   $('modeSel').value = state.mode; $('expo').value = state.exposure; $('env').checked = state.env;
-  $('lightT').value = state.light[0]; $('lightP').value = state.light[1];
+  $('lightT').value = state.light[0]; $('lightP').value = ((state.light[1] % 360) + 360) % 360;
 }
 
 function draw() {
@@ -201,7 +201,11 @@ function pixels() {
   return { width: w, height: h, data: base64(out) };
 }
 
-const redraw = (f) => (...args) => { f(...args); applyState(); draw(); return Promise.resolve(api.state()); };
+const redraw = (f) => (...args) => {
+  try { f(...args); } catch (e) { return Promise.reject(e); }
+  applyState(); draw();
+  return Promise.resolve(api.state());
+};
 Object.assign(api, {
   setMode: redraw((m) => {
     if (!['cdbrdf', 'brdf', 'fallback', 'curvature'].includes(m)) throw new Error(`mode: ${m} is not one of cdbrdf, brdf, fallback, curvature`);
@@ -215,6 +219,18 @@ Object.assign(api, {
   setCamera: redraw((c) => setCameraFrom(c)),
   pixels: () => pixels(),
   evaluateMany: (queries) => Promise.resolve(evaluateMany(renderer, meshes[0].userData.cdbrdf.table, queries)),
+  // the lookup of another asset's table (a GLB in base64), read by the same plugin, on this page's renderer
+  evaluateAsset: async (glbBase64, queries) => {
+    const loader = new GLTFLoader();
+    loader.register((parser) => new CdbrdfCurvatureBrdfExtension(parser, { lighting, apply: false }));
+    const g = await loader.parseAsync(decode(glbBase64), '');
+    let table = null;
+    g.scene.traverse((o) => { if (!table && o.isMesh && o.userData.cdbrdf) table = o.userData.cdbrdf.table; });
+    if (!table) throw new Error(`the asset has no material with the ${EXTENSION} extension`);
+    const out = evaluateMany(renderer, table, queries);
+    table.uTab.value.dispose(); table.uAxes.value.dispose();
+    return out;
+  },
   // mean milliseconds of n frames, each finished (a 1-pixel read-back waits for it)
   frameTime: (n) => {
     const gl = renderer.getContext(), px = new Uint8Array(4);
