@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import cdbrdf
-from cdbrdf.mesh import Swatch, max_curvature, swatch_curvature, swatch_mesh
+from cdbrdf.mesh import SurfaceMaps, Swatch, max_curvature, swatch_curvature, swatch_mesh
 
 from .render_helpers import needs_llvm
 
@@ -137,8 +137,8 @@ def test_swatch_renders_with_the_curvature_of_its_folds():
             assert np.sum(np.isclose(seen, sign / r, rtol=0.02)) >= 3, (r, sign)
     assert np.all(np.abs(seen) <= 1 / 5.0 + 1e-3)
     assert np.mean(seen == 0.0) > 0.2  # the flat cloth between the folds
-    with pytest.raises(ValueError, match="normal_map: only for meshes"):
-        render_table(table, "swatch", size=(8, 8), spp=1, normal_map="x.png")
+    with pytest.raises(ValueError, match="maps: only for meshes"):
+        render_table(table, "swatch", size=(8, 8), spp=1, maps=SurfaceMaps(normal_map="x.png"))
 
 
 @needs_llvm

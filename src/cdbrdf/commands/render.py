@@ -52,6 +52,7 @@ from pathlib import Path
 
 from ..errors import OptionError
 from ..limits import MAX_SPP
+from ._maps import MAP_OPTIONS
 from ._text import say
 
 __all__ = ["register", "run"]
@@ -81,6 +82,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         seed,
         size_wxh,
     )
+    from ._maps import add_map_options
     from .curvature import mesh_options
 
     p = sub.add_parser(
@@ -153,9 +155,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="the curvature looked up: max (the paper's: principal curvature of larger "
                        "magnitude) or directional (normal curvature along the material's x axis) "
                        "(default: max)")
-    table.add_argument("--normal-map", metavar="FILE", type=existing_file(".png", ".tif", ".tiff", ".exr"),
-                       default=None, help="a tangent-space normal map of --mesh (OpenGL convention, green up): its "
-                       "curvature is added to the mesh's, baked per vertex (default: the OBJ's MTL 'norm' map)")
     table.add_argument("--up", choices=UP_AXES, default=None,
                        help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
     table.add_argument("--amplitude", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
@@ -190,12 +189,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "in its file; the sheet and the swatch: mm, centred on the origin; a negative first "
                        "number as --look-at=-5,0,2), or " + "; ".join(f"{k}: {v}" for k, v in LOOK_AT_ANCHORS.items())
                        + " (default: the framed object's centre)")
+    add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\")"))
     btf = p.add_argument_group("a CD-BTF file (docs/btf.md)")
-    btf.add_argument("--uv-scale", type=float_list(0, 1e9, lo_open=True, min_len=1, max_len=2, example="10,6",
-                                                   unit="mm per UV unit"),
-                     default=None, metavar="SU[,SV]",
-                     help="the fabric's mm per unit of the mesh's UVs (default: the sheet's size on the sine "
-                     "sheet, 1 (UVs in mm) on a mesh)")
     btf.add_argument("--texel-filter", choices=TEXEL_FILTERS, default=None,
                      help=f"between texels: {', '.join(TEXEL_FILTERS)} (default {DEFAULT_TEXEL_FILTER})")
     p.set_defaults(func=run)
@@ -203,8 +198,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 #: Options of the table form (default None: not given), each refused with a scene file.
 _TABLE_ONLY = ("scene", "mesh", "brdf", "compare", "size", "lighting", "light", "irradiance", "no_light", "envmap",
-               "neighbourhood", "frame", "curvature", "normal_map", "up", "amplitude", "wavelength", "sheet_size",
-               "max_depth", "view", "zoom", "fov", "look_at", "delta_e", "fold_radii", "uv_scale", "texel_filter")
+               "neighbourhood", "frame", "curvature", "up", "amplitude", "wavelength", "sheet_size",
+               "max_depth", "view", "zoom", "fov", "look_at", "delta_e", "fold_radii", "texel_filter", *MAP_OPTIONS)
 
 #: Options of one built-in surface, refused with another.
 _SURFACE_ONLY = {"amplitude": "sine", "wavelength": "sine", "sheet_size": "sine", "fold_radii": "swatch"}
@@ -231,6 +226,7 @@ def _run_table(args: argparse.Namespace) -> int:
     from ..render.lighting import DEFAULT_IRRADIANCE
     from ..render.output import IMAGE_FORMATS, write_render
     from ..render.picture import DEFAULT_SIZE, DEFAULT_SPP
+    from ._maps import surface_maps
     from ._progress import ProgressBars
     from .curvature import LARGE_MESH_FACES, print_mesh_report
 
@@ -242,12 +238,16 @@ def _run_table(args: argparse.Namespace) -> int:
             raise OptionError(f"--{opt.replace('_', '-')}: only for --scene {scene}")
     if args.delta_e is not None and not args.compare:
         raise OptionError("--delta-e: only with --compare (the metric of its heat map)")
-    if args.uv_scale is not None or args.texel_filter is not None:
-        from ..btf import is_btf
+    from ..btf import is_btf
 
-        if not is_btf(args.file):
-            opt = "--uv-scale" if args.uv_scale is not None else "--texel-filter"
-            raise OptionError(f"{opt}: only for a CD-BTF file ({args.file} has no texels)")
+    if args.texel_filter is not None and not is_btf(args.file):
+        raise OptionError(f"--texel-filter: only for a CD-BTF file ({args.file} has no texels)")
+    if args.uv_scale is not None and args.mesh is None and not is_btf(args.file):
+        raise OptionError(f"--uv-scale: for the maps of --mesh MESH or a CD-BTF file ({args.file} has no texels)")
+    given = [k for k in MAP_OPTIONS[1:] if getattr(args, k) is not None]
+    if given and args.mesh is None:
+        raise OptionError(f"--{given[0].replace('_', '-')}: only for --mesh MESH (a built-in scene's folds are its "
+                          "geometry)")
     out = Path(args.output)
     ext = out.suffix.lower()
     if args.compare:
@@ -285,9 +285,8 @@ def _run_table(args: argparse.Namespace) -> int:
             light=None if args.no_light else (args.light if args.light is not None else "auto"),
             irradiance=args.irradiance or DEFAULT_IRRADIANCE, envmap=args.envmap, camera=camera,
             units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame, up=args.up or "auto",
-            normal_map=args.normal_map,
+            maps=surface_maps(args),
             curvature_mode=args.curvature or "max", exposure=args.exposure or "card", variant=args.variant,
-            uv_scale=None if args.uv_scale is None else tuple(args.uv_scale) * (3 - len(args.uv_scale)),
             texel_filter=args.texel_filter, progress=progress)
     if pic.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), pic.mesh)

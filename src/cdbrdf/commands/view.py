@@ -29,7 +29,8 @@ def _grid(text: str) -> tuple[float, float, int | None]:
 def register(sub: argparse._SubParsersAction) -> None:
     from ..mesh import MESH_FORMATS, UP_AXES
     from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
-    from ._args import existing_file, float_list, int_range, keyword, mesh_file, output_folder
+    from ._args import existing_file, int_range, keyword, mesh_file, output_folder
+    from ._maps import add_uv_scale
     from .curvature import mesh_options
 
     p = sub.add_parser(
@@ -66,11 +67,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rank", type=int_range(0, 100000), metavar="N",
                    help="for a CD-BTF: use at most its N leading components (default: all that fit the GPU's "
                    "guaranteed texture size; fewer draw faster)")
-    p.add_argument("--uv-scale", type=float_list(0, 1e9, lo_open=True, min_len=1, max_len=2, example="10,6",
-                                                 unit="mm per UV unit"),
-                   default=None, metavar="SU[,SV]",
-                   help="for a CD-BTF on --mesh: the fabric's mm per unit of the mesh's UVs (default 1: UVs in "
-                   "mm, as cdbrdf render --uv-scale); a mesh without UVs shows the tile mean")
+    add_uv_scale(p, help="for a CD-BTF on --mesh: the fabric's mm per unit of the mesh's UVs (default 1: UVs in "
+                 "mm); a mesh without UVs shows the tile mean")
     p.add_argument("--precision", type=keyword(("auto", "float32", "float16")), default="auto",
                    help="texture precision: auto (float16 only for very large tables), float32 or float16")
     p.set_defaults(func=run)
@@ -90,20 +88,28 @@ def _browser_available() -> bool:
 
 def _user_mesh(args: argparse.Namespace, table: object) -> Mesh:
     """``--mesh`` prepared as ``cdbrdf render`` prepares it, in the viewer's z-up frame; reported."""
-    from ..mesh import prepare_mesh, read_mesh, z_up_mesh
+    from ..mesh import SurfaceMaps, prepare_mesh, read_mesh, z_up_mesh
+    from ._maps import uv_scale_pair
     from ._progress import ProgressBars
     from .curvature import LARGE_MESH_FACES, print_mesh_report
 
     source = read_mesh(args.mesh)
     big = source.faces.shape[0] >= LARGE_MESH_FACES
     with ProgressBars(quiet=args.quiet or not big, unit="vtx") as bars:
+        # the viewer reads the curvature per vertex: the file's maps are baked at the vertices there
+        maps = SurfaceMaps(bake="vertex", uv_scale=uv_scale_pair(args))
         mesh = prepare_mesh(source, units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame,
-                            table=table, progress=bars.callback("curvature"))
+                            table=table, maps=maps if _names_a_map(source) else None,
+                            progress=bars.callback("curvature"))
     world, up, why = z_up_mesh(mesh, args.up)
     if not args.quiet:
         print_mesh_report(str(args.mesh), mesh)
         say(f"{args.mesh}: up axis: {up} ({why})", err=True)
     return world
+
+
+def _names_a_map(mesh: Mesh) -> bool:
+    return any(mesh.metadata.get(k) is not None for k in ("normal_map", "height_map"))
 
 
 def _btf(args: argparse.Namespace, path: str) -> Any:
@@ -165,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
     from ..table import load
     from ..view.asset import resample
     from ..view.export import MAX_TABLES, drape_entry, export_viewer, viewer_files
+    from ._maps import uv_scale_pair
 
     if any(is_gltf(f) for f in args.files):
         name, files = _gltf_files(args)
@@ -196,7 +203,7 @@ def run(args: argparse.Namespace) -> int:
     if args.mesh:
         first = tables[0][1]
         user = _user_mesh(args, first.mean() if isinstance(first, CDBTF) else first)
-        scale = (1.0, 1.0) if args.uv_scale is None else tuple(args.uv_scale) * (3 - len(args.uv_scale))
+        scale = uv_scale_pair(args) or (1.0, 1.0)
         meshes["user"] = (Path(args.mesh).name, user, scale)
         if any(isinstance(t, CDBTF) for _, t in tables) and not has_own_uv(user) and not args.quiet:
             say(f"{Path(args.mesh).name}: no UVs: the viewer shows the CD-BTF's tile mean on it", err=True)

@@ -19,11 +19,17 @@ renderer and the viewer, which use it:
 - the analytic surfaces with their sizes (:mod:`~cdbrdf.mesh.surfaces`): the
   paper's sine sheet, a swatch laid in folds of known radii, a draped cloth,
   a skirt; garments as their makers export them (:mod:`~cdbrdf.mesh.garments`: sewn panels, a scanned bust);
-- the curvature a normal map draws (:mod:`~cdbrdf.mesh.normalmap`).
+- the detail maps laid by a mesh's UVs (:mod:`~cdbrdf.mesh.maps`:
+  :class:`SurfaceMaps`, the UV scale): normal maps read as data
+  (:mod:`~cdbrdf.mesh.normalmap`), height maps and high-resolution meshes
+  baked (:mod:`~cdbrdf.mesh.bake`) into prefiltered curvature maps
+  (:mod:`~cdbrdf.mesh.curvature_map`) that the renderer looks up per
+  shading point.
 """
 
 from __future__ import annotations
 
+from .bake import HeightMap, bake_height_map, bake_mesh, bake_normal_map, height_map_from_values, read_height_map
 from .core import Mesh
 from .curvature import (
     ATTRIBUTES,
@@ -37,11 +43,13 @@ from .curvature import (
     principal_curvatures,
     surface_curvature,
 )
+from .curvature_map import SHAPE_ATTRIBUTES, CurvatureMap
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, PrincipalCurvatures
 from .frames import FRAMES
 from .garments import Garment, bust_mesh, garment_mesh
 from .io import CURVATURE_PLY_PROPERTY, MESH_FORMATS, read_mesh, read_obj, read_ply, write_ply
-from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, read_normal_map
+from .maps import BAKES, SurfaceMaps, UVScale, apply_maps, as_uv_scale, detect_uv_scale
+from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, normal_map_from_normals, read_normal_map
 from .prepare import UP_AXES, check_up, detect_up, has_own_uv, prepare_mesh, to_z_up, z_up_mesh
 from .references import Reference, check_references, referenced_files
 from .repair import WELD_TOLERANCE, RepairedMesh, repair, weld
@@ -122,4 +130,19 @@ __all__ = [
     "NORMAL_MAP_CONVENTIONS",
     "NormalMap",
     "read_normal_map",
+    "normal_map_from_normals",
+    "HeightMap",
+    "read_height_map",
+    "height_map_from_values",
+    "CurvatureMap",
+    "SHAPE_ATTRIBUTES",
+    "bake_normal_map",
+    "bake_height_map",
+    "bake_mesh",
+    "BAKES",
+    "SurfaceMaps",
+    "UVScale",
+    "detect_uv_scale",
+    "as_uv_scale",
+    "apply_maps",
 ]

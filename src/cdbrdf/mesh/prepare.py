@@ -33,9 +33,10 @@ from numpy.typing import NDArray
 from ..errors import MeshError, OptionError
 from .core import Mesh
 from .curvature import check_neighbourhood, neighbourhood_from_table, outside_by_location, surface_curvature
+from .curvature_map import SHAPE_ATTRIBUTES, mesh_shape_operator
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM
 from .io import read_mesh
-from .normalmap import NormalMap, add_normal_map, read_normal_map
+from .maps import SurfaceMaps, apply_maps
 from .units import check_kappa_range, check_size, parse_units
 
 __all__ = ["UP_AXES", "prepare_mesh", "has_own_uv", "detect_up", "to_z_up", "z_up_mesh", "check_up"]
@@ -86,8 +87,7 @@ def prepare_mesh(
     table: Any = None,
     kappa_range: tuple[float, float] | None = None,
     recompute: bool = False,
-    normal_map: str | PathLike[str] | NormalMap | None = None,
-    normal_map_convention: str = "opengl",
+    maps: SurfaceMaps | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Mesh:
     """Read a user mesh for rendering: repair it, give it a frame and its curvatures in mm^-1.
@@ -117,14 +117,13 @@ def prepare_mesh(
         Without a table: the kappa range to check the curvature against.
     recompute
         Compute the curvature even when the file has it.
-    normal_map
-        A tangent-space normal map (a file, or a
-        :class:`~cdbrdf.mesh.normalmap.NormalMap`) whose curvature is added
-        to the mesh's, baked per vertex (:mod:`cdbrdf.mesh.normalmap`); the
-        mesh needs its UVs. Default: the map the file names (an OBJ's
-        ``norm`` in its MTL), if any.
-    normal_map_convention
-        ``"opengl"`` (green up; Blender, glTF) or ``"directx"``.
+    maps
+        The maps laid on it by its UVs and their UV scale
+        (:class:`~cdbrdf.mesh.SurfaceMaps`, :func:`cdbrdf.mesh.apply_maps`):
+        baked per texel into ``metadata["curvature_map"]`` for the renderer,
+        or per vertex into the curvature. Default: the maps the file names
+        (an OBJ's MTL ``norm``/``bump``/``disp``, a glTF's ``normalTexture``),
+        baked per texel. A map needs the mesh's own UVs.
     progress
         ``progress(done, total)`` while fitting, in vertices.
 
@@ -133,7 +132,10 @@ def prepare_mesh(
     Mesh
         The renderable mesh: repaired faces, normals, UVs carrying the frame,
         attributes ``"curvature"`` (maximum) and ``"curvature_dir"``
-        (directional) in mm^-1; its metadata says what was done
+        (directional) in mm^-1 and its shape operator
+        (:data:`~cdbrdf.mesh.curvature_map.SHAPE_ATTRIBUTES`, mm^-1, frame
+        x = dP/du, y = n x x); with maps ``"uv_scale"``, ``"uv_scale_rule"``
+        and ``"curvature_map"`` (:func:`cdbrdf.mesh.apply_maps`); its metadata says what was done
         (``"repairs"``, ``"notes"``, ``"units"``, ``"neighbourhood_mm"``,
         ``"frame"``, ``"location"`` (:data:`cdbrdf.mesh.curvature.LOCATIONS`
         index per vertex), and with a table ``"outside_share"`` and
@@ -180,6 +182,7 @@ def prepare_mesh(
         nb, nb_note = DEFAULT_NEIGHBOURHOOD_MM, "the default"
     reuse = (not recompute and "curvature" in mesh.attributes and "curvature_dir" in mesh.attributes
              and meta.get("curvature_units") == "1/mm" and recorded_units is not None
+             and all(k in mesh.attributes for k in SHAPE_ATTRIBUTES)
              and mesh.uv is not None
              and (units is None or parse_units(recorded_units) == u)
              and (neighbourhood_mm is None or _same_number(meta.get("neighbourhood_mm"), nb))
@@ -197,20 +200,12 @@ def prepare_mesh(
                               units=u, neighbourhood_mm=nb, frame=frame or "auto", name=name, progress=progress)
         repairs = list(s.repairs)
         notes.extend(s.notes)
-        attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in ("curvature", "curvature_dir")}
+        own = ("curvature", "curvature_dir", *SHAPE_ATTRIBUTES)
+        attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in own}
         attrs["curvature"] = s.kappa
         attrs["curvature_dir"] = s.directional
-        nmap = normal_map if normal_map is not None else meta.get("normal_map")
-        if nmap is not None:
-            if s.uv is None or s.frame != "uv":
-                raise MeshError(f"{name}: a normal map needs the mesh's own UV coordinates (frame 'uv')")
-            nm = nmap if isinstance(nmap, NormalMap) else read_normal_map(nmap, convention=normal_map_convention)
-            arr, nm_notes = add_normal_map(nm, positions=mesh.vertices[s.source], faces=s.faces, uv=s.uv,
-                                           normals=s.normals, tangent=s.tangent, k1=s.k1, k2=s.k2, d1=s.d1,
-                                           d2=s.d2, mm_per_unit=u.mm_per_unit, neighbourhood_mm=nb)
-            attrs["curvature"] = arr["kappa"]
-            attrs["curvature_dir"] = arr["directional"]
-            notes.extend(nm_notes)
+        attrs.update(zip(SHAPE_ATTRIBUTES, mesh_shape_operator(s.k1, s.k2, s.d1, s.d2, s.tangent, s.normals),
+                         strict=True))
         out = Mesh(mesh.vertices[s.source], s.faces, s.normals, s.uv, attrs,
                    None if mesh.tangents is None else mesh.tangents[s.source], dict(meta))
         out.metadata.update({"curvature_units": "1/mm", "neighbourhood_mm": nb, "frame": s.frame,
@@ -222,6 +217,9 @@ def prepare_mesh(
     if table is not None:
         kappa = np.asarray(table.kappa, dtype=np.float64)
         kappa_range = (float(kappa.min()), float(kappa.max()))
+    out.metadata["notes"] = notes
+    out = apply_maps(out, maps, name=name, kappa_range=kappa_range)
+    notes = list(out.metadata["notes"])
     if kappa_range is not None:
         areas = _vertex_areas(out.vertices, out.faces)
         diag = float(np.linalg.norm(out.vertices.max(0) - out.vertices.min(0)))

@@ -42,7 +42,7 @@ from ..interp import LookupGrid, apply_pole_rule
 from . import _lookup_jit as lj
 
 __all__ = ["DEFAULT_TEXEL_FILTER", "TEXEL_FILTERS", "TexelUpload", "as_pair", "lookup", "scalar_texels",
-           "texel_choice", "upload", "upload_nbytes"]
+           "scalar_value", "scalar_spectrum", "texel_choice", "upload", "upload_nbytes"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -191,6 +191,44 @@ def scalar_texels(u_mm: float, v_mm: float, texels: tuple[int, int], repeat_mm: 
     i1, j1 = (i0 + 1) % nu, (j0 + 1) % nv
     out = [(j0, i0, (1 - tu) * (1 - tv)), (j0, i1, tu * (1 - tv)), (j1, i0, (1 - tu) * tv), (j1, i1, tu * tv)]
     return [(j, i, float(w)) for j, i, w in out if w > 0.0]
+
+
+def scalar_value(bsdf: Any, si: Any, q: tuple[float, ...]) -> np.ndarray:
+    """The CD-BTF at one query (scalar variants): :meth:`cdbrdf.CDBTF.evaluate` at the UV in mm."""
+    import math
+
+    u, v = float(si.uv.x) * bsdf.uv_scale[0], float(si.uv.y) * bsdf.uv_scale[1]
+    if bsdf.texel_filter == "nearest":  # the centre of the texel
+        (nu, nv), (su, sv) = bsdf.btf.texels, bsdf.btf.repeat_mm
+        u = (math.floor(u / su * nu) + 0.5) * su / nu
+        v = (math.floor(v / sv * nv) + 0.5) * sv / nv
+    kappa = 0.0 if bsdf.settings.mode == "brdf" else q[4]
+    return np.asarray(bsdf.btf.evaluate(u, v, *q[:4], kappa)).reshape(-1)
+
+
+def scalar_spectrum(bsdf: Any, si: Any, q: tuple[float, ...], lam: np.ndarray) -> np.ndarray:
+    """The CD-BTF's spectrum at one query (scalar spectral variants): the texels' spectra blended.
+
+    Each texel's samples are upsampled (:func:`cdbrdf.render._lookup_jit.records`) and their
+    spectra interpolated, as the vectorised lookup does; ``stochastic`` is the exact bilinear blend.
+    The texels read are kept on ``bsdf`` (decoded once).
+    """
+    from ..interp import evaluate_reference, prepare
+    from ._spectral import lazy_table
+
+    u, v = float(si.uv.x) * bsdf.uv_scale[0], float(si.uv.y) * bsdf.uv_scale[1]
+    q = q[:4] + ((0.0,) if bsdf.settings.mode == "brdf" else q[4:])
+    out = np.zeros(lam.size)
+    cache = bsdf._texel_cache
+    for j, i, w in scalar_texels(u, v, bsdf.btf.texels, bsdf.btf.repeat_mm, bsdf.texel_filter):
+        if (j, i) not in cache:
+            if not cache:  # decode once, keep the texels read
+                bsdf._dense = bsdf.btf.decode()
+            g = prepare(bsdf.btf.grid, bsdf._dense[j, i])
+            cache[(j, i)] = (g, lj.records(g.values, "spectral"))
+        g, rec = cache[(j, i)]
+        out += w * np.asarray(evaluate_reference(lazy_table(g, rec, lam), *q), dtype=np.float64)
+    return out
 
 
 def as_pair(name: str, value: Any) -> tuple[float, float]:

@@ -329,12 +329,11 @@ def render_table(
     neighbourhood_mm: float | None = None,
     frame: str | None = None,
     up: str = "auto",
-    normal_map: str | PathLike[str] | None = None,
+    maps: Any = None,
     curvature_mode: str = "max",
     exposure: float | str = "card",
     variant: str | None = None,
     curvature: bool = False,
-    uv_scale: float | tuple[float, float] | None = None,
     texel_filter: str | None = None,
     progress: Callable[[str, int, int], None] | None = None,
 ) -> Picture:
@@ -391,10 +390,15 @@ def render_table(
         For a mesh: its length unit, the curvature's neighbourhood (mm), the
         source of the material's x axis, its up axis
         (:func:`cdbrdf.mesh.prepare_mesh`, :func:`cdbrdf.mesh.detect_up`).
-    normal_map
-        A tangent-space normal map of the mesh, whose curvature is added to
-        the mesh's (:mod:`cdbrdf.mesh.normalmap`); default: the one the mesh
-        file names, if any.
+    maps
+        A :class:`cdbrdf.mesh.SurfaceMaps`: the maps laid on the mesh by its
+        UVs (a normal or height map, a high-resolution mesh baked onto it;
+        default: the ones the mesh file names), looked up per shading point,
+        their curvature added to the mesh's and their normals tilting the
+        shading; and the UV scale (mm per UV unit) of the maps and a CD-BTF
+        (default: the sheet's size on the sine sheet, the swatch's (its
+        profile's length and its depth) on the swatch; detected on a mesh,
+        :func:`cdbrdf.mesh.detect_uv_scale`).
     curvature_mode
         ``"max"`` (the paper's) or ``"directional"``.
     exposure
@@ -407,10 +411,6 @@ def render_table(
     curvature
         Also record the curvature seen at each pixel (:attr:`Picture.curvature`,
         for :func:`cdbrdf.render.contrast.crest_contrast`).
-    uv_scale
-        For a CD-BTF: mm per UV unit of the mesh (one number or ``(u, v)``);
-        default: the sheet's size for the sine sheet, the swatch's (its
-        profile's length and its depth) for the swatch, 1 (UVs in mm) for a mesh.
     texel_filter
         For a CD-BTF: the plug-in's ``texel_filter`` (default: the plug-in's default).
     progress
@@ -432,7 +432,7 @@ def render_table(
         environment map.
     """
     from ..limits import check as check_limit
-    from ..mesh import ATTRIBUTES, Mesh, SineSheet, Swatch, detect_up, has_own_uv, prepare_mesh, read_mesh
+    from ..mesh import ATTRIBUTES, Mesh, SineSheet, SurfaceMaps, Swatch, detect_up, has_own_uv, prepare_mesh, read_mesh
     from ..table import CDBRDF
     from ..table import load as load_table
     from .camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW, DEFAULT_SWATCH_VIEW
@@ -453,6 +453,8 @@ def render_table(
                               f"got {exposure!r:.40}")
     w, h = (int(x) for x in size)
     check_limit("render_pixels", w * h, what=f"a {w} x {h} render")
+    if maps is not None and not isinstance(maps, SurfaceMaps):
+        raise OptionError(f"maps: expected a cdbrdf.mesh.SurfaceMaps, got {type(maps).__name__}")
     btf = _as_btf(table)
     tbl = btf.mean() if btf is not None else table if isinstance(table, CDBRDF) else load_table(table)
     camera = Camera() if camera is None else camera
@@ -471,8 +473,8 @@ def render_table(
         sheet = surface if isinstance(surface, SineSheet) else SineSheet()
         if envmap is not None:
             raise OptionError("envmap: only for meshes (the sine sheet is the paper's set-up)")
-        if normal_map is not None:
-            raise OptionError("normal_map: only for meshes (the sine sheet's folds are its geometry)")
+        if maps is not None and any(x is not None for x in (maps.normal_map, maps.height_map, maps.hires_mesh)):
+            raise OptionError("maps: only for meshes (the sine sheet's folds are its geometry)")
         if lighting == "studio":
             raise OptionError("lighting 'studio': only for meshes (the sine sheet is the paper's set-up)")
         if sun is None:
@@ -482,8 +484,8 @@ def render_table(
         name = "sine sheet"
     elif is_swatch:
         swatch = surface if isinstance(surface, Swatch) else Swatch()
-        if normal_map is not None:
-            raise OptionError("normal_map: only for meshes (the swatch's folds are its geometry)")
+        if maps is not None and any(x is not None for x in (maps.normal_map, maps.height_map, maps.hires_mesh)):
+            raise OptionError("maps: only for meshes (the swatch's folds are its geometry)")
         if sun is None and envmap is None and lighting == "paper":
             raise OptionError("light: the scene needs a light; give an environment map or use the studio lighting")
         check_limit("mesh_faces", swatch.face_count, what=f"a swatch of {len(swatch.radii_mm)} folds over "
@@ -498,7 +500,7 @@ def render_table(
             source, name = read_mesh(surface), str(surface)
         cb = None if progress is None else (lambda done, total: progress("curvature", done, total))
         mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=tbl,
-                            normal_map=normal_map, progress=cb)
+                            maps=maps, progress=cb)
         up_axis, why = (up, "given") if up != "auto" else detect_up(mesh)
         if btf is not None and not has_own_uv(mesh):  # the per-face UVs prepare_mesh makes follow no fabric
             mesh = mesh.copy()  # the note is this picture's, not the caller's mesh's
@@ -507,12 +509,13 @@ def render_table(
             btf = None
     images: dict[str, NDArray[np.float32]] = {}
     kappa_image = None
-    if btf is not None and uv_scale is None:  # a built-in surface's UVs span it; a mesh's UVs are in mm
-        uv_scale = ((sheet.width_mm, sheet.depth_mm) if is_sheet else (swatch.length_mm, swatch.depth_mm)
-                    if is_swatch else 1.0)
+    span = (sheet.width_mm, sheet.depth_mm) if is_sheet else (swatch.length_mm, swatch.depth_mm) if is_swatch \
+        else None  # a built-in surface's UVs span it
+    uv_scale = _btf_uv_scale(btf, maps, span, mesh)
     with variant_context(variant or DEFAULT_VARIANT):
         for mode in modes:
-            bsdf = None if btf is None else _btf_entry(btf, mode, curvature_mode, uv_scale, texel_filter)
+            bsdf = None if btf is None or uv_scale is None else _btf_entry(btf, mode, curvature_mode, uv_scale,
+                                                                           texel_filter)
             if is_sheet:
                 scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, bsdf=bsdf, **common)
             elif is_swatch:
@@ -555,13 +558,30 @@ def _as_btf(table: Any) -> Any:
     return None
 
 
-def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: Any, texel_filter: str | None) -> dict[str, Any]:
-    """The plug-in's dict for a CD-BTF at ``uv_scale`` mm per UV unit."""
+def _btf_uv_scale(btf: Any, maps: Any, span: tuple[float, float] | None, mesh: Any) -> tuple[float, float] | None:
+    """The UV scale of a CD-BTF: given, a built-in surface's ``span``, or the mesh's (its maps', else detected)."""
+    from ..mesh import as_uv_scale, detect_uv_scale
+
+    if btf is None:
+        return None
+    if maps is not None and maps.uv_scale is not None:
+        return as_uv_scale(maps.uv_scale)
+    if span is not None:
+        return float(span[0]), float(span[1])
+    if mesh.metadata.get("uv_scale") is not None:
+        return as_uv_scale(mesh.metadata["uv_scale"])
+    uvs = detect_uv_scale(mesh.vertices, mesh.faces, mesh.uv, units=mesh.metadata.get("units", "mm"))
+    mesh.metadata["notes"] = [*mesh.metadata.get("notes", []), f"UV scale: {uvs}"]
+    return uvs.pair
+
+
+def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: tuple[float, float],
+               texel_filter: str | None) -> dict[str, Any]:
+    """The plug-in's dict for a CD-BTF at ``uv_scale`` mm per UV unit (two numbers, as they are)."""
     from ..mesh import ATTRIBUTES
 
-    su, sv = (uv_scale, uv_scale) if isinstance(uv_scale, (int, float)) else uv_scale
     entry = {"type": "cdbrdf", "table": btf, "mode": mode, "curvature": ATTRIBUTES[curvature_mode],
-             "uv_scale": f"{float(su)!r}, {float(sv)!r}"}
+             "uv_scale": (float(uv_scale[0]), float(uv_scale[1]))}
     if texel_filter is not None:
         entry["texel_filter"] = texel_filter
     return entry

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import MeshError, OptionError
 from ..mesh import Mesh, SineSheet, Swatch, check_up, prepare_mesh, sine_sheet_mesh, swatch_mesh, to_z_up, z_up_mesh
+from ..mesh.curvature_map import SHAPE_ATTRIBUTES, SHAPE_MESH_ATTRIBUTE
 from .camera import (
     DEFAULT_MESH_FOV_DEG,
     DEFAULT_MESH_VIEW,
@@ -77,6 +78,17 @@ def _bsdf_entry(table: Any, mode: str, scale: float, curvature_mode: str = "max"
     return {"type": "cdbrdf", "table": table, "mode": mode, "curvature": ATTRIBUTES[curvature_mode], "scale": scale}
 
 
+def _map_entry(mesh: Mesh) -> dict[str, Any]:
+    """The plug-in's parameters of a prepared mesh's curvature map and UV scale (none without them)."""
+    out: dict[str, Any] = {}
+    if mesh.metadata.get("uv_scale") is not None:
+        out["uv_scale"] = tuple(float(x) for x in mesh.metadata["uv_scale"])
+    if mesh.metadata.get("curvature_map") is not None:
+        out["curvature_map"] = mesh.metadata["curvature_map"]
+        out["neighbourhood"] = float(mesh.metadata.get("neighbourhood_mm", 5.0))
+    return out
+
+
 def _build(mesh: Mesh, table: Any, *, mode: str, scale: float, size: tuple[int, int], spp: int,
            lights: list[dict], envmap: Any, hide_env: bool, max_depth: int, camera: Camera, bsdf: Any = None,
            curvature_mode: str = "max", fill: float = FRAME_FILL,
@@ -87,6 +99,8 @@ def _build(mesh: Mesh, table: Any, *, mode: str, scale: float, size: tuple[int, 
 
     if bsdf is None:
         bsdf = _bsdf_entry(table, mode, scale, curvature_mode)
+    if isinstance(bsdf, dict) and bsdf.get("type") == "cdbrdf":
+        bsdf = {**_map_entry(mesh), **bsdf}
     if not lights and envmap is None:
         raise OptionError("the scene needs a light: give a directional light or an environment map")
     kappa = mesh.attributes.get(MESH_ATTRIBUTES.get(curvature_mode, ""))
@@ -119,7 +133,8 @@ def mitsuba_mesh(mesh: Mesh, *, bsdf: Any = None, name: str = "object") -> Any:
     Positions, faces, UVs and normals (computed by Mitsuba, smooth, where the
     mesh has none), and every per-vertex attribute ``NAME`` as the
     one-channel mesh attribute ``vertex_NAME`` (the curvatures: what the
-    ``cdbrdf`` BSDF reads, :data:`cdbrdf.mesh.ATTRIBUTES`). Nothing is
+    ``cdbrdf`` BSDF reads, :data:`cdbrdf.mesh.ATTRIBUTES`), but the shape
+    operator's three as the three-channel ``vertex_shape``. Nothing is
     written to a file.
 
     Parameters
@@ -153,9 +168,16 @@ def mitsuba_mesh(mesh: Mesh, *, bsdf: Any = None, name: str = "object") -> Any:
     params.update()
     if mesh.normals is None:
         out.recompute_vertex_normals()
+    shape = all(k in mesh.attributes for k in SHAPE_ATTRIBUTES)
     for key, values in mesh.attributes.items():
+        if shape and key in SHAPE_ATTRIBUTES:
+            continue
         data: Any = np.ascontiguousarray(values, dtype=np.float32)
         out.add_attribute(f"vertex_{key}", 1, data)
+    if shape:  # the shape operator as one three-channel attribute, as Mitsuba's PLY loader makes it
+        three: Any = np.ascontiguousarray(np.stack([mesh.attributes[k] for k in SHAPE_ATTRIBUTES], axis=1),
+                                          dtype=np.float32).ravel()
+        out.add_attribute(SHAPE_MESH_ATTRIBUTE, 3, three)
     if bsdf is not None:
         out.set_bsdf(bsdf)
     return out
