@@ -219,7 +219,7 @@ def encode_table(table: Any, *, max_width: int = MAX_TEXTURE_WIDTH) -> LookupTex
         },
         "attrs": attrs,
     }
-    return LookupTexture(png=png, measured_png=measured_png, spec=spec)
+    return LookupTexture(png=bytes(png), measured_png=bytes(measured_png), spec=spec)
 
 
 # -- reading back ---------------------------------------------------------------------------------
@@ -326,7 +326,8 @@ def decode_table(spec: Mapping[str, Any], png: bytes, measured_png: bytes | None
     _need(shape[0] == g_shape[0] and shape[1] == g_shape[1] and shape[3] == g_shape[3], name,
           f"the lookup's shape {list(shape)} does not match the axes {list(g_shape)}")
     values = _lookup_to_table(v, tl_lookup, tv_lookup, axes["theta_l"], axes["theta_v"], name)
-    _need(values.shape[:5] == g_shape, name, f"the lookup's shape {list(shape)} does not match the axes {list(g_shape)}")
+    _need(values.shape[:5] == g_shape, name,
+          f"the lookup's shape {list(shape)} does not match the axes {list(g_shape)}")
     measured = None
     if measured_png is not None:
         try:
@@ -476,7 +477,8 @@ def read_gltf(path: str | PathLike[str]) -> TableParts:
         tex = lk.get("texture") if isinstance(lk, Mapping) else None
         ti = tex.get("index") if isinstance(tex, Mapping) else None
         textures = doc.textures or []
-        _need(isinstance(ti, int) and 0 <= ti < len(textures), str(p), "the lookup texture does not exist")
+        if not (isinstance(ti, int) and 0 <= ti < len(textures)):
+            raise FormatError(f"{p}: the lookup texture does not exist")
         png = _image_bytes(doc, buffer_bytes, textures[ti].source, str(p), "the lookup texture")
         mi = ext.get("measuredImage")
         measured = None if mi is None else _image_bytes(doc, buffer_bytes, mi, str(p), "the measured mask")

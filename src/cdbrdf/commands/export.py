@@ -23,6 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     from ..mesh import CURVATURE_MODES, MESH_FORMATS, UP_AXES
     from ..render.scenes import SCENES
     from ._args import existing_file, mesh_file, output_file
+    from ._maps import add_map_options
     from .curvature import mesh_options
 
     p = sub.add_parser(
@@ -48,9 +49,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     mesh_options(p)
     p.add_argument("--up", choices=UP_AXES, default=None,
                    help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
-    p.add_argument("--normal-map", metavar="FILE", type=existing_file(".png", ".tif", ".tiff", ".exr"), default=None,
-                   help="a tangent-space normal map of --mesh (OpenGL convention): its curvature is added to the "
-                   "mesh's, baked per vertex")
+    add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\"): their "
+                                         "curvature is added to the mesh's at its vertices"))
     p.add_argument("--curvature", choices=CURVATURE_MODES, default="max",
                    help="the curvature in _CURVATURE: max (the paper's: principal curvature of larger magnitude) "
                    "or directional (normal curvature along the material's x axis; its direction as "
@@ -63,12 +63,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..export.gltf import build_gltf, export_mesh, write_gltf
     from ..table import load
+    from ._maps import MAP_OPTIONS, surface_maps
     from .curvature import print_mesh_report
 
     if args.scene is None and args.mesh is None:
         raise OptionError("give --scene sine, --scene swatch or --mesh MESH: the surface the table is put on")
     if args.scene is not None:
-        given = [o for o in ("units", "neighbourhood", "frame", "up", "normal_map") if getattr(args, o) is not None]
+        given = [o for o in ("units", "neighbourhood", "frame", "up", *MAP_OPTIONS) if getattr(args, o) is not None]
         if given:
             raise OptionError(f"--{given[0].replace('_', '-')}: only with --mesh (the {args.scene} scene is in mm, "
                               "z up, with its analytic curvature)")
@@ -76,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
         raise OptionError("--materialx: must differ from -o")
     table = load(args.file)
     mesh = export_mesh(args.scene or args.mesh, table=table, units=args.units, up=args.up or "auto",
-                       neighbourhood_mm=args.neighbourhood, frame=args.frame, normal_map=args.normal_map)
+                       neighbourhood_mm=args.neighbourhood, frame=args.frame, maps=surface_maps(args))
     asset = build_gltf(table, mesh, curvature_mode=args.curvature)
     if args.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), mesh)

@@ -170,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
     from ..mesh import has_own_uv
     from ..table import load
     from ..view.asset import resample
-    from ..view.export import MAX_TABLES, drape_entry, export_viewer, viewer_files
+    from ..view.export import MAX_TABLES, drape_entry, viewer_files
     from ._maps import uv_scale_pair
 
     if any(is_gltf(f) for f in args.files):

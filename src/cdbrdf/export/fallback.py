@@ -278,9 +278,9 @@ def _box_lsq(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float
             cands.append(x)
     best = np.zeros_like(r)
     best_cost = np.full(r.shape[1], np.inf)
-    for x in cands:
-        ok = np.all((x >= -1e-12) & (x <= 1 + 1e-12), axis=0)
-        x = np.clip(x, 0.0, 1.0)
+    for cand in cands:
+        ok = np.all((cand >= -1e-12) & (cand <= 1 + 1e-12), axis=0)
+        x = np.clip(cand, 0.0, 1.0)
         cost = np.einsum("ic,ij,jc->c", x, g, x) - 2.0 * np.einsum("ic,ic->c", x, r)
         better = ok & (cost < best_cost)
         best[:, better] = x[:, better]

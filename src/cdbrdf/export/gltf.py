@@ -27,6 +27,7 @@ The asset is written atomically (:func:`cdbrdf.fsutil.atomic_path`).
 from __future__ import annotations
 
 import base64
+import dataclasses
 import json
 import logging
 import warnings
@@ -142,9 +143,14 @@ def export_mesh(
     up: str = "auto",
     neighbourhood_mm: float | None = None,
     frame: str | None = None,
-    normal_map: str | PathLike[str] | None = None,
+    maps: Any = None,
 ) -> ExportedMesh:
     """A surface made ready for the asset (see the module's description).
+
+    The maps laid on the mesh (:class:`cdbrdf.mesh.SurfaceMaps`: given, or
+    those the file names) add their curvature at the vertices (``bake =
+    "vertex"``, as the viewer does): the asset's ``_CURVATURE`` holds it, at
+    the mesh's resolution.
 
     Parameters
     ----------
@@ -155,8 +161,10 @@ def export_mesh(
     table
         The table: its kappa range checks the curvature, its provenance gives
         the default neighbourhood (:func:`cdbrdf.mesh.prepare_mesh`).
-    units, up, neighbourhood_mm, frame, normal_map
+    units, up, neighbourhood_mm, frame
         For a mesh, as :func:`cdbrdf.render.render_table` takes them.
+    maps
+        A :class:`cdbrdf.mesh.SurfaceMaps` of the mesh (baked per vertex).
 
     Returns
     -------
@@ -170,14 +178,14 @@ def export_mesh(
     MeshError
         For a mesh that cannot be used.
     """
-    from ..mesh import has_own_uv, prepare_mesh, read_mesh, z_up_mesh
+    from ..mesh import SurfaceMaps, has_own_uv, prepare_mesh, read_mesh, z_up_mesh
     from ..mesh.frames import face_uv_tangents, vertex_tangents
     from ..mesh.units import parse_units
 
     built = _builtin(surface)
     if built is not None:
         given = [n for n, v in (("units", units), ("neighbourhood", neighbourhood_mm), ("frame", frame),
-                                ("normal map", normal_map)) if v is not None] + (["up"] if up != "auto" else [])
+                                ("maps", maps)) if v is not None] + (["up"] if up != "auto" else [])
         if given:
             raise OptionError(f"{given[0]}: only for a mesh (the {built.metadata.get('source', surface)} "
                               "is in mm, z up, with its analytic curvature)")
@@ -188,8 +196,12 @@ def export_mesh(
             source, name = read_mesh(surface), Path(surface).name
         else:
             source, name = surface, str(surface.metadata.get("source", "mesh"))
+        if maps is None and any(source.metadata.get(k) is not None for k in ("normal_map", "height_map")):
+            maps = SurfaceMaps()  # the maps the file names
+        if maps is not None and maps.bake != "vertex":  # the asset's curvature is per vertex
+            maps = dataclasses.replace(maps, bake="vertex")
         mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=table,
-                            normal_map=normal_map)
+                            maps=maps)
         world, axis, why = z_up_mesh(mesh, up)
         info = {"units": mesh.metadata.get("units"), "up": axis, "up_reason": why,
                 "neighbourhood_mm": mesh.metadata.get("neighbourhood_mm"), "frame": mesh.metadata.get("frame"),
@@ -302,9 +314,9 @@ class _Buffer:
             ctype, arr = (_UINT16, a.astype("<u2")) if a.max(initial=0) < 65535 else (_UINT32, a.astype("<u4"))
         else:
             ctype, arr = _FLOAT, np.ascontiguousarray(a, dtype="<f4")
-        acc: dict[str, Any] = {"bufferView": self.view(arr.tobytes(), _ELEMENT_ARRAY_BUFFER if index else _ARRAY_BUFFER),
-                               "componentType": ctype, "count": int(arr.shape[0] if arr.ndim > 1 else arr.size),
-                               "type": kind}
+        view = self.view(arr.tobytes(), _ELEMENT_ARRAY_BUFFER if index else _ARRAY_BUFFER)
+        count = int(arr.shape[0] if arr.ndim > 1 else arr.size)
+        acc: dict[str, Any] = {"bufferView": view, "componentType": ctype, "count": count, "type": kind}
         if bounds:
             flat = arr.reshape(acc["count"], -1).astype(np.float64)
             acc["min"] = [float(x) for x in flat.min(axis=0)]
@@ -467,7 +479,7 @@ def export_gltf(
     up: str = "auto",
     neighbourhood_mm: float | None = None,
     frame: str | None = None,
-    normal_map: str | PathLike[str] | None = None,
+    maps: Any = None,
     curvature_mode: str = "max",
 ) -> GltfAsset:
     """Export a table on a surface as a glTF asset (:func:`export_mesh`, :func:`build_gltf`, :func:`write_gltf`).
@@ -480,7 +492,7 @@ def export_gltf(
         As :func:`export_mesh` takes it.
     path
         ``OUT.glb`` or ``OUT.gltf``.
-    units, up, neighbourhood_mm, frame, normal_map
+    units, up, neighbourhood_mm, frame, maps
         For a mesh (:func:`export_mesh`).
     curvature_mode
         ``"max"`` or ``"directional"``.
@@ -496,7 +508,7 @@ def export_gltf(
         raise OptionError(f"{path}: the output must end in {' or '.join(GLTF_SUFFIXES)}")
     tbl = table if isinstance(table, CDBRDF) else load(table)
     mesh = export_mesh(surface, table=tbl, units=units, up=up, neighbourhood_mm=neighbourhood_mm, frame=frame,
-                       normal_map=normal_map)
+                       maps=maps)
     asset = build_gltf(tbl, mesh, curvature_mode=curvature_mode)
     write_gltf(asset, path)
     return asset
