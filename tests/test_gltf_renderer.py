@@ -22,6 +22,7 @@ from cdbrdf.view.export import write_viewer
 from cdbrdf.view.gltf_page import bundle_missing, gltf_viewer_files, view_options
 from cdbrdf.view.server import ViewerServer
 
+from .test_export import FIXED_FALLBACK
 from .test_viewer import needs_chromium
 
 needs_renderer = pytest.mark.skipif(bool(bundle_missing()) and not os.environ.get("CI"),
@@ -58,9 +59,9 @@ def pixels(page, api="cdbrdfGltf"):
     return np.frombuffer(base64.b64decode(p["data"]), np.uint8).reshape(p["height"], p["width"], 4)[::-1, :, :3]
 
 
-def mitsuba_view(denim, width, height):
-    """Mitsuba's render of the shirt (cdbrdf's plug-in, one directional light, direct light only) and its camera
-    in glTF's frame (metres, +Y up), read from the scene's sensor."""
+def mitsuba_view(denim, width, height, mesh=None, view=(15.0, -70.0)):
+    """Mitsuba's render of a mesh (default: the CAD shirt, prepared; cdbrdf's plug-in, one directional light,
+    direct light only) and its camera in glTF's frame (metres, +Y up), read from the scene's sensor."""
     import mitsuba as mi
 
     from cdbrdf.mesh import prepare_mesh
@@ -72,10 +73,10 @@ def mitsuba_view(denim, width, height):
     from .lookup_cases import need_mitsuba
 
     need_mitsuba()
-    prepared = prepare_mesh(garment_mesh(), table=denim)
+    prepared = prepare_mesh(garment_mesh(), table=denim) if mesh is None else mesh
     with variant("llvm_ad_rgb"):
         scene = mesh_scene(denim, prepared, lighting="paper", light=LIGHT, size=(width, height), spp=32,
-                           max_depth=2, camera=Camera(view=(15.0, -70.0)), up="auto")
+                           max_depth=2, camera=Camera(view=view), up="auto" if mesh is None else "z")
         sensor = scene.sensors()[0]
         m = np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4)
         x_fov = float(np.ravel(mi.traverse(sensor)["x_fov"])[0])
@@ -95,15 +96,26 @@ def mitsuba_view(denim, width, height):
 @needs_renderer
 def test_page_and_mitsuba_agree_on_the_cad_shirt(browser, shirt, tmp_path):
     """The same mesh, camera and light: the page's pixels and Mitsuba's agree within median Delta E*ab 2."""
-    from scipy.ndimage import binary_erosion
-
-    from cdbrdf.colour import card_exposure_ev, delta_e, srgb_encode, srgb_to_lab
+    from cdbrdf.colour import card_exposure_ev, delta_e, srgb_to_lab
     from cdbrdf.render.lighting import card_irradiance
 
     denim, _, _, glb = shirt
     w, h = SIZE
     image, camera = mitsuba_view(denim, w, h)
     ev = card_exposure_ev(card_irradiance(LIGHT, None))
+    ours, flat, theirs, seen = _compare(browser, glb, image, camera, ev, tmp_path)
+    de = delta_e(srgb_to_lab(ours), srgb_to_lab(theirs), metric="ab")[seen]
+    assert np.median(de) <= 2.0, np.percentile(de, [50, 90, 99])
+    assert np.percentile(de, 90) <= 5.0, np.percentile(de, [50, 90, 99])
+
+
+def _compare(browser, glb, image, camera, ev, tmp_path):
+    """The page's CDBRDF and plain BRDF pictures, Mitsuba's as shown, and the pixels inside the silhouette."""
+    from scipy.ndimage import binary_erosion
+
+    from cdbrdf.colour import srgb_encode
+
+    h, w = image.shape[:2]
     opts = {"camera": camera, "light": list(LIGHT), "exposure_ev": ev, "width": w, "height": h, "environment": False}
     index = write_viewer(tmp_path / "v", gltf_viewer_files(glb, name="shirt.glb", options=opts))
     page, messages = open_page(browser, index.resolve().as_uri())
@@ -116,12 +128,29 @@ def test_page_and_mitsuba_agree_on_the_cad_shirt(browser, shirt, tmp_path):
     theirs = np.round(255 * srgb_encode(np.clip(image[..., :3] * 2.0**ev, 0, 1))).astype(np.uint8)
     seen = binary_erosion(image[..., 3] > 0.999, iterations=1)  # inside the silhouette (no edge antialiasing)
     assert seen.sum() > 0.1 * w * h
+    return ours, flat, theirs, seen
+
+
+@needs_chromium
+@needs_renderer
+def test_page_and_mitsuba_agree_on_the_swatch_where_curvature_matters(browser, tmp_path):
+    """Shot fabric on folds of radius 20, 10, 5 and 3 mm: where the curvature changes the colour, the page's
+    CDBRDF follows Mitsuba's."""
+    from cdbrdf.colour import card_exposure_ev, delta_e, srgb_to_lab
+    from cdbrdf.mesh import swatch_mesh
+    from cdbrdf.render.lighting import card_irradiance
+
+    shot = materials.load("shot")
+    glb = build_gltf(shot, export_mesh("swatch"), fallback=FIXED_FALLBACK).glb()
+    image, camera = mitsuba_view(shot, *SIZE, mesh=swatch_mesh(), view=(45.0, -75.0))
+    ev = card_exposure_ev(card_irradiance(LIGHT, None))
+    ours, flat, theirs, seen = _compare(browser, glb, image, camera, ev, tmp_path)
     de = delta_e(srgb_to_lab(ours), srgb_to_lab(theirs), metric="ab")[seen]
-    assert np.median(de) <= 2.0, np.percentile(de, [50, 90, 99])
-    assert np.percentile(de, 90) <= 5.0, np.percentile(de, [50, 90, 99])
-    # the curvature matters: the plain BRDF differs from Mitsuba's CDBRDF more than the page's CDBRDF does
     de_flat = delta_e(srgb_to_lab(flat), srgb_to_lab(theirs), metric="ab")[seen]
-    assert np.mean(de_flat) > np.mean(de), (np.mean(de_flat), np.mean(de))
+    assert np.median(de) <= 2.0, np.percentile(de, [50, 90, 99])
+    bent = de_flat > 3.0  # where the plain BRDF misses Mitsuba's CDBRDF by more than 3
+    assert bent.sum() > 200, bent.sum()
+    assert np.median(de[bent]) <= 2.0, (np.percentile(de[bent], [50, 90]), np.percentile(de_flat[bent], [50, 90]))
 
 
 @needs_chromium
