@@ -41,10 +41,11 @@ def validator(path: Path) -> dict:
 
 
 def assets(denim, out: Path) -> None:
+    from tests.shared_data import shared_data
+
     import cdbrdf
     from cdbrdf.export.gltf import build_gltf, export_mesh, write_gltf
     from cdbrdf.mesh import garment_mesh
-    from tests.shared_data import shared_data
 
     print("| garment | vertices | triangles | GLB | validator errors/warnings | read back: median relative error |")
     print("|---|---|---|---|---|---|")
@@ -74,6 +75,8 @@ def assets(denim, out: Path) -> None:
 def comparison(denim, size: tuple[int, int], figure: Path | None) -> None:
     from playwright.sync_api import sync_playwright
     from scipy.ndimage import binary_erosion
+    from tests.test_gltf_renderer import LIGHT, mitsuba_view
+    from tests.test_viewer import CHROMIUM, CHROMIUM_ARGS
 
     from cdbrdf.colour import card_exposure_ev, delta_e, srgb_encode, srgb_to_lab
     from cdbrdf.export.gltf import build_gltf, export_mesh
@@ -81,8 +84,6 @@ def comparison(denim, size: tuple[int, int], figure: Path | None) -> None:
     from cdbrdf.render.lighting import card_irradiance
     from cdbrdf.view.export import write_viewer
     from cdbrdf.view.gltf_page import gltf_viewer_files, view_options
-    from tests.test_gltf_renderer import LIGHT, mitsuba_view
-    from tests.test_viewer import CHROMIUM, CHROMIUM_ARGS
 
     w, h = size
     glb = build_gltf(denim, export_mesh(garment_mesh(), table=denim)).glb()
@@ -120,7 +121,8 @@ def comparison(denim, size: tuple[int, int], figure: Path | None) -> None:
         b.close()
     theirs = np.round(255 * srgb_encode(np.clip(image[..., :3] * 2.0**ev, 0, 1))).astype(np.uint8)
     seen = binary_erosion(image[..., 3] > 0.999, iterations=1)
-    for label, pic in (("CDBRDF (the extension)", ours), ("plain BRDF (kappa 0)", flat), ("fallback material", fallback)):
+    for label, pic in (("CDBRDF (the extension)", ours), ("plain BRDF (kappa 0)", flat),
+                       ("fallback material", fallback)):
         de = delta_e(srgb_to_lab(pic), srgb_to_lab(theirs), metric="ab")[seen]
         print(f"{label} vs Mitsuba's CDBRDF, {w} x {h}, {seen.sum()} pixels: Delta E*ab median {np.median(de):.2f}, "
               f"p90 {np.percentile(de, 90):.2f}, p99 {np.percentile(de, 99):.2f}")

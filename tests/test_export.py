@@ -170,6 +170,14 @@ def test_the_asset_and_its_extension_follow_the_schema(shirt):
     doc, _ = read_glb(shirt[0])
     ext = doc["materials"][0]["extensions"][EXTENSION]
     jsonschema.validate(ext, schema)
+    from cdbrdf.mesh import SurfaceMaps, normal_map_from_normals
+
+    from .maps_helpers import quad, sine_normals
+
+    maps = SurfaceMaps(normal_map=normal_map_from_normals(sine_normals(32)))
+    wrinkled = build_gltf(materials.load("denim"), export_mesh(quad(), units="mm", maps=maps),
+                          fallback=FIXED_FALLBACK).document
+    jsonschema.validate(wrinkled["materials"][0]["extensions"][EXTENSION], schema)  # with its curvature map
     broken = {k: v for k, v in ext.items() if k != "lookup"}
     with pytest.raises(jsonschema.ValidationError, match="'lookup' is a required property"):
         jsonschema.validate(broken, schema)
@@ -270,7 +278,15 @@ def test_every_asset_passes_the_khronos_validator(shirt, denim, tmp_path):
     tee = tmp_path / "tee.glb"
     write_gltf(build_gltf(denim, export_mesh(shared_file("garments/pattern_generator_tee_sim/tee_sim.obj"),
                                              table=denim), fallback=FIXED_FALLBACK), tee)
-    reports = validate(shirt[0], sine, swatch, tee)
+    from cdbrdf.mesh import SurfaceMaps, normal_map_from_normals
+
+    from .maps_helpers import quad, sine_normals
+
+    wrinkled = tmp_path / "quad.glb"  # a normal map baked per texel: the curvature map's textures
+    maps = SurfaceMaps(normal_map=normal_map_from_normals(sine_normals(64)))
+    write_gltf(build_gltf(denim, export_mesh(quad(), table=denim, units="mm", maps=maps), fallback=FIXED_FALLBACK),
+               wrinkled)
+    reports = validate(shirt[0], sine, swatch, tee, wrinkled)
     for r in reports:
         assert r["issues"]["numErrors"] == 0, errors(r)
     info = reports[2]["info"]

@@ -244,3 +244,43 @@ def test_cli_view_of_an_asset(shirt, tmp_path, capsys):
     assert main(["view", str(plain), "--export", str(tmp_path / "o")]) == 2
     assert "no material with the CDBRDF_materials_curvature_brdf extension" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+@needs_chromium
+@needs_renderer
+def test_curvature_map_in_the_asset_and_the_page(browser, tmp_path):
+    """A normal map's wrinkles (10 mm period, +-0.158 / mm) on a flat quad, baked per texel as the renderer bakes
+    them: carried as the asset's curvature map, they tilt the normals and bend the lookup as in Mitsuba."""
+    from cdbrdf.colour import card_exposure_ev, delta_e, srgb_to_lab
+    from cdbrdf.mesh import SurfaceMaps, normal_map_from_normals, prepare_mesh
+    from cdbrdf.render.lighting import card_irradiance
+
+    from .gltf_helpers import accessor, read_glb
+    from .maps_helpers import PEAK, quad, sine_normals
+
+    shot = materials.load("shot")
+    maps = SurfaceMaps(normal_map=normal_map_from_normals(sine_normals(256)))
+    mesh = export_mesh(quad(), table=shot, units="mm", maps=maps)
+    assert mesh.curvature_map is not None and mesh.uv_scale == (100.0, 100.0)
+    asset = build_gltf(shot, mesh, fallback=FIXED_FALLBACK)
+    (tmp_path / "q.glb").write_bytes(asset.glb())
+    doc, blob = read_glb(tmp_path / "q.glb")
+    curv = doc["materials"][0]["extensions"]["CDBRDF_materials_curvature_brdf"]["curvature"]
+    m = curv["map"]
+    assert curv["shapeAttribute"] == "_CURVATURE_SHAPE" and m["uvScale"] == [100.0, 100.0]
+    assert m["levels"][0] == [0, 256, 256] and m["levels"][-1][1:] == [1, 1]
+    assert m["encoding"]["error"]["maxAbsoluteOverRange"] <= 0.5 / 65535 * (1 + 1e-9)
+    # dp/du per UV unit at 100 mm per UV unit: the wrinkles' curvature A k^2 at the crests
+    assert m["encoding"]["offset"][2] / 100.0 == pytest.approx(-PEAK, rel=0.02)
+    shape = accessor(doc, blob, doc["meshes"][0]["primitives"][0]["attributes"]["_CURVATURE_SHAPE"])
+    np.testing.assert_allclose(shape, 0.0, atol=1e-6)  # the quad itself is flat
+    prepared = prepare_mesh(quad(), table=shot, units="mm", maps=maps)
+    image, camera = mitsuba_view(shot, *SIZE, mesh=prepared, view=(50.0, -80.0))
+    ev = card_exposure_ev(card_irradiance(LIGHT, None))
+    ours, _, theirs, seen = _compare(browser, asset.glb(), image, camera, ev, tmp_path / "a")
+    flat = build_gltf(shot, export_mesh(quad(), table=shot, units="mm"), fallback=FIXED_FALLBACK).glb()
+    nomap, _, _, _ = _compare(browser, flat, image, camera, ev, tmp_path / "b")
+    de = delta_e(srgb_to_lab(ours), srgb_to_lab(theirs), metric="ab")[seen]
+    de_nomap = delta_e(srgb_to_lab(nomap), srgb_to_lab(theirs), metric="ab")[seen]
+    assert np.median(de) <= 1.0 and np.percentile(de, 90) <= 2.0, np.percentile(de, [50, 90])
+    assert np.median(de_nomap) > 2.0, np.percentile(de_nomap, [50, 90])  # the map matters

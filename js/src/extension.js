@@ -77,6 +77,10 @@ export function tableUniforms(ext, pngBytes) {
 const SURFACE_VS = `
 in vec4 cdbrdfTangent; in float cdbrdfCurvature;
 out vec3 vWorld; out vec3 vN; out vec3 vT; out float vK;
+#ifdef CDBRDF_MAP
+in vec2 cdbrdfUv; in vec3 cdbrdfShape;
+out vec2 vUv; out vec3 vShape; out float vHand;
+#endif
 void main() {
   vec4 wp = modelMatrix * vec4(position, 1.0);
   mat3 m = mat3(modelMatrix);
@@ -84,8 +88,60 @@ void main() {
   vN = transpose(inverse(m)) * normal;
   vT = m * cdbrdfTangent.xyz;
   vK = cdbrdfCurvature;
+#ifdef CDBRDF_MAP
+  vUv = vec2(cdbrdfUv.x, 1.0 - cdbrdfUv.y);  // the map's convention: v up (glTF's runs down)
+  vShape = cdbrdfShape; vHand = cdbrdfTangent.w;
+#endif
   gl_Position = projectionMatrix * viewMatrix * wp;
 }`;
+
+// The curvature map (cdbrdf.mesh.curvature_map's rule; the renderer's plug-in reads it the same way): the level of
+// the pixel's footprint on the cloth (distance x pixel angle / max(|cos theta_v|, 1/8), in texels through |dP/du|,
+// |dP/dv|), never finer than the curvature's neighbourhood, trilinear between levels, bilinear and periodic within
+// one; the texel's slopes tilt the normal, its derivatives give the detail's shape operator, added to the mesh's.
+const MAP_GLSL = `
+#ifdef CDBRDF_MAP
+in vec2 vUv; in vec3 vShape; in float vHand;
+uniform sampler2D uMapA; uniform sampler2D uMapB;   // p, q, dp/du | dp/dv, dq/du, dq/dv (decoded, float)
+uniform ivec3 uMapLevel[16]; uniform int uMapN;      // per level: first row, width, height
+uniform vec4 uMapTransform; uniform vec2 uMapUvScale; uniform float uMapMinLevel; uniform float uPixelAngle;
+uniform int uDirectional;
+void mapFetch(int lv, vec2 t, inout vec3 a, inout vec3 b, float wt) {
+  ivec3 L = uMapLevel[lv];
+  vec2 x = vec2((t.x - floor(t.x)) * float(L.y) - 0.5, ((1.0 - t.y) - floor(1.0 - t.y)) * float(L.z) - 0.5);
+  vec2 x0 = floor(x), f = x - x0;
+  ivec2 i0 = ivec2(x0), n = L.yz;
+  i0 = (i0 % n + n) % n;
+  ivec2 i1 = (i0 + 1) % n;
+  for (int k = 0; k < 4; k++) {
+    ivec2 c = ivec2(k % 2 == 0 ? i0.x : i1.x, k < 2 ? i0.y : i1.y);
+    float w = wt * (k % 2 == 0 ? 1.0 - f.x : f.x) * (k < 2 ? 1.0 - f.y : f.y);
+    ivec2 at = ivec2(c.x, L.x + c.y);
+    a += w * texelFetch(uMapA, at, 0).rgb; b += w * texelFetch(uMapB, at, 0).rgb;
+  }
+}
+// the map's (p, q) and the total shape operator (xx, xy, yy) in the frame x = dP/du, y = n x x
+void mapDetail(vec3 world, vec3 v, vec3 n, out vec2 pq, out vec3 S) {
+  vec3 dpx = dFdx(world), dpy = dFdy(world);
+  vec2 dux = dFdx(vUv), duy = dFdy(vUv);
+  float det = dux.x * duy.y - dux.y * duy.x;
+  vec3 dpdu = abs(det) > 1e-20 ? (dpx * duy.y - dpy * dux.y) / det : vec3(0.0);
+  vec3 dpdv = abs(det) > 1e-20 ? (dpy * dux.x - dpx * duy.x) / det : vec3(0.0);
+  float w = length(cameraPosition - world) * uPixelAngle / max(abs(dot(v, n)), 0.125);
+  vec2 tex = vec2(float(uMapLevel[0].y), float(uMapLevel[0].z)) * abs(uMapTransform.xy);
+  float fp = max(w / max(length(dpdu), 1e-30) * tex.x, w / max(length(dpdv), 1e-30) * tex.y);
+  float lv = clamp(max(log2(max(fp, 1e-30)), uMapMinLevel), 0.0, float(uMapN - 1));
+  int l0 = int(floor(lv)); float f = lv - float(l0);
+  vec2 t = vUv * uMapTransform.xy + uMapTransform.zw;
+  vec3 a = vec3(0.0), b = vec3(0.0);
+  mapFetch(l0, t, a, b, 1.0 - f);
+  if (f > 0.0 && l0 + 1 < uMapN) mapFetch(l0 + 1, t, a, b, f);
+  float h = vHand < 0.0 ? -1.0 : 1.0;  // a mirrored UV layout: dP/dv along -y
+  pq = vec2(a.x, a.y * h);
+  S = vShape + vec3(a.z / uMapUvScale.x, (0.5 * b.x / uMapUvScale.y + 0.5 * b.y / uMapUvScale.x) * h, b.z / uMapUvScale.y);
+}
+#endif
+`;
 
 export const MAX_ENV = 32;
 
@@ -100,6 +156,7 @@ uniform int uEnvN; uniform vec3 uEnvDir[${MAX_ENV}]; uniform vec3 uEnvL[${MAX_EN
 uniform int uShadowOn; uniform sampler2D uShadow; uniform mat4 uShadowMatrix; uniform float uShadowTexel;
 uniform float uKScale;           // curvature scale (1: the attribute is in 1/mm)
 out vec4 cdbrdfColor;
+${MAP_GLSL}
 vec2 cdbrdfAngles(vec3 d, vec3 n, vec3 t, vec3 b) {
   vec3 l = vec3(dot(d, t), dot(d, b), dot(d, n));
   float th = degrees(acos(clamp(l.z, -1.0, 1.0)));
@@ -131,9 +188,28 @@ void main() {
   t = length(t) > 1e-8 ? normalize(t) : normalize(abs(n.x) < 0.9 ? cross(n, vec3(1, 0, 0)) : cross(n, vec3(0, 1, 0)));
   float k = vK * uKScale;
   vec3 v = normalize(cameraPosition - vWorld);
-  vec3 ng = n;
-  if (dot(v, n) < 0.0) { n = -n; k = -k; }  // the back side: the frame turned about x, as the renderer's plug-in
+  bool back = dot(v, n) < 0.0;
+#ifdef CDBRDF_MAP
+  vec2 pq; vec3 S;
+  mapDetail(vWorld, v, n, pq, S);
+  k = uDirectional == 1 ? S.x : (0.5 * (S.x + S.z) >= 0.0 ? 0.5 * (S.x + S.z) + sqrt(0.25 * (S.x - S.z) * (S.x - S.z) + S.y * S.y)
+                                                           : 0.5 * (S.x + S.z) - sqrt(0.25 * (S.x - S.z) * (S.x - S.z) + S.y * S.y));
+  k *= uKScale;
+#endif
+  if (back) { n = -n; k = -k; }  // the back side: the frame turned about x, as the renderer's plug-in
   vec3 b = cross(n, t);
+#ifdef CDBRDF_MAP
+  {  // the normal (p, q, 1) of the shading frame, as Mitsuba's normalmap (mirrored to the viewer's side)
+    vec2 d = back ? vec2(-pq.x, pq.y) : pq;
+    vec3 wl = vec3(dot(v, t), dot(v, b), dot(v, n));
+    vec3 nl = normalize(vec3(d, 1.0));
+    if (wl.z * dot(wl, nl) <= 0.0) nl.xy = -nl.xy;
+    vec3 sl = normalize(vec3(1.0 - nl.x * nl.x, -nl.x * nl.y, -nl.x * nl.z));
+    vec3 tl = cross(nl, sl);
+    vec3 n2 = nl.x * t + nl.y * b + nl.z * n, t2 = sl.x * t + sl.y * b + sl.z * n, b2 = tl.x * t + tl.y * b + tl.z * n;
+    n = normalize(n2); t = normalize(t2); b = normalize(b2);
+  }
+#endif
   float kq = uMode == 0 ? 0.0 : k;
   vec2 av = cdbrdfAngles(v, n, t, b);
   vec3 c = vec3(0.0);
@@ -166,16 +242,45 @@ export function lightingUniforms() {
     uMode: { value: 1 }, uLightDir: { value: new THREE.Vector3(0, 1, 0) }, uIrradiance: { value: Math.PI },
     uExpo: { value: 1 }, uEnvN: { value: 0 }, uEnvDir: { value: dirs }, uEnvL: { value: ls },
     uShadowOn: { value: 0 }, uShadow: { value: null }, uShadowMatrix: { value: new THREE.Matrix4() },
-    uShadowTexel: { value: 0 }, uKScale: { value: 1 },
+    uShadowTexel: { value: 0 }, uKScale: { value: 1 }, uPixelAngle: { value: 0 },
   };
 }
 
-export function cdbrdfMaterial(table, lighting) {
+export function cdbrdfMaterial(table, lighting, map = null) {
   return new THREE.ShaderMaterial({
     name: 'cdbrdf', glslVersion: THREE.GLSL3, side: THREE.DoubleSide,
-    uniforms: Object.assign({}, table, lighting),
+    defines: map ? { CDBRDF_MAP: '' } : {},
+    uniforms: Object.assign({}, table, lighting, map || {}),
     vertexShader: SURFACE_VS, fragmentShader: surfaceFS(),
   });
+}
+
+function decodeAtlas(pngBytes, enc, first) {
+  const png = decodePng(new Uint8Array(pngBytes));
+  if (png.depth !== 16 || png.channels !== 3) throw new Error('cdbrdf: a curvature map image is not 16-bit RGB');
+  const n = png.width * png.height, out = new Float32Array(4 * n), q = png.data;
+  for (let i = 0; i < n; i++) {
+    for (let c = 0; c < 3; c++) out[4 * i + c] = enc.offset[first + c] + enc.scale[first + c] * (q[3 * i + c] / 65535);
+    out[4 * i + 3] = 1;
+  }
+  const t = new THREE.DataTexture(out, png.width, png.height, THREE.RGBAFormat, THREE.FloatType);
+  t.minFilter = t.magFilter = THREE.NearestFilter; t.generateMipmaps = false; t.needsUpdate = true;
+  return t;
+}
+
+// The curvature map's uniforms (ext.curvature.map) from its two PNG atlases.
+export function mapUniforms(ext, pngA, pngB) {
+  const m = ext.curvature.map, enc = m.encoding;
+  if (enc.type !== 'unorm16') throw new Error(`cdbrdf: unknown curvature map encoding ${enc.type}`);
+  if (m.levels.length > 16) throw new Error('cdbrdf: a curvature map of more than 16 levels');
+  const levels = new Int32Array(48);  // three sets an ivec3 array from a flat array
+  for (let i = 0; i < 16; i++) levels.set(m.levels[Math.min(i, m.levels.length - 1)], 3 * i);
+  return {
+    uMapA: { value: decodeAtlas(pngA, enc, 0) }, uMapB: { value: decodeAtlas(pngB, enc, 3) },
+    uMapLevel: { value: levels }, uMapN: { value: m.levels.length },
+    uMapTransform: { value: new THREE.Vector4(...m.transform) }, uMapUvScale: { value: new THREE.Vector2(...m.uvScale) },
+    uMapMinLevel: { value: m.minLevel }, uDirectional: { value: ext.curvature.mode === 'directional' ? 1 : 0 },
+  };
 }
 
 // The lookup alone, on queries (theta_v, phi_v, theta_l, phi_l, kappa): a full-screen pass into a float target.
@@ -229,12 +334,21 @@ export class CdbrdfCurvatureBrdfExtension {
     this.apply = options.apply !== false;  // wear the CDBRDF material at once (else: the fallback)
   }
 
-  async _table(ext) {
+  async _image(textureIndex) {
     const json = this.parser.json;
-    const tex = json.textures[ext.lookup.texture.index];
-    const image = json.images[tex.source];
-    const view = await this.parser.getDependency('bufferView', image.bufferView);
-    return tableUniforms(ext, view);
+    const image = json.images[json.textures[textureIndex].source];
+    return this.parser.getDependency('bufferView', image.bufferView);
+  }
+
+  async _table(ext) {
+    return tableUniforms(ext, await this._image(ext.lookup.texture.index));
+  }
+
+  async _map(ext) {
+    const m = ext.curvature && ext.curvature.map;
+    if (!m) return null;
+    const [a, b] = await Promise.all(m.textures.map((t) => this._image(t.index)));
+    return mapUniforms(ext, a, b);
   }
 
   async afterRoot(result) {
@@ -252,10 +366,17 @@ export class CdbrdfCurvatureBrdfExtension {
       if (!g.attributes.tangent) throw new Error('cdbrdf: the mesh has no TANGENT attribute');
       g.setAttribute('cdbrdfCurvature', g.attributes[kName]);
       g.setAttribute('cdbrdfTangent', g.attributes.tangent);
-      if (!cache.has(index)) cache.set(index, this._table(ext));
-      const table = await cache.get(index);
-      const material = cdbrdfMaterial(table, this.lighting);
-      mesh.userData.cdbrdf = { material, fallback: mesh.material, table, extension: ext };
+      if (!cache.has(index)) cache.set(index, Promise.all([this._table(ext), this._map(ext)]));
+      let [table, map] = await cache.get(index);
+      const sName = String(ext.curvature.shapeAttribute || '').toLowerCase();
+      if (map && g.attributes[sName] && g.attributes.uv) {
+        g.setAttribute('cdbrdfShape', g.attributes[sName]);
+        g.setAttribute('cdbrdfUv', g.attributes.uv);
+      } else {
+        map = null;  // a map needs the mesh's UVs and shape operator
+      }
+      const material = cdbrdfMaterial(table, this.lighting, map);
+      mesh.userData.cdbrdf = { material, fallback: mesh.material, table, map, extension: ext };
       if (this.apply) mesh.material = material;
     }
   }

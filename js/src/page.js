@@ -103,6 +103,8 @@ function applyState() {
   const sky = skyDirections(DATA.options.sky || [0.35, 0.25, 0.12], state.envScale);
   u.uEnvN.value = state.env ? MAX_ENV : 0;
   sky.dirs.forEach((d, i) => { u.uEnvDir.value[i].copy(d); u.uEnvL.value[i].copy(sky.ls[i]); });
+  // the camera's angle per pixel (the curvature map's footprint): 2 tan(fov / 2) / height, three's fov vertical
+  u.uPixelAngle.value = 2 * Math.tan(rad(camera.fov) / 2) / renderer.getContext().drawingBufferHeight;
   const fallback = state.mode === 'fallback';
   for (const m of meshes) m.material = fallback ? m.userData.cdbrdf.fallback : m.userData.cdbrdf.material;
   // the fallback: three's own lights, the same key and a hemisphere light standing for the sky
@@ -241,7 +243,8 @@ Object.assign(api, {
     return Promise.resolve((performance.now() - t0) / n);
   },
   info: () => ({ vertices: meshes.reduce((s, m) => s + m.geometry.attributes.position.count, 0),
-    fallback: meshes[0].userData.cdbrdf.fallback.type, extension: state.info }),
+    fallback: meshes[0].userData.cdbrdf.fallback.type, extension: state.info,
+    curvatureMap: !!meshes[0].userData.cdbrdf.map }),
   state: () => JSON.parse(JSON.stringify(Object.assign({}, state, { info: undefined }))),
 });
 

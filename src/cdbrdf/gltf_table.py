@@ -55,7 +55,10 @@ __all__ = [
     "MAX_TEXTURE_WIDTH",
     "MAX_GLTF_BYTES",
     "LookupTexture",
+    "CurvatureMapTexture",
+    "MAP_CHANNELS",
     "encode_table",
+    "encode_curvature_map",
     "decode_table",
     "is_gltf",
     "read_gltf",
@@ -220,6 +223,79 @@ def encode_table(table: Any, *, max_width: int = MAX_TEXTURE_WIDTH) -> LookupTex
         "attrs": attrs,
     }
     return LookupTexture(png=bytes(png), measured_png=bytes(measured_png), spec=spec)
+
+
+@dataclass(frozen=True)
+class CurvatureMapTexture:
+    """A curvature map encoded for the extension (:func:`encode_curvature_map`).
+
+    Attributes
+    ----------
+    pngs
+        Two 16-bit RGB PNGs: the channels ``p, q, dp_du`` and ``dp_dv, dq_du, dq_dv``.
+    spec
+        The extension's ``curvature.map`` JSON without the texture indices.
+    """
+
+    pngs: tuple[bytes, bytes]
+    spec: dict[str, Any]
+
+
+#: The channels of a curvature map's texel, in order (:data:`cdbrdf.mesh.curvature_map.CHANNELS`).
+MAP_CHANNELS: tuple[str, ...] = ("p", "q", "dp_du", "dp_dv", "dq_du", "dq_dv")
+
+
+def encode_curvature_map(levels: Any, *, transform: tuple[float, float, float, float],
+                         uv_scale: tuple[float, float], min_level: float) -> CurvatureMapTexture:
+    """A curvature map's levels as two 16-bit PNG atlases and the extension's JSON (``docs/export.md``).
+
+    The levels (:class:`cdbrdf.mesh.CurvatureMap`: level 0 first, each the 2 x 2
+    means of the one before, the last 1 x 1) are stacked from the top of the
+    image, level ``l`` at rows ``levels[l][0]`` to ``levels[l][0] + h_l - 1``,
+    columns 0 to ``w_l - 1``; each channel unorm16 with its own offset and scale.
+
+    Parameters
+    ----------
+    levels
+        ``(H_l, W_l, 6)`` arrays of :data:`MAP_CHANNELS`.
+    transform
+        ``(ru, rv, ou, ov)``: texture coordinate ``(ru u + ou, rv v + ov)`` of the mesh's UVs (v up), row 0 at
+        the top.
+    uv_scale
+        Mm per UV unit the map is read at.
+    min_level
+        The finest level a lookup reads (the curvature's neighbourhood).
+
+    Returns
+    -------
+    CurvatureMapTexture
+        The images and the JSON.
+    """
+    import imagecodecs
+
+    lv = [np.asarray(a, dtype=np.float64) for a in levels]
+    width = max(a.shape[1] for a in lv)
+    rows, y = [], 0
+    for a in lv:
+        rows.append([y, int(a.shape[1]), int(a.shape[0])])
+        y += int(a.shape[0])
+    allv = np.concatenate([a.reshape(-1, len(MAP_CHANNELS)) for a in lv])
+    lo, hi = allv.min(axis=0), allv.max(axis=0)
+    scale = np.where(hi > lo, hi - lo, 1.0)
+    atlas = np.zeros((y, width, len(MAP_CHANNELS)), dtype=np.uint16)
+    err = 0.0
+    for (y0, w, h), a in zip(rows, lv, strict=True):
+        q = np.clip(np.rint((a - lo) / scale * _UNORM16), 0, _UNORM16)
+        atlas[y0:y0 + h, :w] = q.astype(np.uint16)
+        err = max(err, float(np.max(np.abs(lo + scale * q / _UNORM16 - a) / scale)))
+    pngs = tuple(bytes(imagecodecs.png_encode(np.ascontiguousarray(atlas[..., 3 * j:3 * j + 3]), level=9))
+                 for j in (0, 1))
+    spec = {"channels": list(MAP_CHANNELS), "levels": rows,
+            "encoding": {"type": "unorm16", "offset": lo.tolist(), "scale": scale.tolist(),
+                         "error": {"maxAbsoluteOverRange": err}},
+            "transform": [float(x) for x in transform], "uvScale": [float(x) for x in uv_scale],
+            "minLevel": float(min_level)}
+    return CurvatureMapTexture(pngs=(pngs[0], pngs[1]), spec=spec)
 
 
 # -- reading back ---------------------------------------------------------------------------------

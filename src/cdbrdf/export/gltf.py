@@ -27,7 +27,6 @@ The asset is written atomically (:func:`cdbrdf.fsutil.atomic_path`).
 from __future__ import annotations
 
 import base64
-import dataclasses
 import json
 import logging
 import warnings
@@ -41,12 +40,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import OptionError
-from ..gltf_table import EXTENSION, encode_table
+from ..gltf_table import EXTENSION, encode_curvature_map, encode_table
+from ..mesh.curvature_map import SHAPE_ATTRIBUTES, neighbourhood_level
 from .fallback import FallbackFit, fit_fallback
 from .tangents import any_tangent, mikktspace_tangents
 
-__all__ = ["GLTF_SUFFIXES", "CURVATURE_ATTRIBUTE", "DIRECTION_ATTRIBUTE", "ExportedMesh", "GltfAsset",
-           "export_mesh", "build_gltf", "write_gltf", "export_gltf"]
+__all__ = ["GLTF_SUFFIXES", "CURVATURE_ATTRIBUTE", "DIRECTION_ATTRIBUTE", "SHAPE_ATTRIBUTE", "ExportedMesh",
+           "GltfAsset", "export_mesh", "build_gltf", "write_gltf", "export_gltf"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -58,6 +58,9 @@ CURVATURE_ATTRIBUTE = "_CURVATURE"
 
 #: The custom vertex attribute of the direction the directional curvature is measured along.
 DIRECTION_ATTRIBUTE = "_CURVATURE_DIRECTION"
+
+#: The custom vertex attribute of the mesh's shape operator (with a curvature map): xx, xy, yy in 1/mm.
+SHAPE_ATTRIBUTE = "_CURVATURE_SHAPE"
 
 # z-up world (mm) -> glTF (+Y up): (x, y, z) -> (x, z, -y), a rotation
 _TO_GLTF = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
@@ -91,6 +94,10 @@ class ExportedMesh:
         What was done (units, up axis, neighbourhood), for the asset's ``extras``.
     metadata
         The prepared mesh's metadata (repairs, notes, units and neighbourhood notes, frame), for the report.
+    curvature_map
+        The maps' curvature baked per texel (:class:`cdbrdf.mesh.CurvatureMap`), or None.
+    uv_scale
+        Mm per UV unit of the map, ``(su, sv)``, or None.
     """
 
     positions: NDArray[np.float64]
@@ -103,6 +110,8 @@ class ExportedMesh:
     name: str
     info: Mapping[str, Any] = field(default_factory=dict)
     metadata: Mapping[str, Any] = field(default_factory=dict)
+    curvature_map: Any = None
+    uv_scale: tuple[float, float] | None = None
 
     @property
     def n_vertices(self) -> int:
@@ -148,9 +157,10 @@ def export_mesh(
     """A surface made ready for the asset (see the module's description).
 
     The maps laid on the mesh (:class:`cdbrdf.mesh.SurfaceMaps`: given, or
-    those the file names) add their curvature at the vertices (``bake =
-    "vertex"``, as the viewer does): the asset's ``_CURVATURE`` holds it, at
-    the mesh's resolution.
+    those the file names) are baked as the renderer bakes them: per texel
+    (the default), carried as the curvature map's texture with the mesh's
+    shape operator (``_CURVATURE_SHAPE``), or per vertex (``bake="vertex"``),
+    added into ``_CURVATURE`` at the mesh's resolution.
 
     Parameters
     ----------
@@ -164,7 +174,7 @@ def export_mesh(
     units, up, neighbourhood_mm, frame
         For a mesh, as :func:`cdbrdf.render.render_table` takes them.
     maps
-        A :class:`cdbrdf.mesh.SurfaceMaps` of the mesh (baked per vertex).
+        A :class:`cdbrdf.mesh.SurfaceMaps` of the mesh.
 
     Returns
     -------
@@ -178,7 +188,7 @@ def export_mesh(
     MeshError
         For a mesh that cannot be used.
     """
-    from ..mesh import SurfaceMaps, has_own_uv, prepare_mesh, read_mesh, z_up_mesh
+    from ..mesh import has_own_uv, prepare_mesh, read_mesh, z_up_mesh
     from ..mesh.frames import face_uv_tangents, vertex_tangents
     from ..mesh.units import parse_units
 
@@ -196,10 +206,6 @@ def export_mesh(
             source, name = read_mesh(surface), Path(surface).name
         else:
             source, name = surface, str(surface.metadata.get("source", "mesh"))
-        if maps is None and any(source.metadata.get(k) is not None for k in ("normal_map", "height_map")):
-            maps = SurfaceMaps()  # the maps the file names
-        if maps is not None and maps.bake != "vertex":  # the asset's curvature is per vertex
-            maps = dataclasses.replace(maps, bake="vertex")
         mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=table,
                             maps=maps)
         world, axis, why = z_up_mesh(mesh, up)
@@ -233,7 +239,14 @@ def export_mesh(
     attrs = {k: np.asarray(a, dtype=np.float64)[src] for k, a in world.attributes.items()}
     return ExportedMesh(positions=np.asarray(world.vertices, dtype=np.float64)[src] * mm, normals=n_src,
                         tangents=tang, uv=uv, faces=np.asarray(faces, dtype=np.int64), attributes=attrs,
-                        direction=_unit_rows(direction), name=name, info=info, metadata=dict(world.metadata))
+                        direction=_unit_rows(direction), name=name, info=info, metadata=dict(world.metadata),
+                        curvature_map=world.metadata.get("curvature_map"),
+                        uv_scale=_pair(world.metadata.get("uv_scale")))
+
+
+def _pair(value: Any) -> tuple[float, float] | None:
+    """Two numbers as a pair of floats, or None."""
+    return None if value is None else (float(value[0]), float(value[1]))
 
 
 @dataclass(frozen=True)
@@ -406,6 +419,19 @@ def build_gltf(table: Any, mesh: ExportedMesh, *, curvature_mode: str = "max",
     indices = buf.accessor(mesh.faces.reshape(-1), "SCALAR", index=True)
     images = [{"bufferView": buf.view(lut.png), "mimeType": "image/png", "name": "cdbrdf lookup"},
               {"bufferView": buf.view(lut.measured_png), "mimeType": "image/png", "name": "cdbrdf measured mask"}]
+    textures = [{"sampler": 0, "source": 0, "name": "cdbrdf lookup"}]
+    if mesh.curvature_map is not None and mesh.uv is not None and mesh.uv_scale is not None:
+        attrs[SHAPE_ATTRIBUTE] = buf.accessor(np.stack([np.nan_to_num(mesh.attributes[k]) for k in SHAPE_ATTRIBUTES],
+                                                       axis=1), "VEC3")
+        curv["shapeAttribute"] = SHAPE_ATTRIBUTE
+        cmap = mesh.curvature_map
+        cm = encode_curvature_map(cmap.levels, transform=cmap.transform, uv_scale=mesh.uv_scale,
+                                  min_level=neighbourhood_level(cmap, mesh.uv_scale,
+                                                                float(mesh.info.get("neighbourhood_mm") or 5.0)))
+        for j, png in enumerate(cm.pngs):
+            images.append({"bufferView": buf.view(png), "mimeType": "image/png", "name": f"cdbrdf curvature map {j}"})
+            textures.append({"sampler": 0, "source": len(images) - 1, "name": f"cdbrdf curvature map {j}"})
+        curv["map"] = {"textures": [{"index": len(textures) - 2}, {"index": len(textures) - 1}], **cm.spec}
     ext = dict(lut.spec)
     ext["lookup"] = {"texture": {"index": 0}, **ext["lookup"]}
     ext["measuredImage"] = 1
@@ -425,7 +451,7 @@ def build_gltf(table: Any, mesh: ExportedMesh, *, curvature_mode: str = "max",
                                                        "mode": 4}]}],
         "materials": [material],
         "samplers": [{"magFilter": _NEAREST, "minFilter": _NEAREST, "wrapS": _CLAMP, "wrapT": _CLAMP}],
-        "textures": [{"sampler": 0, "source": 0, "name": "cdbrdf lookup"}],
+        "textures": textures,
         "images": images,
         "accessors": buf.accessors,
         "bufferViews": buf.views,
