@@ -201,9 +201,7 @@ def _run_scalar(t: CDBRDF, q: np.ndarray) -> np.ndarray:
 
 @functools.cache
 def _gltf_page():
-    """One page of the glTF renderer in headless Chromium (software WebGL2), kept for every table; closed at exit."""
-    import atexit
-
+    """One page of the glTF renderer in headless Chromium (software WebGL2), kept for every table of a module."""
     from playwright.sync_api import sync_playwright
 
     from cdbrdf.view.gltf_page import gltf_viewer_files
@@ -224,14 +222,23 @@ def _gltf_page():
     page.on("pageerror", lambda e: messages.append(str(e)))
     page.goto(server.url)
     page.evaluate("window.cdbrdfGltf.ready")
+    _GLTF_SESSION.append((browser, pw, server))
+    return page, messages
 
-    def close() -> None:
+
+#: The browser session of :func:`_gltf_page` while it is open (closed by :func:`close_gltf_page`).
+_GLTF_SESSION: list = []
+
+
+def close_gltf_page() -> None:
+    """Close the glTF renderer's browser (the conformance module's teardown): a Playwright session left open
+    would keep its event loop running in the worker, and the next module's browser could not start."""
+    while _GLTF_SESSION:
+        browser, pw, server = _GLTF_SESSION.pop()
         browser.close()
         pw.stop()
         server.close()
-
-    atexit.register(close)
-    return page, messages
+    _gltf_page.cache_clear()
 
 
 def need_gltf_renderer() -> None:

@@ -34,7 +34,9 @@ from __future__ import annotations
 
 import base64
 import json
+import os
 import re
+import stat
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -436,14 +438,21 @@ def is_gltf(path: str | PathLike[str]) -> bool:
     bool
         True for a glTF asset.
     """
+    if not isinstance(path, str | PathLike):
+        return False
     p = Path(path)
     if p.suffix.lower() in (".glb", ".gltf"):
         return True
+    try:  # the magic of a regular file only (never blocks on a FIFO or a device)
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
+    except (OSError, ValueError):
+        return False
     try:
-        with open(p, "rb") as fh:
-            return fh.read(4) == _GLB_MAGIC
+        return stat.S_ISREG(os.fstat(fd).st_mode) and os.read(fd, 4) == _GLB_MAGIC
     except OSError:
         return False
+    finally:
+        os.close(fd)
 
 
 _DATA_URI = re.compile(r"^data:[^;,]*(;base64)?,", re.IGNORECASE)
