@@ -261,15 +261,16 @@ def test_render_warns_of_a_wrong_unit(variant, tmp_path, caplog):
     table = tmp_path / "k.h5"
     kappa_table().save(table)
     with caplog.at_level(logging.WARNING, logger="cdbrdf"):
-        assert main(["-q", "render", str(table), "--mesh", str(src), "--size", "8x8", "--spp", "1",
+        assert main(["-q", "render", str(table), "--mesh", str(src), "--units", "mm", "--size", "8x8", "--spp", "1",
                      "-o", str(tmp_path / "a.exr")]) == 0
     msgs = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
     assert any("100% of the surface" in m and "--units m" in m for m in msgs), msgs
-    caplog.clear()
-    with caplog.at_level(logging.WARNING, logger="cdbrdf"):
-        assert main(["-q", "render", str(table), "--mesh", str(src), "--units", "m", "--size", "8x8", "--spp", "1",
-                     "-o", str(tmp_path / "b.exr")]) == 0
-    assert not [r for r in caplog.records if r.levelno == logging.WARNING and "curvature" in r.getMessage()]
+    for units in (["--units", "m"], []):  # given, or inferred from the size of the sheet (2.9 cm across in m)
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="cdbrdf"):
+            assert main(["-q", "render", str(table), "--mesh", str(src), *units, "--size", "8x8", "--spp", "1",
+                         "-o", str(tmp_path / "b.exr")]) == 0
+        assert not [r for r in caplog.records if r.levelno == logging.WARNING and "curvature" in r.getMessage()]
 
 
 def test_render_options_are_checked(variant, tmp_path, capsys):

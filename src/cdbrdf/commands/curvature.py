@@ -37,8 +37,9 @@ def mesh_options(p: Any, *, units: bool = True) -> None:
     if units:
         p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
                        default=None, metavar="UNIT",
-                       help="length unit of the mesh: mm, cm, m, in or a number of mm per model unit "
-                       "(default: the unit the file records, glTF's metre, else mm)")
+                       help="length unit of the mesh: mm, cm, dm, m, in or a number of mm per model unit "
+                       "(default: the unit the file records or states (glTF's metre, a header comment, "
+                       "MakeHuman's dm), else the one a garment's or a sheet's size makes plausible, else mm)")
     p.add_argument("--neighbourhood", type=finite_float(lo, hi, unit="mm"), default=None, metavar="MM",
                    help="diameter of the surface patch the curvature is fitted over, mm (default: the "
                    "table's measured patch if its provenance records it, else 5)")

@@ -110,9 +110,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "scalar_*: one Python call per ray, debugging only)")
     p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
                    default=None, metavar="UNIT",
-                   help="length unit: of --mesh (mm, cm, m, in or mm per model unit; default: the one the "
-                   "file records, else mm), or of a scene file (mm per scene unit; default: the cdbrdf BSDF's "
-                   "'unit', else mm)")
+                   help="length unit: of --mesh (mm, cm, dm, m, in or mm per model unit; default: the one the "
+                   "file records or states, else the one a garment's or a sheet's size makes plausible, else mm), "
+                   "or of a scene file (mm per scene unit; default: the cdbrdf BSDF's 'unit', else mm)")
 
     scene_file = p.add_argument_group("a Mitsuba scene file (SCENE.xml)")
     scene_file.add_argument("-D", dest="define", action="append", default=None, type=key_value(),

@@ -46,6 +46,7 @@ from ..errors import CDBRDFError, MeshError
 from ..limits import check
 from .core import Mesh
 from .curvature_map import SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES
+from .statements import file_statements, header_comments
 
 __all__ = [
     "MESH_FORMATS",
@@ -166,7 +167,14 @@ def read_ply(path: str | PathLike[str]) -> Mesh:
     faces = ply.faces
     if faces.size and int(faces.max()) >= n:
         raise MeshError(f"{p}: faces refer to vertex {int(faces.max())} but there are {n}")
-    mesh = Mesh(v, faces, normals, uv, attrs, tangents, {"format": "ply", **_metadata(ply.comments)})
+    meta: dict[str, Any] = {"format": "ply", **_metadata(ply.comments)}
+    stated = file_statements(p, "ply", [c for c in ply.comments if not c.startswith("cdbrdf ")])
+    for key in ("units", "up"):  # a unit or up axis cdbrdf recorded is the file's own
+        if key in stated and key not in meta:
+            meta[key], meta[f"{key}_source"] = stated[key], stated[f"{key}_source"]
+    if "notes" in stated:
+        meta["notes"] = stated["notes"]
+    mesh = Mesh(v, faces, normals, uv, attrs, tangents, meta)
     if ply.corner_uv is not None:
         mesh = _split_corner_uv(mesh, ply.corner_uv)
     return mesh
@@ -268,12 +276,12 @@ def _read_trimesh(p: Path, fmt: str) -> Mesh:
     f_all = np.concatenate(fs).astype(np.int64)
     check("mesh_faces", f_all.shape[0], what=f"{p}: faces")
     meta: dict[str, Any] = {"format": fmt}
-    if fmt in ("gltf", "glb"):
-        meta["units"] = "m"  # glTF's unit is the metre (glTF 2.0, 3.6)
-        meta["up"] = "y"  # and +Y is up
+    # what the file says of its unit and up axis (glTF: metres, +Y up; a header's comments; MakeHuman)
+    meta.update(file_statements(p, fmt, header_comments(data) if fmt in ("obj", "off") else []))
     uv_all = np.concatenate(uvs) if all(u is not None for u in uvs) else None
     if uv_all is None and any(u is not None for u in uvs):
-        meta["notes"] = [f"{sum(u is None for u in uvs)} of {len(uvs)} parts have no UVs: the UVs are not used"]
+        meta["notes"] = [*meta.get("notes", []),
+                         f"{sum(u is None for u in uvs)} of {len(uvs)} parts have no UVs: the UVs are not used"]
     n_all = np.concatenate(ns) if all(n is not None for n in ns) else None
     notes: list[str] = list(meta.get("notes", []))
     if fmt == "obj":

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..fsutil import read_regular
-from ..mesh import Units, check_kappa_range, parse_units
+from ..mesh import UNITS_MM, Units, check_kappa_range, parse_units
 
 __all__ = ["uniform_scale", "ply_unit_mm", "scene_factor", "scene_units", "curvature_warning"]
 
@@ -95,8 +95,8 @@ def scene_units(value: Any, *, what: str = "unit") -> Units:
     try:
         return parse_units(value if isinstance(value, str) else float(value))
     except (MeshError, TypeError, ValueError):
-        raise SceneError(f"cdbrdf BSDF: {what} {value!r:.40} is neither one of mm, cm, m, in nor a positive "
-                         "number of millimetres per scene unit") from None
+        raise SceneError(f"cdbrdf BSDF: {what} {value!r:.40} is neither one of {', '.join(UNITS_MM)} nor a "
+                         "positive number of millimetres per scene unit") from None
 
 
 def scene_factor(*, m_file: float | None, scale: float, unit_mm: float) -> float:
