@@ -33,7 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Write a CDBRDF on the sine sheet, the swatch or a mesh as one glTF 2.0 asset (.glb, or a "
         "self-contained .gltf): the mesh as the renderer prepares it (repaired, welded, upright, in metres; "
         "normals, MikkTSpace tangents, UVs, the signed curvature in 1/mm per vertex as _CURVATURE), the table "
-        "as a 16-bit lookup texture under the CDBRDF_materials_curvature_brdf extension, and the standard "
+        "(and a normal or height map's curvature map) as 16-bit textures under the "
+        "CDBRDF_materials_curvature_brdf extension, and the standard "
         "material (base colour, roughness, sheen, anisotropy) fitted to the flat BRDF, which every glTF viewer "
         "shows. cdbrdf view OUT.glb renders it in the browser; cdbrdf.load(OUT.glb) reads the table back.",
         epilog="example: cdbrdf export denim.h5 --mesh shirt.obj --units mm -o shirt.glb --materialx denim.mtlx",
@@ -49,8 +50,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     mesh_options(p)
     p.add_argument("--up", choices=UP_AXES, default=None,
                    help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
-    add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\"): their "
-                                         "curvature is added to the mesh's at its vertices"))
+    add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\"): baked per "
+                                         "texel into the asset's curvature map, or with --bake vertex into "
+                                         "_CURVATURE"))
     p.add_argument("--curvature", choices=CURVATURE_MODES, default="max",
                    help="the curvature in _CURVATURE: max (the paper's: principal curvature of larger magnitude) "
                    "or directional (normal curvature along the material's x axis; its direction as "
