@@ -464,6 +464,18 @@ def gltf_document(path: str | PathLike[str]) -> tuple[Any, Any]:
     A GLB's first buffer is its binary chunk; a ``.gltf``'s buffers are data
     URIs or files beside it (a plain relative name, read as a regular file).
 
+    Parameters
+    ----------
+    path
+        A ``.glb`` or ``.gltf`` file.
+
+    Returns
+    -------
+    gltf : pygltflib.GLTF2
+        The document.
+    buffer_bytes : callable
+        ``buffer_bytes(i)``: the bytes of buffer ``i``.
+
     Raises
     ------
     FormatError
