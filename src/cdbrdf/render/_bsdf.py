@@ -304,7 +304,8 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             if self.btf is not None:
                 from ._btf_jit import DEFAULT_TEXEL_FILTER
 
-                self._upload_btf(1.0 if uv_scale is None else uv_scale, get("texel_filter", DEFAULT_TEXEL_FILTER))
+                self._upload_btf(1.0 if uv_scale is None else uv_scale, get("texel_filter", DEFAULT_TEXEL_FILTER),
+                                 float(get("pixel_angle", 0.0)))
             self.surface = self._surface_map(get, extras, uv_scale)
             flags = (
                 mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
@@ -364,17 +365,20 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
 
                 self.sampler = _sampling_jit.upload(mi, self.sampler_tables)
 
-        def _upload_btf(self, uv_scale: Any, texel_filter: Any) -> None:
+        def _upload_btf(self, uv_scale: Any, texel_filter: Any, pixel_angle: float) -> None:
             """A CD-BTF: its texels on the device (:mod:`cdbrdf.render._btf_jit`); the tile mean samples."""
             from . import _btf_jit
 
             self.uv_scale = _btf_jit.as_pair("uv_scale", uv_scale)
+            if not (math.isfinite(pixel_angle) and pixel_angle >= 0.0):
+                raise OptionError(f"cdbrdf BSDF: pixel_angle must be finite and >= 0 (radians), got {pixel_angle}")
             self.texel_filter = _choice("texel_filter", texel_filter, _btf_jit.TEXEL_FILTERS)
             self._texel_cache: dict[tuple[int, int], tuple[LookupGrid, np.ndarray]] = {}
             if not scalar:
                 full = self.grid if self.settings.mode == "cdbrdf" else prepare(self.btf.grid, self.btf.mean().values)
                 self.texels = _btf_jit.upload(mi, self.btf, full, self.record, uv_scale=self.uv_scale,
-                                              texel_filter=self.texel_filter)
+                                              texel_filter=self.texel_filter, pixel_angle=pixel_angle,
+                                              mm_per_unit=self.units.mm_per_unit)
 
         def traverse(self, callback: Any) -> None:
             callback.put("values", self.values, mi.ParamFlags.Differentiable)
@@ -497,7 +501,7 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             if self.texels is not None:
                 from . import _btf_jit
 
-                f = _btf_jit.lookup(mi, self.texels, si.uv, tv, pv, tl, pl, kappa, valid, si.wavelengths)
+                f = _btf_jit.evaluate(mi, self.texels, si, tv, pv, tl, pl, kappa, valid, self.record)
             else:
                 f = lj.lookup_jit(mi, self.grid, self.packed, tv, pv, tl, pl, kappa, valid, si.wavelengths)
             if self.record == "one":

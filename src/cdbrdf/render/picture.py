@@ -514,8 +514,10 @@ def render_table(
     uv_scale = _btf_uv_scale(btf, maps, span, mesh)
     with variant_context(variant or DEFAULT_VARIANT):
         for mode in modes:
-            bsdf = None if btf is None or uv_scale is None else _btf_entry(btf, mode, curvature_mode, uv_scale,
-                                                                           texel_filter)
+            bsdf = None
+            if btf is not None and uv_scale is not None:  # with the pixel's angle: the lookup filters its footprint
+                bsdf = {**_btf_entry(btf, mode, curvature_mode, uv_scale, texel_filter),
+                        "pixel_angle": _pixel_angle(camera, is_sheet or is_swatch, (w, h))}
             if is_sheet:
                 scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, bsdf=bsdf, **common)
             elif is_swatch:
@@ -573,6 +575,14 @@ def _btf_uv_scale(btf: Any, maps: Any, span: tuple[float, float] | None, mesh: A
     uvs = detect_uv_scale(mesh.vertices, mesh.faces, mesh.uv, units=mesh.metadata.get("units", "mm"))
     mesh.metadata["notes"] = [*mesh.metadata.get("notes", []), f"UV scale: {uvs}"]
     return uvs.pair
+
+
+def _pixel_angle(camera: Camera, sheet: bool, size: tuple[int, int]) -> float:
+    """Radians per pixel of the picture's lens (its smaller side), as :func:`cdbrdf.render.plugin.pixel_angle`."""
+    from .camera import DEFAULT_MESH_FOV_DEG, DEFAULT_SHEET_FOV_DEG
+
+    lens = camera.resolved(view=(0.0, 0.0), fov_deg=DEFAULT_SHEET_FOV_DEG if sheet else DEFAULT_MESH_FOV_DEG)
+    return 2.0 * math.tan(math.radians(lens.lens_fov_deg) / 2.0) / max(min(size), 1)
 
 
 def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: tuple[float, float],

@@ -314,6 +314,7 @@ def make_bsdf(
     uv_scale: float | str | tuple[float, float] | None = None,
     texel_filter: str | None = None,
     unit: str | float | None = None,
+    pixel_angle: float | None = None,
     curvature_map: Any = None,
     map_settings: Mapping[str, Any] | None = None,
 ) -> Any:
@@ -338,6 +339,12 @@ def make_bsdf(
         in mm) and ``"stochastic"`` (default: one of the four nearest texels
         with probability its bilinear weight), ``"bilinear"`` (the four
         blended, as :meth:`cdbrdf.CDBTF.evaluate`) or ``"nearest"``.
+    pixel_angle
+        The angle one pixel of the camera subtends, radians: a neural
+        CD-BTF's texels and a map's levels are filtered over the pixel's
+        footprint at the hit (``docs/btf.md``, "Filtering"; ``docs/rendering.md``,
+        "Maps"). Default: a map takes the scene's camera's
+        (:func:`check_scene`), a CD-BTF 0 (the texels themselves).
     unit
         The scene's unit (applied by :func:`load_dict` with the shape's
         ``to_world``; ``docs/rendering.md``, "Curvature units").
@@ -347,7 +354,7 @@ def make_bsdf(
     map_settings
         The other map parameters of the table above (``normal_map``,
         ``height_map``, ``height_scale``, ``map_size``, ``neighbourhood``,
-        ``pixel_angle``, ``map_filter``, ``shading_normals``, ...).
+        ``map_filter``, ``shading_normals``, ...).
 
     Returns
     -------
@@ -360,6 +367,8 @@ def make_bsdf(
         raise OptionError(f"map_settings: unknown parameter(s) {sorted(unknown)}; valid: {', '.join(MAP_PARAMETERS)}")
     if curvature_map is not None:
         extra["curvature_map"] = curvature_map
+    if pixel_angle is not None:
+        extra["pixel_angle"] = pixel_angle
     return _make_bsdf(table, mode=mode, curvature=curvature, curvature_mode=curvature_mode,
                       curvature_scale=curvature_scale, scale=scale, sampling=sampling, cosine_weight=cosine_weight,
                       storage=storage, uv_scale=uv_scale, texel_filter=texel_filter, unit=unit, **extra)

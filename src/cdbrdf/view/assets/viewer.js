@@ -52,18 +52,102 @@ uniform sampler2DArray uWts;      // RGBA32F (layer j: components 4j..4j+3) per 
 uniform ivec2 uTexels;            // n_u, n_v
 uniform vec2 uRepeat;             // the repeat's size, mm
 uniform int uRank;                // components used (<= uPer - 1)
+uniform float uFadeLevels;        // levels of the texels' pyramid (cdbrdf.btf._neural.level_shapes)
+uniform float uTexelSize;         // the larger side of a texel, mm
 
 vec3 comp(int s, int layer, int j) { int i = s * uPer + j; return texelFetch(uComp, ivec3(i % uCompW, i / uCompW, layer), 0).rgb; }
 vec4 wts(ivec2 t, int g) { return texelFetch(uWts, ivec3(t, g), 0); }
-// p: the position on the fabric, mm (periodic over the repeat)
-vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p) {
+
+// A neural CD-BTF (cdbrdf.btf._neural): max(0, M (1 + fade o)), o the decoder on the texel's latent code (a
+// pyramid level chosen by the footprint, bilinear between texel centres, linear between levels) and the query.
+uniform int uNeural;            // 1: the bound CD-BTF has a decoder
+uniform sampler2D uLat;         // RGBA32F: group g of code c at i = c * uLatG + g, texel (i % uLatW, i / uLatW)
+uniform int uLatW, uLatG;       // its width; groups of 4 numbers per code
+uniform ivec4 uLev[8];          // per level: n_u, n_v, first code
+uniform int uNLev;
+uniform sampler2D uDec;         // RGBA32F: a row per neuron, its weights in groups of 4 then (bias, 0, 0, 0)
+uniform ivec4 uLay;             // groups of the first layer's input (code + 3 of features), hidden 1, hidden 2, outputs
+uniform vec3 uDecC;             // kappa scale, luminance epsilon, offset
+uniform vec4 uClampT;           // theta_v min, max, theta_l min, max
+uniform float uTexelMM;         // the larger side of a level-0 texel, mm
+vec4 latG(int c, int g) { int i = c * uLatG + g; return texelFetch(uLat, ivec2(i % uLatW, i / uLatW), 0); }
+vec4 dec(int row, int g) { return texelFetch(uDec, ivec2(g, row), 0); }
+void addCode(int lv, vec2 f, float s, inout vec4 z[8]) {
+  ivec4 L = uLev[lv]; ivec2 n = L.xy;
+  vec2 x = f * vec2(n) - 0.5, x0 = floor(x), t = x - x0;
+  ivec2 i0 = (ivec2(x0) % n + n) % n, i1 = (i0 + 1) % n;
+  for (int k = 0; k < 4; k++) {
+    ivec2 c = ivec2(k % 2 == 0 ? i0.x : i1.x, k < 2 ? i0.y : i1.y);
+    float w = s * (k % 2 == 0 ? 1.0 - t.x : t.x) * (k < 2 ? 1.0 - t.y : t.y);
+    if (w == 0.0) continue;
+    int code = L.z + c.y * n.x + c.x;
+    for (int g = 0; g < 8; g++) { if (g >= uLatG) break; z[g] += w * latG(code, g); }
+  }
+}
+vec3 neural(vec3 mean, float tv, float pv, float tl, float pl, float k, vec2 p, float fp) {
+  float lam = log2(max(fp / uTexelMM, 1.0));
+  float fade = clamp(float(uNLev) - lam, 0.0, 1.0);
+  if (fade == 0.0) return mean;
+  int lv = min(int(floor(lam)), uNLev - 1);
+  float t = lv < uNLev - 1 ? lam - float(lv) : 0.0;
+  vec4 x[11];
+  for (int g = 0; g < 11; g++) x[g] = vec4(0.0);
+  vec2 f = p / uRepeat; f -= floor(f);
+  vec4 z[8];
+  for (int g = 0; g < 8; g++) z[g] = vec4(0.0);
+  addCode(lv, f, 1.0 - t, z);
+  if (t > 0.0) addCode(lv + 1, f, t, z);
+  for (int g = 0; g < 8; g++) { if (g >= uLatG) break; x[g] = z[g]; }
+  if (uIso == 1) { pv = wrapAz(wrapAz(pv) - wrapAz(pl)); pl = 0.0; }
+  tv = radians(clamp(tv, uClampT.x, uClampT.y)); tl = radians(clamp(tl, uClampT.z, uClampT.w));
+  pv = radians(pv); pl = radians(pl);
+  vec3 l = vec3(sin(tl) * cos(pl), sin(tl) * sin(pl), cos(tl)), v = vec3(sin(tv) * cos(pv), sin(tv) * sin(pv), cos(tv));
+  vec3 h = l + v; h *= inversesqrt(max(dot(h, h), 1e-24));
+  float lm = log(max(dot(mean, vec3(0.2126, 0.7152, 0.0722)), 0.0) + uDecC.y) - uDecC.z;
+  x[uLatG] = vec4(l, v.x); x[uLatG + 1] = vec4(v.yz, h.xy); k = clamp(k, axisAt(0, 0), axisAt(0, uN.x - 1));
+  x[uLatG + 2] = vec4(h.z, k / uDecC.x, lm, 0.0);
+  vec4 a[32], b[32];
+  int gin = uLay.x, h1 = uLay.y / 4, h2 = uLay.z / 4;
+  for (int j = 0; j < 32; j++) {
+    if (j >= h1) break;
+    vec4 acc = vec4(0.0);
+    for (int q = 0; q < 4; q++) {
+      int row = 4 * j + q; float s = dec(row, gin).x;
+      for (int g = 0; g < 11; g++) { if (g >= gin) break; s += dot(dec(row, g), x[g]); }
+      acc[q] = max(s, 0.0);
+    }
+    a[j] = acc;
+  }
+  for (int j = 0; j < 32; j++) {
+    if (j >= h2) break;
+    vec4 acc = vec4(0.0);
+    for (int q = 0; q < 4; q++) {
+      int row = uLay.y + 4 * j + q; float s = dec(row, h1).x;
+      for (int g = 0; g < 32; g++) { if (g >= h1) break; s += dot(dec(row, g), a[g]); }
+      acc[q] = max(s, 0.0);
+    }
+    b[j] = acc;
+  }
+  vec3 o;
+  for (int c = 0; c < 3; c++) {
+    int row = uLay.y + uLay.z + min(c, uLay.w - 1); float s = dec(row, h2).x;
+    for (int g = 0; g < 32; g++) { if (g >= h2) break; s += dot(dec(row, g), b[g]); }
+    o[c] = s;
+  }
+  return max(mean * (1.0 + fade * o), 0.0);
+}
+// p: the position on the fabric, mm (periodic over the repeat); fp: the footprint there, mm (0: the texels)
+vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p, float fp) {
   int ci[32]; int cl[32]; float cw[32];
   int n = 0;
   Cell cc = cell(tv, pv, tl, pl, k);
   FOR_CORNERS(cc, ci[n] = I; cl[n] = L; cw[n] = W; n++;)
   vec3 acc = vec3(0.0);
   for (int c = 0; c < 32; c++) { if (c >= n) break; acc += cw[c] * comp(ci[c], cl[c], 0); }
-  if (uRank == 0) return acc;
+  if (uNeural == 1) acc = neural(acc, tv, pv, tl, pl, k, p, fp);
+  // the components fade out over the last level of the pyramid (the texels' pyramid itself is not built here)
+  float fadeC = clamp(uFadeLevels - log2(max(fp / uTexelSize, 1.0)), 0.0, 1.0);
+  if (uRank == 0 || fadeC == 0.0) return acc;
   // the weights: periodic bilinear between texel centres (CDBTF.texel_weights)
   vec2 r = p / uRepeat;
   vec2 f = (r - floor(r)) * vec2(uTexels) - 0.5, f0 = floor(f), t = f - f0;
@@ -76,7 +160,7 @@ vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p) {
       if (w[q] == 0.0) continue;
       vec3 s = vec3(0.0);
       for (int c = 0; c < 32; c++) { if (c >= n) break; s += cw[c] * comp(ci[c], cl[c], j); }
-      acc += w[q] * s;
+      acc += fadeC * w[q] * s;
     }
   }
   return acc;
@@ -93,14 +177,14 @@ void main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2
 
   const EVAL_FS = `#version 300 es
 ${LOOKUP_GLSL}
-uniform sampler2D uQ;  // two texels per query: (theta_v, phi_v, theta_l, phi_l), (kappa, u_mm, v_mm, 1: at (u, v))
+uniform sampler2D uQ;  // two texels per query: (theta_v, phi_v, theta_l, phi_l), (kappa, u_mm, v_mm, 1 + footprint mm: at (u, v))
 out vec4 o;
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   vec4 a = texelFetch(uQ, ivec2(2 * p.x, p.y), 0);
   vec4 b = texelFetch(uQ, ivec2(2 * p.x + 1, p.y), 0);
 #ifdef BTF
-  o = vec4(uBtf == 1 && b.w > 0.5 ? lookupBTF(a.x, a.y, a.z, a.w, b.x, b.yz) : lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
+  o = vec4(uBtf == 1 && b.w > 0.5 ? lookupBTF(a.x, a.y, a.z, a.w, b.x, b.yz, b.w - 1.0) : lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
 #else
   o = vec4(lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
 #endif
@@ -161,9 +245,10 @@ uniform vec3 uEye; uniform vec3 uLight; uniform float uExpo;  // uExpo = pi * 2^
 uniform int uEnv; uniform vec3 uEnvDir[9]; uniform float uEnvW[9];
 uniform int uMode; uniform float uSplitX; uniform int uOverlay; uniform float uKmax; uniform int uPick;
 out vec4 o;
+float gFootprint = 0.0;  // the pixel's extent on the fabric (mm), from the derivatives in main (uniform control flow)
 vec3 reflectance(vec2 av, vec2 al, float k) {
 #ifdef BTF
-  return lookupBTF(av.x, av.y, al.x, al.y, k, vUV / uWeaveScale);
+  return lookupBTF(av.x, av.y, al.x, al.y, k, vUV / uWeaveScale, gFootprint);
 #else
   return lookup(av.x, av.y, al.x, al.y, k);
 #endif
@@ -176,6 +261,10 @@ vec2 angles(vec3 d, vec3 n, vec3 t, vec3 b) {
   return vec2(min(th, 90.0), ph);
 }
 void main() {
+#ifdef BTF
+  vec2 pUV = vUV / uWeaveScale;
+  gFootprint = max(length(dFdx(pUV)), length(dFdy(pUV)));
+#endif
   vec3 n, t; float k;
   if (uSurf == 1) {
     float w = 6.283185307179586 / uWave, d1 = uAmp * w * cos(w * vS);
@@ -344,9 +433,28 @@ void main() {
     };
     tex(BTF_UNIT + 2 * index, c.width, c.height, c.layers, block(asset, 'components'), half);
     tex(BTF_UNIT + 2 * index + 1, w.width, w.height, w.layers, block(asset, 'weights'), false);
-    return { unit: BTF_UNIT + 2 * index, compW: c.width, per: c.per_sample, rank: b.rank, rankTotal: b.rank_total,
-      texels: b.texels, repeat: b.repeat_mm };
+    const out = { unit: BTF_UNIT + 2 * index, compW: c.width, per: c.per_sample, rank: b.rank, rankTotal: b.rank_total,
+      texels: b.texels, repeat: b.repeat_mm, neural: null, fadeLevels: b.levels };
+    if (b.neural) {  // the latent pyramid and the decoder: 2D float textures, units NEURAL_UNIT + 2 index (+ 1)
+      const nn = b.neural, tex2 = (unit, t, data) => {
+        const x = gl.createTexture();
+        gl.activeTexture(gl.TEXTURE0 + unit);
+        gl.bindTexture(gl.TEXTURE_2D, x);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+        gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, t.width, t.height, 0, gl.RGBA, gl.FLOAT, data);
+      };
+      for (const [what, t] of [['latents', nn.latents], ['decoder', nn.decoder]]) {
+        if (t.width > limits.MAX_TEXTURE_SIZE || t.height > limits.MAX_TEXTURE_SIZE) throw fail(`${h.name}: the CD-BTF's ${what} texture ${t.width} x ${t.height} exceeds MAX_TEXTURE_SIZE ${limits.MAX_TEXTURE_SIZE}`);
+      }
+      tex2(NEURAL_UNIT + 2 * index, nn.latents, block(asset, 'latents'));
+      tex2(NEURAL_UNIT + 2 * index + 1, nn.decoder, block(asset, 'decoder'));
+      out.neural = { unit: NEURAL_UNIT + 2 * index, latW: nn.latents.width, latG: nn.latents.groups,
+        levels: nn.levels, layers: nn.layers, constants: nn.constants, clamp: nn.clamp, texelMM: nn.texel_mm };
+    }
+    return out;
   }
+  const NEURAL_UNIT = 20;
   // the components a table uses now: the slider's cap, at most what was packed
   const rankUsed = (tab) => (tab.btf ? Math.max(0, Math.min(tab.btf.rank, state.components)) : 0);
 
@@ -367,6 +475,22 @@ void main() {
       gl.uniform2i(prog.u.uTexels, b.texels[0], b.texels[1]);
       gl.uniform2f(prog.u.uRepeat, b.repeat[0], b.repeat[1]);
       gl.uniform1i(prog.u.uRank, rankUsed(tab));
+      gl.uniform1f(prog.u.uFadeLevels, b.fadeLevels);
+      gl.uniform1f(prog.u.uTexelSize, Math.max(b.repeat[0] / b.texels[0], b.repeat[1] / b.texels[1]));
+      const nn = b.neural;
+      gl.uniform1i(prog.u.uNeural, nn ? 1 : 0);
+      if (nn) {
+        gl.uniform1i(prog.u.uLat, nn.unit); gl.uniform1i(prog.u.uDec, nn.unit + 1);
+        gl.uniform1i(prog.u.uLatW, nn.latW); gl.uniform1i(prog.u.uLatG, nn.latG);
+        const lev = new Int32Array(32);
+        nn.levels.forEach((l, i) => lev.set([l[0], l[1], l[2], 0], 4 * i));
+        gl.uniform4iv(prog.u.uLev, lev);
+        gl.uniform1i(prog.u.uNLev, nn.levels.length);
+        gl.uniform4i(prog.u.uLay, nn.layers[0], nn.layers[1], nn.layers[2], nn.layers[3]);
+        gl.uniform3f(prog.u.uDecC, nn.constants[0], nn.constants[1], nn.constants[2]);
+        gl.uniform4f(prog.u.uClampT, nn.clamp[0], nn.clamp[1], nn.clamp[2], nn.clamp[3]);
+        gl.uniform1f(prog.u.uTexelMM, nn.texelMM);
+      }
     }
   }
 
@@ -523,7 +647,9 @@ void main() {
       if (used < b.rank) why += `; the leading ${used}${state.software ? ' on software rendering' : ''}, the components slider goes up to ${b.rank}`;
       const shown = !state.weave ? 'showing the tile mean' : mesh && !s.uv ? 'this mesh has no UVs: tile mean' :
         `weave at ${state.weaveScale === 1 ? 'true size' : `${state.weaveScale.toFixed(1)}x size`}${uvs}`;
-      return `${t.h.name}: CD-BTF, rank ${used} used of ${b.rankTotal}${why}; ${tex}; ${shown}`;
+      const nn = b.neural ? `neural (a ${b.neural.layers[1]}-${b.neural.layers[2]} decoder on ${b.neural.levels.length} levels of codes, filtered by the pixel's footprint)` +
+        (b.rankTotal ? ` + ${used} of ${b.rankTotal} residual components` : '') : null;
+      return `${t.h.name}: CD-BTF, ${nn || `rank ${used} used of ${b.rankTotal}`}${why}; ${tex}; ${shown}`;
     }).join('\n');
   }
 
@@ -591,12 +717,12 @@ void main() {
     queries.forEach((x, i) => {
       // azimuths reduced exactly in float64 (fmod, as cdbrdf.interp.wrap_azimuth) before float32 loses them
       const wrap = (a) => (Math.abs(a) < 360 ? a : a % 360);
-      const [tv, pv0, tl, pl0, k, u, v] = x.map(Number);
+      const [tv, pv0, tl, pl0, k, u, v, fp] = x.map(Number);
       const pv = wrap(pv0), pl = wrap(pl0), at = x.length >= 7;  // a position (u, v) in mm: the CD-BTF there
       ok[i] = [tv, pv, tl, pl, k].every(Number.isFinite) && tv >= 0 && tv <= 90 && tl >= 0 && tl <= 90 &&
         (!at || (Number.isFinite(u) && Number.isFinite(v)));
       const r = Math.floor(i / per), c = i % per, o = (r * cols * 2 + 2 * c) * 4;
-      if (ok[i]) q.set([tv, pv, tl, pl, k, at ? u : 0, at ? v : 0, at ? 1 : 0], o);
+      if (ok[i]) q.set([tv, pv, tl, pl, k, at ? u : 0, at ? v : 0, at ? 1 + (Number.isFinite(fp) && fp > 0 ? fp : 0) : 0], o);
     });
     const qt = gl.createTexture();
     gl.activeTexture(gl.TEXTURE6);
