@@ -45,6 +45,7 @@ COMMANDS: tuple[str, ...] = (
     "simulate-capture",
     "curvature",
     "render",
+    "export",
     "synth",
     "view",
 )
