@@ -76,7 +76,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_map_options(p.add_argument_group("maps laid on --mesh by its UVs, as cdbrdf render lays them "
                                          "(docs/viewer.md, \"Maps\")"))
     p.add_argument("--precision", type=keyword(("auto", "float32", "float16")), default="auto",
-                   help="texture precision: auto (float16 only for very large tables), float32 or float16")
+                   help="texture precision of the tables and a curvature map: auto (float16 only for very large "
+                   "tables; maps float32), float32 or float16")
     p.set_defaults(func=run)
 
 

@@ -895,9 +895,11 @@ void main() {
     if (!s || !s.map) return '';
     const m = s.map.h, f = (x) => Number(x).toPrecision(4).replace(/\.?0+$/, '');
     const scale = m.uv_scale_mm[0] === m.uv_scale_mm[1] ? f(m.uv_scale_mm[0]) : m.uv_scale_mm.map(f).join(' x ');
-    return `${m.name}: ${m.source}, ${m.texels[0]} x ${m.texels[1]} texels, one repeat per ${m.tile_mm.map(f).join(' x ')} mm ` +
-      `(UV scale ${scale} mm per UV unit); ${m.levels.length} levels from ${f(m.texel_mm)} mm texels, read by the ` +
-      `pixel's footprint, none finer than the curvature's ${f(m.neighbourhood_mm)} mm neighbourhood` +
+    const baked = m.baked_texels || m.texels;
+    return `${m.name}: ${m.source}, ${baked[0]} x ${baked[1]} texels, one repeat per ${m.tile_mm.map(f).join(' x ')} mm ` +
+      `(UV scale ${scale} mm per UV unit); looked up per pixel on its levels from ${m.texels[0]} x ${m.texels[1]} ` +
+      `texels of ${f(m.texel_mm)} mm (none finer than the curvature's ${f(m.neighbourhood_mm)} mm neighbourhood) ` +
+      `by the pixel's footprint` +
       (state.maps ? '' : '; off: the mesh\'s own curvature and normals') + (m.note ? `\n${m.note}` : '');
   }
 
