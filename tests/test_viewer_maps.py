@@ -217,11 +217,15 @@ def test_cli_view_lays_the_map_as_render_does(quad_files, tmp_path, capsys):
 @pytest.fixture(scope="module")
 def wrinkle_pages(browser, quad_files, tmp_path_factory):
     """The page of ``view --mesh quad.obj --normal-map wrinkles.png``, and of the quad without it."""
+    from .test_viewer_btf import aniso_grid, random_btf
+
     d, out = quad_files, tmp_path_factory.mktemp("pages")
     shot = str(materials.path("shot"))
+    random_btf(aniso_grid(), rank=2).save(out / "weave.h5")
     pages = {}
-    for key, extra in (("map", ["--normal-map", str(d / "wrinkles.png")]), ("plain", [])):
-        assert main(["-q", "view", shot, "--mesh", str(d / "quad.obj"), "--uv-scale", "100", *extra,
+    for key, table, extra in (("map", shot, ["--normal-map", str(d / "wrinkles.png")]), ("plain", shot, []),
+                              ("btf", str(out / "weave.h5"), ["--normal-map", str(d / "wrinkles.png")])):
+        assert main(["-q", "view", table, "--mesh", str(d / "quad.obj"), "--uv-scale", "100", *extra,
                      "--export", str(out / key)]) == 0
         page, messages = open_page(browser, (out / key / "index.html").resolve().as_uri(), width=240, height=150)
         page.messages = messages
@@ -243,7 +247,8 @@ def test_page_opens_on_the_mesh_framed(wrinkle_pages):
     assert page.messages == [] and st["surface"] == "user" and st["mapped"] == ["user"]
     assert page.locator("#surface").input_value() == "user"
     assert (st["cam"]["elevation"], st["cam"]["azimuth"]) == (20, -65)  # cdbrdf render's view of a mesh
-    assert st["mapText"].startswith("wrinkles.png: normal map, 512 x 512 texels, one repeat per 100 x 100 mm")
+    assert st["mapText"].startswith("wrinkles.png: normal map, one repeat per 100 x 100 mm (UV scale 100 mm per UV "
+                                    "unit); looked up per pixel by its footprint on 10 levels from 512 x 512 texels")
     # framed as cdbrdf render frames it: the quad fills about 3/4 of the canvas's limiting side
     front = curvature(page)[..., 2] > 0.5
     ys, xs = np.nonzero(front)
@@ -256,6 +261,8 @@ def test_page_shows_the_wrinkles(wrinkle_pages):
     """Seen from above, light at 45 degrees across them: 10 stripes over the quad, crests convex at 0.158 / mm."""
     shots = {}
     for key, page in wrinkle_pages.items():
+        if key == "btf":
+            continue
         page.evaluate("cdbrdfViewer.setCamera(90, -90, 190)")  # the 100 mm quad from above, u to the right
         page.evaluate("cdbrdfViewer.setLight(45, 0)")
         shots[key] = pixels(page).astype(np.float64).mean(axis=-1)
@@ -318,3 +325,18 @@ def test_crest_pixels_are_the_table_at_the_tilted_query(wrinkle_pages):
     plain.evaluate("cdbrdfViewer.setMode('cdbrdf')")
     front = kb[..., 2] > 0.5
     assert np.abs(brdf - flat).max(axis=-1)[front].mean() > 3
+
+
+@needs_chromium
+def test_a_cd_btf_takes_the_map_too(wrinkle_pages):
+    """A CD-BTF on the mapped mesh: the weave and the wrinkles in one program (no console message)."""
+    page = wrinkle_pages["btf"]
+    page.evaluate("cdbrdfViewer.setCamera(90, -90, 60)")
+    page.evaluate("cdbrdfViewer.setLight(45, 0)")
+    on = pixels(page)
+    page.evaluate("cdbrdfViewer.setMaps(false)")
+    off = pixels(page)
+    page.evaluate("cdbrdfViewer.setMaps(true)")
+    st = page.evaluate("cdbrdfViewer.state()")
+    assert page.messages == [] and st["surface"] == "user" and st["btf"][0] is not None
+    assert np.abs(on - off).max(axis=-1).mean() > 3 and off.std() > 3

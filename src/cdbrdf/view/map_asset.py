@@ -63,8 +63,8 @@ def map_atlas(cmap: Any, *, uv_scale: Any, neighbourhood_mm: float, max_width: i
     -------
     header : dict
         ``name`` (the file's name without its folders), ``source``,
-        ``baked_texels`` (the map's ``[w, h]``), ``texels`` (the finest level
-        kept), ``levels`` (``[w, h, offset]`` per level), ``transform``, ``uv_scale_mm``,
+        ``texels`` (the finest level kept, ``[w, h]``), ``levels``
+        (``[w, h, offset]`` per level), ``transform``, ``uv_scale_mm``,
         ``min_level`` (fractional), ``neighbourhood_mm``, ``tile_mm``,
         ``texel_mm``, ``dropped_levels`` (for the texture's size),
         ``note`` and ``atlas`` (``width``, ``height``).
@@ -77,7 +77,6 @@ def map_atlas(cmap: Any, *, uv_scale: Any, neighbourhood_mm: float, max_width: i
     pair = as_uv_scale(uv_scale)
     nb = float(neighbourhood_mm)
     label = PurePath(str(cmap.name)).name or "map"  # a file's name, never its folders (an export is published)
-    baked = list(cmap.texels)
     cmap = cmap.coarser(int(neighbourhood_level(cmap, pair, nb)))  # as the renderer (render/_maps_jit.SurfaceMap)
     dropped = 0
 
@@ -107,8 +106,7 @@ def map_atlas(cmap: Any, *, uv_scale: Any, neighbourhood_mm: float, max_width: i
         levels.append([int(w), int(h), int(off)])
         off += w * h
     tu, tv = cmap.tile_mm(pair)
-    header = {"name": label, "source": str(cmap.source), "baked_texels": baked, "texels": list(cmap.texels),
-              "levels": levels,
+    header = {"name": label, "source": str(cmap.source), "texels": list(cmap.texels), "levels": levels,
               "transform": [float(x) for x in cmap.transform], "uv_scale_mm": [pair[0], pair[1]],
               "min_level": float(min_level), "neighbourhood_mm": nb, "tile_mm": [tu, tv],
               "texel_mm": cmap.texel_mm(pair), "dropped_levels": dropped, "note": note,

@@ -895,11 +895,9 @@ void main() {
     if (!s || !s.map) return '';
     const m = s.map.h, f = (x) => Number(x).toPrecision(4).replace(/\.?0+$/, '');
     const scale = m.uv_scale_mm[0] === m.uv_scale_mm[1] ? f(m.uv_scale_mm[0]) : m.uv_scale_mm.map(f).join(' x ');
-    const baked = m.baked_texels || m.texels;
-    return `${m.name}: ${m.source}, ${baked[0]} x ${baked[1]} texels, one repeat per ${m.tile_mm.map(f).join(' x ')} mm ` +
-      `(UV scale ${scale} mm per UV unit); looked up per pixel on its levels from ${m.texels[0]} x ${m.texels[1]} ` +
-      `texels of ${f(m.texel_mm)} mm (none finer than the curvature's ${f(m.neighbourhood_mm)} mm neighbourhood) ` +
-      `by the pixel's footprint` +
+    return `${m.name}: ${m.source}, one repeat per ${m.tile_mm.map(f).join(' x ')} mm (UV scale ${scale} mm per UV ` +
+      `unit); looked up per pixel by its footprint on ${m.levels.length} levels from ${m.texels[0]} x ${m.texels[1]} ` +
+      `texels of ${f(m.texel_mm)} mm (none finer than the curvature's ${f(m.neighbourhood_mm)} mm neighbourhood)` +
       (state.maps ? '' : '; off: the mesh\'s own curvature and normals') + (m.note ? `\n${m.note}` : '');
   }
 
