@@ -89,6 +89,14 @@ API_MODULES = {
     "Fabrics": ["cdbrdf.materials", "cdbrdf.synth", "cdbrdf.synth.metrics"],
     "Measurement and import": ["cdbrdf.measure", "cdbrdf.rig", "cdbrdf.importers", "cdbrdf.images"],
     "Geometry and rendering": ["cdbrdf.frames", "cdbrdf.mesh", "cdbrdf.render"],
+    "Exchange: glTF 2.0 and MaterialX": [
+        "cdbrdf.gltf_table",
+        "cdbrdf.export.gltf",
+        "cdbrdf.export.fallback",
+        "cdbrdf.export.tangents",
+        "cdbrdf.export.materialx",
+        "cdbrdf.view.gltf_page",
+    ],
     "Colour, figures, the viewer, the demo": [
         "cdbrdf.colour",
         "cdbrdf.plot",

@@ -44,6 +44,7 @@ COMMANDS: tuple[str, ...] = (
     "simulate-capture",
     "curvature",
     "render",
+    "export",
     "synth",
     "view",
 )

@@ -54,7 +54,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "cdbrdf view shot.h5 --mesh quad.obj --normal-map wrinkles.png --uv-scale 100",
     )
     p.add_argument("files", metavar="FILE", nargs="+", type=existing_file(),
-                   help="a CDBRDF or CD-BTF file (.h5); a second one is shown side by side")
+                   help="a CDBRDF or CD-BTF file (.h5), a second one shown side by side; or a glTF asset (.glb) "
+                   "written by cdbrdf export, shown by the glTF renderer (three.js)")
     p.add_argument("--export", metavar="DIR", type=output_folder(maker=EXPORT_MAKER, signature=EXPORT_SIGNATURE),
                    help="write the viewer as a static folder DIR instead of serving it (replaced whole "
                    "only if it holds an earlier export of the viewer and nothing added to it)")
@@ -140,15 +141,53 @@ def _btf(args: argparse.Namespace, path: str) -> Any:
     return t
 
 
+#: Options of the table viewer that the glTF renderer does not take.
+_TABLE_VIEWER_ONLY = ("mesh", "grid", "rank", "uv_scale", "units", "neighbourhood", "frame")
+
+
+def _gltf_files(args: argparse.Namespace) -> tuple[str, dict[str, bytes]]:
+    """``cdbrdf view x.glb``: the glTF renderer's files (:mod:`cdbrdf.view.gltf_page`)."""
+    from ..errors import FormatError, OptionError
+    from ..fsutil import read_regular
+    from ..gltf_table import MAX_GLTF_BYTES
+    from ..table import load
+    from ..view.gltf_page import gltf_viewer_files
+
+    if len(args.files) != 1:
+        raise OptionError("FILE: the glTF renderer shows one asset (.glb) at a time")
+    from ._maps import MAP_OPTIONS
+
+    given = [o for o in (*_TABLE_VIEWER_ONLY, *MAP_OPTIONS) if getattr(args, o, None) not in (None, False)]
+    if args.up != "auto":
+        given.append("up")
+    if args.precision != "auto":
+        given.append("precision")
+    if given:
+        raise OptionError(f"--{given[0].replace('_', '-')}: not for a glTF asset (its mesh, curvature and table "
+                          "are in the file)")
+    path = Path(args.files[0])
+    if path.suffix.lower() != ".glb":
+        raise OptionError(f"{path}: the glTF renderer opens binary glTF (.glb); write one with cdbrdf export -o X.glb")
+    glb = read_regular(path, max_bytes=MAX_GLTF_BYTES)
+    if glb[:4] != b"glTF":
+        raise FormatError(f"{path}: not a binary glTF file")
+    load(path)  # refuses a file without the extension, or a damaged one, in one line
+    return path.name, gltf_viewer_files(glb, name=path.name)
+
+
 def run(args: argparse.Namespace) -> int:
     from ..btf import CDBTF, is_btf
     from ..errors import OptionError
+    from ..gltf_table import is_gltf
     from ..mesh import has_own_uv
     from ..table import load
     from ..view.asset import resample
-    from ..view.export import MAX_TABLES, drape_entry, export_viewer, viewer_files
+    from ..view.export import MAX_TABLES, drape_entry, viewer_files
     from ._maps import MAP_OPTIONS
 
+    if any(is_gltf(f) for f in args.files):
+        name, files = _gltf_files(args)
+        return _publish(args, [name], files)
     if len(args.files) > MAX_TABLES:
         raise OptionError(f"FILE: the viewer shows at most {MAX_TABLES} tables side by side, got {len(args.files)}")
     if args.export:
@@ -180,6 +219,13 @@ def run(args: argparse.Namespace) -> int:
             say(f"{Path(args.mesh).name}: no UVs: the viewer shows the CD-BTF's tile mean on it", err=True)
     files = viewer_files(tables, meshes=meshes, precision=args.precision, max_rank=args.rank,
                          open_on="user" if args.mesh else None)
+    return _publish(args, [n for n, _ in tables], files)
+
+
+def _publish(args: argparse.Namespace, names: list[str], files: dict[str, bytes]) -> int:
+    """Write the pages as a static folder (``--export``) or serve them until Ctrl-C."""
+    from ..view.export import export_viewer
+
     if args.export:
         index = export_viewer(args.export, files)
         if not args.quiet:
@@ -188,7 +234,7 @@ def run(args: argparse.Namespace) -> int:
     from ..view.server import ViewerServer
 
     server = ViewerServer(files, port=args.port)
-    say(f"cdbrdf view: serving {', '.join(n for n, _ in tables)} at {server.url} (Ctrl-C stops)", flush=True)
+    say(f"cdbrdf view: serving {', '.join(names)} at {server.url} (Ctrl-C stops)", flush=True)
     if args.browser and _browser_available():
         import webbrowser
 

@@ -2,7 +2,8 @@
 
 :func:`viewer_files` builds every file of the viewer in memory:
 
-- ``index.html`` and ``viewer.js``: the page (package data, ``assets/``);
+- ``index.html``, ``lookup.js`` (the GLSL lookup, shared with the glTF
+  renderer) and ``viewer.js``: the page (package data, ``assets/``);
 - ``data.js``: ``window.CDBRDF_VIEWER_DATA``, every asset's JSON header and
   its binary blob in base64, loaded by a ``<script>`` tag, so that the page
   opens from ``file://`` (where a browser refuses ``fetch()`` of local files)
@@ -61,7 +62,7 @@ EXPORT_SIGNATURE: tuple[str, ...] = ("index.html", "data.js")
 MAX_TABLES = 2
 
 #: The page's own files (package data under ``cdbrdf/view/assets``) and their names in the folder.
-PAGE_FILES: Mapping[str, str] = {"viewer.html": "index.html", "viewer.js": "viewer.js"}
+PAGE_FILES: Mapping[str, str] = {"viewer.html": "index.html", "lookup.js": "lookup.js", "viewer.js": "viewer.js"}
 
 #: Vertices along each side of the draped cloth shown in the viewer.
 DRAPE_RESOLUTION = 101
