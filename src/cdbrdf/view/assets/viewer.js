@@ -172,6 +172,88 @@ vec3 srgb(vec3 c) {
 }
 `;
 
+  // A curvature map (cdbrdf.mesh.curvature_map, packed by cdbrdf.view.asset.map_atlas): the lookup rule of
+  // CurvatureMap (the level of the footprint, bilinear between texel centres, periodic, row 0 at the top, linear
+  // between levels: trilinear, on the map's own prefiltered levels read with texelFetch, not WebGL's mip maps) and
+  // the plug-in's use of it (cdbrdf.render._maps_jit: the detail's shape operator at the UV scale added to the
+  // mesh's own, the eigenvalue of larger magnitude or the xx entry; the shading frame tilted as Mitsuba's
+  // normalmap builds it). Written once; tested against the Python rule in tests/test_viewer_maps.py.
+  const MAPS_GLSL = `
+precision highp float; precision highp int; precision highp sampler2D;
+uniform sampler2D uMap;     // RGBA: map texel j of a level at atlas texels 2 (offset + j), 2 (offset + j) + 1
+uniform int uMapW;          // the atlas's width: texel i at (i % uMapW, i / uMapW)
+uniform ivec4 uMapLev[16];  // per level: width, height, offset (map texels)
+uniform int uMapN;          // levels
+uniform vec4 uMapTr;        // texture transform: t = (ru u + ou, rv v + ov)
+uniform vec2 uMapScale;     // UV scale, mm per UV unit (su, sv)
+uniform float uMapMin;      // the finest level read (the curvature's neighbourhood)
+uniform int uMapDir;        // 1: the directional curvature (xx), 0: the eigenvalue of larger magnitude
+struct MapTexel { vec4 a; vec2 b; };  // (p, q, dp/du, dp/dv), (dq/du, dq/dv)
+struct MapDetail { float p, q; vec3 k; };  // slopes and the shape operator (kxx, kxy, kyy), 1/mm, shading frame
+
+// the level of a footprint (fu, fv) in UV units: log2 in level-0 texels along the map's longer axis
+float mapLevel(vec2 f) {
+  vec2 n = vec2(uMapLev[0].xy) * abs(uMapTr.xy);
+  float t = max(f.x * n.x, f.y * n.y);
+  return clamp(max(log2(max(t, 1e-30)), uMapMin), 0.0, float(uMapN - 1));
+}
+MapTexel mapFetch(int lv, ivec2 c) {
+  ivec4 L = uMapLev[lv];
+  int i = 2 * (L.z + c.y * L.x + c.x);
+  MapTexel m;
+  m.a = texelFetch(uMap, ivec2(i % uMapW, i / uMapW), 0);
+  m.b = texelFetch(uMap, ivec2((i + 1) % uMapW, (i + 1) / uMapW), 0).xy;
+  return m;
+}
+void mapAdd(inout MapTexel acc, MapTexel m, float w) { acc.a += w * m.a; acc.b += w * m.b; }
+// level lv at texture coordinates t: bilinear between the four nearest texel centres, periodic
+void mapBilinear(int lv, vec2 t, float s, inout MapTexel acc) {
+  ivec2 n = uMapLev[lv].xy;
+  vec2 x = vec2(t.x - floor(t.x), (1.0 - t.y) - floor(1.0 - t.y)) * vec2(n) - 0.5;
+  vec2 x0 = floor(x), f = x - x0;
+  ivec2 i0 = ivec2(x0);  // in [-1, n - 1]
+  if (i0.x < 0) i0.x += n.x;
+  if (i0.y < 0) i0.y += n.y;
+  ivec2 i1 = ivec2(i0.x + 1 < n.x ? i0.x + 1 : 0, i0.y + 1 < n.y ? i0.y + 1 : 0);
+  mapAdd(acc, mapFetch(lv, i0), s * (1.0 - f.x) * (1.0 - f.y));
+  mapAdd(acc, mapFetch(lv, ivec2(i1.x, i0.y)), s * f.x * (1.0 - f.y));
+  mapAdd(acc, mapFetch(lv, ivec2(i0.x, i1.y)), s * (1.0 - f.x) * f.y);
+  mapAdd(acc, mapFetch(lv, i1), s * f.x * f.y);
+}
+// the six values at mesh UVs and a (fractional) level: trilinear
+MapTexel mapTexel(vec2 uv, float level) {
+  vec2 t = uv * uMapTr.xy + uMapTr.zw;
+  float l = clamp(level, 0.0, float(uMapN - 1));
+  int l0 = int(floor(l));
+  float f = l - float(l0);
+  MapTexel acc; acc.a = vec4(0.0); acc.b = vec2(0.0);
+  mapBilinear(l0, t, l0 + 1 < uMapN ? 1.0 - f : 1.0, acc);
+  if (l0 + 1 < uMapN && f > 0.0) mapBilinear(l0 + 1, t, f, acc);
+  return acc;
+}
+// the detail at the UV scale in the shading frame; hand = -1 on a mirrored UV layout (flips q and kxy)
+MapDetail mapDetail(MapTexel m, float hand) {
+  MapDetail d;
+  d.p = m.a.x; d.q = m.a.y * hand;
+  d.k = vec3(m.a.z / uMapScale.x, (0.5 * m.a.w / uMapScale.y + 0.5 * m.b.x / uMapScale.x) * hand, m.b.y / uMapScale.y);
+  return d;
+}
+// the curvature of the mesh's shape operator (sxx, sxy, syy) plus the detail's
+float mapCurvature(vec3 mesh, MapDetail d, int directional) {
+  vec3 s = mesh + d.k;
+  if (directional == 1) return s.x;
+  float mean = 0.5 * (s.x + s.z), half_ = sqrt(0.25 * (s.x - s.z) * (s.x - s.z) + s.y * s.y);
+  return mean >= 0.0 ? mean + half_ : mean - half_;
+}
+// the tilted frame (columns s', t', n' in shading-frame coordinates) for the view direction wi there
+mat3 mapFrame(float p, float q, vec3 wi) {
+  vec3 n = normalize(vec3(p, q, 1.0));
+  if (wi.z * dot(wi, n) <= 0.0) n.xy = -n.xy;  // mirrored about the normal when it faces away from the viewer
+  vec3 s = normalize(vec3(1.0 - n.x * n.x, -n.x * n.y, -n.x * n.z));
+  return mat3(s, cross(n, s), n);
+}
+`;
+
   const FULLSCREEN_VS = `#version 300 es
 void main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2)); gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }`;
 
@@ -190,6 +272,26 @@ void main() {
 #endif
 }`;
 
+  // the map's rule at given points, for the tests: queries of three texels (u, v, level or -1: from the
+  // footprint, fu), (fv, sxx, sxy, syy), (hand, wi in the shading frame); uOut picks four of the outputs
+  const MAP_EVAL_FS = `#version 300 es
+${MAPS_GLSL}
+uniform sampler2D uQ; uniform int uOut;
+out vec4 o;
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  vec4 a = texelFetch(uQ, ivec2(3 * p.x, p.y), 0), b = texelFetch(uQ, ivec2(3 * p.x + 1, p.y), 0);
+  vec4 c = texelFetch(uQ, ivec2(3 * p.x + 2, p.y), 0);
+  float lv = a.z >= 0.0 ? a.z : mapLevel(vec2(a.w, b.x));
+  MapTexel m = mapTexel(a.xy, lv);
+  MapDetail d = mapDetail(m, c.x);
+  mat3 f = mapFrame(d.p, d.q, c.yzw);
+  if (uOut == 0) o = m.a;
+  else if (uOut == 1) o = vec4(m.b, lv, mapCurvature(b.yzw, d, 0));
+  else if (uOut == 2) o = vec4(mapCurvature(b.yzw, d, 1), f[2]);
+  else o = vec4(f[0], d.q);
+}`;
+
   const POLAR_FS = `#version 300 es
 ${LOOKUP_GLSL}
 uniform vec2 uL; uniform float uK; uniform vec2 uSize; uniform float uExpo;
@@ -206,14 +308,23 @@ void main() {
   const SURFACE_VS = `#version 300 es
 in vec3 aPos; in vec3 aNrm; in vec3 aTan; in float aK;
 uniform mat4 uMVP; uniform int uSurf; uniform float uAmp, uWave, uStandK, uWidth, uDepth;
-#ifdef BTF
+#if defined(BTF) || defined(MAPS)
 in vec2 aUV;            // a mesh's UVs (zero without)
+#endif
+#ifdef BTF
 uniform vec2 uUvScale;  // mm of fabric per UV unit (cdbrdf view --uv-scale, the renderer's uv_scale)
+#endif
+#ifdef MAPS
+in vec4 aShape;         // the mesh's own shape operator (sxx, sxy, syy; 1/mm, x = dP/du) and the UV handedness
+out vec2 vMapUV; out vec4 vShape;
 #endif
 out vec3 vWorld; out vec3 vN; out vec3 vT; out float vK; out float vS; out vec2 vUV;
 void main() {
   vec3 p = aPos;
   vN = aNrm; vT = aTan; vK = aK; vS = 0.0; vUV = vec2(0.0);
+#ifdef MAPS
+  vMapUV = aUV; vShape = aShape;
+#endif
   if (uSurf == 1) {          // sine sheet: z = A sin(2 pi x / L)
     float x = (aPos.x - 0.5) * uWidth;
     p = vec3(x, (aPos.y - 0.5) * uDepth, uAmp * sin(6.283185307179586 * x / uWave));
@@ -238,6 +349,10 @@ void main() {
 
   const SURFACE_FS = `#version 300 es
 ${LOOKUP_GLSL}
+#ifdef MAPS
+${MAPS_GLSL}
+in vec2 vMapUV; in vec4 vShape;
+#endif
 in vec3 vWorld; in vec3 vN; in vec3 vT; in float vK; in float vS; in vec2 vUV;
 uniform int uSurf; uniform float uAmp, uWave, uStandK;
 uniform float uWeaveScale;  // BTF: decode the CD-BTF at (u, v) / scale (sheet, stand, a mesh with UVs)
@@ -260,10 +375,16 @@ vec2 angles(vec3 d, vec3 n, vec3 t, vec3 b) {
   if (ph < 0.0) ph += 360.0;
   return vec2(min(th, 90.0), ph);
 }
+// the cosine of a light direction at the point: 0 below the shading normal ns or the (tilted) normal n
+float cosLight(vec3 l, vec3 n, vec3 ns) { return dot(l, ns) > 0.0 ? max(dot(l, n), 0.0) : 0.0; }
 void main() {
 #ifdef BTF
   vec2 pUV = vUV / uWeaveScale;
   gFootprint = max(length(dFdx(pUV)), length(dFdy(pUV)));
+#endif
+#ifdef MAPS
+  // the footprint in UV units along u and v: the UV partials of the pixel (the plug-in's duv_dx, duv_dy)
+  float mapLv = mapLevel(max(abs(dFdx(vMapUV)), abs(dFdy(vMapUV))));
 #endif
   vec3 n, t; float k;
   if (uSurf == 1) {
@@ -279,19 +400,27 @@ void main() {
   vec3 b = cross(n, t);
   vec3 v = normalize(uEye - vWorld);
   bool front = dot(v, n) > 0.0;
+  vec3 ns = n;  // the shading normal
+#ifdef MAPS
+  // the map's detail: its curvature added to the mesh's shape operator, the frame tilted by its slopes
+  MapDetail md = mapDetail(mapTexel(vMapUV, mapLv), vShape.w < 0.0 ? -1.0 : 1.0);
+  k = mapCurvature(vShape.xyz, md, uMapDir);
+  mat3 sh = mat3(t, b, n), tilt = mapFrame(md.p, md.q, vec3(dot(v, t), dot(v, b), dot(v, n)));
+  t = sh * tilt[0]; b = sh * tilt[1]; n = sh * tilt[2];
+#endif
   float kq = (uMode == 0 || (uMode == 2 && gl_FragCoord.x < uSplitX)) ? 0.0 : k;
   vec2 av = angles(v, n, t, b);
   if (uPick == 1) { vec2 al = angles(uLight, n, t, b); o = front ? vec4(av, al) : vec4(-1.0); return; }
-  if (uPick == 2) { o = vec4(kq, k, front ? 1.0 : 0.0, dot(uLight, n)); return; }
+  if (uPick == 2) { o = vec4(kq, k, front ? 1.0 : 0.0, dot(uLight, ns) > 0.0 ? dot(uLight, n) : dot(uLight, ns)); return; }
   vec3 c = vec3(0.0);
   if (!front) {
     c = vec3(0.02);
   } else if (uEnv == 0) {
-    float cl = dot(uLight, n);
+    float cl = cosLight(uLight, n, ns);
     if (cl > 0.0) { vec2 al = angles(uLight, n, t, b); c = reflectance(av, al, kq) * cl * uExpo; }
   } else {
     for (int i = 0; i < 9; i++) {
-      float cl = dot(uEnvDir[i], n);
+      float cl = cosLight(uEnvDir[i], n, ns);
       if (cl <= 0.0) continue;
       vec2 al = angles(uEnvDir[i], n, t, b);
       c += uEnvW[i] * reflectance(av, al, kq) * cl * uExpo;
@@ -347,12 +476,13 @@ void main() {
     surface: 'sheet', amplitude: NaN, wavelength: NaN, width: NaN, depth: NaN, standKappa: 0.13,
     lightTheta: 45.0, lightPhi: 0.0, env: false, exposure: 0.0, mode: 'cdbrdf', split: 0.5, overlay: false,
     side: false, cam: { elevation: 50.0, azimuth: -90.0, distance: 150.0 }, mosaicTable: 0, mosaicK: 0,
-    pick: null, drawCalls: 0, weave: true, weaveScale: 1.0, components: 0,
+    pick: null, drawCalls: 0, weave: true, weaveScale: 1.0, components: 0, maps: true,
   };
   const viewer = { errors: [] };
   window.cdbrdfViewer = viewer;
 
-  const ATTRIBS = ['aPos', 'aNrm', 'aTan', 'aK', 'aUV'];  // their locations: aUV only in the CD-BTF programs
+  // their locations: aUV only in the CD-BTF and map programs, aShape only in the map programs
+  const ATTRIBS = ['aPos', 'aNrm', 'aTan', 'aK', 'aUV', 'aShape'];
   function compile(vs, fs) {
     const p = gl.createProgram();
     for (const [type, src] of [[gl.VERTEX_SHADER, vs], [gl.FRAGMENT_SHADER, fs]]) {
@@ -505,14 +635,15 @@ void main() {
     return { pos, idx };
   }
 
-  function makeVAO(pos, nrm, tan, kap, idx, uv) {  // at the bound locations (ATTRIBS), for every program
+  function makeVAO(pos, nrm, tan, kap, idx, uv, shape) {  // at the bound locations (ATTRIBS), for every program
     const vao = gl.createVertexArray();
     gl.bindVertexArray(vao);
     const attr = (name, data, size) => {
       const loc = ATTRIBS.indexOf(name);
       if (!data) {
         gl.disableVertexAttribArray(loc);
-        if (size === 1) gl.vertexAttrib1f(loc, 0); else if (size === 2) gl.vertexAttrib2f(loc, 0, 0); else gl.vertexAttrib3f(loc, 0, 0, 1);
+        if (size === 1) gl.vertexAttrib1f(loc, 0); else if (size === 2) gl.vertexAttrib2f(loc, 0, 0);
+        else if (size === 4) gl.vertexAttrib4f(loc, 0, 0, 0, 1); else gl.vertexAttrib3f(loc, 0, 0, 1);
         return;
       }
       const b = gl.createBuffer();
@@ -522,6 +653,7 @@ void main() {
       gl.vertexAttribPointer(loc, size, gl.FLOAT, false, 0, 0);
     };
     attr('aPos', pos, 3); attr('aNrm', nrm, 3); attr('aTan', tan, 3); attr('aK', kap, 1); attr('aUV', uv || null, 2);
+    attr('aShape', shape || null, 4);
     const ib = gl.createBuffer();
     gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ib);
     gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
@@ -530,7 +662,40 @@ void main() {
   }
 
   let surfProg, evalProg, polarProg, surfBtfProg = null, evalBtfProg = null, tables = [], surfaces = {}, emptyVAO;
+  let surfMapProg = null, surfBtfMapProg = null, mapEvalProg = null;
   const withBTF = (src) => src.replace('#version 300 es', '#version 300 es\n#define BTF 1');
+  const withMaps = (src) => src.replace('#version 300 es', '#version 300 es\n#define MAPS 1');
+
+  // a mesh's curvature map (cdbrdf.view.asset.map_atlas): its levels in one RGBA texture, bound to MAP_UNIT to draw
+  const MAP_UNIT = 12;
+  function uploadMap(asset) {
+    const m = asset.header.map, at = m.atlas, max = gl.getParameter(gl.MAX_TEXTURE_SIZE);
+    if (at.width > max || at.height > max) throw fail(`${m.name}: its levels' texture ${at.width} x ${at.height} exceeds this GPU's MAX_TEXTURE_SIZE ${max}`);
+    const half = at.type === 'float16', t = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE0 + MAP_UNIT);
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+    gl.texImage2D(gl.TEXTURE_2D, 0, half ? gl.RGBA16F : gl.RGBA32F, at.width, at.height, 0, gl.RGBA,
+      half ? gl.HALF_FLOAT : gl.FLOAT, block(asset, 'map'));
+    const lev = new Int32Array(64);
+    m.levels.forEach((l, i) => lev.set([l[0], l[1], l[2], 0], 4 * i));
+    return { tex: t, h: m, lev };
+  }
+  function bindMap(prog, map) {
+    const u = prog.u, m = map.h;
+    gl.activeTexture(gl.TEXTURE0 + MAP_UNIT);
+    gl.bindTexture(gl.TEXTURE_2D, map.tex);
+    gl.uniform1i(u.uMap, MAP_UNIT);
+    gl.uniform1i(u.uMapW, m.atlas.width);
+    gl.uniform4iv(u.uMapLev, map.lev);
+    gl.uniform1i(u.uMapN, m.levels.length);
+    gl.uniform4f(u.uMapTr, m.transform[0], m.transform[1], m.transform[2], m.transform[3]);
+    gl.uniform2f(u.uMapScale, m.uv_scale_mm[0], m.uv_scale_mm[1]);
+    gl.uniform1f(u.uMapMin, m.min_level);
+    gl.uniform1i(u.uMapDir, 0);  // the viewer reads the curvature of larger magnitude, as cdbrdf render's default
+  }
   let pickFBO = null, evalFBO = null, polarFBO = null;
 
   function floatFBO(w, h, depth) {
@@ -573,7 +738,8 @@ void main() {
   function drawSurface(vp, pick) {
     const s = surfaces[state.surface];
     const weave = !!(vp.tab.btf && state.weave && (s.kind !== 0 || s.uv));  // a mesh without UVs: the tile mean
-    const prog = weave ? surfBtfProg : surfProg, u = prog.u, e = eye();
+    const mapped = !!(s.map && state.maps);
+    const prog = weave ? (mapped ? surfBtfMapProg : surfBtfProg) : (mapped ? surfMapProg : surfProg), u = prog.u, e = eye();
     gl.viewport(vp.x, vp.y, vp.w, vp.h);
     gl.useProgram(prog.p);
     bindTable(prog, vp.tab);
@@ -595,6 +761,7 @@ void main() {
     gl.uniform1f(u.uKmax, KMAX_OVERLAY);
     gl.uniform1i(u.uPick, pick || 0);
     if (weave) { gl.uniform1f(u.uWeaveScale, state.weaveScale); gl.uniform2fv(u.uUvScale, s.uvScale || [1, 1]); }
+    if (mapped) bindMap(prog, s.map);
     gl.bindVertexArray(s.vao);
     gl.drawElements(gl.TRIANGLES, s.count, gl.UNSIGNED_INT, 0);  // one draw call per surface
     state.drawCalls++;
@@ -632,6 +799,21 @@ void main() {
     $('compsOut').textContent = String(state.components);
     $('scaleOut').textContent = `${state.weaveScale.toFixed(1)}x`;
     $('btfInfo').textContent = btfText();
+    const s = surfaces[state.surface];
+    $('mapsLabel').style.display = s && s.map ? '' : 'none';
+    $('mapInfo').textContent = mapText();
+  }
+
+  // what the surface panel says of the shown mesh's curvature map
+  function mapText() {
+    const s = surfaces[state.surface];
+    if (!s || !s.map) return '';
+    const m = s.map.h, f = (x) => Number(x).toPrecision(4).replace(/\.?0+$/, '');
+    const scale = m.uv_scale_mm[0] === m.uv_scale_mm[1] ? f(m.uv_scale_mm[0]) : m.uv_scale_mm.map(f).join(' x ');
+    return `${m.name}: ${m.source}, one repeat per ${m.tile_mm.map(f).join(' x ')} mm (UV scale ${scale} mm per UV ` +
+      `unit); looked up per pixel by its footprint on ${m.levels.length} levels from ${m.texels[0]} x ${m.texels[1]} ` +
+      `texels of ${f(m.texel_mm)} mm (none finer than the curvature's ${f(m.neighbourhood_mm)} mm neighbourhood)` +
+      (state.maps ? '' : '; off: the mesh\'s own curvature and normals') + (m.note ? `\n${m.note}` : '');
   }
 
   // what the weave panel says: per CD-BTF, the components used of the file's rank, and why fewer
@@ -748,6 +930,45 @@ void main() {
       if (!ok[i]) return new Array(nc).fill(NaN);
       const r = Math.floor(i / per), c = i % per, o = (r * cols + c) * 4;
       return nc === 3 ? [out[o], out[o + 1], out[o + 2]] : [out[o]];
+    });
+  }
+
+  function mapEvaluate(queries, key) {
+    const s = surfaces[key || state.surface];
+    if (!s || !s.map) throw new Error(`surface ${key || state.surface}: has no curvature map`);
+    if (!mapEvalProg) mapEvalProg = compile(FULLSCREEN_VS, MAP_EVAL_FS);
+    const n = queries.length, per = 512, rows = Math.max(1, Math.ceil(n / per)), cols = Math.min(per, Math.max(1, n));
+    const q = new Float32Array(cols * 3 * rows * 4);
+    queries.forEach((x, i) => {
+      const r = Math.floor(i / per), c = i % per;
+      q.set(x.slice(0, 12).map(Number), (r * cols * 3 + 3 * c) * 4);
+    });
+    const qt = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE6);
+    gl.bindTexture(gl.TEXTURE_2D, qt);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, cols * 3, rows, 0, gl.RGBA, gl.FLOAT, q);
+    if (!evalFBO || evalFBO.w !== cols || evalFBO.h !== rows) { freeFBO(evalFBO); evalFBO = floatFBO(cols, rows, false); }
+    gl.useProgram(mapEvalProg.p);
+    bindMap(mapEvalProg, s.map);
+    gl.uniform1i(mapEvalProg.u.uQ, 6);
+    const outs = [];
+    for (let k = 0; k < 4; k++) {
+      gl.bindFramebuffer(gl.FRAMEBUFFER, evalFBO.fb);
+      gl.viewport(0, 0, cols, rows);
+      gl.disable(gl.DEPTH_TEST);
+      gl.uniform1i(mapEvalProg.u.uOut, k);
+      gl.bindVertexArray(emptyVAO);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      gl.bindVertexArray(null);
+      outs.push(readFloatPass(evalFBO, 0, 0, cols, rows));
+    }
+    gl.deleteTexture(qt);
+    return queries.map((_, i) => {
+      const o = (Math.floor(i / per) * cols + (i % per)) * 4;
+      const [a, b, c, d] = outs.map((x) => Array.from(x.subarray(o, o + 4)));
+      return [...a, b[0], b[1], b[2], b[3], ...c, d[0], d[1], d[2], d[3]];
     });
   }
 
@@ -924,6 +1145,7 @@ void main() {
     $('mode').addEventListener('change', (e) => { state.mode = e.target.value; draw(); });
     num('comps', 'components'); num('scale', 'weaveScale');
     $('weave').addEventListener('change', (e) => { state.weave = e.target.checked; draw(); });
+    $('maps').addEventListener('change', (e) => { state.maps = e.target.checked; draw(); });
     $('surface').addEventListener('change', (e) => { state.surface = e.target.value; setDefaultCamera(); draw(); });
     $('mosaicTable').addEventListener('change', (e) => { state.mosaicTable = Number(e.target.value); fillKappaSelect(); drawMosaic(); draw(); });
     $('mosaicK').addEventListener('change', (e) => { state.mosaicK = Number(e.target.value); drawMosaic(); draw(); });
@@ -981,15 +1203,29 @@ void main() {
     surfaces.sheet = Object.assign(makeVAO(grid.pos, null, null, null, grid.idx), { kind: 1, label: 'sine sheet', distance: 150 });
     surfaces.stand = Object.assign(makeVAO(grid.pos, null, null, null, grid.idx), { kind: 2, label: 'cylinder stand', distance: 150 });
     for (const [key, m] of Object.entries(DATA.meshes || {})) {
-      const a = { header: m.header, buffer: decode(m.data) };
-      const size = Math.max(...a.header.size_mm);
-      const uv = a.header.uv && a.header.blocks.uv ? block(a, 'uv') : null;  // older assets: no UVs
+      const a = { header: m.header, buffer: decode(m.data) }, h = a.header;
+      const size = Math.max(...h.size_mm);
+      const uv = h.uv && h.blocks.uv ? block(a, 'uv') : null;  // older assets: no UVs
+      const map = uv && h.map && h.blocks.map && h.blocks.shape ? uploadMap(a) : null;
       surfaces[key] = Object.assign(makeVAO(block(a, 'position'), block(a, 'normal'), block(a, 'tangent'),
-        block(a, 'curvature'), block(a, 'index'), uv), { kind: 0, label: a.header.name, distance: 2.2 * size,
-        uv: !!uv, uvScale: uv ? a.header.uv_scale_mm.map(Number) : null });
+        block(a, 'curvature'), block(a, 'index'), uv, map ? block(a, 'shape') : null), { kind: 0, label: h.name,
+        distance: h.frame ? h.frame.distance_mm : 2.2 * size, frame: h.frame || null,
+        uv: !!uv, uvScale: uv ? h.uv_scale_mm.map(Number) : null, map });
     }
-    const sel = $('surface');
+    if (Object.values(surfaces).some((x) => x.map)) {  // the map programs only where a mesh has a map
+      surfMapProg = compile(withMaps(SURFACE_VS), withMaps(SURFACE_FS));
+      if (btfs.length) surfBtfMapProg = compile(withMaps(withBTF(SURFACE_VS)), withMaps(withBTF(SURFACE_FS)));
+    }
+    const sel = $('surface'), opt = DATA.options || {};
     for (const [key, s] of Object.entries(surfaces)) { const o = document.createElement('option'); o.value = key; o.textContent = s.label; sel.appendChild(o); }
+    const first = surfaces[opt.surface];
+    if (first) {  // cdbrdf view --mesh: the page opens on the mesh, framed as cdbrdf render frames it
+      state.surface = opt.surface;
+      const f = first.frame;
+      if (f) state.cam = { elevation: f.elevation_deg, azimuth: f.azimuth_deg, distance: f.distance_mm };
+      else state.cam.distance = first.distance;
+    }
+    sel.value = state.surface;
     const ms = $('mosaicTable');
     tables.forEach((t, i) => { const o = document.createElement('option'); o.value = String(i); o.textContent = t.h.name; ms.appendChild(o); });
     $('tables').textContent = tables.map((t) => `${t.h.name} (${t.h.material || 'table'}, ${t.h.quantity}, ${t.h.symmetry}${t.btf ? ', CD-BTF' : ''})`).join('  |  ');
@@ -1001,7 +1237,6 @@ void main() {
     state.amplitude = sheet.amplitude_mm; state.wavelength = sheet.wavelength_mm;
     state.width = sheet.width_mm; state.depth = sheet.depth_mm;
     $('bend').value = state.amplitude; $('wave').value = state.wavelength;
-    const opt = DATA.options || {};
     state.exposure = Number.isFinite(opt.exposure_ev) ? opt.exposure_ev : tables[0].h.exposure_ev;
     $('expo').value = state.exposure;
     const k0 = tables[0].h.axes.kappa;
@@ -1041,6 +1276,11 @@ void main() {
     setSideBySide: redraw((on) => { state.side = !!on; $('side').checked = state.side; }),
     // a CD-BTF: the weave (true) or the tile mean (false); the components used; the weave drawn `s` times its size
     setWeave: redraw((on) => { state.weave = !!on; $('weave').checked = state.weave; }),
+    // a mesh's curvature map: looked up (true) or left out (false: the mesh's own curvature and normals)
+    setMaps: redraw((on) => { state.maps = !!on; $('maps').checked = state.maps; }),
+    // the map's rule at points (tests): rows [u, v, level (-1: from the footprint), fu, fv, sxx, sxy, syy, hand,
+    // wi.x, wi.y, wi.z] -> [p, q, dp/du, dp/dv, dq/du, dq/dv, level, kappa max, kappa directional, n'.xyz, s'.xyz, q]
+    mapEvaluate: (queries, opts) => Promise.resolve(mapEvaluate(queries, (opts || {}).surface)),
     setComponents: redraw((n) => { state.components = Math.max(0, Math.round(Number(n))); $('comps').value = n; }),
     setWeaveScale: redraw((x) => {
       if (!(Number(x) > 0)) throw new Error(`weave scale: expected a positive number, got ${x}`);
@@ -1085,6 +1325,7 @@ void main() {
     },
     state: () => JSON.parse(JSON.stringify(Object.assign({}, state, {
       crestCurvatureText: $('crest').textContent, crestCurvature: crestCurvature(), btfText: $('btfInfo').textContent,
+      mapText: mapText(), mapped: Object.keys(surfaces).filter((k) => surfaces[k].map),
       btf: tables.map((t) => (t.btf ? { rank: t.btf.rank, rankTotal: t.btf.rankTotal, used: rankUsed(t) } : null)),
       tables: tables.map((t) => t.h.name), surfaces: Object.keys(surfaces) }))),
   });
