@@ -42,8 +42,8 @@ def test_round_trip_through_the_file_and_xarray(tmp_path):
     assert back == t
     np.testing.assert_array_equal(back.fill_weights, t.fill_weights)
     with xr.open_dataset(p, engine="h5netcdf") as ds:
-        assert ds.attrs["format_version"] == "1.4"
-        assert ds["fill_method"].attrs["flag_meanings"] == "measured unknown nearest nearest_stand kappa_fit"
+        assert ds.attrs["format_version"] == "1.5"
+        assert ds["fill_method"].attrs["flag_meanings"] == "measured unknown nearest nearest_stand kappa_fit model"
         assert ds["fill_sources"].dims[-1] == "fill_slot" and ds.sizes["fill_slot"] == 2
         sel = dict(kappa=-0.22, phi_l=0.0, theta_l=0.0, phi_v=0.0, theta_v=60.0)
         assert int(ds["fill_method"].sel(**sel)) == FILL_METHOD_CODES["kappa_fit"]
@@ -238,7 +238,8 @@ def test_nearest_reproduces_the_paper_rule_bit_for_bit(wiggly_capture):
     flat_std = t.std.reshape(t.measured.size, -1)
     np.testing.assert_array_equal(t.values[hidden], flat_values[src[hidden]])
     np.testing.assert_array_equal(t.std[hidden], flat_std[src[hidden]])
-    assert rep.n_filled == 33 and rep.n_filled_by == {"nearest": 33, "nearest_stand": 0, "kappa_fit": 0}
+    assert rep.n_filled == 33 and rep.n_filled_by == {"nearest": 33, "nearest_stand": 0, "kappa_fit": 0,
+                                                          "model": 0}
     assert t.attrs["provenance"]["fill"].startswith("nearest measured direction at the same curvature")
 
 

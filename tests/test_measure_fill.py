@@ -157,7 +157,7 @@ def test_kappa_fit_is_exact_for_a_log_linear_curvature_dependence():
     # measured samples are kept bit for bit
     np.testing.assert_array_equal(r.values[valid], truth[valid])
     assert r.summary["samples"] == {"measured": int(valid.sum()), "nearest": 0, "nearest_stand": 0,
-                                    "kappa_fit": int((~valid).sum())}
+                                    "kappa_fit": int((~valid).sum()), "model": 0}
 
 
 def test_kappa_fit_error_is_the_second_order_term():
