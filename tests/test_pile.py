@@ -58,7 +58,7 @@ def test_fibre_normalised():
     from cdbrdf.synth.pile import _fibre_albedo
 
     m = PileModel(PileParams(fibre_rgb=(1.0, 1.0, 1.0), fibre_specular=1.0))
-    bare = _fibre_albedo(m._fibre, 0) * m._fibre[_pile.F_K]
+    bare = _fibre_albedo(m._fibre, 0, m._trans) * m._fibre[_pile.F_K]
     assert bare.max() <= 1.0 and bare.max() >= 0.98
 
 
@@ -81,7 +81,7 @@ def test_vertical_diffuse_pile_closed_form():
     n, d, h, A, G, L = 20.0, 0.1, 1.5, 0.6, 0.3, 8
     p = PileParams(strands_per_mm2=n, strand_diameter_mm=d, pile_height_mm=h, spread_deg=0.0,
                    fibre_specular=0.0, fibre_rgb=(A, A, A), ground_rgb=(G, G, G), correlation_mm=1e-9,
-                   layers=L)
+                   layers=L, scattering="single")
     m = PileModel(p)
     tv, tl = np.radians(50.0), np.radians(20.0)
     sv, cv, sl, cl = math.sin(tv), math.cos(tv), math.sin(tl), math.cos(tl)
