@@ -136,7 +136,7 @@ def test_file_round_trip_and_the_tile_mean_is_a_cdbrdf_file(exact, tmp_path):
     assert back.compression == btf.compression
     assert cdbrdf.load(path) == btf.mean()
     with h5py.File(path, "r") as f:
-        assert f.attrs["format_version"] == "1.4"
+        assert f.attrs["format_version"] == "1.5"
 
 
 def test_damaged_or_plain_files_are_refused(exact, tmp_path):
