@@ -316,7 +316,7 @@ def _select(vals: NDArray[np.float64], valid: NDArray[np.bool_], grid: Grid, fit
         ir = order[runner][(er.idx[order[runner]] // per) == k0]
         parts.append(_Estimate(eb.idx[ib], eb.values[ib], eb.code[ib], eb.sources[ib], eb.weights[ib], eb.reach[ib]))
         d = np.abs(_log_error(eb.values[ib], er.values[ir]))
-        spreads.append(0.5 * np.where(np.isfinite(d), d, 0.0))
+        spreads.append(np.where(np.isfinite(d), d, 0.0))
         for key, (x, e) in checks[best].items.items():
             if key[2] == k0:
                 merged.add(key[0], key[1], key[2], x, e)

@@ -181,9 +181,10 @@ COLORANTS: Mapping[str, Colorant] = MappingProxyType({
         source="tartrazine on silk, C.I. Acid Yellow 23 (absorption maximum 427 nm), K/S 3 at its maximum",
     ),
     "crimson_viscose": Colorant(
-        fibre="viscose", dyes=(Band(528.0, 5000.0, 18.0), Band(430.0, 6000.0, 10.0)),
-        source="a crimson on viscose: C.I. Direct Red 80 (absorption maximum 528 nm), K/S 18, shaded with "
-               "a yellow absorbing at 430 nm (K/S 10) that takes the blue out",
+        fibre="viscose", dyes=(Band(545.0, 2800.0, 15.0), Band(490.0, 3500.0, 10.0), Band(430.0, 5000.0, 6.0)),
+        source="a crimson direct dyeing on viscose: a red of the class of C.I. Direct Red 80 (absorption "
+               "maximum about 530-545 nm on cellulose; K/S 15) shaded with an orange (490 nm, K/S 10) and a "
+               "yellow (430 nm, K/S 6) that take out the green and the blue",
     ),
     "gold_cotton": Colorant(
         fibre="bleached_cotton", dyes=(Band(405.0, 6000.0, 8.0), Band(485.0, 5500.0, 1.5), Band(560.0, 9000.0, 0.5)),

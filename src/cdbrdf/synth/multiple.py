@@ -149,8 +149,8 @@ class HemisphereGrid:
         out = np.zeros((n + 1, n + 1) + f.shape[2:])
         out[:n, :n] = f
         out[n, :n] = f[ring].mean(axis=0)
-        out[:n, n] = f[:, ring].mean(axis=1)
-        out[n, n] = f[ring, ring].mean(axis=(0, 1))
+        out[:n, n] = out[n, :n]  # f is symmetric: the same mean, kept exactly symmetric
+        out[n, n] = out[n, ring].mean(axis=0)
         return out
 
 

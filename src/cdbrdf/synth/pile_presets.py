@@ -53,9 +53,10 @@ PILE_PRESETS: Mapping[str, Mapping[str, Any]] = MappingProxyType(
                 "lean_deg": 5.0,
                 "brush_deg": 90.0,
                 "spread_deg": 6.0,
-                # Crimson viscose (C.I. Direct Red 80), R_inf = colorants.linear_rgb("crimson_viscose")
-                # = (0.0672, 0.0234, 0.0319), L* 21, a* 16, b* 1: the strand albedo of that R_inf.
-                "fibre_rgb": (0.1941, 0.0533, 0.0818),
+                # Crimson viscose (a direct red shaded orange and yellow), R_inf =
+                # colorants.linear_rgb("crimson_viscose") = (0.171, 0.0176, 0.0454), L* 27, a* 37, b* 4:
+                # the strand albedo of that R_inf.
+                "fibre_rgb": (0.4714, 0.0337, 0.1257),
                 # An old-gold cotton ground (C.I. Direct Yellow 12, shaded): colorants.linear_rgb(
                 # "gold_cotton"), L* 53, a* 11.5, b* 34.
                 "ground_rgb": (0.3597, 0.1797, 0.056),
