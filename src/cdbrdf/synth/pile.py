@@ -440,10 +440,19 @@ class PileModel(SampledModel):
     def multiple_scattering(self, kappa: float) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
         """The further orders of scattering at curvature ``kappa`` (None with ``scattering = "single"``).
 
-        Returns the BRDF matrices ``(pile, ground)`` over the model's direction
-        grid (:func:`cdbrdf.synth.multiple.pile_multiple`): the light that
-        scattered two or more times and never reached the ground, and that
-        which reached it at least once (besides the ground's single bounce).
+        Parameters
+        ----------
+        kappa
+            Curvature, mm^-1.
+
+        Returns
+        -------
+        tuple of numpy.ndarray or None
+            The BRDF matrices ``(pile, ground)`` over the model's direction
+            grid (:func:`cdbrdf.synth.multiple.pile_multiple`): the light that
+            scattered two or more times and never reached the ground, and
+            that which reached it at least once (besides the ground's single
+            bounce).
         """
         if self._medium is None or self._grid is None:
             return None
