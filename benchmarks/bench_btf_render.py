@@ -14,7 +14,8 @@ Run: ``python benchmarks/bench_btf_render.py FILE [--picture out.png] [--spp 64]
 - distant: the paper's 60 x 60 mm sheet with the CD-BTF (every texel filter)
   and with its tile mean (the CDBRDF), the ratio of the mean pixel values and
   the per-channel means;
-- time: the CDBRDF plug-in and the CD-BTF with every texel filter on the same
+- time (a neural CD-BTF with the camera's ``pixel_angle``, so its pyramid level follows the footprint):
+  the CDBRDF plug-in and the CD-BTF with every texel filter on the same
   built scene (same spp and seed), rendered in turn ``--repeat`` times; the
   shortest wall time and the shortest process CPU time of each and their
   ratios to the CDBRDF's of the same run (the CPU time is the steadier
@@ -27,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 
 import numpy as np
@@ -49,7 +51,7 @@ def main() -> None:
     from cdbrdf.btf import load
     from cdbrdf.colour import LUMINANCE_WEIGHTS
     from cdbrdf.mesh import SineSheet
-    from cdbrdf.render import render_table
+    from cdbrdf.render import Camera, render_table
     from cdbrdf.render._btf_jit import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS
 
     btf = load(a.file)
@@ -60,7 +62,7 @@ def main() -> None:
         close = SineSheet(width_mm=20.0, depth_mm=14.0, vertices_per_wavelength=256)
         size = (640, 448)
         t0 = time.perf_counter()
-        pic = render_table(btf, close, size=size, view=(90.0, -90.0), **kw)
+        pic = render_table(btf, close, size=size, camera=Camera(view=(90.0, -90.0)), **kw)
         out["close_up_seconds"] = round(time.perf_counter() - t0, 1)
         img = pic.images["cdbrdf"][..., :3].astype(np.float64)
         if a.picture:
@@ -101,10 +103,14 @@ def main() -> None:
     from cdbrdf.render.scenes import sine_scene
 
     scenes = {}
+    # the camera's pixel angle (the sine scene's field of view over the smaller side): a neural CD-BTF's footprint
+    pixel_angle = math.radians((sine_scene.__kwdefaults__ or {})["fov_deg"]) / 192
+    out["method"] = btf.method
     for kind in ("cdbrdf",) + TEXEL_FILTERS:
         t0 = time.perf_counter()
         bsdf = (make_bsdf(btf.mean()) if kind == "cdbrdf"
-                else make_bsdf(btf, uv_scale=(far.width_mm, far.depth_mm), texel_filter=kind))
+                else make_bsdf(btf, uv_scale=(far.width_mm, far.depth_mm), texel_filter=kind,
+                               pixel_angle=pixel_angle))
         out[f"setup_seconds_{kind}"] = round(time.perf_counter() - t0, 2)
         scenes[kind] = sine_scene(btf.mean(), sheet=far, bsdf=bsdf, size=(256, 192), spp=a.spp)
         dr.eval(mi.render(scenes[kind], spp=a.spp))  # compiles the kernels

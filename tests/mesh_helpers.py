@@ -81,9 +81,11 @@ def sphere_mesh(radius: float, n: int = 20000, seed: int = 1):
     return p * radius, f
 
 
-def write_obj(path: Path, v: np.ndarray, f: np.ndarray, uv: np.ndarray | None = None) -> Path:
-    """A plain OBJ: ``v``, optional ``vt`` with the same indices, triangles."""
-    lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in v]
+def write_obj(path: Path, v: np.ndarray, f: np.ndarray, uv: np.ndarray | None = None, *, header: str = "") -> Path:
+    """A plain OBJ: ``header`` (comment lines, without their ``#``), ``v``, optional ``vt`` with the same
+    indices, triangles."""
+    lines = [f"# {c}" for c in header.splitlines()]
+    lines += [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in v]
     if uv is not None:
         lines += [f"vt {a:.9g} {b:.9g}" for a, b in uv]
         lines += [f"f {a + 1}/{a + 1} {b + 1}/{b + 1} {c + 1}/{c + 1}" for a, b, c in f]

@@ -73,6 +73,24 @@ BAD: list[tuple[list[str], list[str], str]] = [
     (RENDER, ["--irradiance", "inf"], "--irradiance"),
     (RENDER, ["--units", "furlong"], "--units"),
     (RENDER, ["--variant", "cuda"], "--variant"),
+    (RENDER, ["--zoom", "0"], "--zoom"),
+    (RENDER, ["--zoom", "nan"], "--zoom"),
+    (RENDER, ["--zoom", "1e4"], "--zoom"),
+    (RENDER, ["--fov", "0"], "--fov"),
+    (RENDER, ["--fov", "175"], "--fov"),
+    (RENDER, ["--zoom", "0.1", "--fov", "150"], "--zoom: 0.1 with a field of view of 150 degrees widens the lens"),
+    (RENDER, ["--look-at", "nowhere"], "one of centre, fold, crest, valley"),
+    (RENDER, ["--look-at", "1,2"], "--look-at"),
+    (RENDER, ["--look-at", "1,2,nan"], "--look-at"),
+    (RENDER, ["--view", "100,0"], "--view: elevation 100 degrees is not in [-90, 90]"),
+    (["render", T, "--scene", "plane", "-o", "{o}/a.png"], [], "invalid choice: 'plane' (choose from 'sine', 'swatch')"),
+    (RENDER, ["--delta-e", "ab"], "--delta-e: only with --compare"),
+    (RENDER, ["--compare", "--delta-e", "cmc"], "--delta-e"),
+    (RENDER, ["--fold-radii", "20,10"], "--fold-radii: only for --scene swatch"),
+    (["render", T, "--scene", "swatch", "-o", "{o}/a.png"], ["--fold-radii", "20,0.1"],
+     "--fold-radii: 0.1 mm is not a radius between 0.5 and 1000 mm"),
+    (["render", T, "--scene", "swatch", "-o", "{o}/a.png"], ["--amplitude", "2"], "--amplitude: only for --scene sine"),
+    (["render", T, "--mesh", M, "-o", "{o}/a.png"], ["--wavelength", "10"], "--wavelength: only for --scene sine"),
     (["render", T, "--mesh", "{d}/missing.obj", "-o", "{o}/a.png"], [], "--mesh"),
     (["render", T, "--scene", "sine", "-o", "{o}/nowhere/a.png"], [], "--output"),
     (MOSAIC, ["--channel", "-1"], "--channel"),
@@ -165,6 +183,12 @@ def test_arguments_that_were_valid_still_are(files):
     a = p.parse_args(["render", str(d / "t.h5"), "--scene", "sine", "-o", str(o / "a.png"),
                       "--view=-10,-90", "--light", "45,0", "--size", "24x16", "--seed", "7"])
     assert a.size == (24, 16) and a.view == [-10.0, -90.0] and a.seed == 7
+    assert a.zoom is None and a.fov is None and a.look_at is None and a.delta_e is None  # the camera's defaults
+    a = p.parse_args(["render", str(d / "t.h5"), "--scene", "swatch", "-o", str(o / "a.png"), "--zoom", "4",
+                      "--fov", "20", "--look-at=-5,0,2.5", "--fold-radii", "20,-5", "--compare", "--delta-e", "ab"])
+    assert (a.zoom, a.fov, a.look_at, a.fold_radii, a.delta_e) == (4.0, 20.0, [-5.0, 0.0, 2.5], [20.0, -5.0], "ab")
+    assert p.parse_args(["render", str(d / "t.h5"), "--mesh", str(d / "m.obj"), "-o", str(o / "a.png"), "--look-at",
+                         "fold"]).look_at == "fold"
     assert a.sheet_size is None  # not given: the sine sheet's own size (cdbrdf.mesh.SineSheet) applies
     assert p.parse_args(["render", str(d / "t.h5"), "--scene", "sine", "-o", str(o / "a.png"), "--sheet-size",
                          "30x40"]).sheet_size == [30, 40]

@@ -151,7 +151,7 @@ def test_tonemap_srgb8():
 
 
 def test_import_is_numpy_only():
-    code_ = "import sys, cdbrdf.colour\nassert 'matplotlib' not in sys.modules and 'scipy' not in sys.modules\n"
+    code_ = "import sys, cdbrdf.colour\nassert 'matplotlib' not in sys.modules and 'scipy' not in sys.modules and 'colour' not in sys.modules\n"
     r = subprocess.run([sys.executable, "-W", "error", "-c", code_], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
 
@@ -191,3 +191,96 @@ def test_delta_e_chroma_hue():
         colour.delta_e_ab([1.0, 2.0], [1.0, 2.0, 3.0])
     with pytest.raises(ValueError, match="rgb"):
         colour.linear_to_lab([1.0, 2.0])
+
+
+# -- CIEDE2000 (colour-science) against the published test data ----------------------------
+#: Sharma, Wu and Dalal (2005), Table 1: the 34 pairs (L*, a*, b* of each) and their CIEDE2000
+#: (kL = kC = kH = 1), published to 4 decimals. They probe the formula's hue-angle and mean-hue
+#: corners (pairs 7-16), the rotation term in the blue (1-6, 25-34) and large differences (17-20).
+SHARMA_2005 = [
+    ((50.0000, 2.6772, -79.7751), (50.0000, 0.0000, -82.7485), 2.0425),
+    ((50.0000, 3.1571, -77.2803), (50.0000, 0.0000, -82.7485), 2.8615),
+    ((50.0000, 2.8361, -74.0200), (50.0000, 0.0000, -82.7485), 3.4412),
+    ((50.0000, -1.3802, -84.2814), (50.0000, 0.0000, -82.7485), 1.0000),
+    ((50.0000, -1.1848, -84.8006), (50.0000, 0.0000, -82.7485), 1.0000),
+    ((50.0000, -0.9009, -85.5211), (50.0000, 0.0000, -82.7485), 1.0000),
+    ((50.0000, 0.0000, 0.0000), (50.0000, -1.0000, 2.0000), 2.3669),
+    ((50.0000, -1.0000, 2.0000), (50.0000, 0.0000, 0.0000), 2.3669),
+    ((50.0000, 2.4900, -0.0010), (50.0000, -2.4900, 0.0009), 7.1792),
+    ((50.0000, 2.4900, -0.0010), (50.0000, -2.4900, 0.0010), 7.1792),
+    ((50.0000, 2.4900, -0.0010), (50.0000, -2.4900, 0.0011), 7.2195),
+    ((50.0000, 2.4900, -0.0010), (50.0000, -2.4900, 0.0012), 7.2195),
+    ((50.0000, -0.0010, 2.4900), (50.0000, 0.0009, -2.4900), 4.8045),
+    ((50.0000, -0.0010, 2.4900), (50.0000, 0.0010, -2.4900), 4.8045),
+    ((50.0000, -0.0010, 2.4900), (50.0000, 0.0011, -2.4900), 4.7461),
+    ((50.0000, 2.5000, 0.0000), (50.0000, 0.0000, -2.5000), 4.3065),
+    ((50.0000, 2.5000, 0.0000), (73.0000, 25.0000, -18.0000), 27.1492),
+    ((50.0000, 2.5000, 0.0000), (61.0000, -5.0000, 29.0000), 22.8977),
+    ((50.0000, 2.5000, 0.0000), (56.0000, -27.0000, -3.0000), 31.9030),
+    ((50.0000, 2.5000, 0.0000), (58.0000, 24.0000, 15.0000), 19.4535),
+    ((50.0000, 2.5000, 0.0000), (50.0000, 3.1736, 0.5854), 1.0000),
+    ((50.0000, 2.5000, 0.0000), (50.0000, 3.2972, 0.0000), 1.0000),
+    ((50.0000, 2.5000, 0.0000), (50.0000, 1.8634, 0.5757), 1.0000),
+    ((50.0000, 2.5000, 0.0000), (50.0000, 3.2592, 0.3350), 1.0000),
+    ((60.2574, -34.0099, 36.2677), (60.4626, -34.1751, 39.4387), 1.2644),
+    ((63.0109, -31.0961, -5.8663), (62.8187, -29.7946, -4.0864), 1.2630),
+    ((61.2901, 3.7196, -5.3901), (61.4292, 2.2480, -4.9620), 1.8731),
+    ((35.0831, -44.1164, 3.7933), (35.0232, -40.0716, 1.5901), 1.8645),
+    ((22.7233, 20.0904, -46.6940), (23.0331, 14.9730, -42.5619), 2.0373),
+    ((36.4612, 47.8580, 18.3852), (36.2715, 50.5065, 21.2231), 1.4146),
+    ((90.8027, -2.0831, 1.4410), (91.1528, -1.6435, 0.0447), 1.4441),
+    ((90.9257, -0.5406, -0.9208), (88.6381, -0.8985, -0.7239), 1.5381),
+    ((6.7747, -0.2908, -2.4247), (5.8714, -0.0985, -2.2286), 0.6377),
+    ((2.0776, 0.0795, -1.1350), (0.9033, -0.0636, -0.5514), 0.9082),
+]
+
+
+def test_ciede2000_matches_the_published_test_pairs():
+    lab1 = np.array([p[0] for p in SHARMA_2005])
+    lab2 = np.array([p[1] for p in SHARMA_2005])
+    published = np.array([p[2] for p in SHARMA_2005])
+    d = colour.delta_e(lab1, lab2)
+    assert d.shape == (34,)
+    np.testing.assert_allclose(d, published, atol=5e-5)  # the table's 4 decimals
+    # symmetric, and one pair at a time gives the same (broadcast over any leading shape)
+    np.testing.assert_allclose(colour.delta_e(lab2, lab1), published, atol=5e-5)
+    assert colour.delta_e(lab1[0], lab2[0]) == pytest.approx(2.0425, abs=5e-5)
+    np.testing.assert_allclose(colour.delta_e(lab1.reshape(2, 17, 3), lab2.reshape(2, 17, 3)),
+                               published.reshape(2, 17), atol=5e-5)
+    # Delta E*ab of the same pairs is their Euclidean distance; the textile weighting (kL = 2)
+    # halves a pure lightness difference (pair 33: L* 6.77 vs 5.87 mostly differs in lightness)
+    np.testing.assert_allclose(colour.delta_e(lab1, lab2, metric="ab"), np.linalg.norm(lab1 - lab2, axis=1))
+    pure_l = colour.delta_e([50.0, 0.0, 0.0], [54.0, 0.0, 0.0])
+    assert colour.delta_e([50.0, 0.0, 0.0], [54.0, 0.0, 0.0], metric="2000-textiles") == pytest.approx(pure_l / 2)
+    with pytest.raises(ValueError, match=r"delta E metric: 'cmc' is not one of 2000, 2000-textiles, ab"):
+        colour.delta_e(lab1, lab2, metric="cmc")
+    with pytest.raises(ValueError, match="lab"):
+        colour.delta_e([1.0, 2.0], [1.0, 2.0, 3.0])
+
+
+def test_srgb_to_lab_known_values():
+    """Display sRGB -> L*a*b* (D65): 8-bit codes and encoded floats, the chain a textile team reads.
+
+    Published values (sRGB, D65): red 255, 0, 0 -> 53.24, 80.09, 67.20; the mid code 128 (grey)
+    -> L* 53.59 (its linear value 0.2158); white -> 100; black -> 0.
+    """
+    codes = np.array([[255, 0, 0], [128, 128, 128], [255, 255, 255], [0, 0, 0]], dtype=np.uint8)
+    lab = colour.srgb_to_lab(codes)
+    np.testing.assert_allclose(lab[0], [53.24, 80.09, 67.20], atol=0.05)
+    np.testing.assert_allclose(lab[1], [53.585, 0.0, 0.0], atol=2e-3)
+    np.testing.assert_allclose(lab[2], [100.0, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(lab[3], [0.0, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(colour.srgb_to_lab(codes / 255.0), lab, atol=1e-12)  # floats: encoded values
+    # the same chain as linear_to_lab after the sRGB decoding
+    np.testing.assert_allclose(lab, colour.linear_to_lab(colour.srgb_to_linear(codes / 255.0)), atol=1e-12)
+    with pytest.raises(ValueError, match="srgb"):
+        colour.srgb_to_lab([1, 2])
+
+
+def test_colour_science_is_imported_only_when_a_difference_is_computed():
+    code_ = ("import sys, cdbrdf, cdbrdf.colour, cdbrdf.plot, cdbrdf.render\n"
+             "assert 'colour' not in sys.modules, 'imported at import time'\n"
+             "cdbrdf.colour.delta_e([50, 0, 0], [51, 0, 0])\n"
+             "assert sys.modules['colour'].__name__ == 'colour' and hasattr(sys.modules['colour'], 'XYZ_to_Lab')\n")
+    r = subprocess.run([sys.executable, "-W", "error", "-c", code_], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr

@@ -238,7 +238,8 @@ def test_nearest_reproduces_the_paper_rule_bit_for_bit(wiggly_capture):
     flat_std = t.std.reshape(t.measured.size, -1)
     np.testing.assert_array_equal(t.values[hidden], flat_values[src[hidden]])
     np.testing.assert_array_equal(t.std[hidden], flat_std[src[hidden]])
-    assert rep.n_filled == 33 and rep.n_filled_by == {"nearest": 33, "nearest_stand": 0, "kappa_fit": 0, "model": 0}
+    assert rep.n_filled == 33 and rep.n_filled_by == {"nearest": 33, "nearest_stand": 0, "kappa_fit": 0,
+                                                          "model": 0}
     assert t.attrs["provenance"]["fill"].startswith("nearest measured direction at the same curvature")
 
 

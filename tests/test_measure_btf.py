@@ -174,7 +174,8 @@ def test_cli_texels_out_of_range_is_one_line(tmp_path, capsys):
 def test_registration_errors_are_one_line():
     for doc, match in (([], "expected an object"), ({"version": 2}, "newer"), ({"camera": "pinhole"}, "camera"),
                        ({"stands": [{"kappa": 0.0}]}, "stand 0"), ({"repeat_mm": [1.0, -1.0]}, "positive"),
-                       ({"foo": 1}, "unknown keys")):
+                       ({"foo": 1}, "unknown keys"), ({"repeat_mm": [10**400, 1.0]}, "out of range"),
+                       ({"repeat_mm": [1e300, 1.0]}, "at most")):
         with pytest.raises(CaptureError, match=match) as e:
             parse_registration(doc, "stands.json")
         assert "\n" not in str(e.value)

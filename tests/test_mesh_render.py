@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import cdbrdf
-from cdbrdf.render import _llvm
+from cdbrdf.render import Camera, _llvm
 from cdbrdf.render._llvm import find_llvm
 
 from .mesh_helpers import R_CYL, cylinder_patch, shared_mesh, write_obj
@@ -83,7 +83,7 @@ def test_directional_mode_reads_the_curvature_along_x(variant):
     got = {}
     for mode in ("max", "directional"):
         scene = mesh_scene(table, mesh, curvature_mode=mode, lighting="paper", light=(0.0, 0.0, np.pi),
-                           size=(33, 33), spp=4, max_depth=2, elevation_deg=89.0, azimuth_deg=-90.0, fov_deg=10.0)
+                           size=(33, 33), spp=4, max_depth=2, camera=Camera(view=(89.0, -90.0), fov_deg=10.0))
         got[mode] = render_scene(scene)[14:19, 14:19].mean()
     assert got["max"] == pytest.approx(np.pi * (0.5 + 0.13), rel=0.03)
     assert got["directional"] == pytest.approx(np.pi * 0.5, rel=0.03)
@@ -100,7 +100,7 @@ def test_each_visible_side_of_the_garment_shows_its_sign(variant):
     flat = kappa_table(gain=0.0, kappa=(-0.01, 0.0, 0.01))
     for azimuth in (-90.0, 90.0):  # the front panel (and the sash), then the back panel
         imgs = [render_scene(mesh_scene(t, mesh, lighting="paper", light=(30.0, azimuth, np.pi), size=(40, 40),
-                                        spp=2, max_depth=2, elevation_deg=10.0, azimuth_deg=azimuth),
+                                        spp=2, max_depth=2, camera=Camera(view=(10.0, azimuth))),
                              alpha=True) for t in (curved, flat)]
         cover = (imgs[0][..., 3] > 0.99) & (imgs[1][..., 0] > 0.05)
         ratio = imgs[0][..., 0][cover] / imgs[1][..., 0][cover]
@@ -123,7 +123,7 @@ def test_up_axis_is_detected_and_can_be_given(variant, tmp_path):
     w_h = {}
     for up in ("auto", "z"):
         img = render_scene(mesh_scene(white_table(), mesh, up=up, size=(40, 40), spp=1, max_depth=2,
-                                      elevation_deg=10.0, azimuth_deg=0.0), alpha=True)
+                                      camera=Camera(view=(10.0, 0.0))), alpha=True)
         w_h[up] = silhouette(img)
     assert w_h["auto"][1] > 3 * w_h["auto"][0]  # standing
     assert w_h["z"][0] > 3 * w_h["z"][1]  # lying along the view's horizontal
@@ -211,7 +211,7 @@ def test_a_dark_fabric_shows_at_its_own_reflectance(variant):
     shown = {}
     for rule in ("card", "auto"):
         pic = render_table(table, square, size=(24, 24), spp=4, lighting="paper", light=(0.0, 0.0),
-                           view=(60.0, -90.0), exposure=rule)
+                           camera=Camera(view=(60.0, -90.0)), exposure=rule)
         img = pic.images["cdbrdf"]
         shown[rule] = img[10:14, 10:14, :3].reshape(-1, 3).mean(axis=0) * 2.0 ** pic.exposure_ev
         assert pic.exposure_source == {"card": "grey card", "auto": "auto"}[rule]
@@ -261,15 +261,16 @@ def test_render_warns_of_a_wrong_unit(variant, tmp_path, caplog):
     table = tmp_path / "k.h5"
     kappa_table().save(table)
     with caplog.at_level(logging.WARNING, logger="cdbrdf"):
-        assert main(["-q", "render", str(table), "--mesh", str(src), "--size", "8x8", "--spp", "1",
+        assert main(["-q", "render", str(table), "--mesh", str(src), "--units", "mm", "--size", "8x8", "--spp", "1",
                      "-o", str(tmp_path / "a.exr")]) == 0
     msgs = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
     assert any("100% of the surface" in m and "--units m" in m for m in msgs), msgs
-    caplog.clear()
-    with caplog.at_level(logging.WARNING, logger="cdbrdf"):
-        assert main(["-q", "render", str(table), "--mesh", str(src), "--units", "m", "--size", "8x8", "--spp", "1",
-                     "-o", str(tmp_path / "b.exr")]) == 0
-    assert not [r for r in caplog.records if r.levelno == logging.WARNING and "curvature" in r.getMessage()]
+    for units in (["--units", "m"], []):  # given, or inferred from the size of the sheet (2.9 cm across in m)
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="cdbrdf"):
+            assert main(["-q", "render", str(table), "--mesh", str(src), *units, "--size", "8x8", "--spp", "1",
+                         "-o", str(tmp_path / "b.exr")]) == 0
+        assert not [r for r in caplog.records if r.levelno == logging.WARNING and "curvature" in r.getMessage()]
 
 
 def test_render_options_are_checked(variant, tmp_path, capsys):

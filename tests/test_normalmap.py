@@ -12,7 +12,7 @@ import pytest
 
 from cdbrdf.errors import MeshError
 from cdbrdf.images import write_png
-from cdbrdf.mesh import Mesh, prepare_mesh
+from cdbrdf.mesh import Mesh, SurfaceMaps, prepare_mesh
 from cdbrdf.mesh.normalmap import normal_map_from_normals, read_normal_map
 
 from .mesh_helpers import write_obj
@@ -56,7 +56,8 @@ def test_a_sine_normal_map_bends_like_the_same_folds_in_the_geometry(tmp_path):
     geo = prepare_mesh(Mesh(v, f, None, uv), neighbourhood_mm=5.0)
     png = write_normal_png(tmp_path / "folds.png", sine_normals(400))
     v0, f0, uv0 = sheet(n=81)
-    mapped = prepare_mesh(Mesh(v0, f0, None, uv0), neighbourhood_mm=5.0, normal_map=png)
+    mapped = prepare_mesh(Mesh(v0, f0, None, uv0), neighbourhood_mm=5.0,
+                          maps=SurfaceMaps(normal_map=png, bake="vertex"))
     kg, kn = geo.attributes["curvature"], mapped.attributes["curvature"]
     at = crests(geo, kg)
     assert at.sum() > 100
@@ -74,7 +75,7 @@ def test_an_obj_material_names_the_normal_map(tmp_path):
     obj = write_obj(tmp_path / "cloth.obj", v0, f0, uv0)
     obj.write_text("mtllib cloth.mtl\nusemtl cloth\n" + obj.read_text())
     (tmp_path / "cloth.mtl").write_text("newmtl cloth\nKd 0.5 0.5 0.5\nnorm folds.png\n")
-    mesh = prepare_mesh(obj, neighbourhood_mm=5.0)
+    mesh = prepare_mesh(obj, neighbourhood_mm=5.0, maps=SurfaceMaps(bake="vertex"))
     assert np.abs(mesh.attributes["curvature"]).max() == pytest.approx(A * (2 * np.pi / L) ** 2, rel=0.15)
 
 
@@ -91,7 +92,7 @@ def test_the_green_convention_and_bad_maps():
 def test_a_normal_map_needs_the_meshs_uvs(tmp_path):
     v0, f0, _ = sheet(n=11)
     with pytest.raises(MeshError, match="needs the mesh's own UV"):
-        prepare_mesh(Mesh(v0, f0), normal_map=normal_map_from_normals(sine_normals(8)))
+        prepare_mesh(Mesh(v0, f0), maps=SurfaceMaps(normal_map=normal_map_from_normals(sine_normals(8))))
     grey = tmp_path / "grey.png"
     write_png(grey, np.zeros((4, 4), np.uint8))
     with pytest.raises(MeshError, match="RGB image"):
@@ -109,7 +110,8 @@ def test_a_gltf_normal_texture_is_read(tmp_path):
     mat = trimesh.visual.material.PBRMaterial(normalTexture=img)
     tm = trimesh.Trimesh(v0 / 1000.0, f0, visual=trimesh.visual.TextureVisuals(uv=uv0, material=mat), process=False)
     tm.export(tmp_path / "cloth.glb")
-    mesh = prepare_mesh(read_mesh(tmp_path / "cloth.glb"), neighbourhood_mm=5.0)  # glTF: metres
+    mesh = prepare_mesh(read_mesh(tmp_path / "cloth.glb"), neighbourhood_mm=5.0,  # glTF: metres
+                        maps=SurfaceMaps(bake="vertex"))
     assert np.abs(mesh.attributes["curvature"]).max() == pytest.approx(A * (2 * np.pi / L) ** 2, rel=0.15)
     assert any("normalTexture" in n for n in mesh.metadata["notes"])
 
@@ -118,8 +120,9 @@ def test_a_mesh_too_coarse_for_the_maps_folds_gets_a_note():
     nmap = normal_map_from_normals(sine_normals(200))  # folds 20 mm long
     for n, coarse in ((61, False), (7, True)):  # 1 mm and 10 mm edges
         v0, f0, uv0 = sheet(n=n)
-        notes = prepare_mesh(Mesh(v0, f0, None, uv0), neighbourhood_mm=5.0, normal_map=nmap).metadata["notes"]
-        said = [x for x in notes if "coarse for the normal map's folds" in x]
+        notes = prepare_mesh(Mesh(v0, f0, None, uv0), neighbourhood_mm=5.0,
+                             maps=SurfaceMaps(normal_map=nmap, bake="vertex")).metadata["notes"]
+        said = [x for x in notes if "coarse for normal map's folds" in x]
         assert bool(said) == coarse, notes
         if coarse:
             assert "about 20 mm long" in said[0]

@@ -54,6 +54,7 @@ PUBLIC = [
     "srgb_encode", "auto_exposure", "kappa_label", "EXPOSURE_PERCENTILE", "EXPOSURE_MODES",
     "KAPPA_ATOL", "SLICE_PLANES", "LUMINANCE_WEIGHTS",
     "DIFF_PERCENTILE", "plot_hidden", "plot_kappa_curves", "plot_weave", "save_figure", "FIGURE_FORMATS",
+    "displayed_delta_e",
 ]
 
 
@@ -84,7 +85,12 @@ def test_importing_plot_is_light():
 
 
 def test_no_figure_switches_the_backend(tmp_path):
-    """The capture plan's figure once called matplotlib.use('Agg'); no figure may."""
+    """The capture plan's figure once called matplotlib.use('Agg'); no figure may.
+
+    The render comparison computes CIEDE2000 with colour-science, whose package imports
+    ``matplotlib.pyplot`` (its plotting module) without choosing a backend: after it, the
+    backend is still the caller's and pyplot holds no figure of ours.
+    """
     code_ = (
         "import sys, numpy as np, matplotlib, cdbrdf\n"
         "matplotlib.use('svg')\n"
@@ -93,10 +99,11 @@ def test_no_figure_switches_the_backend(tmp_path):
         "g = cdbrdf.Grid.regular(theta_step_deg=30, phi_step_deg=90, kappa=[-0.22, 0.0])\n"
         "hid = hidden_mask(g, [default_stand(float(k)) for k in g.kappa])\n"
         "save_figure(plot_hidden(g, hid), sys.argv[1] + '/h.png', dpi=30)\n"
+        "assert 'matplotlib.pyplot' not in sys.modules\n"
         "img = np.ones((4, 5, 3))\n"
         "save_figure(plot_render_comparison(img, img), sys.argv[1] + '/r.png', dpi=30)\n"
         "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
-        "assert 'matplotlib.pyplot' not in sys.modules\n"
+        "assert sys.modules['matplotlib.pyplot'].get_fignums() == []\n"
     )
     r = subprocess.run([sys.executable, "-W", "error", "-c", code_, str(tmp_path)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr

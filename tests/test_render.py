@@ -14,7 +14,7 @@ import pytest
 
 import cdbrdf
 from cdbrdf.frames import angles_from_direction
-from cdbrdf.render import _llvm
+from cdbrdf.render import Camera, _llvm
 from cdbrdf.render._llvm import LLVMError, LLVMInfo, check_llvm, find_llvm
 
 _INFO = find_llvm()
@@ -319,7 +319,7 @@ def test_convex_and_concave_patches_pick_the_right_kappa(variant, tmp_path, conv
     path = tmp_path / "cyl.ply"
     write_ply(path, cylinder_mesh(radius, convex))
     scene = mesh_scene(kappa_table(), path, size=(33, 33), spp=4, max_depth=2, lighting="paper",
-                       light=(0.0, 0.0, np.pi), elevation_deg=89.0, azimuth_deg=-90.0, fov_deg=10.0)
+                       light=(0.0, 0.0, np.pi), camera=Camera(view=(89.0, -90.0), fov_deg=10.0))
     img = render_scene(scene)
     centre = img[14:19, 14:19].mean(axis=(0, 1))
     expected = np.pi * (0.5 + (0.13 if convex else -0.13))  # E = pi, normal light, f = 0.5 + kappa
@@ -472,7 +472,7 @@ def test_mesh_scene_with_environment_map(variant, tmp_path):
     albedo = 0.6
     table = cdbrdf.CDBRDF(np.full(g.shape + (3,), albedo / np.pi), **g.axes())
     img = render_scene(mesh_scene(table, path, lighting="paper", light=None, envmap=env, size=(17, 17), spp=64,
-                                  max_depth=2, elevation_deg=89.0, fov_deg=10.0))
+                                  max_depth=2, camera=Camera(view=(89.0, -65.0), fov_deg=10.0)))
     # Lambertian under a uniform unit sky, direct light only, at the apex: radiance = albedo.
     assert img[7:10, 7:10].mean() == pytest.approx(albedo, rel=0.1)
     with pytest.raises(ValueError, match="needs a light"):

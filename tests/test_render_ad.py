@@ -35,11 +35,12 @@ def small_table(seed=0, **kw):
 
 def sheet_scene(cr, table, *, sampling="cosine", size=(16, 12), spp=4, view=(40.0, -90.0), light=(30.0, 20.0)):
     from cdbrdf.mesh import SineSheet
+    from cdbrdf.render import Camera
     from cdbrdf.render.scenes import sine_scene
 
     sheet = SineSheet(width_mm=20, depth_mm=20, vertices_per_wavelength=16)
-    return sine_scene(table, sheet=sheet, size=size, spp=spp, max_depth=2, elevation_deg=view[0],
-                      azimuth_deg=view[1], light=(light[0], light[1], np.pi),
+    return sine_scene(table, sheet=sheet, size=size, spp=spp, max_depth=2, camera=Camera(view=view),
+                      light=(light[0], light[1], np.pi),
                       bsdf={"type": "cdbrdf", "table": table, "sampling": sampling})
 
 

@@ -471,3 +471,45 @@ def test_inline_bsdf_under_a_scaled_shape_loads_in_a_fresh_process(tmp_path):
                        timeout=300, cwd=tmp_path)
     assert r.returncode == 0, (r.returncode, r.stderr[-2000:])
     assert "(12, 16, 3)" in r.stdout
+
+
+@pytest.mark.parametrize("defect", ["duplicate-attribute", "undefined-entity"])
+def test_a_scene_that_is_not_well_formed_xml_is_refused_before_mitsuba_reads_it(cr, tmp_path, defect):
+    """pugixml accepts both, so the include check was skipped and Mitsuba opened a FIFO the include named."""
+    import os
+
+    path = write_scene(tmp_path)
+    os.mkfifo(tmp_path / "pipe.xml")
+    xml = path.read_text()
+    bad = '<integrator type="path" type="path"/>' if defect == "duplicate-attribute" else "<!-- &nbsp; -->&nbsp;"
+    xml = xml.replace("<integrator", f'<include filename="pipe.xml"/>{bad}<integrator', 1)
+    path.write_text(xml)
+    with pytest.raises(SceneError, match=r"s\.xml: not well-formed XML"):
+        cr.load_file(path)
+
+
+@pytest.mark.parametrize("nested", [False, True])
+def test_an_include_is_read_only_from_beside_the_including_file(cr, tmp_path, monkeypatch, nested):
+    """Mitsuba's resolver found an include that is not beside the scene in the current folder (or the scene's)."""
+    path = write_scene(tmp_path / "scene")
+    elsewhere = tmp_path / "cwd"
+    elsewhere.mkdir()
+    (elsewhere / "inc.xml").write_text('<scene version="3.0.0"><shape type="sphere" id="from_cwd"/></scene>')
+    monkeypatch.chdir(elsewhere)
+    xml = path.read_text()
+    if nested:  # scene -> sub/a.xml -> inc.xml, which exists only beside the scene (Mitsuba's second guess)
+        (path.parent / "sub").mkdir()
+        (path.parent / "sub" / "a.xml").write_text('<scene version="3.0.0"><include filename="inc.xml"/></scene>')
+        (path.parent / "inc.xml").write_text('<scene version="3.0.0"><shape type="sphere" id="top"/></scene>')
+        xml = xml.replace("<integrator", '<include filename="sub/a.xml"/><integrator', 1)
+    else:
+        xml = xml.replace("<integrator", '<include filename="inc.xml"/><integrator', 1)
+    path.write_text(xml)
+    with pytest.raises(SceneError, match=r"<include filename='inc\.xml'>: no such file beside"):
+        cr.load_file(path)
+
+
+def test_a_to_world_with_nan_is_one_line_naming_the_shape(cr, tmp_path):
+    path = write_scene(tmp_path, shape_extra='<transform name="to_world"><scale value="nan"/></transform>')
+    with pytest.raises(SceneError, match=r"to_world.*NaN or infinite"):
+        cr.load_file(path)

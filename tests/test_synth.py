@@ -447,6 +447,18 @@ def test_cli_synth_bad_setting_is_the_only_line(tmp_path, capsys, setting):
     assert setting.split("=")[0].split("_")[0] in cap.err and not out.exists()
 
 
+@pytest.mark.parametrize("preset", ["velvet", "denim"])
+def test_the_name_parameter_can_be_set(tmp_path, preset):
+    """``synth velvet --set name=x`` raised "model() got multiple values for argument 'name'" (the API too)."""
+    from cdbrdf.synth import presets
+
+    assert presets.params(preset, name="my fabric").name == "my fabric"
+    out = tmp_path / "s.h5"
+    assert cli_main(["-q", "synth", preset, "--grid", "regular:45,120", "--kappa", "0", "--set", "name=x",
+                     "-o", str(out)]) == 0
+    assert cdbrdf.load(out).attrs["material"] == "x"
+
+
 def test_cli_synth(tmp_path, capsys):
     out = tmp_path / "s.h5"
     rc = cli_main(["-q", "synth", "shot", "--grid", "regular:45,90", "--kappa", "0,0.22",

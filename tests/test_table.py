@@ -214,6 +214,21 @@ def test_xarray_round_trip(small_grid):
     assert isinstance(ds, xr.Dataset)
 
 
+@pytest.mark.parametrize(("name", "units"), [("kappa", "1/m"), ("theta_v", "radian"), ("phi_l", "rad"),
+                                             ("reflectance", "1/m2")])
+def test_from_xarray_honours_units_as_load_does(small_grid, name, units, tmp_path):
+    """kappa in 1/m was read as 1/mm and a theta_v in radian accepted (cdbrdf.load of the same file refused)."""
+    ds = make_table(small_grid, attrs={"quantity": "brdf"}).to_xarray()
+    ds[name].attrs["units"] = units
+    with pytest.raises(TableError, match=rf"ds: '{name}' is in '{units}'"):
+        CDBRDF.from_xarray(ds)
+    ds.to_netcdf(tmp_path / "t.h5", engine="h5netcdf")
+    with pytest.raises(cdbrdf.FormatError, match=rf"'{name}' is in '{units}'"):
+        cdbrdf.load(tmp_path / "t.h5")
+    ds[name].attrs["units"] = {"kappa": "mm-1", "reflectance": "sr-1"}.get(name, "degrees")  # other spellings
+    assert CDBRDF.from_xarray(ds) == make_table(small_grid, attrs={"quantity": "brdf"})
+
+
 # -- hardening: axes, dtypes, masked arrays, fill sources, size limit -------------------------
 _BASE = dict(kappa=[0.0], theta_l=[0.0, 30.0], phi_l=[0.0, 180.0], theta_v=[0.0, 30.0], phi_v=[0.0, 180.0])
 
@@ -381,3 +396,13 @@ def test_masked_queries_are_refused_unless_nothing_is_masked():
         t.evaluate(10.0, q, 20.0, 0.0)
     np.testing.assert_array_equal(t.evaluate(10.0, np.ma.masked_array([10.0, 20.0]), 20.0, 0.0),
                                   t.evaluate(10.0, [10.0, 20.0], 20.0, 0.0))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_the_value_bound_is_the_same_in_either_precision(small_grid, dtype):
+    """float32 values of 1e30 were refused with "0 value(s) beyond +-1e+30" (the count compared at float32)."""
+    v = np.full(small_grid.shape + (3,), 1e30, dtype)
+    assert CDBRDF(v, **small_grid.axes()).values.max() == v.max()
+    v[0, 0, 0, 0, 0, 1] = 3e30
+    with pytest.raises(TableError, match=r"values: 1 value\(s\) beyond \+-1e\+30 \(up to 3e\+30\)"):
+        CDBRDF(v, **small_grid.axes())

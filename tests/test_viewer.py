@@ -305,6 +305,41 @@ def test_server_answers_only_its_own_host_and_origin(files):
         assert _request(srv.port, "/", {"Host": f"evil.example:{srv.port}"})[0] == 403
 
 
+def test_two_host_headers_are_a_400_and_a_malformed_origin_a_403(files):
+    """The first of two Hosts won (HTTP requires 400); an Origin of ``http://[::1`` raised in the handler."""
+    with ViewerServer(files).start() as srv:
+        host = f"127.0.0.1:{srv.port}"
+        head = f"GET /data.js HTTP/1.1\r\nHost: {host}\r\nHost: evil.example\r\nConnection: close\r\n\r\n"
+        with socket.create_connection(("127.0.0.1", srv.port), timeout=10) as s:
+            s.sendall(head.encode())
+            assert s.recv(100).split()[1] == b"400"
+        assert _request(srv.port, headers={"Host": host, "Origin": "http://[::1"})[0] == 403
+        assert _request(srv.port, headers={"Host": host, "Referer": "http://[::1/x"})[0] == 403
+        assert _request(srv.port, headers={"Host": host})[0] == 200
+
+
+def test_silent_connections_are_closed_and_cannot_hold_every_thread(files, monkeypatch):
+    """300 half-open connections held 300 threads for ever."""
+    import time
+
+    from cdbrdf.view import server
+
+    monkeypatch.setattr(server, "IDLE_TIMEOUT_S", 0.5)
+    with ViewerServer(files).start() as srv:
+        idle = [socket.create_connection(("127.0.0.1", srv.port), timeout=10) for _ in range(server.MAX_CONNECTIONS + 8)]
+        try:
+            time.sleep(0.3)
+            t0 = time.monotonic()
+            for s in idle[:4]:  # the server closes them: recv returns b"" (or an error page) without hanging
+                s.recv(100)
+            assert time.monotonic() - t0 < 5
+            time.sleep(0.8)
+            assert _request(srv.port, headers={"Host": f"127.0.0.1:{srv.port}"})[0] == 200  # still serving
+        finally:
+            for s in idle:
+                s.close()
+
+
 def test_a_client_that_resets_mid_download_is_logged_without_a_traceback(files, capfd, caplog):
     import logging
     import struct

@@ -21,12 +21,17 @@ exactly the same numbers:
   Rec. 709 RGB (:func:`reflectance_to_xyz`, :func:`reflectance_to_linear`;
   the CIE tables are Mitsuba 3's, read without changing its variant);
 - colour differences: linear RGB to CIE XYZ (:data:`RGB_TO_XYZ`, D65) and
-  CIE 1976 L*a*b* (:func:`linear_to_lab`, :func:`xyz_to_lab`), chroma and
-  hue angle (:func:`lab_chroma_hue`), and the CIE 1976 colour difference
-  Delta E*ab (:func:`delta_e_ab`).
+  CIE 1976 L*a*b* (:func:`linear_to_lab`, :func:`xyz_to_lab`), display
+  sRGB (8-bit codes or encoded values) to L*a*b* (:func:`srgb_to_lab`),
+  chroma and hue angle (:func:`lab_chroma_hue`), the CIE 1976 colour
+  difference Delta E*ab (:func:`delta_e_ab`) and the metrics of
+  :data:`DELTA_E_METRICS` (:func:`delta_e`): CIEDE2000, the textile trade's
+  tolerance metric, and Delta E*ab.
 
-Only numpy is imported (Mitsuba inside the spectral functions); nothing
-happens at import time.
+The L*a*b* formula and CIEDE2000 are those of the ``colour-science``
+package (imported as ``colour_science`` inside the functions that use it);
+Mitsuba is imported inside the spectral functions: importing this module
+imports only numpy and does nothing.
 
 References
 ----------
@@ -35,11 +40,16 @@ management - Default RGB colour space - sRGB.
 ITU-R BT.709-6, Parameter values for the HDTV standards, item 3.3 (luminance).
 CIE 15:2004, Colorimetry, 3rd edition, section 8.2.1 (CIE 1976 L*a*b*) and
 8.2.1.3 (Delta E*ab).
+CIE 142-2001, Improvement to industrial colour-difference evaluation (CIEDE2000).
+G. Sharma, W. Wu, E. N. Dalal, "The CIEDE2000 color-difference formula:
+implementation notes, supplementary test data, and mathematical
+observations", Color Research & Application 30(1), 21-30, 2005.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -76,6 +86,9 @@ __all__ = [
     "linear_to_lab",
     "lab_chroma_hue",
     "delta_e_ab",
+    "srgb_to_lab",
+    "DELTA_E_METRICS",
+    "delta_e",
 ]
 
 #: Rec. 709 / sRGB luminance weights of linear R, G, B (read-only).
@@ -431,11 +444,6 @@ RGB_TO_XYZ.setflags(write=False)
 D65_WHITE_XYZ: NDArray[np.float64] = RGB_TO_XYZ.sum(axis=1)
 D65_WHITE_XYZ.setflags(write=False)
 
-#: CIE constants of L*a*b*: epsilon = (6/29)^3 and kappa = (29/3)^3.
-_LAB_EPSILON = 216.0 / 24389.0
-_LAB_KAPPA = 24389.0 / 27.0
-
-
 def linear_to_xyz(rgb: ArrayLike) -> NDArray[np.float64]:
     """CIE XYZ of linear Rec. 709 RGB (:data:`RGB_TO_XYZ`); white (1, 1, 1) has Y = 1.
 
@@ -544,16 +552,18 @@ def xyz_to_lab(xyz: ArrayLike, *, white: ArrayLike = D65_WHITE_XYZ) -> NDArray[n
     numpy.ndarray
         L*, a*, b*, ``(..., 3)``.
     """
+    import colour as colour_science  # the colour-science package (this module is cdbrdf.colour)
+
     v = np.asarray(xyz, dtype=np.float64)
     if v.ndim == 0 or v.shape[-1] != 3:
         raise OptionError(f"xyz: expected XYZ values (..., 3), got shape {v.shape}")
-    t = v / np.asarray(white, dtype=np.float64)
-    f = np.where(t > _LAB_EPSILON, np.cbrt(np.maximum(t, _LAB_EPSILON)), (_LAB_KAPPA * t + 16.0) / 116.0)
-    lab = np.empty_like(f)
-    lab[..., 0] = 116.0 * f[..., 1] - 16.0
-    lab[..., 1] = 500.0 * (f[..., 0] - f[..., 1])
-    lab[..., 2] = 200.0 * (f[..., 1] - f[..., 2])
-    return lab
+    w = np.asarray(white, dtype=np.float64)
+    if w.shape != (3,) or not (np.all(np.isfinite(w)) and np.all(w > 0)):
+        raise OptionError(f"white: expected the XYZ of a white (3 positive numbers), got {w!r:.60}")
+    # colour-science takes the white as chromaticity xyY: its Y scales the white (here Y/Yn, as CIE 15 says)
+    with colour_science.domain_range_scale("reference"):  # whatever scale the caller set for the library
+        lab = colour_science.XYZ_to_Lab(v, illuminant=colour_science.XYZ_to_xyY(w))
+    return np.asarray(lab, dtype=np.float64)
 
 
 def linear_to_lab(rgb: ArrayLike) -> NDArray[np.float64]:
@@ -617,3 +627,78 @@ def delta_e_ab(lab1: ArrayLike, lab2: ArrayLike) -> NDArray[np.float64]:
     if a.ndim == 0 or b.ndim == 0 or a.shape[-1] != 3 or b.shape[-1] != 3:
         raise OptionError(f"lab: expected L*a*b* values (..., 3), got shapes {a.shape} and {b.shape}")
     return np.sqrt(np.sum((a - b) ** 2, axis=-1))
+
+
+def srgb_to_lab(srgb: ArrayLike) -> NDArray[np.float64]:
+    """CIE 1976 L*a*b* (D65, white = display white) of display sRGB: 8-bit codes or encoded values.
+
+    The colours as a picture shows them: the sRGB decoding
+    (:func:`srgb_to_linear`), the sRGB primaries to XYZ (:data:`RGB_TO_XYZ`)
+    and L*a*b* relative to the display's white (:func:`linear_to_lab`).
+
+    Parameters
+    ----------
+    srgb
+        ``(..., 3)``: ``uint8`` codes 0-255 (as :func:`tonemap_srgb8` makes
+        them), or encoded values in [0, 1] as floats.
+
+    Returns
+    -------
+    numpy.ndarray
+        L*, a*, b*, ``(..., 3)``.
+    """
+    v = np.asarray(srgb)
+    if v.ndim == 0 or v.shape[-1] != 3:
+        raise OptionError(f"srgb: expected sRGB colours (..., 3), got shape {v.shape}")
+    enc = v.astype(np.float64) / 255.0 if v.dtype == np.uint8 else np.asarray(v, dtype=np.float64)
+    return linear_to_lab(srgb_to_linear(enc))
+
+
+#: Colour-difference metrics of :func:`delta_e` (``cdbrdf render --compare --delta-e``).
+DELTA_E_METRICS: Mapping[str, str] = {
+    "2000": "CIEDE2000 (CIE 142-2001; kL = kC = kH = 1): the textile trade's tolerance metric",
+    "2000-textiles": "CIEDE2000 with the textile industry's lightness weight kL = 2 (CIEDE2000 (2:1:1))",
+    "ab": "CIE 1976 Delta E*ab: the distance in L*a*b*",
+}
+
+def delta_e(lab1: ArrayLike, lab2: ArrayLike, *, metric: str = "2000") -> NDArray[np.float64]:
+    """Colour difference of L*a*b* colours ``(..., 3)`` (broadcast) by a metric of :data:`DELTA_E_METRICS`.
+
+    ``"2000"`` is CIEDE2000 (``colour-science``'s ``delta_E_CIE2000``,
+    checked against the test pairs of Sharma, Wu and Dalal, 2005, in the
+    tests): about 1 is a just-noticeable difference, and textile colour
+    tolerances are commonly set at 1 (tight) to 2. ``"2000-textiles"``
+    weighs lightness differences half (kL = 2), as textile colour matching
+    does. ``"ab"`` is :func:`delta_e_ab`.
+
+    Parameters
+    ----------
+    lab1, lab2
+        CIE L*a*b* colours, ``(..., 3)``.
+    metric
+        A key of :data:`DELTA_E_METRICS`.
+
+    Returns
+    -------
+    numpy.ndarray
+        The difference, the broadcast shape without the last axis.
+
+    Raises
+    ------
+    OptionError
+        For another metric (the message lists the valid ones) or colours not ``(..., 3)``.
+    """
+    if metric not in DELTA_E_METRICS:
+        raise OptionError(f"delta E metric: {metric!r:.40} is not one of {', '.join(DELTA_E_METRICS)}")
+    if metric == "ab":
+        return delta_e_ab(lab1, lab2)
+    import colour as colour_science  # the colour-science package (this module is cdbrdf.colour)
+
+    a = np.asarray(lab1, dtype=np.float64)
+    b = np.asarray(lab2, dtype=np.float64)
+    if a.ndim == 0 or b.ndim == 0 or a.shape[-1] != 3 or b.shape[-1] != 3:
+        raise OptionError(f"lab: expected L*a*b* values (..., 3), got shapes {a.shape} and {b.shape}")
+    a, b = np.broadcast_arrays(a, b)
+    with colour_science.domain_range_scale("reference"):
+        d = colour_science.difference.delta_E_CIE2000(a, b, textiles=metric == "2000-textiles")
+    return np.asarray(d, dtype=np.float64)

@@ -363,7 +363,7 @@ def _render_pair(table: CDBRDF, surface: Any, *, config: DemoConfig, progress: P
                  label: str, curvature: bool = False, light: tuple[float, float] = (45.0, 0.0),
                  view: tuple[float, float] | None = None) -> tuple[Any, float]:
     """The surface rendered with the plain BRDF and the CDBRDF under one directional light; and the seconds."""
-    from .render import render_table
+    from .render import Camera, render_table
 
     def stage(what: str, done: int, total: int) -> None:
         if progress is not None:
@@ -371,7 +371,7 @@ def _render_pair(table: CDBRDF, surface: Any, *, config: DemoConfig, progress: P
 
     t0 = time.perf_counter()
     pic = render_table(table, surface, modes=("brdf", "cdbrdf"), size=config.render_size, spp=config.render_spp,
-                       lighting="paper", light=light, view=view, exposure="auto", curvature=curvature,
+                       lighting="paper", light=light, camera=Camera(view=view), exposure="auto", curvature=curvature,
                        progress=stage)
     return pic, time.perf_counter() - t0
 

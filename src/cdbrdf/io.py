@@ -669,13 +669,22 @@ def parts_from_dataset(ds: Any) -> TableParts:
     Raises
     ------
     TableError
-        For a dataset without the reflectance or a sample axis.
+        For a dataset without the reflectance or a sample axis, or whose
+        variables are in other units than the format's (``kappa`` in
+        ``1/m``, an angle in ``radian``) or packed.
     """
     for name in (REFLECTANCE, *SAMPLE_AXES):
         if name not in ds.variables:
             raise TableError(f"ds: the dataset has no variable {name!r}")
-    arrays = {name: ds[name].transpose(*dims).values for name, dims in DATA_VARIABLES.items() if name in ds}
     attrs = attrs_from_globals(ds.attrs)
+    quantity = str(attrs.get("quantity", "relative"))
+    for name in (*SAMPLE_AXES, *DATA_VARIABLES):  # units and packing as the file's reader checks them
+        if name in ds.variables:
+            try:
+                check_cf(Path("ds"), ds[name], name, quantity)
+            except FormatError as exc:
+                raise TableError(str(exc)) from None
+    arrays = {name: ds[name].transpose(*dims).values for name, dims in DATA_VARIABLES.items() if name in ds}
     if CHANNEL in ds.coords:
         attrs = with_channel_names(attrs, [str(c) for c in ds[CHANNEL].values])
     return TableParts(values=arrays[REFLECTANCE], axes={name: ds[name].values for name in SAMPLE_AXES},

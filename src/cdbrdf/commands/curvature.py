@@ -37,8 +37,9 @@ def mesh_options(p: Any, *, units: bool = True) -> None:
     if units:
         p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
                        default=None, metavar="UNIT",
-                       help="length unit of the mesh: mm, cm, m, in or a number of mm per model unit "
-                       "(default: the unit the file records, glTF's metre, else mm)")
+                       help="length unit of the mesh: mm, cm, dm, m, in or a number of mm per model unit "
+                       "(default: the unit the file records or states (glTF's metre, a header comment, "
+                       "MakeHuman's dm), else the one a garment's or a sheet's size makes plausible, else mm)")
     p.add_argument("--neighbourhood", type=finite_float(lo, hi, unit="mm"), default=None, metavar="MM",
                    help="diameter of the surface patch the curvature is fitted over, mm (default: the "
                    "table's measured patch if its provenance records it, else 5)")
@@ -71,7 +72,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "panels) and fit at every vertex the signed principal curvature of larger magnitude and the "
         "normal curvature along the material's x axis (> 0 convex, in 1/mm, over a neighbourhood in "
         "mm), then write binary PLY with 'curvature_x' and 'curvature_dir_x' (Mitsuba attributes "
-        "'vertex_curvature', 'vertex_curvature_dir'), keeping UVs and normals.",
+        "'vertex_curvature', 'vertex_curvature_dir') and the shape operator 'shape_x', 'shape_y', 'shape_z' "
+        "(Mitsuba: 'vertex_shape', what a normal or height map's curvature is added to), keeping UVs and normals.",
     )
     p.add_argument("mesh", metavar="IN", type=mesh_file(),
                    help=f"input mesh ({', '.join(MESH_FORMATS)})")
@@ -94,13 +96,21 @@ def run(args: argparse.Namespace) -> int:
         from ..table import load
 
         table = load(args.table)
+    from ..mesh import SurfaceMaps
+
     mesh = read_mesh(args.mesh)
     big = mesh.faces.shape[0] >= LARGE_MESH_FACES
     with ProgressBars(quiet=args.quiet or not big, unit="vtx") as bars:
         out = prepare_mesh(mesh, units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame,
+                           maps=SurfaceMaps(from_file=False),
                            table=table, kappa_range=(float(PAPER_KAPPA.min()), float(PAPER_KAPPA.max())),
                            progress=bars.callback("curvature"))
     write_ply(args.output, out)
+    named = mesh.metadata.get("normal_map", mesh.metadata.get("height_map"))
+    if named is not None and not args.quiet:
+        kind = "normal_map" if mesh.metadata.get("normal_map") is not None else "height_map"
+        say(f"{args.mesh}: note: its map {getattr(named, 'name', named)} is not in the PLY: name it in the scene's "
+            f"cdbrdf BSDF (<string name=\"{kind}\" .../>), which looks it up per shading point", err=True)
     if not args.quiet:
         print_mesh_report(str(args.mesh), out)
         k = out.attributes["curvature"]

@@ -46,8 +46,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--btf", type=int_range(1, 256), default=None, metavar="N",
                    help="measure a CD-BTF of N x N texels per weave repeat instead (the capture's stands.json "
                    "must register the fabric's (u, v) on the stands): every photograph is rectified onto the "
-                   "texels instead of averaged; the same calibration, hidden samples and fill. Writes a CD-BTF "
-                   "file; no checkpoint")
+                   "texels instead of averaged; the same calibration, hidden samples, fill, schedulers and "
+                   "resumable checkpoint (OUT.ckpt/). Writes a CD-BTF file")
     p.add_argument("--workers", type=int_range(1, 1024), default=None, help="local threads/processes, 1 to 1024")
     p.add_argument("--force", action="store_true",
                    help="overwrite an existing output file (never one of the capture's own files)")

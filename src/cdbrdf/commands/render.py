@@ -1,4 +1,4 @@
-"""``cdbrdf render FILE (--scene sine | --mesh MESH) -o OUT`` or ``cdbrdf render SCENE.xml -o OUT``.
+"""``cdbrdf render FILE (--scene sine|swatch | --mesh MESH) -o OUT`` or ``cdbrdf render SCENE.xml -o OUT``.
 
 Render with Mitsuba 3.
 
@@ -24,8 +24,16 @@ i.e. just white at 0 EV. EXR output is the linear radiance (no exposure
 applied; black where the built-in studio sky is hidden); both are written by
 :func:`cdbrdf.render.output.write_render`. ``--compare`` renders the plain
 BRDF and the CDBRDF and writes one figure: BRDF | CDBRDF | difference (heat
-map of the per-pixel RGB distance in linear radiance, with a colour bar), as
-the paper's Figs. 9-10 (:func:`cdbrdf.plot.plot_render_comparison`).
+map of the colour difference of the two pictures as shown, CIEDE2000 by
+default or ``--delta-e ab``, with a colour bar naming the metric), as the
+paper's Figs. 9-10 (:func:`cdbrdf.plot.plot_render_comparison`).
+
+``--scene`` is a built-in scene (:data:`cdbrdf.render.scenes.SCENES`): the
+paper's sine sheet or a swatch laid in folds of known radii (``--fold-radii``).
+``--view``, ``--zoom``, ``--fov`` and ``--look-at`` make the camera
+(:class:`cdbrdf.render.camera.Camera`): a close-up of a fold is
+``--look-at X,Y,Z --zoom 6`` (the mesh's own coordinates and unit) or
+``--look-at fold --zoom 6``.
 
 ``--mesh`` takes any mesh cdbrdf reads, repairs it and says what it repaired,
 computes its curvature in mm^-1 with ``--units`` (or the unit the file
@@ -38,10 +46,13 @@ directional light (``--lighting paper``); see :mod:`cdbrdf.render.scenes`.
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..errors import OptionError
 from ..limits import MAX_SPP
+from ._maps import MAP_OPTIONS
 from ._text import say
 
 __all__ = ["register", "run"]
@@ -51,10 +62,13 @@ _SEED_MAX = 2**32 - 1 - MAX_SPP
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ..colour import DELTA_E_METRICS
     from ..mesh import CURVATURE_MODES, MESH_FORMATS, UNITS_MM, UP_AXES
     from ..render import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS, VARIANTS
+    from ..render.camera import FOV_RANGE_DEG, LOOK_AT_ANCHORS, ZOOM_RANGE
     from ..render.lighting import LIGHTINGS
     from ..render.picture import DEFAULT_SIZE, DEFAULT_SPP
+    from ..render.scenes import SCENES
     from ._args import (
         existing_file,
         finite_float,
@@ -68,14 +82,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         seed,
         size_wxh,
     )
+    from ._maps import add_map_options
     from .curvature import mesh_options
 
     p = sub.add_parser(
         "render",
-        help="render a CDBRDF with Mitsuba 3 (the paper's sine sheet or any mesh), or a Mitsuba scene",
-        description="Render a CDBRDF file with Mitsuba 3 (llvm_ad_rgb) on the paper's sine sheet or on "
-        "a mesh (PLY, OBJ, glTF/GLB, STL, OFF; repaired, its curvature computed in 1/mm from --units "
-        "unless the file has it), or render a Mitsuba XML scene that uses <bsdf type=\"cdbrdf\">. "
+        help="render a CDBRDF with Mitsuba 3 (the paper's sine sheet, a swatch or any mesh), or a Mitsuba scene",
+        description="Render a CDBRDF file with Mitsuba 3 (llvm_ad_rgb) on the paper's sine sheet, a swatch "
+        "in folds of known radii or a mesh (PLY, OBJ, glTF/GLB, STL, OFF; repaired, its curvature computed in "
+        "1/mm from --units unless the file has it), or render a Mitsuba XML scene that uses <bsdf type=\"cdbrdf\">. "
         "PNG is sRGB-encoded after the exposure (radiance x 2^EV, clipped; default: an 18 %% grey card "
         "facing the key light shows as mid-grey); EXR is linear.",
     )
@@ -95,9 +110,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "scalar_*: one Python call per ray, debugging only)")
     p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
                    default=None, metavar="UNIT",
-                   help="length unit: of --mesh (mm, cm, m, in or mm per model unit; default: the one the "
-                   "file records, else mm), or of a scene file (mm per scene unit; default: the cdbrdf BSDF's "
-                   "'unit', else mm)")
+                   help="length unit: of --mesh (mm, cm, dm, m, in or mm per model unit; default: the one the "
+                   "file records or states, else the one a garment's or a sheet's size makes plausible, else mm), "
+                   "or of a scene file (mm per scene unit; default: the cdbrdf BSDF's 'unit', else mm)")
 
     scene_file = p.add_argument_group("a Mitsuba scene file (SCENE.xml)")
     scene_file.add_argument("-D", dest="define", action="append", default=None, type=key_value(),
@@ -106,13 +121,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     table = p.add_argument_group("a CDBRDF file: the surface, its camera and light (every default below is "
                                  "the table form's; none of these apply to a scene file)")
     what = table.add_mutually_exclusive_group()
-    what.add_argument("--scene", choices=["sine"], help="built-in scene: the paper's sine sheet")
+    what.add_argument("--scene", choices=tuple(SCENES), default=None,
+                      help="built-in scene: " + "; ".join(f"{k}: {v}" for k, v in SCENES.items()))
     what.add_argument("--mesh", metavar="MESH", type=mesh_file(),
                       help=f"a mesh ({', '.join(MESH_FORMATS)}), lengths in --units")
     mode = table.add_mutually_exclusive_group()
     mode.add_argument("--brdf", action="store_true", default=None, help="render the plain BRDF (kappa = 0 slice)")
     mode.add_argument("--compare", action="store_true", default=None,
-                      help="write a figure BRDF | CDBRDF | difference (PNG/PDF/SVG output)")
+                      help="write a figure BRDF | CDBRDF | colour difference as shown (PNG/PDF/SVG output)")
+    table.add_argument("--delta-e", choices=tuple(DELTA_E_METRICS), default=None,
+                       help="the colour difference of --compare's heat map, between the pictures as shown "
+                       "(sRGB -> CIELAB D65): 2000: CIEDE2000 (default); 2000-textiles: CIEDE2000 with kL = 2; "
+                       "ab: CIE 1976 Delta E*ab")
     table.add_argument("--size", type=size_wxh(), default=None, metavar="WxH",
                        help=f"image size (default: {DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}; at most "
                        "CDBRDF_MAX_RENDER_PIXELS pixels)")
@@ -135,9 +155,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="the curvature looked up: max (the paper's: principal curvature of larger "
                        "magnitude) or directional (normal curvature along the material's x axis) "
                        "(default: max)")
-    table.add_argument("--normal-map", metavar="FILE", type=existing_file(".png", ".tif", ".tiff", ".exr"),
-                       default=None, help="a tangent-space normal map of --mesh (OpenGL convention, green up): its "
-                       "curvature is added to the mesh's, baked per vertex (default: the OBJ's MTL 'norm' map)")
     table.add_argument("--up", choices=UP_AXES, default=None,
                        help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
     table.add_argument("--amplitude", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
@@ -147,18 +164,33 @@ def register(sub: argparse._SubParsersAction) -> None:
     table.add_argument("--sheet-size", type=float_list(0, 1e5, lo_open=True, min_len=2, max_len=2, sep="x",
                                                       example="60x60", unit="mm"),
                        default=None, metavar="WxD", help="sine sheet size, mm (default: 60x60)")
+    table.add_argument("--fold-radii", type=float_list(-1000, 1000, min_len=1, max_len=32, example="20,10,5,3",
+                                                      unit="mm"),
+                       default=None, metavar="R1,R2,...",
+                       help="the swatch's folds, left to right: radius in mm, > 0 a ridge, < 0 a groove "
+                       "(default: 20,10,5,3)")
     table.add_argument("--max-depth", type=int_range(2, 64), default=None,
                        help="Mitsuba path length, 2 to 64: 2 = direct light only (default: 3)")
     table.add_argument("--view", type=float_list(-360, 360, min_len=2, max_len=2, example="40,-90", unit="deg"),
                        default=None, metavar="ELEV,AZIM",
-                       help="camera elevation above the ground plane and azimuth, degrees (default: 40,-90 "
-                       "for the sheet, 20,-65 for a mesh)")
+                       help="camera elevation above the ground plane (-90 to 90) and azimuth, degrees "
+                       "(default: 40,-90 for the sheet, 45,-75 for the swatch, 20,-65 for a mesh)")
+    table.add_argument("--zoom", type=finite_float(*ZOOM_RANGE, unit="x"), default=None, metavar="F",
+                       help=f"magnification about the framed view, {ZOOM_RANGE[0]:g} to {ZOOM_RANGE[1]:g}: 2 halves "
+                       "the visible extent, the camera stays where it frames the whole object (default: 1)")
+    table.add_argument("--fov", type=finite_float(*FOV_RANGE_DEG, lo_open=True, unit="deg"), default=None,
+                       metavar="DEG", help="the lens's field of view along the picture's smaller side, degrees: "
+                       "the object is framed the same, the perspective changes (default: 40 for the sheet and "
+                       "the swatch, 30 for a mesh)")
+    table.add_argument("--look-at", type=keyword(tuple(LOOK_AT_ANCHORS),
+                                                 float_list(min_len=3, max_len=3, example="0,10,-5")),
+                       default=None, metavar="X,Y,Z|ANCHOR",
+                       help="the point at the picture's centre: X,Y,Z in the mesh's own coordinates and unit (as "
+                       "in its file; the sheet and the swatch: mm, centred on the origin; a negative first "
+                       "number as --look-at=-5,0,2), or " + "; ".join(f"{k}: {v}" for k, v in LOOK_AT_ANCHORS.items())
+                       + " (default: the framed object's centre)")
+    add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\")"))
     btf = p.add_argument_group("a CD-BTF file (docs/btf.md)")
-    btf.add_argument("--uv-scale", type=float_list(0, 1e9, lo_open=True, min_len=1, max_len=2, example="10,6",
-                                                   unit="mm per UV unit"),
-                     default=None, metavar="SU[,SV]",
-                     help="the fabric's mm per unit of the mesh's UVs (default: the sheet's size on the sine "
-                     "sheet, 1 (UVs in mm) on a mesh)")
     btf.add_argument("--texel-filter", choices=TEXEL_FILTERS, default=None,
                      help=f"between texels: {', '.join(TEXEL_FILTERS)} (default {DEFAULT_TEXEL_FILTER})")
     p.set_defaults(func=run)
@@ -166,8 +198,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 #: Options of the table form (default None: not given), each refused with a scene file.
 _TABLE_ONLY = ("scene", "mesh", "brdf", "compare", "size", "lighting", "light", "irradiance", "no_light", "envmap",
-               "neighbourhood", "frame", "curvature", "normal_map", "up", "amplitude", "wavelength", "sheet_size",
-               "max_depth", "view", "uv_scale", "texel_filter")
+               "neighbourhood", "frame", "curvature", "up", "amplitude", "wavelength", "sheet_size",
+               "max_depth", "view", "zoom", "fov", "look_at", "delta_e", "fold_radii", "texel_filter", *MAP_OPTIONS)
+
+#: Options of one built-in surface, refused with another.
+_SURFACE_ONLY = {"amplitude": "sine", "wavelength": "sine", "sheet_size": "sine", "fold_radii": "swatch"}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -184,24 +219,35 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_table(args: argparse.Namespace) -> int:
-    """``cdbrdf render TABLE (--scene sine | --mesh MESH)``."""
-    from ..mesh import SineSheet
+    """``cdbrdf render TABLE (--scene sine|swatch | --mesh MESH)``."""
+    from ..mesh import SineSheet, Swatch
     from ..plot import FIGURE_FORMATS, plot_render_comparison, save_figure
-    from ..render import render_table
+    from ..render import Camera, render_table
     from ..render.lighting import DEFAULT_IRRADIANCE
     from ..render.output import IMAGE_FORMATS, write_render
     from ..render.picture import DEFAULT_SIZE, DEFAULT_SPP
+    from ._maps import surface_maps
     from ._progress import ProgressBars
     from .curvature import LARGE_MESH_FACES, print_mesh_report
 
     if args.scene is None and args.mesh is None:
-        raise OptionError("give --scene sine or --mesh MESH for a CDBRDF file (or render a scene file SCENE.xml)")
-    if args.uv_scale is not None or args.texel_filter is not None:
-        from ..btf import is_btf
+        raise OptionError("give --scene sine, --scene swatch or --mesh MESH for a CDBRDF file (or render a scene "
+                          "file SCENE.xml)")
+    for opt, scene in _SURFACE_ONLY.items():
+        if getattr(args, opt) is not None and args.scene != scene:
+            raise OptionError(f"--{opt.replace('_', '-')}: only for --scene {scene}")
+    if args.delta_e is not None and not args.compare:
+        raise OptionError("--delta-e: only with --compare (the metric of its heat map)")
+    from ..btf import is_btf
 
-        if not is_btf(args.file):
-            opt = "--uv-scale" if args.uv_scale is not None else "--texel-filter"
-            raise OptionError(f"{opt}: only for a CD-BTF file ({args.file} has no texels)")
+    if args.texel_filter is not None and not is_btf(args.file):
+        raise OptionError(f"--texel-filter: only for a CD-BTF file ({args.file} has no texels)")
+    if args.uv_scale is not None and args.mesh is None and not is_btf(args.file):
+        raise OptionError(f"--uv-scale: for the maps of --mesh MESH or a CD-BTF file ({args.file} has no texels)")
+    given = [k for k in MAP_OPTIONS[1:] if getattr(args, k) is not None]
+    if given and args.mesh is None:
+        raise OptionError(f"--{given[0].replace('_', '-')}: only for --mesh MESH (a built-in scene's folds are its "
+                          "geometry)")
     out = Path(args.output)
     ext = out.suffix.lower()
     if args.compare:
@@ -211,15 +257,23 @@ def _run_table(args: argparse.Namespace) -> int:
         raise OptionError(f"{out}: unknown image type {ext!r}; use {' or '.join(IMAGE_FORMATS)}")
     spp = DEFAULT_SPP if args.spp is None else args.spp
     size = args.size or DEFAULT_SIZE
-    if args.mesh is None:
+    if args.scene == "swatch":
+        with _as_option("fold-radii", "radii_mm"):
+            surface: object = Swatch() if args.fold_radii is None else Swatch(radii_mm=tuple(args.fold_radii))
+    elif args.mesh is None:
         defaults = SineSheet()
         width, depth = args.sheet_size or (defaults.width_mm, defaults.depth_mm)
-        surface: object = SineSheet(amplitude_mm=args.amplitude or defaults.amplitude_mm,
+        surface = SineSheet(amplitude_mm=args.amplitude or defaults.amplitude_mm,
                                     wavelength_mm=args.wavelength or defaults.wavelength_mm,
                                     width_mm=width, depth_mm=depth)
     else:
         surface = args.mesh
     modes = ("brdf", "cdbrdf") if args.compare else (("brdf",) if args.brdf else ("cdbrdf",))
+    with _as_option("view", "view"), _as_option("zoom", "zoom"), _as_option("fov", "fov_deg"), \
+            _as_option("look-at", "look_at"):
+        camera = Camera(view=None if args.view is None else tuple(args.view), zoom=args.zoom or 1.0,
+                        fov_deg=args.fov, look_at=args.look_at if args.look_at is None or isinstance(args.look_at, str)
+                        else tuple(args.look_at))
     with ProgressBars(quiet=args.quiet, unit="spp", leave=True) as bars:
         def progress(stage: str, done: int, total: int) -> None:
             if stage != "curvature" or 2 * total >= LARGE_MESH_FACES:  # a bar for the fit of large meshes
@@ -229,15 +283,18 @@ def _run_table(args: argparse.Namespace) -> int:
             args.file, surface, modes=modes, size=size, spp=spp, seed=args.seed,
             max_depth=args.max_depth or 3, lighting=args.lighting,
             light=None if args.no_light else (args.light if args.light is not None else "auto"),
-            irradiance=args.irradiance or DEFAULT_IRRADIANCE, envmap=args.envmap, view=args.view,
+            irradiance=args.irradiance or DEFAULT_IRRADIANCE, envmap=args.envmap, camera=camera,
             units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame, up=args.up or "auto",
-            normal_map=args.normal_map,
+            maps=surface_maps(args),
             curvature_mode=args.curvature or "max", exposure=args.exposure or "card", variant=args.variant,
-            uv_scale=None if args.uv_scale is None else tuple(args.uv_scale) * (3 - len(args.uv_scale)),
             texel_filter=args.texel_filter, progress=progress)
     if pic.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), pic.mesh)
         say(f"{args.mesh}: up axis: {pic.up} ({pic.up_reason}); lighting: {pic.lighting}", err=True)
+    if isinstance(surface, Swatch) and not args.quiet:
+        folds = ", ".join(f"{'ridge' if r > 0 else 'groove'} {abs(r):g} mm (kappa +-{1 / abs(r):.3g} / mm)"
+                          for r in surface.radii_mm)
+        say(f"swatch: {folds}; lighting: {pic.lighting}", err=True)
     if args.compare:
         from ..table import load
 
@@ -245,7 +302,7 @@ def _run_table(args: argparse.Namespace) -> int:
         lit = (f"light theta={pic.light[0]:g}, phi={pic.light[1]:g} deg" if pic.light is not None
                else "environment")
         fig = plot_render_comparison(pic.display("brdf"), pic.display("cdbrdf"), exposure_ev=pic.exposure_ev,
-                                     title=f"{name}: {pic.lighting} lighting, {lit}")
+                                     title=f"{name}: {pic.lighting} lighting, {lit}", delta_e=args.delta_e or "2000")
         save_figure(fig, out, dpi=150)
     elif ext == ".png":
         write_render(out, pic.display(modes[0]), exposure_ev=pic.exposure_ev)
@@ -255,6 +312,18 @@ def _run_table(args: argparse.Namespace) -> int:
         expo = f", exposure {pic.exposure_ev:+.2f} EV ({pic.exposure_source})" if ext != ".exr" or args.compare else ""
         say(f"{out}: written ({size[0]}x{size[1]}, {spp} spp{expo})", err=True)
     return 0
+
+
+@contextmanager
+def _as_option(option: str, field: str) -> Iterator[None]:
+    """An :class:`OptionError` about the library's ``field`` said about the command's ``--option``."""
+    try:
+        yield
+    except OptionError as exc:
+        text = str(exc)
+        if text.startswith(f"{field}: "):
+            raise OptionError(f"--{option}: {text[len(field) + 2:]}") from None
+        raise
 
 
 def _run_scene_file(args: argparse.Namespace) -> int:

@@ -46,6 +46,7 @@ from .stands import (
     KAPPA_TOL_PER_MM,
     Stand,
     hidden_mask,
+    json_number,
     load_json_object,
     parse_stands,
     read_input,
@@ -344,9 +345,7 @@ def _explicit_grid(doc: dict[str, Any], stand_path: Path) -> dict[str, NDArray[n
             raise CaptureError(f"{stand_path}: grid: {name}: expected a non-empty list of numbers")
         xs = []
         for v in vals:
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-                raise CaptureError(f"{stand_path}: grid: {name}: {v!r:.40} is not a finite number")
-            v = float(v)
+            v = json_number(stand_path, f"grid: {name}", v)
             if name.startswith("phi"):
                 v = v % 360.0
             v = _round_angle(v)

@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import CaptureError
-from .stands import KAPPA_TOL_PER_MM, Stand
+from .stands import KAPPA_TOL_PER_MM, Stand, json_number
 
 __all__ = ["ROW_COLUMNS", "row_origin", "REGISTRATION_VERSION", "CAMERA_MODELS", "Registration",
            "parse_registration", "camera_up", "image_axes", "face_points", "face_hits"]
@@ -103,10 +103,10 @@ class Registration:
 
 
 def _num(where: str, key: str, v: object) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)) \
-            or abs(float(v)) > _MAX_MM:
-        raise CaptureError(f"{where}: {key}: expected a finite number of mm, got {v!r:.40}")
-    return float(v)
+    x = json_number(where, key, v)
+    if abs(x) > _MAX_MM:
+        raise CaptureError(f"{where}: {key}: expected at most {_MAX_MM:g} mm, got {x:.6g}")
+    return x
 
 
 def parse_registration(doc: object, where: str) -> Registration:

@@ -65,6 +65,7 @@ __all__ = [
     "footprint_mm",
     "load_json_object",
     "read_json_object",
+    "json_number",
     "read_input",
     "parse_stands",
     "read_stands",
@@ -354,8 +355,8 @@ def _reject_constant(name: str) -> float:
     raise OptionError(f"{name} is not a number JSON allows")
 
 
-def _number(where: str | PathLike[str], key: str, v: object) -> float:
-    """A finite JSON number (not a boolean) or :class:`CaptureError`."""
+def json_number(where: str | PathLike[str], key: str, v: object) -> float:
+    """A finite JSON number (not a boolean; an integer too big for a float is out of range), else a CaptureError."""
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise CaptureError(f"{where}: {key}: expected a number, got {_short(v)}")
     try:
@@ -404,7 +405,7 @@ def parse_stands(doc: Mapping[str, Any], where: str | PathLike[str]) -> dict[flo
             raise CaptureError(
                 f"{where}: stand {i} has unknown keys {sorted(unknown)}; valid: {sorted(fields)}"
             )
-        vals = {k: _number(where, f"stand {i} {k}", item[k]) for k in fields if k in item}
+        vals = {k: json_number(where, f"stand {i} {k}", item[k]) for k in fields if k in item}
         try:
             st = Stand(**vals)
         except ValueError as exc:

@@ -21,6 +21,17 @@ FIT_ITERATIONS = 3
 #: Fewest vertices worth a thread of their own (:func:`cdbrdf._jit.run_split`).
 GRAIN = 256
 
+#: A fit is resolved when the fitted surface turns its normal, from the vertex to its samples, by at
+#: most this many radians (rms): the samples' normals are within 60 degrees of the vertex's, so a surface
+#: through them turns by about 1 radian at most; ill-conditioned fits along a collar's rim or a
+#: waistband's ledge (samples nearly on a line) turn by tens.
+BEND_MAX = 1.5
+
+#: and when its samples span the neighbourhood in both directions: the smaller second moment of their
+#: positions in the tangent plane at least this share of the larger (a curvature across a line of
+#: vertices, a crease or a seam line, would be measured at the scale of their jitter).
+SPREAD_MIN = 0.05
+
 #: Tukey biweight constant (95 % efficiency under Gaussian noise), in robust standard deviations.
 TUKEY_C = 4.685
 
@@ -297,6 +308,27 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
     half = math.sqrt(0.25 * (ka - kc) * (ka - kc) + kb * kb)
     k1[i] = mean + half
     k2[i] = mean - half
+    # resolved: the fitted surface turns its normal, between the vertex and its samples, by at most
+    # BEND_MAX radians (rms): their normals are within the cone of the vertex's, so a fit that turns by
+    # more shows what they do not (a spike, along a rim or a ledge where they are nearly collinear)
+    turn = 0.0
+    ws = 0.0
+    sxx = 0.0
+    sxy = 0.0
+    syy = 0.0
+    for j in range(cnt):
+        if w[j] > 0.0:
+            sx = (ka * x[j] + kb * y[j]) * sigma
+            sy = (kb * x[j] + kc * y[j]) * sigma
+            turn += w[j] * (sx * sx + sy * sy)
+            ws += w[j]
+            sxx += w[j] * x[j] * x[j]
+            sxy += w[j] * x[j] * y[j]
+            syy += w[j] * y[j] * y[j]
+    # and the samples span the neighbourhood across as well as along (not a line of vertices)
+    disc = math.sqrt(0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy)
+    spread = 0.5 * (sxx + syy) - disc >= SPREAD_MIN * (0.5 * (sxx + syy) + disc)
+    resolved = ws > 0.0 and turn <= BEND_MAX * BEND_MAX * ws and spread
     # eigenvector of k1: angle th with tan(2 th) = 2 kb / (ka - kc)
     th = 0.5 * math.atan2(2.0 * kb, ka - kc)
     ct = math.cos(th)
@@ -308,7 +340,7 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
     d2[i, 1] = -st * t11 + ct * t21
     d2[i, 2] = -st * t12 + ct * t22
     nrm[i, 0], nrm[i, 1], nrm[i, 2] = n0, n1, n2
-    status[i] = 0
+    status[i] = 0 if resolved else 3
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -339,7 +371,9 @@ def fit_vertices(
     Where fewer than 6 candidates pass the normal test (a mesh coarser than
     its folds), the test is dropped for that vertex.
 
-    ``status``: 0 fitted, 1 too few samples (curvature 0), 2 no normal.
+    ``status``: 0 fitted, 1 too few samples (curvature 0), 2 no normal, 3
+    unresolved (the fit turns by more than :data:`BEND_MAX` radians over
+    the samples: a spike, no surface they show).
     Releases the GIL: :func:`cdbrdf._jit.run_split` runs ranges in threads.
     """
     kk = nbr.shape[1]
@@ -448,3 +482,4 @@ def transfer_tensors(q_nrm, q_comp, s_nrm, s_comp, s_ok, s_fn, s_k1, s_k2, s_d1,
         d2[i, 1] = -st * t11 + ct * t21
         d2[i, 2] = -st * t12 + ct * t22
         status[i] = 0
+

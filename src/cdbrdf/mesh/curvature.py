@@ -43,6 +43,7 @@ __all__ = [
     "CURVATURE_MODES",
     "LOCATIONS",
     "outside_by_location",
+    "dihedral_curvature",
     "ATTRIBUTES",
     "PLY_PROPERTIES",
     "MESH_ATTRIBUTES",
@@ -65,6 +66,10 @@ ADAPT_EDGES = 2.0
 
 #: Where a vertex lies, for the report of curvature outside a table's range (:attr:`SurfaceCurvature.location`).
 LOCATIONS: tuple[str, ...] = ("interior", "boundary", "seam")
+
+#: Smallest panel, in faces: the boundary of a smaller UV chart is no seam (a UV atlas cut at nearly
+#: every edge, as some remeshing tools leave it, has charts of 1-20 faces; a garment's panels have hundreds).
+PANEL_FACES = 20
 
 #: Largest neighbourhood, as a share of the mesh's size (bounding-box diagonal): a larger one is
 #: reduced to it, with a note (a wrong unit?); beyond it a quadric cannot follow the surface.
@@ -206,12 +211,65 @@ def _per_output(rep: RepairedMesh, pc: PrincipalCurvatures, mm_per_unit: float) 
     return PrincipalCurvatures(k1, k2, d1, d2)
 
 
+def _single_edges(faces: NDArray[np.int64], n: int) -> tuple[NDArray[np.int64], NDArray[np.bool_]]:
+    """The faces' corner edges (``(3m, 2)``, edge k of face f at row ``k m + f``) and which of them are
+    an edge of one face only (an integer key per edge: much faster than unique rows)."""
+    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    key = np.minimum(e[:, 0], e[:, 1]) * np.int64(n) + np.maximum(e[:, 0], e[:, 1])
+    _, inv, count = np.unique(key, return_inverse=True, return_counts=True)
+    return e, count[inv.reshape(-1)] == 1
+
+
 def _boundary_vertices(faces: NDArray[np.int64], n: int) -> NDArray[np.bool_]:
     """Vertices on an edge of one face only (open boundaries and cuts)."""
-    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    edges, count = np.unique(e, axis=0, return_counts=True)
+    e, one = _single_edges(faces, n)
     out = np.zeros(n, np.bool_)
-    out[edges[count == 1].reshape(-1)] = True
+    out[e[one].reshape(-1)] = True
+    return out
+
+
+def _chart_sizes(faces: NDArray[np.int64], n: int) -> NDArray[np.int64]:
+    """Per face, the number of faces of its piece of the file's mesh (faces joined through shared vertices:
+    a panel, a UV chart)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = faces.shape[0]
+    if m == 0:
+        return np.zeros(0, np.int64)
+    # one graph of faces and vertices, each face joined to its three (linear in the mesh's size)
+    g = coo_matrix((np.ones(3 * m), (np.repeat(np.arange(m), 3), m + faces.reshape(-1))), shape=(m + n, m + n))
+    _, label = connected_components(g, directed=False)
+    piece = label[:m]
+    return np.bincount(piece)[piece].astype(np.int64)
+
+
+def _uv_scraps(v: NDArray[np.float64], faces: NDArray[np.int64], chart: NDArray[np.int64]) -> bool:
+    """Whether most faces lie in pieces of fewer than :data:`PANEL_FACES` faces cut out of a larger surface
+    (a UV map cut at nearly every edge; a quad of two faces is one piece, and whole)."""
+    from .repair import weld
+
+    small = chart < PANEL_FACES
+    if not float(np.mean(small)) > 0.5:
+        return False
+    wid = weld(v)
+    whole = _chart_sizes(wid[faces], int(wid.max()) + 1 if wid.size else 0)  # the surface's own pieces
+    return float(np.mean(small & (chart < whole))) > 0.5
+
+
+def _seam_vertices(faces: NDArray[np.int64], chart: NDArray[np.int64], n: int) -> NDArray[np.bool_]:
+    """Vertices on the boundary of a panel: a piece of the file's mesh of at least :data:`PANEL_FACES`
+    faces (``chart``: :func:`_chart_sizes`).
+
+    A UV map cut at nearly every edge (an atlas of a few faces per chart) has no panels, so no seams.
+    """
+    m = faces.shape[0]
+    if m == 0:
+        return np.zeros(n, np.bool_)
+    e, one = _single_edges(faces, n)
+    one &= np.tile(chart, 3) >= PANEL_FACES
+    out = np.zeros(n, np.bool_)
+    out[e[one].reshape(-1)] = True
     return out
 
 
@@ -299,14 +357,20 @@ def surface_curvature(  # noqa: C901 - the steps in order
     if frame == "tangent" and tan_in is None:
         raise MeshError(f"{name}: the mesh has no tangent attribute for frame 'tangent'")
     notes: list[str] = []
-    if frame == "auto":
-        frame = "uv" if uv_in is not None else "tangent" if tan_in is not None else "principal"
-        if frame == "tangent":
-            notes.append("no UV coordinates: the material's x axis is the file's tangent attribute")
-        elif frame == "principal":
-            notes.append("no UV coordinates: the material's x axis is the bending direction "
-                         "(of the principal curvature of larger magnitude)")
     rep = repair(v, faces, normals=normals, uv=uv_in, name=name)
+    f_in = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    chart = _chart_sizes(f_in, v.shape[0])
+    if frame == "auto":
+        scraps = uv_in is not None and _uv_scraps(v, f_in, chart)
+        frame = "uv" if uv_in is not None and not scraps else "tangent" if tan_in is not None else "principal"
+        why = (f"the UV map is cut at nearly every edge ({int(np.count_nonzero(chart < PANEL_FACES))} of "
+               f"{chart.size} faces in pieces of fewer than {PANEL_FACES}), so it follows no fabric"
+               if scraps else "no UV coordinates")
+        if frame == "tangent":
+            notes.append(f"{why}: the material's x axis is the file's tangent attribute")
+        elif frame == "principal":
+            notes.append(f"{why}: the material's x axis is the bending direction "
+                         "(of the principal curvature of larger magnitude)")
     pos_in = np.asarray(rep.vertices)
     diag = float(np.linalg.norm(pos_in.max(0) - pos_in.min(0)))
     radius = 0.5 * nb / u.mm_per_unit
@@ -384,9 +448,8 @@ def surface_curvature(  # noqa: C901 - the steps in order
         directional = np.where(undefined, pc.kappa, directional)
     areas = _vertex_areas(positions_o, out_faces, n_o)
     # a seam: a panel's (or UV chart's) boundary in the file that the analysis surface closes
-    f_in = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     location = np.where(boundary_a[rep.out_vertex[src_first]], 1,
-                        np.where(_boundary_vertices(f_in, v.shape[0])[src], 2, 0))
+                        np.where(_seam_vertices(f_in, chart, v.shape[0])[src], 2, 0))
     for note in notes:
         _LOG.info("%s: %s", name, note)
     return SurfaceCurvature(src, out_faces, normals_o, uv_o, pc.kappa, directional, pc.k1, pc.k2, pc.d1, pc.d2,
@@ -402,6 +465,70 @@ def outside_by_location(kappa: NDArray[np.float64], location: NDArray[np.int8],
     out = (kappa < lo - tol) | (kappa > hi + tol)
     return {name: (int(np.count_nonzero(out & (location == i))), int(np.count_nonzero(location == i)))
             for i, name in enumerate(LOCATIONS)}
+
+
+def dihedral_curvature(vertices: ArrayLike, faces: ArrayLike, *, units: str | float | Units = "mm",
+                       name: str = "mesh") -> NDArray[np.float64]:
+    """The sharpest bend the tessellation itself shows at each vertex, mm^-1, unsigned: a check of the fit.
+
+    For every edge of the surface (seams closed, :func:`cdbrdf.mesh.repair.weld_seams`)
+    the angle between its two faces' planes over the mean height of the
+    two triangles on it: the normal curvature across that edge a circle
+    through the faces would have (a cylinder of radius R tessellated along
+    its axis gives 1 / R). A vertex gets the largest of its edges'. It uses
+    no neighbourhood: where a fitted curvature (:func:`surface_curvature`)
+    exceeds it several times, the fit shows more than the mesh does (a
+    spike); where both exceed a table's range, the cloth bends that tightly.
+
+    Parameters
+    ----------
+    vertices, faces
+        ``(n, 3)`` positions in ``units`` and ``(m, 3)`` triangles.
+    units
+        Their length unit.
+    name
+        For messages.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n,)`` per input vertex, mm^-1 (0 on a vertex of no two-face edge).
+    """
+    from .repair import check_arrays, weld_seams
+
+    v, f = check_arrays(vertices, faces, name=name)
+    u = parse_units(units)
+    out = np.zeros(v.shape[0])
+    if f.size == 0:
+        return out
+    wid = weld_seams(v, f)
+    pos = np.zeros((int(wid.max()) + 1, 3))
+    pos[wid] = v * u.mm_per_unit
+    fw = wid[f]
+    cr = np.cross(pos[fw[:, 1]] - pos[fw[:, 0]], pos[fw[:, 2]] - pos[fw[:, 0]])
+    a2 = np.linalg.norm(cr, axis=1)
+    good = a2 > 0
+    fn = np.divide(cr, a2[:, None], out=np.zeros_like(cr), where=good[:, None])
+    a = fw.reshape(-1)
+    b = fw[:, [1, 2, 0]].reshape(-1)
+    face = np.repeat(np.arange(fw.shape[0]), 3)
+    key = np.minimum(a, b) * np.int64(pos.shape[0]) + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    pair = np.flatnonzero(ks[1:] == ks[:-1])  # the two faces of an edge (more on a non-manifold one: pairwise)
+    f1, f2 = face[order][pair], face[order][pair + 1]
+    ea, eb = a[order][pair], b[order][pair]
+    ok = good[f1] & good[f2]
+    f1, f2, ea, eb = f1[ok], f2[ok], ea[ok], eb[ok]
+    length = np.linalg.norm(pos[ea] - pos[eb], axis=1)
+    height = 0.5 * (a2[f1] + a2[f2]) / np.maximum(length, 1e-300)
+    # the faces' windings are the file's: the angle between their planes, not their sides
+    angle = np.arccos(np.clip(np.abs(np.einsum("ij,ij->i", fn[f1], fn[f2])), 0.0, 1.0))
+    bend = np.divide(angle, height, out=np.zeros_like(angle), where=height > 0)
+    per = np.zeros(pos.shape[0])
+    np.maximum.at(per, ea, bend)
+    np.maximum.at(per, eb, bend)
+    return per[wid]
 
 
 #: Mitsuba mesh attribute of each curvature mode (what the ``cdbrdf`` BSDF reads), mm^-1.

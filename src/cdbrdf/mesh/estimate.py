@@ -23,7 +23,13 @@ given in mm and converted to the mesh's unit, whatever the tessellation:
    the ball;
 3. a weighted (Gaussian, sigma = radius / 2) robust fit (Tukey's biweight)
    of a height quadric, then of the normal-section model, which is exact for
-   spheres at any radius (:func:`cdbrdf.mesh._kernels.fit_vertices`).
+   spheres at any radius (:func:`cdbrdf.mesh._kernels.fit_vertices`);
+4. a fit that turns by more than :data:`cdbrdf.mesh._kernels.BEND_MAX`
+   radians over its samples' rms distance, which samples within the normal
+   cone cannot show, is a spike (on a coarse mesh, the samples along a
+   collar's rim, a turned-up cuff or a waistband's ledge fit curvatures of
+   10 to 100 mm^-1 at 17 mm edges): it is replaced by the Gaussian-weighted
+   mean of the shape operators fitted around it.
 
 Measured (``tests/test_curvature.py``, ``docs/rendering.md``): a cylinder
 of radius 1/0.22 mm at the default 5 mm neighbourhood is within 0.86 %
@@ -82,6 +88,10 @@ TRANSFER_NEIGHBOURS = 12
 
 #: Growth of the radius at a boundary: a half disc of sqrt(2) r holds as much surface as a disc of r.
 ONE_SIDED_GROWTH = math.sqrt(2.0)
+
+#: A boundary vertex's refit is a spike when it bends more than this many times as tightly as the fits of
+#: the interior vertices beside it; it gets theirs instead.
+OPENING_SPIKE = 2.0
 
 #: Largest angle between a sample's normal and the vertex's, degrees.
 NORMAL_CONE_DEG = 60.0
@@ -235,7 +245,10 @@ def fit_curvatures(
         fitted again over a one-sided neighbourhood as large as a full one
         (the radius grown by :data:`ONE_SIDED_GROWTH`, at least twice
         :data:`MIN_NEIGHBOURS` samples), not over half a neighbourhood (a
-        spike on a coarse mesh).
+        spike on a coarse mesh); a refit that bends more than
+        :data:`OPENING_SPIKE` times as tightly as the interior vertices beside
+        it (their shape operators, carried over with Gaussian weights) is a
+        spike too, and the vertex gets theirs.
     progress
         ``progress(done, total)`` in vertices, after each chunk.
 
@@ -298,6 +311,23 @@ def fit_curvatures(
                   np.ascontiguousarray(idx, np.int64), np.ascontiguousarray(dist), float(radius),
                   MIN_NEIGHBOURS, cos_max, r1, r2, e1, e2, en, rs, grain=GRAIN)
         k1[retry], k2[retry], d1[retry], d2[retry], fitted_n[retry], status[retry] = r1, r2, e1, e2, en, rs
+    unresolved = np.flatnonzero(status == 3)
+    if unresolved.size:  # a spike (no height field the samples resolve): the fits around it, averaged
+        ok = status == 0
+        kt = int(min(MAX_NEIGHBOURS, sp.shape[0]))  # past a row of unresolved neighbours (a crease's line)
+        dist, idx = tree.query(q_pos[unresolved], k=kt, workers=-1)
+        dist, idx = dist.reshape(unresolved.size, kt), idx.reshape(unresolved.size, kt)
+        spacing = max(float(np.median(dist[:, 1:])) if kt > 1 else radius, 1e-300)
+        r1, r2 = np.zeros(unresolved.size), np.zeros(unresolved.size)
+        e1, e2 = np.zeros((unresolved.size, 3)), np.zeros((unresolved.size, 3))
+        rs = np.zeros(unresolved.size, np.int8)
+        # the query points are the samples (the vertices of a mesh fitted at its vertices)
+        run_split(transfer_tensors, unresolved.size, np.ascontiguousarray(q_nrm[unresolved]),
+                  np.ascontiguousarray(q_comp[unresolved]), sn, sc, ok, fitted_n, k1, k2, d1, d2,
+                  np.ascontiguousarray(idx, np.int64), np.ascontiguousarray(dist), spacing, cos_max,
+                  r1, r2, e1, e2, rs, grain=GRAIN)
+        k1[unresolved], k2[unresolved], d1[unresolved], d2[unresolved] = r1, r2, e1, e2
+        status[unresolved] = np.where(rs == 0, 0, 1)
     if thinned:
         spacing = radius * math.sqrt(math.pi / SAMPLES_PER_NEIGHBOURHOOD)
         ok = status == 0
@@ -332,7 +362,7 @@ def _one_sided(pos: NDArray[np.float64], nrm: NDArray[np.float64], comp: NDArray
                cos_max: float) -> tuple[Any, ...]:
     """The boundary vertices fitted again over a half disc as large as the full one (see fit_curvatures)."""
     from .._jit import run_split
-    from ._kernels import GRAIN, fit_vertices
+    from ._kernels import GRAIN, fit_vertices, transfer_tensors
 
     q = np.flatnonzero(one_sided)
     k = int(min(2 * MAX_NEIGHBOURS, sp.shape[0]))
@@ -345,8 +375,29 @@ def _one_sided(pos: NDArray[np.float64], nrm: NDArray[np.float64], comp: NDArray
               np.ascontiguousarray(comp[q]), sp, sn, sw, sc, np.ascontiguousarray(idx, dtype=np.int64),
               np.ascontiguousarray(dist), float(ONE_SIDED_GROWTH * radius), 2 * MIN_NEIGHBOURS, cos_max,
               b1, b2, e1, e2, en, bs, grain=GRAIN)
-    done = bs == 0
+    # the surface's side: the fits of the interior vertices nearby, carried over (Gaussian weights)
+    from scipy.spatial import cKDTree
+
+    inner = (status == 0) & ~one_sided
+    t1, t2 = np.zeros(q.size), np.zeros(q.size)
+    f1, f2 = np.zeros((q.size, 3)), np.zeros((q.size, 3))
+    ts = np.ones(q.size, np.int8)
+    if inner.any():
+        kt = int(min(MAX_NEIGHBOURS, int(inner.sum())))
+        pi = np.flatnonzero(inner)
+        dist, idx = cKDTree(pos[pi]).query(pos[q], k=kt, workers=-1)
+        dist, idx = dist.reshape(q.size, kt), idx.reshape(q.size, kt)
+        run_split(transfer_tensors, q.size, np.ascontiguousarray(nrm[q]), np.ascontiguousarray(comp[q]),
+                  np.ascontiguousarray(nrm[pi]), np.ascontiguousarray(comp[pi]), np.ones(pi.size, np.bool_),
+                  np.ascontiguousarray(fitted_n[pi]), k1[pi], k2[pi], d1[pi], d2[pi], np.ascontiguousarray(idx),
+                  np.ascontiguousarray(dist), float(radius), cos_max, t1, t2, f1, f2, ts, grain=GRAIN)
+    # the refit, unless it bends more than twice as tightly as the surface beside it (a spike at an
+    # opening: a sleeve's hem where the bodice's other layer is near); else the surface beside it
+    side = np.maximum(np.abs(t1), np.abs(t2))
+    done = (bs == 0) & ((ts != 0) | (np.maximum(np.abs(b1), np.abs(b2)) <= OPENING_SPIKE * side + 1e-12))
+    carried = ~done & (ts == 0)
     k1, k2, d1, d2, status = k1.copy(), k2.copy(), d1.copy(), d2.copy(), status.copy()
     k1[q[done]], k2[q[done]], d1[q[done]], d2[q[done]] = b1[done], b2[done], e1[done], e2[done]
-    status[q[done]] = 0
+    k1[q[carried]], k2[q[carried]], d1[q[carried]], d2[q[carried]] = t1[carried], t2[carried], f1[carried], f2[carried]
+    status[q[done | carried]] = 0
     return k1, k2, d1, d2, status

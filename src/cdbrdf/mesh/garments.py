@@ -11,6 +11,9 @@ at each side is the armhole, sewn to the sleeve's first ring.
 
 :func:`bust_mesh` is a scan-like bust: Y-up, a closed surface with a flat
 base (or open at the base), fine and unitless as scans are.
+:func:`head_mesh` is a scanned head and neck, Y-up, facing +z: the neck cut
+at a slant (from under the chin to the nape) and left open or capped flat,
+with a nose and a chin, noisy.
 
 They exercise what real files do to the up axis, the units and the
 curvature (``tests/test_garments.py``); the documentation's pictures are
@@ -28,7 +31,7 @@ from numpy.typing import NDArray
 from ..errors import OptionError
 from .core import Mesh
 
-__all__ = ["Garment", "garment_mesh", "bust_mesh"]
+__all__ = ["Garment", "garment_mesh", "bust_mesh", "head_mesh"]
 
 
 @dataclass(frozen=True)
@@ -225,3 +228,61 @@ def bust_mesh(*, base: str = "closed", n_around: int = 96, n_rows: int = 64, sca
         parts_f.append(np.stack([np.full(n_around, n + 1), ring0, np.roll(ring0, -1)], -1))
     verts = np.concatenate(parts_v) * scale
     return Mesh(verts, np.concatenate(parts_f).astype(np.int64), None, None, {}, metadata={"format": "ply"})
+
+
+def head_mesh(*, base: str = "open", tilt_deg: float = 25.0, n_around: int = 120, n_rows: int = 90,
+              noise_mm: float = 0.3, seed: int = 0) -> Mesh:
+    """A scanned head and neck, Y-up, facing +z, about 190 mm wide, 290 mm tall, in mm (see the module).
+
+    Parameters
+    ----------
+    base
+        ``"open"`` (the cut is a hole, as most scans leave it) or ``"closed"``
+        (capped flat, as a watertight scan).
+    tilt_deg
+        How far the cut slants (up towards the front: under the chin), degrees.
+    n_around, n_rows
+        Vertices around and from the cut to the crown.
+    noise_mm
+        Gaussian noise on every vertex but the cut's (a scan's), mm.
+    seed
+        Of the noise.
+
+    Returns
+    -------
+    Mesh
+        Y-up vertices, triangles facing out, no UVs; metadata ``format = "ply"``.
+    """
+    if base not in ("closed", "open"):
+        raise OptionError(f"base: {base!r} is not one of closed, open")
+    if not (math.isfinite(tilt_deg) and 0.0 <= tilt_deg < 60.0):
+        raise OptionError(f"tilt_deg: must be in [0, 60), got {tilt_deg!r}")
+    phi = np.linspace(0.0, 2 * np.pi, n_around, endpoint=False)  # 0 at +x, pi/2 at +z (the face)
+    t = np.linspace(0.0, 1.0, n_rows)[None, :]
+    # the cut: y = 30 + tan(tilt) z on the neck (radius 55)
+    y0 = 30.0 + math.tan(math.radians(tilt_deg)) * 55.0 * np.sin(phi)[:, None]
+    y = y0 + (290.0 - y0) * t
+    ell = lambda a, b: 1.0 / np.sqrt((np.cos(phi)[:, None] / a) ** 2 + (np.sin(phi)[:, None] / b) ** 2)  # noqa: E731
+    head = ell(80.0, 98.0) * np.sqrt(np.clip(1.0 - ((y - 180.0) / 110.0) ** 2, 0.0, 1.0))
+    neck = ell(55.0, 58.0) * np.ones_like(y)
+    r = np.where(y > 180.0, head, np.log(np.exp(head / 8.0) + np.exp(neck / 8.0)) * 8.0)  # a soft union below
+    front = np.exp(-((phi[:, None] - 0.5 * np.pi) / 0.22) ** 2)
+    r = r + front * (16.0 * np.exp(-((y - 175.0) / 14.0) ** 2) + 8.0 * np.exp(-((y - 108.0) / 12.0) ** 2))
+    r = np.where(t[..., :] >= 1.0, 0.0, r)  # the crown closes in a point
+    v = np.stack([r * np.cos(phi)[:, None], y, r * np.sin(phi)[:, None]], -1).reshape(-1, 3)
+    f = _ring_faces(n_around, n_rows, 0, closed=True)[:, ::-1]
+    parts_v, parts_f = [v], [f]
+    if base == "closed":
+        ring0 = np.arange(n_around) * n_rows
+        parts_v.append(v[ring0].mean(axis=0, keepdims=True))
+        parts_f.append(np.stack([np.full(n_around, v.shape[0]), ring0, np.roll(ring0, -1)], -1))
+    verts = np.concatenate(parts_v)
+    noisy = np.ones(verts.shape[0], bool)
+    noisy[np.arange(n_around) * n_rows] = False  # the cut is a software's plane: exact
+    noisy[n_around * n_rows:] = False
+    verts = verts + noisy[:, None] * np.random.default_rng(seed).normal(0.0, noise_mm, verts.shape)
+    faces = np.concatenate(parts_f).astype(np.int64)
+    # the crown's ring collapses to one point: drop the faces that collapse with it
+    top = np.arange(n_around) * n_rows + n_rows - 1
+    verts[top] = verts[top].mean(axis=0)
+    return Mesh(verts, faces, None, None, {}, metadata={"format": "ply"})

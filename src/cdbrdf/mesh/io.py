@@ -37,6 +37,7 @@ import warnings
 from os import PathLike
 from pathlib import Path
 from typing import Any
+from urllib.parse import unquote
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,6 +45,8 @@ from numpy.typing import NDArray
 from ..errors import CDBRDFError, MeshError
 from ..limits import check
 from .core import Mesh
+from .curvature_map import SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES
+from .statements import file_statements, header_comments
 
 __all__ = [
     "MESH_FORMATS",
@@ -152,16 +155,26 @@ def read_ply(path: str | PathLike[str]) -> Mesh:
     tangents = next((np.stack([vert[a] for a in tri], axis=1) for tri in _TANGENT_NAMES
                      if all(a in vert for a in tri)), None)
     attrs = {}
+    shape = all(k in vert for k in SHAPE_PLY_PROPERTIES)
     for k, a in vert.items():
-        if k in _KNOWN:
+        if k in _KNOWN or (shape and k in SHAPE_PLY_PROPERTIES):
             continue
         m = re.fullmatch(r"(.+)_x", k)
         if m:
             attrs[m.group(1)] = a
+    if shape:  # the shape operator's three properties (Mitsuba: one three-channel attribute)
+        attrs.update({a: vert[k] for a, k in zip(SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES, strict=True)})
     faces = ply.faces
     if faces.size and int(faces.max()) >= n:
         raise MeshError(f"{p}: faces refer to vertex {int(faces.max())} but there are {n}")
-    mesh = Mesh(v, faces, normals, uv, attrs, tangents, {"format": "ply", **_metadata(ply.comments)})
+    meta: dict[str, Any] = {"format": "ply", **_metadata(ply.comments)}
+    stated = file_statements(p, "ply", [c for c in ply.comments if not c.startswith("cdbrdf ")])
+    for key in ("units", "up"):  # a unit or up axis cdbrdf recorded is the file's own
+        if key in stated and key not in meta:
+            meta[key], meta[f"{key}_source"] = stated[key], stated[f"{key}_source"]
+    if "notes" in stated:
+        meta["notes"] = stated["notes"]
+    mesh = Mesh(v, faces, normals, uv, attrs, tangents, meta)
     if ply.corner_uv is not None:
         mesh = _split_corner_uv(mesh, ply.corner_uv)
     return mesh
@@ -263,45 +276,113 @@ def _read_trimesh(p: Path, fmt: str) -> Mesh:
     f_all = np.concatenate(fs).astype(np.int64)
     check("mesh_faces", f_all.shape[0], what=f"{p}: faces")
     meta: dict[str, Any] = {"format": fmt}
-    if fmt in ("gltf", "glb"):
-        meta["units"] = "m"  # glTF's unit is the metre (glTF 2.0, 3.6)
-        meta["up"] = "y"  # and +Y is up
+    # what the file says of its unit and up axis (glTF: metres, +Y up; a header's comments; MakeHuman)
+    meta.update(file_statements(p, fmt, header_comments(data) if fmt in ("obj", "off") else []))
     uv_all = np.concatenate(uvs) if all(u is not None for u in uvs) else None
     if uv_all is None and any(u is not None for u in uvs):
-        meta["notes"] = [f"{sum(u is None for u in uvs)} of {len(uvs)} parts have no UVs: the UVs are not used"]
+        meta["notes"] = [*meta.get("notes", []),
+                         f"{sum(u is None for u in uvs)} of {len(uvs)} parts have no UVs: the UVs are not used"]
     n_all = np.concatenate(ns) if all(n is not None for n in ns) else None
     notes: list[str] = list(meta.get("notes", []))
-    nmap = _obj_normal_map(refs, notes) if fmt == "obj" else _gltf_normal_map(scene, p) if fmt in ("gltf", "glb") \
-        else None
+    if fmt == "obj":
+        meta.update(_obj_maps(refs, notes))
+    elif fmt in ("gltf", "glb"):
+        meta.update(_gltf_maps(scene, p, data, notes))
     if notes:
         meta["notes"] = notes
-    if nmap is not None:
-        meta["normal_map"] = nmap
     return Mesh(v_all, f_all, n_all, uv_all, {}, None, meta)
 
 
-def _obj_normal_map(refs: list[Any], notes: list[str]) -> str | None:
-    """The tangent-space normal map an OBJ's material library names (``norm FILE``), if it can be read."""
-    for r in refs:
-        if r.role.lower() != "norm":
+#: MTL map statements read as detail maps, in order of preference: a normal map, then height maps.
+_MTL_MAPS: tuple[tuple[str, str, str], ...] = (("norm", "normal_map", "normal map"),
+                                               ("map_bump", "height_map", "bump map"),
+                                               ("bump", "height_map", "bump map"),
+                                               ("disp", "height_map", "displacement map"))
+
+
+def _mtl_transform(options: tuple[str, ...]) -> tuple[tuple[float, float, float, float] | None, float | None]:
+    """An MTL map's texture transform ``(ru, rv, ou, ov)`` from ``-s`` and ``-o``, and its ``-bm``."""
+    rep, off, bm = [1.0, 1.0], [0.0, 0.0], None
+    words = [w.lower() for w in options]
+    for i, w in enumerate(words):
+        nums = []
+        for x in words[i + 1 : i + 4]:
+            try:
+                nums.append(float(x))
+            except ValueError:
+                break
+        if w == "-s" and nums:
+            rep = [nums[0], nums[1] if len(nums) > 1 else nums[0]]
+        elif w == "-o" and nums:
+            off = [nums[0], nums[1] if len(nums) > 1 else 0.0]
+        elif w == "-bm" and nums:
+            bm = nums[0]
+    ok = all(np.isfinite(rep + off)) and rep[0] != 0 and rep[1] != 0
+    t = (rep[0], rep[1], off[0], off[1]) if ok and (rep != [1.0, 1.0] or off != [0.0, 0.0]) else None
+    return t, bm
+
+
+def _obj_maps(refs: list[Any], notes: list[str]) -> dict[str, Any]:
+    """The detail map an OBJ's material library names (``norm``, else ``map_Bump``/``bump``/``disp``), if readable."""
+    for role, key, what in _MTL_MAPS:
+        for r in refs:
+            if r.role.lower() != role:
+                continue
+            if not r.path.is_file():
+                notes.append(f"{r.named_by}: names the {what} {r.path}, which does not exist: not used")
+                continue
+            t, bm = _mtl_transform(r.options)
+            out: dict[str, Any] = {key: str(r.path)}
+            if t is not None:
+                out["map_transform"] = t
+            if bm is not None and key == "height_map":
+                out["height_scale"] = bm
+            return out
+    return {}
+
+
+def _gltf_maps(scene: Any, p: Path, data: bytes, notes: list[str]) -> dict[str, Any]:
+    """A glTF's first ``normalTexture`` (its image file read as data, else trimesh's), with its texture transform.
+
+    ``KHR_texture_transform`` (glTF's texture coordinates run down from the
+    top) becomes the transform of UVs with v up: repeat ``(sx, sy)``, offset
+    ``(ox, 1 - oy - sy)``; a rotation is not applied (said).
+    """
+    from .normalmap import normal_map_from_normals, read_normal_map
+    from .references import _gltf_json
+
+    doc = _gltf_json(p, data)
+    for mat in doc.get("materials", []) if isinstance(doc.get("materials"), list) else []:
+        nt = mat.get("normalTexture") if isinstance(mat, dict) else None
+        if not isinstance(nt, dict):
             continue
-        if r.path.is_file():
-            return str(r.path)
-        notes.append(f"{r.named_by}: names the normal map {r.path}, which does not exist: not used")
-    return None
-
-
-def _gltf_normal_map(scene: Any, p: Path) -> Any:
-    """The ``normalTexture`` of a glTF's first material that has one, as a normal map, or None."""
-    from .normalmap import normal_map_from_normals
-
-    for geom in scene.geometry.values():
-        mat = getattr(getattr(geom, "visual", None), "material", None)
-        tex = getattr(mat, "normalTexture", None)
-        if tex is not None:
-            px = np.asarray(tex.convert("RGB"), dtype=np.float64)
-            return normal_map_from_normals(2.0 * px / 255.0 - 1.0, name=f"{p}: normalTexture")
-    return None
+        out: dict[str, Any] = {}
+        kt = (nt.get("extensions") or {}).get("KHR_texture_transform")
+        if isinstance(kt, dict):
+            try:
+                sx, sy = (float(x) for x in kt.get("scale", (1.0, 1.0)))
+                ox, oy = (float(x) for x in kt.get("offset", (0.0, 0.0)))
+                if sx != 0 and sy != 0 and np.isfinite([sx, sy, ox, oy]).all():
+                    out["map_transform"] = (sx, sy, ox, 1.0 - oy - sy)
+                if float(kt.get("rotation", 0.0)) != 0.0:
+                    notes.append(f"{p}: the normal texture's KHR_texture_transform rotation is not applied")
+            except (TypeError, ValueError):
+                notes.append(f"{p}: the normal texture's KHR_texture_transform cannot be read: not applied")
+        try:
+            img = doc["images"][doc["textures"][int(nt["index"])]["source"]]
+            uri = img.get("uri")
+        except (KeyError, IndexError, TypeError, ValueError):
+            uri = None
+        if isinstance(uri, str) and not uri.startswith("data:") and (p.parent / unquote(uri)).is_file():
+            out["normal_map"] = read_normal_map(p.parent / unquote(uri))
+            return out
+        for geom in scene.geometry.values():  # embedded: the image trimesh decoded
+            tex = getattr(getattr(getattr(geom, "visual", None), "material", None), "normalTexture", None)
+            if tex is not None:
+                px = np.asarray(tex.convert("RGB"), dtype=np.float64)
+                out["normal_map"] = normal_map_from_normals(2.0 * px / 255.0 - 1.0, name=f"{p}: normalTexture")
+                return out
+    return {}
 
 
 def _scene_parts(scene: Any) -> list[tuple[NDArray[np.float64], NDArray[np.int64], Any, Any]]:
@@ -342,8 +423,10 @@ def write_ply(path: str | PathLike[str], mesh: Mesh) -> None:
     """Write ``mesh`` as binary little-endian PLY (float32 vertex data), atomically.
 
     Attributes are written as ``NAME_x`` float properties (Mitsuba loads them
-    as ``vertex_NAME``); the metadata ``units``, ``up``, ``curvature_units``,
-    ``neighbourhood_mm`` and ``frame`` as ``comment cdbrdf KEY VALUE`` lines.
+    as ``vertex_NAME``), the shape operator's three as ``shape_x``,
+    ``shape_y``, ``shape_z`` (Mitsuba: one attribute ``vertex_shape``); the
+    metadata ``units``, ``up``, ``curvature_units``, ``neighbourhood_mm`` and
+    ``frame`` as ``comment cdbrdf KEY VALUE`` lines.
 
     Parameters
     ----------
@@ -371,13 +454,15 @@ def write_ply(path: str | PathLike[str], mesh: Mesh) -> None:
         cols += [("u", mesh.uv[:, 0]), ("v", mesh.uv[:, 1])]
     if mesh.tangents is not None:
         cols += [(c, mesh.tangents[:, i]) for i, c in enumerate(_TANGENT_NAMES[0])]
-    for name, a in mesh.attributes.items():
+    ply_name = dict(zip(SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES, strict=True)) if all(
+        k in mesh.attributes for k in SHAPE_ATTRIBUTES) else {}
+    for name, a in sorted(mesh.attributes.items(), key=lambda kv: kv[0] in ply_name):  # the shape's three last
         a = np.asarray(a, dtype=np.float64)
         if a.shape != (n,):
             raise MeshError(f"mesh: attribute {name!r}: expected shape ({n},), got {a.shape}")
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
             raise MeshError(f"mesh: attribute {name!r}: not a valid PLY property name")
-        cols.append((f"{name}_x", a))
+        cols.append((ply_name.get(name, f"{name}_x"), a))
     comments = [f"written by cdbrdf {__version__}"]
     for key in ("units", "up", "curvature_units", "neighbourhood_mm", "frame"):
         val = mesh.metadata.get(key)

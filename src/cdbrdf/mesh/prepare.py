@@ -1,22 +1,40 @@
-"""A user's mesh made ready to render: repaired, in mm, framed, upright, with its curvature.
+"""A user's mesh made ready to render: repaired, in its unit, framed, upright, with its curvature.
 
 :func:`prepare_mesh` reads a mesh file (or takes a :class:`~cdbrdf.mesh.Mesh`),
 repairs it, gives it the material's frame and its curvatures in mm^-1
 (:mod:`cdbrdf.mesh.curvature`) and checks them against a table's kappa range.
 
-**Up axis** (:func:`detect_up`), from the geometry first: the axis a PLY
-written by cdbrdf records; else a flat object (its extent along y or z
-below a fifth of the other two) lies on that axis; else the direction the
-open boundaries point (a garment's neck, hem and sleeves, a figure's neck
-and base: the boundaries after the seams are closed, each weighted by its
-perimeter, decide when y or z has 1.5 times the other's share); else a flat
-base (a planar cap at one end of an axis holding at least 2 % of the
-surface, as scans are cut); else the taller of y and z (by 1.2 times). The
-format's convention (Y for OBJ, glTF and OFF, Z for PLY and STL) decides
-only when the geometry does not, and a geometry that disagrees with it is
-logged as a warning. ``up="y"`` or ``"z"`` overrides it. :func:`z_up_mesh`
-turns a mesh into the z-up world frame by ``(x, y, z) -> (x, -z, y)``, so a
-Y-up mesh's front (+z) faces a camera at azimuth -90 degrees.
+**Unit**: given, recorded by cdbrdf or stated by the file
+(:mod:`cdbrdf.mesh.statements`), else inferred from the size of a garment or
+a sheet (:func:`cdbrdf.mesh.units.infer_units`), else mm; the note
+``units_note`` says which (``units: inferred dm from the size: 1.14 m tall,
+1.05 m across as a garment (0.2-2.5 m)``). A stated unit that makes a garment
+implausibly large or small is followed, with a warning.
+
+**Up axis** (:func:`detect_up`): what the file states first (a PLY written by
+cdbrdf, glTF's specification, a header comment such as ``# Y-up``, a
+MakeHuman asset), else the geometry (:mod:`cdbrdf.mesh.shape`), by the first
+rule that decides:
+
+1. a flat object (its extent along y or z below a fifth of the other two)
+   lies on that axis (a pattern laid out, a swatch);
+2. a flat base (a plane capping the surface at its extreme across a crease:
+   a scan's cut, a plinth, slanting up to 40 degrees);
+3. the left-right mirror plane: when it is across y or z, the other is up;
+4. the openings (a garment's neck, hem and cuffs, a scan's open base, with
+   the seams closed: each points away from the cloth, weighted by its
+   length) point along y or z 1.5 times as much as along the other;
+5. separate panels (a CAD stage) hang around a body, so they face across
+   the up axis 1.5 times less; one sheet (a drape) faces up 1.25 times more;
+6. the taller of y and z (by 1.2 times).
+
+Else the tool's default (Blender's, Maya's and 3ds Max's OBJ exports are
+Y-up), else the format's convention (Y for OBJ, glTF and OFF, Z for PLY and
+STL). A geometry that disagrees with the convention or with what the file
+states is logged as a warning. ``up="y"`` or ``"z"`` overrides it.
+:func:`z_up_mesh` turns a mesh into the z-up world frame by ``(x, y, z) ->
+(x, -z, y)``, so a Y-up mesh's front (+z) faces a camera at azimuth -90
+degrees.
 """
 
 from __future__ import annotations
@@ -33,10 +51,12 @@ from numpy.typing import NDArray
 from ..errors import MeshError, OptionError
 from .core import Mesh
 from .curvature import check_neighbourhood, neighbourhood_from_table, outside_by_location, surface_curvature
+from .curvature_map import SHAPE_ATTRIBUTES, mesh_shape_operator
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM
 from .io import read_mesh
-from .normalmap import NormalMap, add_normal_map, read_normal_map
-from .units import check_kappa_range, check_size, parse_units
+from .maps import SurfaceMaps, apply_maps
+from .shape import Shape
+from .units import Units, check_garment_size, check_kappa_range, check_size, infer_units, parse_units
 
 __all__ = ["UP_AXES", "prepare_mesh", "has_own_uv", "detect_up", "to_z_up", "z_up_mesh", "check_up"]
 
@@ -45,11 +65,27 @@ _LOG = logging.getLogger(__name__)
 #: Up axes a mesh can be given (``"auto"``: :func:`detect_up`).
 UP_AXES: tuple[str, ...] = ("auto", "y", "z")
 
-#: An axis is the openings' when their length along it is at least this many times that along the other.
+#: A flat object (its extent along y or z below this share of the other two) lies on that axis.
+FLAT_SHARE = 0.2
+
+#: A flat base decides when its normal's component along y or z is this many times that along the other
+#: (a cut slanting up to 40 degrees, from under a chin to the nape).
+BASE_RATIO = 1.15
+
+#: The mirror plane's axis is the left-right axis when its asymmetry is below this share of the next axis's.
+SYMMETRY_RATIO = 0.6
+
+#: and when every other axis is at least this many vertex spacings off (a mirror image on two axes tells nothing).
+ASYMMETRIC_SPACINGS = 0.5
+
+#: An axis is the openings' when they point along it at least this many times as much as along the other.
 OPENINGS_RATIO = 1.5
 
-#: Share of the surface a flat base must have (a scan's cut).
-BASE_SHARE = 0.02
+#: Separate panels (hanging around a body) face across the up axis at most 1 / this as much as the other.
+PANELS_RATIO = 1.5
+
+#: One sheet faces along the up axis at least this many times as much as along the other.
+SHEET_RATIO = 1.25
 
 #: An axis is the tallest when the extent along it is at least this many times that along the other.
 EXTENT_RATIO = 1.2
@@ -86,8 +122,7 @@ def prepare_mesh(
     table: Any = None,
     kappa_range: tuple[float, float] | None = None,
     recompute: bool = False,
-    normal_map: str | PathLike[str] | NormalMap | None = None,
-    normal_map_convention: str = "opengl",
+    maps: SurfaceMaps | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Mesh:
     """Read a user mesh for rendering: repair it, give it a frame and its curvatures in mm^-1.
@@ -98,9 +133,11 @@ def prepare_mesh(
         A mesh file (any of :data:`cdbrdf.mesh.MESH_FORMATS`) or a
         :class:`~cdbrdf.mesh.Mesh` (not modified).
     units
-        The mesh's length unit (``mm``, ``cm``, ``m``, ``in`` or mm per unit);
-        default: the one the file records (a PLY written by cdbrdf, glTF's
-        metre), else mm.
+        The mesh's length unit (``mm``, ``cm``, ``dm``, ``m``, ``in`` or mm
+        per unit); default: the one the file records or states (a PLY written
+        by cdbrdf, glTF's metre, a header comment, MakeHuman's decimetre),
+        else the one a garment's or a sheet's size makes plausible, else mm
+        (the metadata's ``"units_note"`` says which).
     neighbourhood_mm
         Diameter of the neighbourhood the curvature is fitted over, mm;
         default: the table's measured patch when its provenance records it
@@ -117,14 +154,13 @@ def prepare_mesh(
         Without a table: the kappa range to check the curvature against.
     recompute
         Compute the curvature even when the file has it.
-    normal_map
-        A tangent-space normal map (a file, or a
-        :class:`~cdbrdf.mesh.normalmap.NormalMap`) whose curvature is added
-        to the mesh's, baked per vertex (:mod:`cdbrdf.mesh.normalmap`); the
-        mesh needs its UVs. Default: the map the file names (an OBJ's
-        ``norm`` in its MTL), if any.
-    normal_map_convention
-        ``"opengl"`` (green up; Blender, glTF) or ``"directx"``.
+    maps
+        The maps laid on it by its UVs and their UV scale
+        (:class:`~cdbrdf.mesh.SurfaceMaps`, :func:`cdbrdf.mesh.apply_maps`):
+        baked per texel into ``metadata["curvature_map"]`` for the renderer,
+        or per vertex into the curvature. Default: the maps the file names
+        (an OBJ's MTL ``norm``/``bump``/``disp``, a glTF's ``normalTexture``),
+        baked per texel. A map needs the mesh's own UVs.
     progress
         ``progress(done, total)`` while fitting, in vertices.
 
@@ -133,7 +169,10 @@ def prepare_mesh(
     Mesh
         The renderable mesh: repaired faces, normals, UVs carrying the frame,
         attributes ``"curvature"`` (maximum) and ``"curvature_dir"``
-        (directional) in mm^-1; its metadata says what was done
+        (directional) in mm^-1 and its shape operator
+        (:data:`~cdbrdf.mesh.curvature_map.SHAPE_ATTRIBUTES`, mm^-1, frame
+        x = dP/du, y = n x x); with maps ``"uv_scale"``, ``"uv_scale_rule"``
+        and ``"curvature_map"`` (:func:`cdbrdf.mesh.apply_maps`); its metadata says what was done
         (``"repairs"``, ``"notes"``, ``"units"``, ``"neighbourhood_mm"``,
         ``"frame"``, ``"location"`` (:data:`cdbrdf.mesh.curvature.LOCATIONS`
         index per vertex), and with a table ``"outside_share"`` and
@@ -161,16 +200,7 @@ def prepare_mesh(
     meta = mesh.metadata
     notes: list[str] = list(meta.get("notes", []))
     recorded_units = meta.get("units")
-    if units is not None:
-        u = parse_units(units)
-        units_note = f"units: {u} (given)"
-    elif recorded_units is not None:
-        u = parse_units(recorded_units)
-        units_note = f"units: {u} (recorded in the file)" if meta.get("format") == "ply" else \
-            f"units: {u} ({str(meta.get('format', '')).upper()}'s unit)"
-    else:
-        u = parse_units("mm")
-        units_note = "units: mm (none given or recorded; give the mesh's unit if it is not mm)"
+    u, units_note = _mesh_units(mesh, units, name)
     check_size(mesh.vertices, u, name=name)  # a vertex 1e10 mm away would leave the object invisible
     if neighbourhood_mm is not None:
         nb, nb_note = check_neighbourhood(neighbourhood_mm), "given"
@@ -180,6 +210,7 @@ def prepare_mesh(
         nb, nb_note = DEFAULT_NEIGHBOURHOOD_MM, "the default"
     reuse = (not recompute and "curvature" in mesh.attributes and "curvature_dir" in mesh.attributes
              and meta.get("curvature_units") == "1/mm" and recorded_units is not None
+             and all(k in mesh.attributes for k in SHAPE_ATTRIBUTES)
              and mesh.uv is not None
              and (units is None or parse_units(recorded_units) == u)
              and (neighbourhood_mm is None or _same_number(meta.get("neighbourhood_mm"), nb))
@@ -193,24 +224,21 @@ def prepare_mesh(
     else:
         if "curvature" in mesh.attributes and not recompute:
             notes.append("curvature: computed again (the file's has no recorded unit, or other settings)")
+        given = maps is not None and any(m is not None for m in (maps.normal_map, maps.height_map, maps.hires_mesh))
+        from_file = (maps is None or maps.from_file) and (meta.get("normal_map") is not None
+                                                          or meta.get("height_map") is not None)
+        mapped = mesh.uv is not None and (given or from_file)  # maps need the file's UVs, however cut
         s = surface_curvature(mesh.vertices, mesh.faces, uv=mesh.uv, normals=mesh.normals, tangents=mesh.tangents,
-                              units=u, neighbourhood_mm=nb, frame=frame or "auto", name=name, progress=progress)
+                              units=u, neighbourhood_mm=nb, frame=frame or ("uv" if mapped else "auto"), name=name,
+                              progress=progress)
         repairs = list(s.repairs)
         notes.extend(s.notes)
-        attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in ("curvature", "curvature_dir")}
+        own = ("curvature", "curvature_dir", *SHAPE_ATTRIBUTES)
+        attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in own}
         attrs["curvature"] = s.kappa
         attrs["curvature_dir"] = s.directional
-        nmap = normal_map if normal_map is not None else meta.get("normal_map")
-        if nmap is not None:
-            if s.uv is None or s.frame != "uv":
-                raise MeshError(f"{name}: a normal map needs the mesh's own UV coordinates (frame 'uv')")
-            nm = nmap if isinstance(nmap, NormalMap) else read_normal_map(nmap, convention=normal_map_convention)
-            arr, nm_notes = add_normal_map(nm, positions=mesh.vertices[s.source], faces=s.faces, uv=s.uv,
-                                           normals=s.normals, tangent=s.tangent, k1=s.k1, k2=s.k2, d1=s.d1,
-                                           d2=s.d2, mm_per_unit=u.mm_per_unit, neighbourhood_mm=nb)
-            attrs["curvature"] = arr["kappa"]
-            attrs["curvature_dir"] = arr["directional"]
-            notes.extend(nm_notes)
+        attrs.update(zip(SHAPE_ATTRIBUTES, mesh_shape_operator(s.k1, s.k2, s.d1, s.d2, s.tangent, s.normals),
+                         strict=True))
         out = Mesh(mesh.vertices[s.source], s.faces, s.normals, s.uv, attrs,
                    None if mesh.tangents is None else mesh.tangents[s.source], dict(meta))
         out.metadata.update({"curvature_units": "1/mm", "neighbourhood_mm": nb, "frame": s.frame,
@@ -222,6 +250,9 @@ def prepare_mesh(
     if table is not None:
         kappa = np.asarray(table.kappa, dtype=np.float64)
         kappa_range = (float(kappa.min()), float(kappa.max()))
+    out.metadata["notes"] = notes
+    out = apply_maps(out, maps, name=name, kappa_range=kappa_range)
+    notes = list(out.metadata["notes"])
     if kappa_range is not None:
         areas = _vertex_areas(out.vertices, out.faces)
         diag = float(np.linalg.norm(out.vertices.max(0) - out.vertices.min(0)))
@@ -241,6 +272,39 @@ def prepare_mesh(
     return out
 
 
+def _mesh_units(mesh: Mesh, units: str | float | None, name: str) -> tuple[Units, str]:
+    """The mesh's unit and the note saying where it comes from (see :mod:`cdbrdf.mesh.units`)."""
+    from .shape import describe
+
+    meta = mesh.metadata
+    if units is not None:
+        return parse_units(units), f"units: {parse_units(units)} (given)"
+    rec, source = meta.get("units"), meta.get("units_source")
+    if rec is not None and not source:
+        u = parse_units(rec)
+        return u, f"units: {u} (recorded in the file)" if meta.get("format") == "ply" and meta.get("source") else \
+            f"units: {u} (the mesh's own)"
+    if mesh.n_vertices == 0 or mesh.faces.size == 0:
+        u = parse_units(rec if rec is not None else "mm")
+        return u, f"units: {u} ({source or 'none given or recorded'})"
+    shape = describe(mesh)
+    up_axis = meta.get("up") if meta.get("up") in ("y", "z") else (_geometry_up(mesh, shape) or (None,))[0]
+    up = None if up_axis is None else "xyz".index(str(up_axis))
+    if rec is not None:
+        u = parse_units(rec)
+        note = f"units: {u} ({source})"
+        warning = check_garment_size(shape, u, up=up)
+        if warning:
+            _LOG.warning("%s: %s", name, warning)
+            note += "; implausible for a garment: see the warning"
+        return u, note
+    inferred = infer_units(shape, up=up)
+    if inferred is not None:
+        return inferred[0], f"units: {inferred[1]}"
+    return parse_units("mm"), ("units: mm (none given or recorded, and the geometry is no garment or sheet whose "
+                               "size would tell; give the mesh's unit if it is not mm)")
+
+
 def _is_number(x: Any) -> bool:
     try:
         return math.isfinite(float(x))
@@ -258,75 +322,74 @@ def _vertex_areas(v: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.fl
     return np.bincount(f.reshape(-1), weights=np.repeat(a / 3.0, 3), minlength=v.shape[0]).astype(np.float64)
 
 
-def _open_loops(v: NDArray[np.float64], f: NDArray[np.int64]) -> list[NDArray[np.int64]]:
-    """The open boundaries of a mesh with its seams closed: vertex sets of its boundary loops (welded indices)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    from .repair import weld
-
-    wid = weld(v)
-    fw = wid[f]
-    fw = fw[(fw[:, 0] != fw[:, 1]) & (fw[:, 1] != fw[:, 2]) & (fw[:, 2] != fw[:, 0])]
-    e = np.sort(np.concatenate([fw[:, [0, 1]], fw[:, [1, 2]], fw[:, [2, 0]]]), axis=1)
-    edges, count = np.unique(e, axis=0, return_counts=True)
-    b = edges[count == 1]
-    if b.size == 0:
-        return []
-    n = int(wid.max()) + 1
-    g = coo_matrix((np.ones(b.shape[0]), (b[:, 0], b[:, 1])), shape=(n, n))
-    _, label = connected_components(g, directed=False)
-    verts = np.unique(b)
-    first = np.zeros(n, np.int64)
-    first[wid[::-1]] = np.arange(wid.size)[::-1]  # an input vertex of each welded one
-    return [first[verts[label[verts] == c]] for c in np.unique(label[verts])]
-
-
-def _openings_axis(mesh: Mesh) -> tuple[NDArray[np.float64], int]:
-    """Per axis (x, y, z) the length of the open boundaries pointing along it, and the number of openings."""
-    v = mesh.vertices
-    score = np.zeros(3)
-    loops = [lp for lp in _open_loops(v, mesh.faces) if lp.size >= 3]
-    centre = v.mean(axis=0)
-    for lp in loops:
-        p = v[lp]
-        c = p.mean(axis=0)
-        # the loop's direction: its plane's normal (least spread), pointing away from the object
-        _, _, vt = np.linalg.svd(p - c, full_matrices=False)
-        d = vt[-1] if np.dot(vt[-1], c - centre) >= 0 else -vt[-1]
-        length = float(np.sqrt(np.sum((p - c) ** 2, axis=1)).mean()) * 2 * math.pi  # about its perimeter
-        score += length * np.abs(d)
-    return score, len(loops)
-
-
-def _base_axis(mesh: Mesh) -> tuple[int, float] | None:
-    """The axis of a flat base (a planar cap at the bottom of a scan) and its share of the area, or None."""
-    v, f = mesh.vertices, mesh.faces
-    p = v[f]
-    cr = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    area = 0.5 * np.linalg.norm(cr, axis=1)
-    total = float(area.sum())
-    if not total > 0:
+def _axis_pair(score: NDArray[np.float64], ratio: float, *, most: bool = True) -> tuple[str, str] | None:
+    """``"y"`` or ``"z"``, whichever ``score`` (per axis x, y, z) favours by ``ratio`` (the larger, or with
+    ``most=False`` the smaller), and how much more the larger is, in words; None when neither does."""
+    y, z = float(score[1]), float(score[2])
+    hi, lo = max(y, z), min(y, z)
+    if not hi > 0 or hi < ratio * lo:
         return None
-    nrm = cr / np.maximum(2 * area, 1e-300)[:, None]
-    lo, hi = v.min(axis=0), v.max(axis=0)
-    best: tuple[int, float] | None = None
-    for a in range(3):
-        tol = 0.01 * float(hi[a] - lo[a])
-        flat = np.abs(nrm[:, a]) > 0.999
-        for end in (lo[a], hi[a]):
-            at = flat & (np.abs(p[:, :, a] - end).max(axis=1) <= tol)
-            share = float(area[at].sum()) / total
-            if share >= BASE_SHARE and (best is None or share > best[1]):
-                best = (a, share)
-    return best
+    r = hi / lo if lo > 0 else math.inf
+    times = "more than 10 times" if not r <= 10 else f"{r:.1f} times"
+    pick = ("y" if y > z else "z") if most else ("z" if y > z else "y")
+    return pick, times
+
+
+def _geometry_up(mesh: Mesh, shape: Shape | None = None) -> tuple[str, str] | None:
+    """The up axis the geometry shows, and why (see the module's description); None when it does not tell."""
+    from .shape import describe
+
+    e = mesh.vertices.max(0) - mesh.vertices.min(0)
+    if e[2] < FLAT_SHARE * min(e[0], e[1]):
+        return "z", "the object is flat along z"
+    if e[1] < FLAT_SHARE * min(e[0], e[2]):
+        return "y", "the object is flat along y"
+    shape = describe(mesh) if shape is None else shape
+    if shape.base is not None:
+        nrm, share = shape.base
+        pick = _axis_pair(np.abs(nrm), BASE_RATIO)
+        if pick is not None and abs(nrm[0]) < abs(nrm["xyz".index(pick[0])]):
+            return pick[0], f"a flat base across {pick[0]} ({share:.0%} of the surface: a scan's cut, a plinth)"
+    sym = shape.symmetry
+    lateral = int(np.argmin(sym))
+    others = np.delete(sym, lateral)
+    if lateral > 0 and sym[lateral] <= SYMMETRY_RATIO * others.min() and others.min() >= ASYMMETRIC_SPACINGS:
+        up = "z" if lateral == 1 else "y"
+        return up, (f"it is mirror-symmetric across {'xyz'[lateral]}, its left-right axis ({sym[lateral]:.2f} "
+                    f"vertex spacings off against {others.min():.2f} for the next axis), so {up} is up")
+    openings = shape.openings()
+    if openings:
+        score = np.sum([np.abs(lp.direction) for lp in openings], axis=0)
+        pick = _axis_pair(score, OPENINGS_RATIO)
+        if pick is not None:
+            n, other = len(openings), "yz".replace(pick[0], "")
+            return pick[0], (f"its {n} opening{'s' if n > 1 else ''} (a garment's neck, hem and cuffs, a scan's open "
+                             f"base) point along {pick[0]} {pick[1]} as much as along {other}")
+    n_sheets = sum(c.kind in ("panel", "sheet") for c in shape.components)
+    if n_sheets >= 2 and shape.share("panel", "sheet") >= 0.5:
+        pick = _axis_pair(shape.normals, PANELS_RATIO, most=False)
+        if pick is not None:
+            other = "yz".replace(pick[0], "")
+            return pick[0], (f"it is {n_sheets} separate panels hung around a body: they face along {other} "
+                             f"{pick[1]} as much as along {pick[0]}")
+    elif n_sheets == 1 and shape.share("panel", "sheet") >= 0.5:
+        pick = _axis_pair(shape.normals, SHEET_RATIO)
+        if pick is not None:
+            other = "yz".replace(pick[0], "")
+            return pick[0], f"it is one sheet, facing along {pick[0]} {pick[1]} as much as along {other}"
+    pick = _axis_pair(e, EXTENT_RATIO)
+    if pick is not None:
+        other = "yz".replace(pick[0], "")
+        return pick[0], f"the object is tallest along {pick[0]}, {pick[1]} its extent along {other}"
+    return None
 
 
 def detect_up(mesh: Mesh) -> tuple[str, str]:
-    """The up axis of a mesh and why, from its geometry (see the module's description).
+    """The up axis of a mesh and why, from the file's own statement or its geometry (see the module's description).
 
-    A disagreement between the geometry and the file format's convention is
-    logged as a warning (``--up`` overrides both).
+    A disagreement between the geometry and the file format's convention, or
+    between the geometry and what the file states, is logged as a warning
+    (``--up`` overrides both).
 
     Parameters
     ----------
@@ -341,39 +404,28 @@ def detect_up(mesh: Mesh) -> tuple[str, str]:
         Why, in a few words.
     """
     fmt = str(mesh.metadata.get("format", "ply"))
+    name = str(mesh.metadata.get("source", "mesh"))
     rec = mesh.metadata.get("up")
-    if rec in ("y", "z") and fmt not in ("gltf", "glb"):
+    stated = mesh.metadata.get("up_source")
+    if rec in ("y", "z") and not stated:
         return str(rec), "recorded in the file"
     convention = "y" if fmt in ("obj", "gltf", "glb", "off") else "z"
-    conv_why = "glTF's specification" if fmt in ("gltf", "glb") else f"{fmt.upper()}'s usual convention"
+    conv_why = f"{fmt.upper()}'s usual convention"
     if mesh.n_vertices == 0 or mesh.faces.size == 0:
-        return convention, conv_why
-    e = mesh.vertices.max(0) - mesh.vertices.min(0)
-    axis: str | None = None
-    why = ""
-    if e[2] < 0.2 * min(e[0], e[1]):
-        axis, why = "z", "the object is flat along z"
-    elif e[1] < 0.2 * min(e[0], e[2]):
-        axis, why = "y", "the object is flat along y"
-    else:
-        score, n_open = _openings_axis(mesh)
-        yz = score[1:]
-        if n_open and yz.max() > 0 and yz.max() >= OPENINGS_RATIO * yz.min() and yz.max() >= score[0]:
-            axis = "yz"[int(np.argmax(yz))]
-            why = (f"its {n_open} open boundar{'y points' if n_open == 1 else 'ies point'} mostly along {axis} "
-                   "(a garment's neck, hem and sleeves, a scan's cut base)")
-        else:
-            base = _base_axis(mesh)
-            if base is not None and base[0] > 0:
-                axis = "xyz"[base[0]]
-                why = f"a flat base across {axis} ({base[1]:.0%} of the surface)"
-            elif max(e[1], e[2]) >= EXTENT_RATIO * min(e[1], e[2]) and max(e[1], e[2]) >= e[0]:
-                axis = "y" if e[1] > e[2] else "z"
-                why = f"the object is tallest along {axis}"
-    if axis is None:
+        return (str(rec), str(stated)) if rec in ("y", "z") else (convention, conv_why)
+    geometry = _geometry_up(mesh)
+    if rec in ("y", "z"):
+        if geometry is not None and geometry[0] != rec:
+            _LOG.warning("%s: the geometry says the up axis is %s (%s) while %s says %s; using %s (--up overrides)",
+                         name, geometry[0], geometry[1], stated, rec, rec)
+        return str(rec), str(stated)
+    if geometry is None:
+        default = mesh.metadata.get("up_default")
+        if isinstance(default, tuple) and len(default) == 2 and default[0] in ("y", "z"):
+            return str(default[0]), f"{default[1]} (the geometry does not tell)"
         return convention, conv_why + " (the geometry does not tell)"
+    axis, why = geometry
     if axis != convention:
-        name = str(mesh.metadata.get("source", "mesh"))
         _LOG.warning("%s: the geometry says the up axis is %s (%s) while %s is %s; using %s (--up overrides)",
                      name, axis, why, conv_why, convention, axis)
         why += f"; not {conv_why}, {convention}"

@@ -56,15 +56,19 @@ class Reference:
         ``"buffer"`` or ``"image"``.
     named_by
         The file that names it (the mesh, or its material library).
+    options
+        An MTL map statement's options before the file name, as written
+        (``("-bm", "0.5", "-s", "2", "2", "1")``).
     """
 
     path: Path
     role: str
     named_by: Path
+    options: tuple[str, ...] = ()
 
 
-def _map_file(args: str) -> str:
-    """The file name of an MTL map statement's arguments, its options skipped."""
+def _map_file(args: str) -> tuple[str, tuple[str, ...]]:
+    """The file name of an MTL map statement's arguments, and its options."""
     words = args.split()
     i = 0
     while i < len(words) and words[i].lower() in _MAP_OPTIONS:
@@ -77,7 +81,7 @@ def _map_file(args: str) -> str:
         while taken < most and i < len(words) and _is_number(words[i]):
             i += 1
             taken += 1
-    return " ".join(words[i:])
+    return " ".join(words[i:]), tuple(words[:i])
 
 
 def _is_number(word: str) -> bool:
@@ -104,9 +108,9 @@ def _obj_references(p: Path, data: bytes) -> list[Reference]:
             except OSError:
                 continue  # checked (and reported) by check_references
             for mm in _MAP.finditer(lib):
-                name_ = _map_file(mm.group(2))
+                name_, options = _map_file(mm.group(2))
                 if name_:
-                    refs.append(Reference(mtl.parent / name_.replace("\\", "/"), mm.group(1), mtl))
+                    refs.append(Reference(mtl.parent / name_.replace("\\", "/"), mm.group(1), mtl, options))
     return refs
 
 
@@ -194,6 +198,18 @@ def check_references(path: str | PathLike[str], data: bytes | None = None) -> li
     socket or a folder: :func:`cdbrdf.fsutil.check_regular`); a missing one
     is left to the reader (an OBJ's missing material library or map is
     skipped by it, a glTF's missing buffer refused).
+
+    Parameters
+    ----------
+    path
+        The mesh file.
+    data
+        Its bytes, when already read.
+
+    Returns
+    -------
+    list of Reference
+        As :func:`referenced_files` gives them.
 
     Raises
     ------

@@ -10,7 +10,12 @@ components"``):
 1. **weld**: vertices closer than :data:`WELD_TOLERANCE` x the bounding-box
    diagonal become one for the curvature (UV and normal seams stay in the
    output; only vertices identical in position, UV and normal are merged
-   there, and only those count as "welded");
+   there, and only those count as "welded"); so do the *seams*
+   (:func:`weld_seams`): a boundary vertex within :data:`SEAM_TOLERANCE` x
+   the median edge length of another boundary vertex it shares no edge with
+   (sewn panels whose seam vertices a simulation or an export left a hair
+   apart) is one vertex of the analysis surface, so the seam is fitted as
+   the one surface it is, while the output keeps both panels' vertices;
 2. **clean**: faces with a repeated vertex or no area are dropped, and of
    faces on the same three vertices with the same winding all but the first;
 3. **double-sided**: two faces on the same three vertices with opposite
@@ -50,18 +55,25 @@ from ..errors import MeshError
 
 __all__ = [
     "WELD_TOLERANCE",
+    "SEAM_TOLERANCE",
     "CREASE_DEG",
     "MAX_COORDINATE",
     "RepairedMesh",
     "check_arrays",
     "repair",
     "weld",
+    "weld_seams",
 ]
 
 _LOG = logging.getLogger(__name__)
 
 #: Relative tolerance (of the bounding-box diagonal) under which vertices are welded.
 WELD_TOLERANCE = 1e-7
+
+#: Boundary vertices closer than this many median edge lengths (and sharing no edge) are one seam vertex
+#: for the curvature. The seams of a draped, simulated dress meet within 1 % of an edge (a few are
+#: 1-5 % apart); the layers of a pleat or a collar lie a cloth's thickness apart, 10 % of an edge and more.
+SEAM_TOLERANCE = 0.05
 
 #: Faces meeting at a larger angle are shaded separately when the file has no normals, degrees.
 CREASE_DEG = 45.0
@@ -192,6 +204,14 @@ def _unique_rows(a: NDArray[Any]) -> tuple[NDArray[np.int64], NDArray[np.int64]]
     return order[new].astype(np.int64), inv
 
 
+def _distinct(a: NDArray[np.int64], n: int) -> NDArray[np.int64]:
+    """The distinct values of ``a`` (integers in ``[0, n)``), sorted: a mask, linear in ``n`` (numpy 2's
+    hashed ``unique`` takes seconds on a million face indices)."""
+    mask = np.zeros(n, np.bool_)
+    mask[a.reshape(-1)] = True
+    return np.flatnonzero(mask)
+
+
 def weld(vertices: NDArray[np.float64], *, tolerance: float = WELD_TOLERANCE) -> NDArray[np.int64]:
     """For every vertex the index of its welded vertex (vertices closer than ``tolerance`` x diagonal).
 
@@ -231,6 +251,81 @@ def weld(vertices: NDArray[np.float64], *, tolerance: float = WELD_TOLERANCE) ->
             _, label = connected_components(g, directed=False)
     group = label[inv]
     # renumber in order of first appearance
+    _, first_g, inv_g = np.unique(group, return_index=True, return_inverse=True)
+    order = np.argsort(first_g, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    return rank[inv_g.reshape(-1)].astype(np.int64)
+
+
+def weld_seams(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
+               tolerance: float = SEAM_TOLERANCE) -> NDArray[np.int64]:
+    """For every vertex its welded index, the seams closed: :func:`weld`, then boundary vertices close together.
+
+    A boundary vertex (on an edge of one face, after :func:`weld`) within
+    ``tolerance`` x the median edge length of another boundary vertex is
+    welded to it, unless the two share an edge or the weld would collapse a
+    face (a short edge of one panel is not a seam).
+
+    Parameters
+    ----------
+    vertices
+        ``(n, 3)`` positions.
+    faces
+        ``(m, 3)`` vertex indices (checked).
+    tolerance
+        Weld distance of boundary vertices, in median edge lengths.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n,)`` welded index of every vertex, numbered in order of first appearance.
+    """
+    return _close_seams(vertices, faces, weld(vertices), tolerance)
+
+
+def _close_seams(vertices: NDArray[np.float64], faces: NDArray[np.int64], wid: NDArray[np.int64],
+                 tolerance: float) -> NDArray[np.int64]:
+    """:func:`weld_seams` on the result ``wid`` of :func:`weld`."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    if faces.size == 0 or not tolerance > 0:
+        return wid
+    n = int(wid.max()) + 1
+    fw = wid[faces]
+    pos = np.zeros((n, 3))
+    pos[wid] = vertices
+    e = np.sort(np.concatenate([fw[:, [0, 1]], fw[:, [1, 2]], fw[:, [2, 0]]]), axis=1)
+    e = e[e[:, 0] != e[:, 1]]
+    key = e[:, 0] * np.int64(n) + e[:, 1]
+    ukey, count = np.unique(key, return_counts=True)
+    length = np.linalg.norm(pos[ukey // n] - pos[ukey % n], axis=1)
+    edge = float(np.median(length[length > 0])) if (length > 0).any() else 0.0
+    b = _distinct(np.r_[ukey[count == 1] // n, ukey[count == 1] % n], n)
+    if b.size < 2 or not edge > 0:
+        return wid
+    pairs = cKDTree(pos[b]).query_pairs(tolerance * edge, output_type="ndarray")
+    if pairs.size == 0:
+        return wid
+    p = np.sort(b[pairs], axis=1)
+    pk = p[:, 0] * np.int64(n) + p[:, 1]
+    at = np.minimum(np.searchsorted(ukey, pk), ukey.size - 1)
+    p = p[ukey[at] != pk]  # two ends of one edge stay apart (ukey is sorted)
+    if p.size == 0:
+        return wid
+    _, label = connected_components(coo_matrix((np.ones(len(p)), (p[:, 0], p[:, 1])), shape=(n, n)),
+                                    directed=False)
+    lf = label[fw]
+    collapsed = ((lf[:, 0] == lf[:, 1]) | (lf[:, 1] == lf[:, 2]) | (lf[:, 0] == lf[:, 2])) & \
+        (fw[:, 0] != fw[:, 1]) & (fw[:, 1] != fw[:, 2]) & (fw[:, 0] != fw[:, 2])
+    if collapsed.any():  # undo the welds that would collapse a face
+        bad = np.zeros(n, np.bool_)
+        bad[lf[collapsed].reshape(-1)] = True
+        undo = bad[label]
+        label = np.where(undo, n + np.arange(n), label)
+    group = label[wid]
     _, first_g, inv_g = np.unique(group, return_index=True, return_inverse=True)
     order = np.argsort(first_g, kind="stable")
     rank = np.empty_like(order)
@@ -418,12 +513,13 @@ def repair(  # noqa: C901 - one pass, step by step
         repairs.append(note)
     if f_in.shape[0] == 0:
         raise MeshError(f"{name}: the mesh has no faces")
-    wid = weld(v_in)
+    exact = weld(v_in)
+    wid = _close_seams(v_in, f_in, exact, SEAM_TOLERANCE)
     n_w = int(wid.max()) + 1
     _, first_w = np.unique(wid, return_index=True)
     vw = v_in[first_w]  # the first vertex of each group
-    # output identity of input vertices: same position, UV and normal
-    cols = [wid[:, None].astype(np.float64)]
+    # output identity of input vertices: same position (a seam's two sides stay apart), UV and normal
+    cols = [exact[:, None].astype(np.float64)]
     if uv is not None:
         cols.append(np.asarray(uv, dtype=np.float64))
     if n_file is not None:
@@ -451,8 +547,8 @@ def repair(  # noqa: C901 - one pass, step by step
     pos_in_front = np.full(fw.shape[0], -1, np.int64)
     pos_in_front[front_idx] = np.arange(front_idx.size)
     ff_in, ffw = f_in[front_idx].copy(), fw[front_idx].copy()
-    used_front = np.unique(ff_in)
-    n_twins = int(used_front.size) - int(np.unique(ident[used_front]).size)
+    used_front = _distinct(ff_in, n_in)
+    n_twins = int(used_front.size) - int(_distinct(ident[used_front], n_in).size)
     if n_twins:
         repairs.insert(0, f"welded {n_twins} duplicate vertices")
     fb_in, fbw = f_in[back].copy(), fw[back].copy()
@@ -464,7 +560,7 @@ def repair(  # noqa: C901 - one pass, step by step
         ref = n_file[ff_in].sum(axis=1)
     flip, comp, n_comp, conflicts = _orient(vw, ffw, edges, ref)
     if flip.any():
-        n_flipped_comp = int(np.unique(comp[flip]).size)
+        n_flipped_comp = int(_distinct(comp[flip], n_comp).size)
         repairs.append(f"re-oriented {n_flipped_comp} of {n_comp} component{'s' if n_comp > 1 else ''}")
         ff_in[flip] = ff_in[flip][:, ::-1]
         ffw[flip] = ffw[flip][:, ::-1]
@@ -484,7 +580,7 @@ def repair(  # noqa: C901 - one pass, step by step
     c_b2 = 3 * edges.f2[ok] + edges.k2[ok]
     n_cls, cls = _components(3 * m_a, np.r_[c_a1, c_b1], np.r_[c_a2, c_b2])
     corner_w = ffw.reshape(-1)
-    n_used_w = int(np.unique(corner_w).size)
+    n_used_w = int(_distinct(corner_w, n_w).size)
     if n_cls > n_used_w:
         n_cut = int(edges.same.sum()) + edges.n_nonmanifold
         repairs.append(f"split {n_cls - n_used_w} vertices along {n_cut} non-manifold or non-orientable "

@@ -19,6 +19,12 @@ millimetres, two panels (front and back) sewn along the side seams with
 towards the hem, one UV chart per panel (u around the body, across the
 folds), and a sash hanging at the front that is a *double-sided* panel: the
 same triangles twice, once with each winding.
+
+:class:`Swatch` / :func:`swatch_mesh` is a cloth swatch laid in folds of
+known radii (20, 10, 5 and 3 mm by default), each fold made of circular arcs
+so that its curvature is exact (:func:`swatch_curvature`), convex on the
+crests and concave at the feet: a material's look at every bend radius on
+one picture (``cdbrdf render --scene swatch``).
 """
 
 from __future__ import annotations
@@ -32,7 +38,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import OptionError
 from .core import Mesh
 
-__all__ = ["DrapedCloth", "draped_cloth_height", "draped_cloth_mesh", "Skirt", "skirt_mesh"]
+__all__ = ["DrapedCloth", "draped_cloth_height", "draped_cloth_mesh", "Skirt", "skirt_mesh", "Swatch", "swatch_mesh",
+           "swatch_curvature", "SWATCH_MIN_RADIUS_MM", "SWATCH_MAX_RADIUS_MM", "SWATCH_MAX_FOLDS"]
 
 
 def sine_sheet_height(x_mm: ArrayLike, *, amplitude_mm: float, wavelength_mm: float) -> NDArray[np.float64]:
@@ -384,3 +391,223 @@ def skirt_mesh(skirt: Skirt = Skirt()) -> Mesh:
             offset += V.shape[0]
     return Mesh(np.concatenate(parts_v), np.concatenate(parts_f), None, np.concatenate(parts_uv), {},
                 metadata={"units": "mm", "up": "y", "format": "obj"})
+
+
+# -- the swatch: folds of known radii --------------------------------------------------------
+#: Radii a swatch's fold may have, mm.
+SWATCH_MIN_RADIUS_MM = 0.5
+SWATCH_MAX_RADIUS_MM = 1000.0
+#: Most folds on one swatch.
+SWATCH_MAX_FOLDS = 32
+
+
+@dataclass(frozen=True)
+class Swatch:
+    """A cloth swatch laid in folds of known radii (lengths in mm); see :func:`swatch_mesh`.
+
+    Its profile across the folds (x) is made of circular arcs and straight
+    pieces joined without a kink, swept along y. Each fold, left to right
+    in the order of ``radii_mm``, rises from the flat cloth, turns over and
+    comes back down, every arc of the fold's radius: a **ridge** (a
+    positive radius) has a convex crest (kappa = +1/R, turning through twice
+    the slope) between two concave feet (kappa = -1/R, each through the
+    slope); a **groove** (a negative radius) is the ridge upside down. Every
+    fold turns through the same angles, so under a plain BRDF each shows
+    the same colours (over a width in proportion to its radius) and what
+    differs from fold to fold is the curvature's doing. Flat cloth
+    (kappa = 0) lies between the folds and at both ends.
+
+    Attributes
+    ----------
+    radii_mm
+        Signed radius of each fold (ridge > 0, groove < 0), at least
+        :data:`SWATCH_MIN_RADIUS_MM` in magnitude. The default spans 20 mm
+        (kappa 0.05 mm^-1) to 3 mm (0.33 mm^-1, beyond the paper's
+        +-0.22 mm^-1: clamped to it, as the lookup rule says).
+    slope_deg
+        Steepest slope of every fold, degrees in (0, 80].
+    flank_mm
+        Straight piece on each flank, between a foot and the crest.
+    gap_mm
+        Flat cloth between two folds and at both ends.
+    depth_mm
+        Length along the folds (y).
+    step_mm
+        Largest spacing of the vertices across the folds (every arc gets at
+        least 8 segments).
+    row_mm
+        Spacing of the vertices along the folds, where the cloth is straight.
+    """
+
+    radii_mm: tuple[float, ...] = (20.0, 10.0, 5.0, 3.0)
+    slope_deg: float = 35.0
+    flank_mm: float = 2.0
+    gap_mm: float = 6.0
+    depth_mm: float = 80.0
+    step_mm: float = 0.25
+    row_mm: float = 1.0
+
+    def __post_init__(self) -> None:
+        try:
+            if isinstance(self.radii_mm, (str, bytes)):
+                raise TypeError
+            radii = tuple(float(r) for r in self.radii_mm)
+        except (TypeError, ValueError):
+            raise OptionError(f"radii_mm: expected signed radii in mm, got {self.radii_mm!r:.60}") from None
+        if not radii or len(radii) > SWATCH_MAX_FOLDS:
+            raise OptionError(f"radii_mm: give 1 to {SWATCH_MAX_FOLDS} folds, got {len(radii)}")
+        for r in radii:
+            if not (math.isfinite(r) and SWATCH_MIN_RADIUS_MM <= abs(r) <= SWATCH_MAX_RADIUS_MM):
+                raise OptionError(f"radii_mm: {r:g} mm is not a radius between {SWATCH_MIN_RADIUS_MM:g} and "
+                                  f"{SWATCH_MAX_RADIUS_MM:g} mm in magnitude (> 0 ridge, < 0 groove)")
+        object.__setattr__(self, "radii_mm", radii)
+        if not (math.isfinite(self.slope_deg) and 0.0 < self.slope_deg <= 80.0):
+            raise OptionError(f"slope_deg: expected (0, 80] degrees, got {self.slope_deg!r}")
+        for name, positive in (("flank_mm", False), ("gap_mm", False), ("depth_mm", True), ("step_mm", True),
+                               ("row_mm", True)):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and (v > 0 if positive else v >= 0)):
+                raise OptionError(f"{name}: must be a {'positive' if positive else 'non-negative'} length in mm, "
+                                  f"got {v!r}")
+
+    @property
+    def width_mm(self) -> float:
+        """Extent across the folds (x), mm."""
+        return float(sum(_piece_width(*p) for p in _swatch_pieces(self)))
+
+    @property
+    def length_mm(self) -> float:
+        """Length of the cloth across the folds (its profile's arc length: u spans it), mm."""
+        return float(sum(length for _, length, _ in _swatch_pieces(self)))
+
+    @property
+    def grid_shape(self) -> tuple[int, int]:
+        """Vertices across (x) and along (y) the folds of :func:`swatch_mesh`."""
+        across = 1 + sum(_piece_segments(self, c, length) for c, length, _ in _swatch_pieces(self))
+        return across, max(2, int(math.ceil(self.depth_mm / self.row_mm)) + 1)
+
+    @property
+    def face_count(self) -> int:
+        """Triangles of :func:`swatch_mesh`."""
+        nx, ny = self.grid_shape
+        return 2 * (nx - 1) * (ny - 1)
+
+
+def _swatch_pieces(sw: Swatch) -> list[tuple[float, float, float]]:
+    """The profile's pieces: ``(dpsi/ds in mm^-1, length mm, heading at the start rad)``, left to right.
+
+    ``dpsi/ds > 0`` turns counter-clockwise seen from -y (up, concave with
+    the normal up); the curvature (convex > 0) is its negative.
+    """
+    a = math.radians(sw.slope_deg)
+    out: list[tuple[float, float, float]] = [(0.0, sw.gap_mm, 0.0)]
+    for r in sw.radii_mm:
+        c = 1.0 / r  # a ridge (r > 0) first turns up: concave foot
+        up = math.copysign(a, r)
+        out += [(c, a * abs(r), 0.0), (0.0, sw.flank_mm, up), (-c, 2 * a * abs(r), up),
+                (0.0, sw.flank_mm, -up), (c, a * abs(r), -up), (0.0, sw.gap_mm, 0.0)]
+    return [p for p in out if p[1] > 0]
+
+
+def _piece_width(c: float, length: float, psi: float) -> float:
+    """Extent along x of a piece of the profile."""
+    return length * math.cos(psi) if c == 0 else (math.sin(psi + c * length) - math.sin(psi)) / c
+
+
+def _piece_segments(sw: Swatch, c: float, length: float) -> int:
+    return max(8 if c != 0 else 1, int(math.ceil(length / sw.step_mm)))
+
+
+def _swatch_profile(sw: Swatch) -> tuple[NDArray[np.float64], ...]:
+    """Vertices of the profile: arc length, x (centred), z, heading and curvature (mm^-1)."""
+    s_all, x_all, z_all, psi_all, k_all = [np.zeros(1)], [np.zeros(1)], [np.zeros(1)], [np.zeros(1)], []
+    x0 = z0 = s0 = 0.0
+    for c, length, psi0 in _swatch_pieces(sw):
+        t = np.linspace(0.0, length, _piece_segments(sw, c, length) + 1)[1:]
+        psi = psi0 + c * t
+        if c == 0:
+            x, z = x0 + t * math.cos(psi0), z0 + t * math.sin(psi0)
+        else:
+            x = x0 + (np.sin(psi) - math.sin(psi0)) / c
+            z = z0 - (np.cos(psi) - math.cos(psi0)) / c
+        s_all.append(s0 + t)
+        x_all.append(x)
+        z_all.append(z)
+        psi_all.append(psi)
+        k_all.append(np.full(len(t), -c))
+        x0, z0, s0 = float(x[-1]), float(z[-1]), s0 + length
+    k_seg = np.concatenate(k_all)  # the curvature of the segment ending at each vertex
+    k = np.empty(len(k_seg) + 1)
+    k[0], k[-1] = k_seg[0], k_seg[-1]
+    k[1:-1] = 0.5 * (k_seg[:-1] + k_seg[1:])  # a vertex where two pieces meet: the mean of both sides
+    x = np.concatenate(x_all)
+    return np.concatenate(s_all), x - 0.5 * x[-1], np.concatenate(z_all), np.concatenate(psi_all), k
+
+
+def swatch_curvature(x_mm: ArrayLike, swatch: Swatch = Swatch()) -> NDArray[np.float64]:
+    """Signed curvature (mm^-1) of the swatch across its folds, seen from +z.
+
+    Constant on each piece of the profile: +1/R on a convex arc (a ridge's
+    crest, a groove's shoulders), -1/R on a concave one, 0 on the flanks and
+    the flat cloth; at a point where two pieces meet, the mean of both. Along
+    the folds the curvature is 0, so this is also the principal curvature of
+    larger magnitude and the normal curvature along x (u).
+
+    Parameters
+    ----------
+    x_mm
+        Positions across the swatch (x, centred on 0), mm.
+    swatch
+        The swatch.
+
+    Returns
+    -------
+    numpy.ndarray
+        Curvatures, mm^-1 (0 beyond the swatch's ends).
+    """
+    x = np.asarray(x_mm, dtype=np.float64)
+    pieces = _swatch_pieces(swatch)
+    ends = np.r_[0.0, np.cumsum([_piece_width(*p) for p in pieces])]
+    edges = ends - 0.5 * ends[-1]
+    kappa = np.array([-c for c, _, _ in pieces])
+    i = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(pieces) - 1)
+    out = np.where((x < edges[0]) | (x > edges[-1]), 0.0, kappa[i])
+    tie = np.isclose(x, edges[i], rtol=0.0, atol=1e-9 * max(1.0, float(ends[-1]))) & (i > 0)
+    return np.where(tie, 0.5 * (kappa[i] + kappa[np.maximum(i - 1, 0)]), out)
+
+
+def swatch_mesh(swatch: Swatch = Swatch()) -> Mesh:
+    """The swatch as a mesh with UVs, analytic normals and curvature (see :class:`Swatch`).
+
+    The attributes ``"curvature"`` and ``"curvature_dir"`` hold the analytic
+    signed curvature (mm^-1) of every vertex (:func:`swatch_curvature`; x,
+    across the folds, is a principal direction, so both modes agree). u is
+    the arc length across the folds over the profile's length (the
+    material's x follows the bending, as on the measurement stands), v runs
+    along y; faces wind counter-clockwise seen from +z.
+
+    Parameters
+    ----------
+    swatch
+        The swatch.
+
+    Returns
+    -------
+    Mesh
+        The mesh, in mm, z up, centred on the origin in x and y, the flat cloth at z = 0.
+    """
+    s, x, z, psi, k = _swatch_profile(swatch)
+    nx, ny = len(x), swatch.grid_shape[1]
+    y = np.linspace(-swatch.depth_mm / 2, swatch.depth_mm / 2, ny)
+    V = np.stack([np.repeat(x, ny), np.tile(y, nx), np.repeat(z, ny)], axis=1)
+    N = np.stack([np.repeat(-np.sin(psi), ny), np.zeros(nx * ny), np.repeat(np.cos(psi), ny)], axis=1)
+    U = np.stack([np.repeat(s / s[-1], ny), np.tile((y - y[0]) / swatch.depth_mm, nx)], axis=1)
+    i, j = np.meshgrid(np.arange(nx - 1), np.arange(ny - 1), indexing="ij")
+    a = (i * ny + j).ravel()
+    b = a + ny  # +x
+    c = b + 1   # +x +y
+    d = a + 1   # +y
+    F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]).astype(np.int64)
+    kk = np.repeat(k, ny)
+    return Mesh(V, F, N, U, {"curvature": kk, "curvature_dir": kk.copy()},
+                metadata={"units": "mm", "up": "z", "curvature_units": "1/mm", "frame": "uv", "source": "swatch"})

@@ -7,6 +7,14 @@ curvature the CDBRDF is looked up with is in mm^-1, so every path from a mesh
 to a render takes a unit: a name (:data:`UNITS_MM`) or a number, the
 millimetres per model unit (a free scale for unitless models).
 
+A mesh's unit is, in this order: given (``--units``), recorded by cdbrdf or
+stated by the file (glTF's metre, a header comment, MakeHuman's decimetre:
+:mod:`cdbrdf.mesh.statements`), inferred from the size of a garment or a
+sheet (:func:`infer_units`: a garment is 0.2-2.5 m across, a sheet or a
+swatch 5 mm to 3 m; millimetres first when they fit), or else millimetres, and the notes say which. A stated
+unit that makes a garment implausibly large or small is followed (it is the
+file's own statement) with a warning (:func:`check_garment_size`).
+
 A wrong unit shows as curvature outside the table's kappa range: a garment in
 metres read as millimetres is 1000 times too small and 1000 times too curved,
 so all of it would be clamped to the table's last kappa. :func:`check_kappa_range`
@@ -22,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -39,10 +48,16 @@ __all__ = [
     "MAX_SIZE_MM",
     "YARN_SCALE_MM",
     "check_size",
+    "GARMENT_SIZE_M",
+    "SHEET_SIZE_M",
+    "OPENING_SIZE_M",
+    "object_kind",
+    "infer_units",
+    "check_garment_size",
 ]
 
 #: Named length units: millimetres per unit.
-UNITS_MM: dict[str, float] = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}
+UNITS_MM: dict[str, float] = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "dm": 100.0}
 
 #: Smallest and largest free scale accepted (millimetres per model unit).
 SCALE_RANGE_MM: tuple[float, float] = (1e-9, 1e9)
@@ -97,6 +112,27 @@ def check_size(vertices: ArrayLike, units: Units, *, name: str = "mesh") -> floa
         raise MeshError(f"{name}: {size:.3g} mm across (unit {units}), beyond {MAX_SIZE_MM:g} mm: a wrong unit or a "
                         "vertex far from the rest (a triangle that long leaves the object less than a pixel)")
     return size
+
+
+#: The largest extent of a garment or a figure, m (a glove, a child's shirt, ..., a gown in a T-pose).
+GARMENT_SIZE_M: tuple[float, float] = (0.2, 2.5)
+
+#: The largest extent of a sheet of cloth, a swatch (a sample on the paper's stands is 15 mm across) or a
+#: drape, m.
+SHEET_SIZE_M: tuple[float, float] = (0.005, 3.0)
+
+#: Around the smallest of a garment's three or more tube ends (its cuffs, ankles or neck), m: wrists
+#: and ankles are 0.15-0.25 m around, a neck 0.35-0.45 m, a wide sleeve's hem up to 0.8 m.
+OPENING_SIZE_M: tuple[float, float] = (0.1, 0.9)
+
+#: The units a unit is inferred among, in the order preferred when the size fits more than one.
+INFER_UNITS: tuple[str, ...] = ("mm", "m", "cm", "dm")
+
+#: A loop is a tube's end (a cuff, a neck, a hem; not a slit or a pleat's edge) from this openness on,
+TUBE_END_OPENNESS = 0.7
+
+#: and when it is at least this share of the garment's largest extent around (not a hole).
+TUBE_END_SIZE = 0.05
 
 
 @dataclass(frozen=True)
@@ -277,3 +313,112 @@ def check_kappa_range(
             message += (f"; its median bend radius, {1 / median_k:.3g} mm, is one cloth can have: the object "
                         "bends more tightly than the table's stands (the unit is not the cause)")
     return KappaRangeCheck(share, (lo, hi), likely, message)
+
+
+def object_kind(shape: Any) -> str | None:
+    """What the geometry is, for the plausible sizes: ``"garment"``, ``"sheet"`` or None (anything else).
+
+    A garment: most of the surface is tubes or bags with openings (a worn
+    garment, a figure's clothes, a scan open at its base), or separate panels
+    (a CAD pattern, a sewing stage). A sheet: one sheet or flat panel (a
+    drape, a swatch).
+
+    Parameters
+    ----------
+    shape
+        :func:`cdbrdf.mesh.shape.describe` of the mesh.
+
+    Returns
+    -------
+    str or None
+        The kind.
+    """
+    sheets = sum(c.kind in ("panel", "sheet") for c in shape.components)
+    if shape.share("tube", "bag") >= 0.5 or (sheets >= 2 and shape.share("panel", "sheet") >= 0.5):
+        return "garment"
+    if sheets == 1 and shape.share("panel", "sheet") >= 0.5:
+        return "sheet"
+    return None
+
+
+def _describe_size(extent_m: np.ndarray, up: int | None) -> str:
+    if up is None:
+        return f"{float(extent_m.max()):.3g} m across"
+    across = max(float(extent_m[a]) for a in range(3) if a != up)
+    return f"{float(extent_m[up]):.3g} m tall, {across:.3g} m across"
+
+
+def infer_units(shape: Any, *, up: int | None = None) -> tuple[Units, str] | None:
+    """The unit a garment's or a sheet's size makes plausible, and the reason, or None.
+
+    The largest extent of a garment must be in :data:`GARMENT_SIZE_M`, of a
+    sheet in :data:`SHEET_SIZE_M`; of the units in :data:`INFER_UNITS` that
+    put it there, the first is taken.
+
+    Parameters
+    ----------
+    shape
+        :func:`cdbrdf.mesh.shape.describe` of the mesh.
+    up
+        Its up axis (0, 1, 2) for the message, or None.
+
+    Returns
+    -------
+    (Units, str) or None
+        The unit and why (``"inferred dm from the size: 1.47 m tall, ... as a
+        garment (0.2-2.5 m)"``); None for another kind of object or a size
+        no unit makes plausible.
+    """
+    kind = object_kind(shape)
+    if kind is None:
+        return None
+    lo, hi = GARMENT_SIZE_M if kind == "garment" else SHEET_SIZE_M
+    size = float(np.max(shape.extent))
+    fits = [u for u in INFER_UNITS if lo <= size * UNITS_MM[u] / 1000.0 <= hi]
+    if not fits:
+        return None
+    u = parse_units(fits[0])
+    also = f"; {', '.join(fits[1:])} would fit too" if len(fits) > 1 else ""
+    ext = np.asarray(shape.extent, dtype=np.float64) * u.mm_per_unit / 1000.0
+    return u, f"inferred {u} from the size: {_describe_size(ext, up)} as a {kind} ({lo:g}-{hi:g} m){also}"
+
+
+def check_garment_size(shape: Any, units: Units, *, up: int | None = None) -> str | None:
+    """A warning when a unit makes a garment implausibly large or small, else None.
+
+    Implausible: a largest extent outside :data:`GARMENT_SIZE_M`, or, for a
+    garment with three or more tube ends (cuffs, ankles, a neck), the
+    smallest of them outside :data:`OPENING_SIZE_M` around.
+
+    Parameters
+    ----------
+    shape
+        :func:`cdbrdf.mesh.shape.describe` of the mesh.
+    units
+        The unit (given or stated by the file).
+    up
+        Its up axis (0, 1, 2) for the message, or None.
+
+    Returns
+    -------
+    str or None
+        The warning, naming the sizes.
+    """
+    if object_kind(shape) != "garment":
+        return None
+    k = units.mm_per_unit / 1000.0
+    ext = np.asarray(shape.extent, dtype=np.float64) * k
+    lo, hi = GARMENT_SIZE_M
+    size = _describe_size(ext, up)
+    if not lo <= float(ext.max()) <= hi:
+        return f"in unit {units} the garment is {size}: a garment is {lo:g}-{hi:g} m across; is the unit right?"
+    smallest = TUBE_END_SIZE * float(np.max(shape.extent))  # not a hole or a pleat's slit
+    ends = sorted(lp.perimeter * k for lp in shape.openings()
+                  if lp.openness >= TUBE_END_OPENNESS and lp.perimeter >= smallest)
+    olo, ohi = OPENING_SIZE_M
+    if len(ends) >= 3 and not olo <= ends[0] <= ohi:
+        big = "large" if ends[0] > ohi else "small"
+        return (f"in unit {units} the garment is {size} and the smallest of its {len(ends)} openings is "
+                f"{ends[0]:.2g} m around (a garment's cuffs, ankles or neck are {olo:g}-{ohi:g} m): it is "
+                f"implausibly {big} for a garment worn by a person; give --units if it is life size")
+    return None

@@ -50,7 +50,7 @@ from .capture import plot_hidden
 from .fabric import plot_kappa_curves, plot_weave
 from .hemisphere import plot_hemisphere
 from .mosaic import DIFF_PERCENTILE, KAPPA_ATOL, Mosaic, mosaic_arrays, plot_mosaic
-from .renders import plot_curvature_map, plot_render_comparison
+from .renders import displayed_delta_e, plot_curvature_map, plot_render_comparison
 from .slices import SLICE_PLANES, plot_slice
 
 __all__ = [
@@ -60,6 +60,7 @@ __all__ = [
     "plot_slice",
     "plot_hemisphere",
     "plot_render_comparison",
+    "displayed_delta_e",
     "plot_curvature_map",
     "plot_hidden",
     "plot_kappa_curves",

@@ -1,4 +1,11 @@
-"""Figures of renders: BRDF vs CDBRDF side by side (the paper's Figs. 9-10) and curvature maps."""
+"""Figures of renders: BRDF vs CDBRDF side by side (the paper's Figs. 9-10) and curvature maps.
+
+The difference of two renders is drawn as a textile team reads it: the
+colour difference of the two pictures as they are shown (exposed,
+tone-mapped to 8-bit sRGB, then CIE L*a*b* under D65:
+:func:`cdbrdf.colour.srgb_to_lab`), CIEDE2000 by default
+(:data:`cdbrdf.colour.DELTA_E_METRICS`), with a colour bar that names the metric.
+"""
 
 from __future__ import annotations
 
@@ -8,14 +15,60 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..colour import tonemap_srgb8
+from ..colour import DELTA_E_METRICS, srgb_to_lab, tonemap_srgb8
+from ..colour import delta_e as colour_difference
 from ..errors import OptionError
 from ._common import new_figure
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["plot_render_comparison", "plot_curvature_map"]
+__all__ = ["DELTA_E_LABELS", "DELTA_E_FLOOR", "plot_render_comparison", "plot_curvature_map", "displayed_delta_e"]
+
+#: How a figure names each metric of :data:`cdbrdf.colour.DELTA_E_METRICS` (a colour bar's label).
+DELTA_E_LABELS: dict[str, str] = {
+    "2000": "CIEDE2000 $\\Delta E_{00}$",
+    "2000-textiles": "CIEDE2000 (2:1:1) $\\Delta E_{00}$",
+    "ab": "CIE 1976 $\\Delta E^*_{ab}$",
+}
+
+#: The least top of a heat map's scale, per metric: about a just-noticeable difference, so that
+#: two pictures no one can tell apart stay dark (1 for CIEDE2000, 2.3 for Delta E*ab).
+DELTA_E_FLOOR: dict[str, float] = {"2000": 1.0, "2000-textiles": 1.0, "ab": 2.3}
+
+
+def displayed_delta_e(image_a: ArrayLike, image_b: ArrayLike, *, exposure_ev: float = 0.0,
+                      metric: str = "2000") -> np.ndarray:
+    """Per-pixel colour difference of two linear renders as they are shown.
+
+    Each is exposed and tone-mapped to 8-bit sRGB
+    (:func:`cdbrdf.colour.tonemap_srgb8`), converted to CIE L*a*b* (D65,
+    :func:`cdbrdf.colour.srgb_to_lab`) and compared by ``metric``
+    (:func:`cdbrdf.colour.delta_e`).
+
+    Parameters
+    ----------
+    image_a, image_b
+        Linear RGB ``(H, W, 3)`` (more channels are ignored), of one shape.
+    exposure_ev
+        The exposure both are shown at, stops.
+    metric
+        A key of :data:`cdbrdf.colour.DELTA_E_METRICS`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(H, W)`` float64.
+    """
+    a = np.asarray(image_a, dtype=np.float64)[..., :3]
+    b = np.asarray(image_b, dtype=np.float64)[..., :3]
+    if a.shape != b.shape or a.ndim != 3:
+        raise OptionError(f"images: expected two (H, W, 3) images of one shape, got {a.shape} and {b.shape}")
+    if metric not in DELTA_E_METRICS:
+        raise OptionError(f"delta E metric: {metric!r:.40} is not one of {', '.join(DELTA_E_METRICS)}")
+    lab_a = srgb_to_lab(tonemap_srgb8(a, exposure_ev=exposure_ev))
+    lab_b = srgb_to_lab(tonemap_srgb8(b, exposure_ev=exposure_ev))
+    return colour_difference(lab_a, lab_b, metric=metric)
 
 
 def plot_render_comparison(
@@ -27,9 +80,10 @@ def plot_render_comparison(
     labels: tuple[str, str] = ("(a) plain BRDF (kappa = 0)", "(b) CDBRDF"),
     width_in: float = 12.0,
     swatches: Any = None,
+    delta_e: str = "2000",
     fig: Figure | None = None,
 ) -> Figure:
-    """Two renders side by side and their difference (the paper's Figs. 9-10).
+    """Two renders side by side and their colour difference as shown (the paper's Figs. 9-10).
 
     Parameters
     ----------
@@ -49,14 +103,20 @@ def plot_render_comparison(
         colour swatches under the panels, the mean colour of each render at
         the convex crests and where the surface is flat, with the median
         Delta E*ab of each region.
+    delta_e
+        The metric of panel (c), a key of :data:`cdbrdf.colour.DELTA_E_METRICS`:
+        ``"2000"`` (CIEDE2000, the default), ``"2000-textiles"`` or ``"ab"``
+        (CIE 1976 Delta E*ab).
     fig
         Draw into this (empty) figure instead of a new one.
 
     Returns
     -------
     matplotlib.figure.Figure
-        Panels (a) BRDF, (b) CDBRDF, (c) heat map of the RGB distance
-        ``|CDBRDF - BRDF|`` in linear radiance with a colour bar; with
+        Panels (a) BRDF, (b) CDBRDF, (c) heat map of the colour difference
+        of (a) and (b) as shown (:func:`displayed_delta_e`), from 0 to its
+        99.5th percentile (at least :data:`DELTA_E_FLOOR`), with a colour bar
+        labelled with the metric (:data:`DELTA_E_LABELS`); with
         ``swatches``, the row of swatches under them.
     """
     a = np.asarray(brdf_image, dtype=np.float64)[..., :3]
@@ -65,7 +125,7 @@ def plot_render_comparison(
         raise OptionError(
             f"brdf_image, cdbrdf_image: expected two (H, W, 3) images of one shape, got {a.shape} and {b.shape}"
         )
-    diff = np.linalg.norm(np.nan_to_num(b - a), axis=-1)
+    diff = displayed_delta_e(a, b, exposure_ev=exposure_ev, metric=delta_e)
     h, w = diff.shape
     panel_w = width_in / 3.2
     extra = 0.9 if swatches is not None else 0.0
@@ -82,14 +142,14 @@ def plot_render_comparison(
     axes[0].set_title(labels[0])
     axes[1].imshow(tonemap_srgb8(b, exposure_ev=exposure_ev))
     axes[1].set_title(labels[1])
-    vmax = float(np.percentile(diff, 99.5)) or 1e-6
+    vmax = max(float(np.percentile(diff, 99.5)), DELTA_E_FLOOR[delta_e])
     im = axes[2].imshow(diff, cmap="inferno", vmin=0.0, vmax=vmax)
-    axes[2].set_title("(c) |CDBRDF - BRDF|")
+    axes[2].set_title(f"(c) {DELTA_E_LABELS[delta_e].split(' $')[0]}: CDBRDF vs BRDF")
     for ax in axes:
         ax.set_xticks([])
         ax.set_yticks([])
     cb = fig.colorbar(im, ax=axes[2], shrink=0.85)
-    cb.set_label("RGB distance (linear radiance)")
+    cb.set_label(DELTA_E_LABELS[delta_e] + " (as shown)")
     if title:
         fig.suptitle(title)
     return fig

@@ -1,19 +1,21 @@
 """Render a CDBRDF with Mitsuba 3: the ``cdbrdf`` BSDF plug-in, scenes, pictures.
 
 Importing this package does nothing heavy: it neither imports Mitsuba nor sets
-a variant. One function makes a picture of a table, on the paper's sine sheet
-or on any mesh (:func:`render_table`); the pieces it is made of are public
-too:
+a variant. One function makes a picture of a table, on a built-in scene (the
+paper's sine sheet, a swatch laid in folds of known radii) or on any mesh,
+seen by a :class:`Camera` (:func:`render_table`); the pieces it is made of
+are public too:
 
 - :mod:`~cdbrdf.render.plugin`: the ``cdbrdf`` BSDF plug-in (its parameter
   table and examples), variants (:func:`set_variant` for an application,
   :func:`variant` for a ``with`` block), :func:`load_dict`, :func:`check_scene`;
 - :mod:`~cdbrdf.render.scenefile`: Mitsuba XML scenes using the plug-in
   (:func:`load_file`: curvature units, the scene checks);
-- :mod:`~cdbrdf.render.scenes`: the sine sheet and mesh scenes, meshes given
-  to Mitsuba in memory (:func:`~cdbrdf.render.scenes.mitsuba_mesh`);
-- :mod:`~cdbrdf.render.camera`, :mod:`~cdbrdf.render.lighting`: framing and
-  lights; :mod:`~cdbrdf.render.picture`: renders in passes, exposure,
+- :mod:`~cdbrdf.render.scenes`: the built-in scenes (:data:`SCENES`) and mesh
+  scenes, meshes given to Mitsuba in memory
+  (:func:`~cdbrdf.render.scenes.mitsuba_mesh`);
+- :mod:`~cdbrdf.render.camera`, :mod:`~cdbrdf.render.lighting`: the camera
+  (framing, zoom, field of view, look-at) and lights; :mod:`~cdbrdf.render.picture`: renders in passes, exposure,
   :func:`render_table`; :mod:`~cdbrdf.render.output`: image files;
 - :mod:`~cdbrdf.render.contrast`: the curvature seen in each pixel and the
   colour difference of two renders at the crests and where the surface is
@@ -31,6 +33,7 @@ from __future__ import annotations
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._btf_jit import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
+from .camera import LOOK_AT_ANCHORS, Camera
 from .contrast import CrestContrast, crest_contrast, curvature_image
 from .picture import (
     RENDER_MODES,
@@ -54,7 +57,7 @@ from .plugin import (
     variant,
 )
 from .scenefile import load_file
-from .scenes import mesh_scene, mitsuba_mesh, sine_scene
+from .scenes import SCENES, mesh_scene, mitsuba_mesh, sine_scene, swatch_scene
 
 __all__ = [
     "CURVATURE_MODES",
@@ -87,7 +90,11 @@ __all__ = [
     "render_scene",
     "render_table",
     "Picture",
+    "Camera",
+    "LOOK_AT_ANCHORS",
+    "SCENES",
     "sine_scene",
+    "swatch_scene",
     "mesh_scene",
     "mitsuba_mesh",
     "exposure_from_render",

@@ -29,6 +29,7 @@ from ..errors import OptionError, TableError
 from ..grid import Grid
 from ..interp import LookupGrid, prepare
 from ..mesh import ATTRIBUTES
+from ..mesh.curvature_map import SHAPE_MESH_ATTRIBUTE
 from . import _lookup_jit as lj
 from . import _sampling
 from ._units import scene_units
@@ -231,26 +232,6 @@ class _Prepared:
         return self._lookup
 
 
-class _LazySpectra:
-    """Spectra of the prepared samples at fixed wavelengths, computed for the samples read (scalar variants)."""
-
-    def __init__(self, records: np.ndarray, wavelengths: np.ndarray) -> None:
-        self.records = records
-        self.wavelengths = wavelengths
-        self.shape = records.shape[:-1] + (wavelengths.size,)
-
-    def __getitem__(self, idx: tuple[int, ...]) -> np.ndarray:
-        r = self.records[idx].astype(np.float64)
-        x = (r[0] * self.wavelengths + r[1]) * self.wavelengths + r[2]
-        return r[3] * np.maximum(0.0, 0.5 * x / np.sqrt(x * x + 1.0) + 0.5)
-
-
-def _lazy(grid: LookupGrid, records: np.ndarray, wavelengths: np.ndarray) -> Any:
-    """A table whose prepared samples are the spectra of ``records`` at ``wavelengths`` (for ``evaluate_reference``)."""
-    spectra: Any = _LazySpectra(records, wavelengths)
-    return SimpleNamespace(lookup_grid=lambda: grid._replace(values=spectra))
-
-
 def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
     import drjit as dr
 
@@ -262,8 +243,9 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
     class CDBRDFBSDF(mi.BSDF):
         """Mitsuba BSDF of a curvature-dependent BRDF table (see :mod:`cdbrdf.render`)."""
 
-        def __init__(self, props: Any, *, table: Any = None) -> None:
+        def __init__(self, props: Any, *, table: Any = None, extras: dict[str, Any] | None = None) -> None:
             mi.BSDF.__init__(self, props)
+            extras = extras or {}
             if table is None:
                 if "filename" not in props:
                     raise OptionError(
@@ -282,8 +264,8 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                 table, self.btf = load_source(table)
                 self.filename = None
 
-            def get(key: str, default: Any = None) -> Any:
-                return props[key] if key in props else default
+            def get(key: str, default: Any = None) -> Any:  # Python values (pairs, objects) first, then Mitsuba's
+                return extras[key] if key in extras else props[key] if key in props else default
 
             self.units = scene_units(get("unit", "mm"))
             #: whether cdbrdf's loaders applied the scene's unit with the shapes' to_world scales
@@ -318,10 +300,13 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             self._maps: Any = None
             self._upload(np.asarray(self._eval_table.values, dtype=np.float64), differentiable=False)
             self.texels: Any = None
+            uv_scale = get("uv_scale")
             if self.btf is not None:
                 from ._btf_jit import DEFAULT_TEXEL_FILTER
 
-                self._upload_btf(get("uv_scale", 1.0), get("texel_filter", DEFAULT_TEXEL_FILTER))
+                self._upload_btf(1.0 if uv_scale is None else uv_scale, get("texel_filter", DEFAULT_TEXEL_FILTER),
+                                 float(get("pixel_angle", 0.0)))
+            self.surface = self._surface_map(get, extras, uv_scale)
             flags = (
                 mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
                 | mi.BSDFFlags.BackSide | mi.BSDFFlags.Anisotropic
@@ -380,17 +365,20 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
 
                 self.sampler = _sampling_jit.upload(mi, self.sampler_tables)
 
-        def _upload_btf(self, uv_scale: Any, texel_filter: Any) -> None:
+        def _upload_btf(self, uv_scale: Any, texel_filter: Any, pixel_angle: float) -> None:
             """A CD-BTF: its texels on the device (:mod:`cdbrdf.render._btf_jit`); the tile mean samples."""
             from . import _btf_jit
 
             self.uv_scale = _btf_jit.as_pair("uv_scale", uv_scale)
+            if not (math.isfinite(pixel_angle) and pixel_angle >= 0.0):
+                raise OptionError(f"cdbrdf BSDF: pixel_angle must be finite and >= 0 (radians), got {pixel_angle}")
             self.texel_filter = _choice("texel_filter", texel_filter, _btf_jit.TEXEL_FILTERS)
             self._texel_cache: dict[tuple[int, int], tuple[LookupGrid, np.ndarray]] = {}
             if not scalar:
                 full = self.grid if self.settings.mode == "cdbrdf" else prepare(self.btf.grid, self.btf.mean().values)
                 self.texels = _btf_jit.upload(mi, self.btf, full, self.record, uv_scale=self.uv_scale,
-                                              texel_filter=self.texel_filter)
+                                              texel_filter=self.texel_filter, pixel_angle=pixel_angle,
+                                              mm_per_unit=self.units.mm_per_unit)
 
         def traverse(self, callback: Any) -> None:
             callback.put("values", self.values, mi.ParamFlags.Differentiable)
@@ -430,12 +418,76 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             k = dr.select(dr.isnan(kappa), 0.0, kappa)
             return dr.clip(k, float(self.grid.kappa[0]), float(self.grid.kappa[-1]))
 
-        def _front(self, si: Any, active: Any) -> tuple[Any, Any, Any]:
-            """The view direction in the front frame (turned about x on the back side), the side's sign, kappa."""
-            back = mi.Frame3f.cos_theta(si.wi) < 0.0
-            sign = dr.select(back, -1.0, 1.0)
-            wi = mi.Vector3f(si.wi.x, sign * si.wi.y, sign * si.wi.z)
-            return wi, sign, self._clamped(sign * self._kappa(si, active))
+        def _surface_map(self, get: Any, extras: dict[str, Any], uv_scale: Any) -> Any:
+            """The curvature map of the parameters (:mod:`cdbrdf.render._maps_jit`), or None."""
+            from ..mesh.curvature import neighbourhood_from_table
+            from . import _maps_jit
+            from ._btf_jit import as_pair
+
+            nb, _ = neighbourhood_from_table(getattr(self.table, "attrs", None))
+            pair = None if uv_scale is None else as_pair("uv_scale", uv_scale)
+            m = _maps_jit.surface_from_props(get, extras, lambda n: mi.file_resolver().resolve(n),
+                                             neighbourhood_mm=nb, uv_scale=pair)
+            attr = self.settings.curvature_attribute
+            if m is not None and attr not in (None, *CURVATURE_MODES.values()):
+                raise OptionError(f"cdbrdf BSDF: a curvature map adds to the mesh's shape operator "
+                                  f"({SHAPE_MESH_ATTRIBUTE}); the curvature attribute {attr!r} cannot be combined "
+                                  "with it")
+            self.map_mode = "directional" if attr == CURVATURE_MODES["directional"] else "max"
+            c = get("curvature")  # a constant curvature (the rule of Settings.parse); else the mesh's, in either mode
+            self._mesh_shape = c is None or Settings.parse(curvature=c).curvature_attribute is not None
+            return m
+
+        def _shading(self, si: Any, active: Any) -> tuple[Any, Any, Any]:
+            """The view direction in the frame the table sees (a map tilts it), the curvature, that frame (or None)."""
+            if self.surface is None:
+                return si.wi, self._kappa(si, active), None
+            from . import _maps_jit as mj
+
+            p, q, *k3 = self._map_detail(si, active)
+            k = mi.Float(0.0) if self.settings.mode == "brdf" else self._with_mesh(si, active, k3, self.map_mode)
+            if not self.surface.shading:
+                return si.wi, k, None
+            fr = mj.frame(mi, dr, p, q, si.wi)
+            return fr.to_local(dr, mi, si.wi), k, fr
+
+        def _map_detail(self, si: Any, active: Any) -> tuple[Any, ...]:
+            """The map's ``(p, q, kxx, kxy, kyy)`` at ``si`` in the shading frame (:mod:`cdbrdf.render._maps_jit`)."""
+            from . import _maps_jit as mj
+
+            vals = self.surface.values(mi, si, active, scalar)
+            return mj.detail(dr, vals, self.surface.uv_scale, mj.handedness(mi, dr, si))
+
+        def _with_mesh(self, si: Any, active: Any, k3: list[Any], mode: str) -> Any:
+            """The curvature of the mesh's shape operator plus the map's ``(kxx, kxy, kyy)``, by ``mode``."""
+            from . import _maps_jit as mj
+
+            st = self.settings
+            if self._mesh_shape:
+                a = si.shape.eval_attribute_3(SHAPE_MESH_ATTRIBUTE, si, active)
+                mesh = [a.x * st.curvature_scale, a.y * st.curvature_scale, a.z * st.curvature_scale]
+            else:  # a constant: a cylinder bent along x
+                mesh = [mi.Float(st.kappa_const), mi.Float(0.0), mi.Float(0.0)]
+            sxx, sxy, syy = (m + k for m, k in zip(mesh, k3, strict=True))
+            return sxx if mode == "directional" else mj.principal(dr, sxx, sxy, syy)
+
+        def curvature_at(self, si: Any, active: Any = True, mode: str | None = None) -> Any:
+            """The curvature (mm^-1) at ``si`` relative to its shading normal, a map's added, before clamping.
+
+            ``mode``: ``"max"`` or ``"directional"`` (default: the plug-in's),
+            in either render mode (the plain BRDF renders without it).
+            """
+            if self.surface is None:
+                return self._kappa(si, active)
+            return self._with_mesh(si, active, list(self._map_detail(si, active)[2:]), mode or self.map_mode)
+
+        def _front(self, si: Any, active: Any) -> tuple[Any, Any, Any, Any]:
+            """The view direction in the front frame (turned about x on the back side), the side's sign, kappa, the
+            map's frame (None without one)."""
+            wi0, k, fr = self._shading(si, active)
+            sign = dr.select(wi0.z < 0.0, -1.0, 1.0)
+            wi = mi.Vector3f(wi0.x, sign * wi0.y, sign * wi0.z)
+            return wi, sign, self._clamped(sign * k), fr
 
         def _scale(self, si: Any, active: Any) -> Any:
             if self.scale_texture is not None:
@@ -449,7 +501,7 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             if self.texels is not None:
                 from . import _btf_jit
 
-                f = _btf_jit.lookup(mi, self.texels, si.uv, tv, pv, tl, pl, kappa, valid, si.wavelengths)
+                f = _btf_jit.evaluate(mi, self.texels, si, tv, pv, tl, pl, kappa, valid, self.record)
             else:
                 f = lj.lookup_jit(mi, self.grid, self.packed, tv, pv, tl, pl, kappa, valid, si.wavelengths)
             if self.record == "one":
@@ -458,6 +510,8 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
 
         def _f_scalar(self, si: Any, tv: Any, pv: Any, tl: Any, pl: Any, kappa: Any, valid: Any) -> Any:
             from ..interp import evaluate, evaluate_reference
+            from . import _btf_jit
+            from ._spectral import lazy_table
 
             if not valid:
                 return dr.zeros(mi.UnpolarizedSpectrum)
@@ -465,13 +519,13 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             if self.record == "spectral":
                 lam = np.array(si.wavelengths, dtype=np.float64).reshape(-1)
                 if self.btf is not None:
-                    v = self._btf_scalar_spectrum(si, q, lam)
+                    v = _btf_jit.scalar_spectrum(self, si, q, lam)
                 else:
-                    v = evaluate_reference(_lazy(self.grid, self._records, lam), *q)
+                    v = evaluate_reference(lazy_table(self.grid, self._records, lam), *q)
                 f = mi.UnpolarizedSpectrum(*map(float, v))
             else:
                 if self.btf is not None:
-                    v = self._btf_scalar(si, q)
+                    v = _btf_jit.scalar_value(self, si, q)
                 else:
                     v = evaluate(self.prepared, *q, on_invalid="nan")
                 if self.record == "one":
@@ -481,49 +535,22 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                     f = mi.UnpolarizedSpectrum(*map(float, v))
             return f * self._scale(si, valid)
 
-        def _btf_scalar(self, si: Any, q: tuple[float, ...]) -> np.ndarray:
-            """The CD-BTF at one query (scalar variants): :meth:`cdbrdf.CDBTF.evaluate` at the UV in mm."""
-            u, v = float(si.uv.x) * self.uv_scale[0], float(si.uv.y) * self.uv_scale[1]
-            if self.texel_filter == "nearest":  # the centre of the texel
-                (nu, nv), (su, sv) = self.btf.texels, self.btf.repeat_mm
-                u = (math.floor(u / su * nu) + 0.5) * su / nu
-                v = (math.floor(v / sv * nv) + 0.5) * sv / nv
-            kappa = 0.0 if self.settings.mode == "brdf" else q[4]
-            return np.asarray(self.btf.evaluate(u, v, *q[:4], kappa)).reshape(-1)
-
-        def _btf_scalar_spectrum(self, si: Any, q: tuple[float, ...], lam: np.ndarray) -> np.ndarray:
-            """The CD-BTF's spectrum at one query (scalar spectral variants): the texels' spectra blended.
-
-            Each texel's samples are upsampled (:func:`cdbrdf.render._lookup_jit.records`) and their
-            spectra interpolated, as the vectorised lookup does; ``stochastic`` is the exact bilinear blend.
-            """
-            from ..interp import evaluate_reference
-            from . import _btf_jit
-
-            u, v = float(si.uv.x) * self.uv_scale[0], float(si.uv.y) * self.uv_scale[1]
-            q = q[:4] + ((0.0,) if self.settings.mode == "brdf" else q[4:])
-            out = np.zeros(lam.size)
-            for j, i, w in _btf_jit.scalar_texels(u, v, self.btf.texels, self.btf.repeat_mm, self.texel_filter):
-                if (j, i) not in self._texel_cache:
-                    if not self._texel_cache:  # decode once, keep the texels read
-                        self._dense = self.btf.decode()
-                    g = prepare(self.btf.grid, self._dense[j, i])
-                    self._texel_cache[(j, i)] = (g, lj.records(g.values, "spectral"))
-                g, rec = self._texel_cache[(j, i)]
-                out += w * np.asarray(evaluate_reference(_lazy(g, rec, lam), *q), dtype=np.float64)
-            return out
-
         def _angles(self, d: Any) -> tuple[Any, Any]:
             return (dr.acos(dr.clip(d.z, -1.0, 1.0)) * _RAD2DEG, dr.atan2(d.y, d.x) * _RAD2DEG)
 
         def _query(self, ctx: Any, si: Any, wo: Any, active: Any) -> SimpleNamespace:
-            wi, sign, kappa = self._front(si, active)
+            wi, sign, kappa, fr = self._front(si, active)
+            valid = active & (wi.z > 0.0)
+            if fr is not None:  # in the map's frame; not where it and the shading frame disagree (as normalmap)
+                w = fr.to_local(dr, mi, wo)
+                valid = valid & (wo.z * w.z > 0.0)
+                wo = w
             wl = mi.Vector3f(wo.x, sign * wo.y, sign * wo.z)
-            valid = active & (wi.z > 0.0) & (wl.z > 0.0)
+            valid = valid & (wl.z > 0.0)
             tv, pv = self._angles(wi)
             tl, pl = self._angles(wl)
             return SimpleNamespace(wi=wi, wl=wl, sign=sign, kappa=kappa, valid=valid, tv=tv, pv=pv, tl=tl, pl=pl,
-                                   importance=self._importance(ctx))
+                                   importance=self._importance(ctx), frame=fr)
 
         def _importance(self, ctx: Any) -> bool:
             return ctx is not None and ctx.mode == mi.TransportMode.Importance
@@ -574,9 +601,10 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             return self._value(si, q), self._pdf(q, self._conditioning(q, q.valid))
 
         def sample(self, ctx: Any, si: Any, sample1: Any, sample2: Any, active: Any = True) -> tuple[Any, Any]:
-            wi, sign, kappa = self._front(si, active)
+            wi, sign, kappa, fr = self._front(si, active)
             tv, pv = self._angles(wi)
-            return self._sample(ctx, si, wi, sign, kappa, tv, pv, sample1, sample2, active, None)
+            q = SimpleNamespace(wi=wi, sign=sign, kappa=kappa, tv=tv, pv=pv, frame=fr)
+            return self._sample(ctx, si, q, sample1, sample2, active, None)
 
         def eval_pdf_sample(self, ctx: Any, si: Any, wo: Any, sample1: Any, sample2: Any,
                             active: Any = True) -> tuple[Any, Any, Any, Any]:
@@ -584,14 +612,15 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
             q = self._query(ctx, si, wo, active)
             ok = active & (q.wi.z > 0.0)
             cond = self._conditioning(q, ok)
-            bs, value = self._sample(ctx, si, q.wi, q.sign, q.kappa, q.tv, q.pv, sample1, sample2, active, cond)
+            bs, value = self._sample(ctx, si, q, sample1, sample2, active, cond)
             return self._value(si, q), self._pdf(q, cond), bs, value
 
-        def _sample(self, ctx: Any, si: Any, wi: Any, sign: Any, kappa: Any, tv: Any, pv: Any, sample1: Any,
-                    sample2: Any, active: Any, cond: Any) -> tuple[Any, Any]:
-            importance = self._importance(ctx)
-            q = SimpleNamespace(wi=wi, sign=sign, kappa=kappa, tv=tv, pv=pv, importance=importance)
-            ok = active & (wi.z > 0.0)
+        def _sample(self, ctx: Any, si: Any, view: SimpleNamespace, sample1: Any, sample2: Any, active: Any,
+                    cond: Any) -> tuple[Any, Any]:
+            """Sample the light direction for the view of ``view`` (``wi, sign, kappa, tv, pv, frame``)."""
+            sign, kappa, tv, pv = view.sign, view.kappa, view.tv, view.pv
+            q = SimpleNamespace(wi=view.wi, sign=sign, kappa=kappa, tv=tv, pv=pv, importance=self._importance(ctx))
+            ok = active & (view.wi.z > 0.0)
             if not self._table_sampling(q):
                 wl = mi.warp.square_to_cosine_hemisphere(sample2)
             elif scalar and not ok:  # a view below the surface or not a direction (NaN): nothing to sample
@@ -610,12 +639,17 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                 wl = _sampling_jit.sample(mi, self.sampler, cond, sample1, sample2, self.settings.cosine_weight, ok)
             q.wl = wl
             q.valid = ok & (wl.z > 0.0)
+            wo = mi.Vector3f(wl.x, sign * wl.y, sign * wl.z)
+            if view.frame is not None:  # back to the shading frame
+                w = view.frame.to_shading(mi, wo)
+                q.valid = q.valid & (w.z * wo.z > 0.0)
+                wo = w
             q.tl, q.pl = self._angles(wl)
             pdf = self._pdf(q, cond)
             q.valid = q.valid & (pdf > 0.0)
             value = self._value(si, q)
             bs = dr.zeros(mi.BSDFSample3f)
-            bs.wo = mi.Vector3f(wl.x, sign * wl.y, sign * wl.z)
+            bs.wo = wo
             bs.pdf = dr.select(q.valid, pdf, 0.0)
             bs.eta = 1.0
             bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
@@ -624,8 +658,7 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
 
         def eval_diffuse_reflectance(self, si: Any, active: Any = True) -> Any:
             # Albedo-like estimate for AOVs: the table at normal incidence times pi.
-            back = mi.Frame3f.cos_theta(si.wi) < 0.0
-            kappa = self._clamped(dr.select(back, -1.0, 1.0) * self._kappa(si, active))
+            kappa = self._front(si, active)[2]
             zero = mi.Float(0.0)
             return self._f(si, zero, zero, zero, zero, kappa, active) * math.pi
 
@@ -639,8 +672,9 @@ def _make_class(mi: Any) -> type:  # noqa: C901 - the plug-in is one class
                 f"CDBRDFBSDF[material={self.table.attrs.get('material', '?')!r}, "
                 f"mode={st.mode!r}, curvature={k}, scale={scale}, sampling={st.sampling!r}, "
                 f"storage={getattr(self, 'packed', None) and self.packed.layout!r}, shape={self.table.shape}"
-                + (f", btf={self.btf!r}, uv_scale={self.uv_scale}, texel_filter={self.texel_filter!r}]"
-                   if self.btf is not None else "]")
+                + (f", btf={self.btf!r}, uv_scale={self.uv_scale}, texel_filter={self.texel_filter!r}"
+                   if self.btf is not None else "")
+                + (f", map={self.surface.name!r}, map uv_scale={self.surface.uv_scale}]" if self.surface else "]")
             )
 
     CDBRDFBSDF.__name__ = "CDBRDFBSDF"

@@ -30,13 +30,15 @@ from __future__ import annotations
 import functools
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FormatError
 
-__all__ = ["SRGBModel", "srgb_model", "srgb_coefficients", "spectral_records", "model_path"]
+__all__ = ["SRGBModel", "srgb_model", "srgb_coefficients", "spectral_records", "model_path", "LazySpectra",
+           "lazy_table"]
 
 #: The coefficient c2 of saturated greys (black: -c2, white: +c2), as in Mitsuba.
 _SATURATED = 8192.0
@@ -153,3 +155,29 @@ def spectral_records(values: ArrayLike, model: SRGBModel | None = None) -> NDArr
     out[..., :3] = coeff
     out[..., 3] = scale
     return out
+
+
+class LazySpectra:
+    """Spectra of prepared samples at fixed wavelengths, computed for the samples read (scalar variants).
+
+    ``records`` are :func:`cdbrdf.render._lookup_jit.records` (three model
+    coefficients and a scale per sample).
+    """
+
+    def __init__(self, records: NDArray, wavelengths: NDArray) -> None:
+        self.records = records
+        self.wavelengths = wavelengths
+        self.shape = records.shape[:-1] + (wavelengths.size,)
+
+    def __getitem__(self, idx: tuple[int, ...]) -> NDArray:
+        r = self.records[idx].astype(np.float64)
+        x = (r[0] * self.wavelengths + r[1]) * self.wavelengths + r[2]
+        return r[3] * np.maximum(0.0, 0.5 * x / np.sqrt(x * x + 1.0) + 0.5)
+
+
+def lazy_table(grid: Any, records: NDArray, wavelengths: NDArray) -> Any:
+    """A table whose prepared samples are the spectra of ``records`` at ``wavelengths`` (for ``evaluate_reference``)."""
+    from types import SimpleNamespace
+
+    spectra: Any = LazySpectra(records, wavelengths)
+    return SimpleNamespace(lookup_grid=lambda: grid._replace(values=spectra))

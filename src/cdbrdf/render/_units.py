@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..fsutil import read_regular
-from ..mesh import Units, check_kappa_range, parse_units
+from ..mesh import UNITS_MM, Units, check_kappa_range, parse_units
 
 __all__ = ["uniform_scale", "ply_unit_mm", "scene_factor", "scene_units", "curvature_warning"]
 
@@ -49,6 +49,8 @@ def uniform_scale(matrix: Any, *, what: str = "to_world") -> float:
     """The uniform scale of an affine 4x4 (or 3x3) matrix; a :class:`SceneError` for a non-uniform one."""
     m = np.asarray(matrix, dtype=np.float64)
     m3 = m[:3, :3]
+    if not np.isfinite(m).all():  # SVD of NaN raises LinAlgError naming nothing
+        raise SceneError(f"{what}: the transform has NaN or infinite entries")
     sv = np.linalg.svd(m3, compute_uv=False)
     if not np.all(np.isfinite(sv)) or sv[-1] <= 0.0:
         raise SceneError(f"{what}: the transform is singular or not finite")
@@ -93,8 +95,8 @@ def scene_units(value: Any, *, what: str = "unit") -> Units:
     try:
         return parse_units(value if isinstance(value, str) else float(value))
     except (MeshError, TypeError, ValueError):
-        raise SceneError(f"cdbrdf BSDF: {what} {value!r:.40} is neither one of mm, cm, m, in nor a positive "
-                         "number of millimetres per scene unit") from None
+        raise SceneError(f"cdbrdf BSDF: {what} {value!r:.40} is neither one of {', '.join(UNITS_MM)} nor a "
+                         "positive number of millimetres per scene unit") from None
 
 
 def scene_factor(*, m_file: float | None, scale: float, unit_mm: float) -> float:

@@ -3,7 +3,8 @@
 :func:`curvature_image` asks Mitsuba which surface point each pixel centre
 sees (the scene's first sensor, its rays traced by Mitsuba) and reads the
 curvature attribute the ``cdbrdf`` BSDF reads there, interpolated over the
-triangle as the plug-in interpolates it. :func:`crest_contrast` compares two
+triangle as the plug-in interpolates it (with a curvature map, the
+plug-in's own sum of the mesh's and the map's, :mod:`cdbrdf.render._maps_jit`). :func:`crest_contrast` compares two
 renders of one scene (the plain BRDF and the CDBRDF, as :func:`render_table`
 makes them) where they are seen as a viewer sees them: in sRGB at the
 picture's exposure, converted to CIE 1976 L*a*b* (:func:`cdbrdf.colour.linear_to_lab`,
@@ -63,7 +64,13 @@ def curvature_image(scene: Any, *, attribute: str = "vertex_curvature") -> NDArr
             continue
         mine = np.asarray(si.shape == mi.ShapePtr(shape), dtype=bool) & hit
         if mine.any():
-            out[mine] = np.asarray(shape.eval_attribute_1(attribute, si, mine), dtype=np.float32)[mine]
+            bsdf = shape.bsdf()
+            if getattr(bsdf, "surface", None) is not None:  # a curvature map's added, as the plug-in looks it up
+                mode = "directional" if attribute.endswith("_dir") else "max"
+                k = bsdf.curvature_at(si, mi.Bool(mine), mode)
+            else:
+                k = shape.eval_attribute_1(attribute, si, mine)
+            out[mine] = np.broadcast_to(np.asarray(k, dtype=np.float32), mine.shape)[mine]
     return out.reshape(h, w)
 
 

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from ..errors import OptionError, SceneError
 from ..limits import MAX_SPP
+from .camera import Camera
 from .lighting import DEFAULT_IRRADIANCE
 
 __all__ = [
@@ -243,7 +244,7 @@ class Picture:
         ``"grey card"`` (:func:`cdbrdf.colour.card_exposure_ev`), ``"auto"``
         (:func:`exposure_from_render` of the CDBRDF image) or ``"given"``.
     surface
-        What was rendered: ``"sine sheet"`` or the mesh's name.
+        What was rendered: ``"sine sheet"``, ``"swatch"`` or the mesh's name.
     lighting
         ``"paper"`` or ``"studio"``.
     light
@@ -253,9 +254,9 @@ class Picture:
         backdrop (:meth:`display`).
     mesh
         The prepared mesh (its metadata says what was repaired, its unit,
-        neighbourhood and frame), or None for the sine sheet.
+        neighbourhood and frame), or None for a built-in scene.
     up, up_reason
-        The mesh's up axis and why (None for the sine sheet).
+        The mesh's up axis and why (None for a built-in scene).
     curvature
         With ``render_table(..., curvature=True)``: the curvature (mm^-1)
         seen at each pixel centre, ``(H, W)`` float32, NaN where no surface
@@ -323,21 +324,20 @@ def render_table(
     light: Any = "auto",
     irradiance: float = DEFAULT_IRRADIANCE,
     envmap: str | PathLike[str] | None = None,
-    view: tuple[float, float] | None = None,
+    camera: Camera | None = None,
     units: str | float | None = None,
     neighbourhood_mm: float | None = None,
     frame: str | None = None,
     up: str = "auto",
-    normal_map: str | PathLike[str] | None = None,
+    maps: Any = None,
     curvature_mode: str = "max",
     exposure: float | str = "card",
     variant: str | None = None,
     curvature: bool = False,
-    uv_scale: float | tuple[float, float] | None = None,
     texel_filter: str | None = None,
     progress: Callable[[str, int, int], None] | None = None,
 ) -> Picture:
-    """Render a table on the paper's sine sheet or on a mesh, with the CDBRDF and/or the plain BRDF.
+    """Render a table on a built-in scene or on a mesh, with the CDBRDF and/or the plain BRDF.
 
     The one entry point for a picture of a table: ``cdbrdf render``, the demo
     and user scripts call it. It prepares the surface (a mesh is read,
@@ -353,8 +353,11 @@ def render_table(
         A :class:`~cdbrdf.CDBRDF` or a CDBRDF file, or a :class:`~cdbrdf.CDBTF`
         or its file (each texel at the surface's UVs, ``docs/btf.md``).
     surface
-        ``"sine"`` (the paper's sine sheet, :class:`cdbrdf.mesh.SineSheet`
-        defaults), a :class:`~cdbrdf.mesh.SineSheet`, a
+        A built-in scene of :data:`cdbrdf.render.scenes.SCENES`: ``"sine"``
+        (the paper's sine sheet, :class:`cdbrdf.mesh.SineSheet` defaults) or
+        ``"swatch"`` (a swatch laid in folds of known radii,
+        :class:`cdbrdf.mesh.Swatch` defaults); a
+        :class:`~cdbrdf.mesh.SineSheet` or :class:`~cdbrdf.mesh.Swatch`; a
         :class:`~cdbrdf.mesh.Mesh` or a mesh file.
     modes
         Any of :data:`RENDER_MODES`: ``("brdf", "cdbrdf")`` for the paper's
@@ -364,8 +367,8 @@ def render_table(
         Mitsuba path length (2 = direct light only).
     lighting
         ``"paper"`` (one directional light) or ``"studio"`` (a key light and
-        a soft sky; meshes only); default: paper for the sheet, studio for a
-        mesh (:mod:`cdbrdf.render.lighting`).
+        a soft sky; the swatch and meshes); default: paper for the sheet,
+        studio for the swatch and a mesh (:mod:`cdbrdf.render.lighting`).
     light
         ``(theta_deg, phi_deg)``: direction towards the directional (key)
         light (elevation from the up axis, azimuth from +x); ``"auto"``: the
@@ -375,19 +378,27 @@ def render_table(
         Of the directional light, W m^-2 (pi: a white Lambertian surface
         facing it is just white at 0 EV).
     envmap
-        An environment map file (.exr, .hdr), meshes only.
-    view
-        Camera ``(elevation_deg, azimuth_deg)`` above the ground plane;
-        default :data:`cdbrdf.render.camera.DEFAULT_SINE_VIEW` or
-        ``DEFAULT_MESH_VIEW``.
+        An environment map file (.exr, .hdr), the swatch and meshes only.
+    camera
+        A :class:`cdbrdf.render.camera.Camera`: the view ``(elevation_deg,
+        azimuth_deg)`` above the ground plane, the zoom, the lens's field of
+        view and the point looked at (in the surface's own coordinates and
+        unit, or an anchor such as ``"fold"``); None or a field left None:
+        the surface's defaults (:data:`~cdbrdf.render.camera.DEFAULT_SINE_VIEW`,
+        ``DEFAULT_SWATCH_VIEW``, ``DEFAULT_MESH_VIEW``).
     units, neighbourhood_mm, frame, up
         For a mesh: its length unit, the curvature's neighbourhood (mm), the
         source of the material's x axis, its up axis
         (:func:`cdbrdf.mesh.prepare_mesh`, :func:`cdbrdf.mesh.detect_up`).
-    normal_map
-        A tangent-space normal map of the mesh, whose curvature is added to
-        the mesh's (:mod:`cdbrdf.mesh.normalmap`); default: the one the mesh
-        file names, if any.
+    maps
+        A :class:`cdbrdf.mesh.SurfaceMaps`: the maps laid on the mesh by its
+        UVs (a normal or height map, a high-resolution mesh baked onto it;
+        default: the ones the mesh file names), looked up per shading point,
+        their curvature added to the mesh's and their normals tilting the
+        shading; and the UV scale (mm per UV unit) of the maps and a CD-BTF
+        (default: the sheet's size on the sine sheet, the swatch's (its
+        profile's length and its depth) on the swatch; detected on a mesh,
+        :func:`cdbrdf.mesh.detect_uv_scale`).
     curvature_mode
         ``"max"`` (the paper's) or ``"directional"``.
     exposure
@@ -400,9 +411,6 @@ def render_table(
     curvature
         Also record the curvature seen at each pixel (:attr:`Picture.curvature`,
         for :func:`cdbrdf.render.contrast.crest_contrast`).
-    uv_scale
-        For a CD-BTF: mm per UV unit of the mesh (one number or ``(u, v)``);
-        default: the sheet's size for the sine sheet, 1 (UVs in mm) for a mesh.
     texel_filter
         For a CD-BTF: the plug-in's ``texel_filter`` (default: the plug-in's default).
     progress
@@ -424,15 +432,15 @@ def render_table(
         environment map.
     """
     from ..limits import check as check_limit
-    from ..mesh import ATTRIBUTES, Mesh, SineSheet, detect_up, has_own_uv, prepare_mesh, read_mesh
+    from ..mesh import ATTRIBUTES, Mesh, SineSheet, SurfaceMaps, Swatch, detect_up, has_own_uv, prepare_mesh, read_mesh
     from ..table import CDBRDF
     from ..table import load as load_table
-    from .camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW
+    from .camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW, DEFAULT_SWATCH_VIEW
     from .contrast import curvature_image
     from .lighting import LIGHTINGS
     from .plugin import DEFAULT_VARIANT
     from .plugin import variant as variant_context
-    from .scenes import mesh_scene, sine_scene
+    from .scenes import mesh_scene, sine_scene, swatch_scene
 
     modes = tuple(modes)
     if not modes or any(m not in RENDER_MODES for m in modes) or len(set(modes)) != len(modes):
@@ -445,23 +453,28 @@ def render_table(
                               f"got {exposure!r:.40}")
     w, h = (int(x) for x in size)
     check_limit("render_pixels", w * h, what=f"a {w} x {h} render")
+    if maps is not None and not isinstance(maps, SurfaceMaps):
+        raise OptionError(f"maps: expected a cdbrdf.mesh.SurfaceMaps, got {type(maps).__name__}")
     btf = _as_btf(table)
     tbl = btf.mean() if btf is not None else table if isinstance(table, CDBRDF) else load_table(table)
+    camera = Camera() if camera is None else camera
+    if not isinstance(camera, Camera):
+        raise OptionError(f"camera: expected a cdbrdf.render.Camera, got {type(camera).__name__:.40}")
     is_sheet = isinstance(surface, SineSheet) or (isinstance(surface, str) and surface == "sine")
+    is_swatch = isinstance(surface, Swatch) or (isinstance(surface, str) and surface == "swatch")
     lighting = lighting or ("paper" if is_sheet else "studio")
-    elevation, azimuth = view if view is not None else (DEFAULT_SINE_VIEW if is_sheet else DEFAULT_MESH_VIEW)
-    sun = _light_of(light, irradiance, lighting, azimuth)
-    common: dict[str, Any] = {"size": (w, h), "spp": int(spp), "max_depth": int(max_depth),
-              "elevation_deg": float(elevation),
-              "azimuth_deg": float(azimuth), "curvature_mode": curvature_mode}
+    view = DEFAULT_SINE_VIEW if is_sheet else DEFAULT_SWATCH_VIEW if is_swatch else DEFAULT_MESH_VIEW
+    sun = _light_of(light, irradiance, lighting, (camera.view or view)[1])
+    common: dict[str, Any] = {"size": (w, h), "spp": int(spp), "max_depth": int(max_depth), "camera": camera,
+                              "curvature_mode": curvature_mode}
     mesh: Any = None
     up_axis = why = None
     if is_sheet:
         sheet = surface if isinstance(surface, SineSheet) else SineSheet()
         if envmap is not None:
             raise OptionError("envmap: only for meshes (the sine sheet is the paper's set-up)")
-        if normal_map is not None:
-            raise OptionError("normal_map: only for meshes (the sine sheet's folds are its geometry)")
+        if maps is not None and any(x is not None for x in (maps.normal_map, maps.height_map, maps.hires_mesh)):
+            raise OptionError("maps: only for meshes (the sine sheet's folds are its geometry)")
         if lighting == "studio":
             raise OptionError("lighting 'studio': only for meshes (the sine sheet is the paper's set-up)")
         if sun is None:
@@ -469,6 +482,15 @@ def render_table(
         check_limit("mesh_faces", sheet.face_count, what=f"a sine sheet of wavelength {sheet.wavelength_mm:g} mm "
                     f"over {sheet.width_mm:g} x {sheet.depth_mm:g} mm")
         name = "sine sheet"
+    elif is_swatch:
+        swatch = surface if isinstance(surface, Swatch) else Swatch()
+        if maps is not None and any(x is not None for x in (maps.normal_map, maps.height_map, maps.hires_mesh)):
+            raise OptionError("maps: only for meshes (the swatch's folds are its geometry)")
+        if sun is None and envmap is None and lighting == "paper":
+            raise OptionError("light: the scene needs a light; give an environment map or use the studio lighting")
+        check_limit("mesh_faces", swatch.face_count, what=f"a swatch of {len(swatch.radii_mm)} folds over "
+                    f"{swatch.width_mm:.0f} x {swatch.depth_mm:g} mm")
+        name = "swatch"
     else:
         if sun is None and envmap is None and lighting == "paper":
             raise OptionError("light: the scene needs a light; give an environment map or use the studio lighting")
@@ -478,7 +500,7 @@ def render_table(
             source, name = read_mesh(surface), str(surface)
         cb = None if progress is None else (lambda done, total: progress("curvature", done, total))
         mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=tbl,
-                            normal_map=normal_map, progress=cb)
+                            maps=maps, progress=cb)
         up_axis, why = (up, "given") if up != "auto" else detect_up(mesh)
         if btf is not None and not has_own_uv(mesh):  # the per-face UVs prepare_mesh makes follow no fabric
             mesh = mesh.copy()  # the note is this picture's, not the caller's mesh's
@@ -487,13 +509,20 @@ def render_table(
             btf = None
     images: dict[str, NDArray[np.float32]] = {}
     kappa_image = None
-    if btf is not None and uv_scale is None:  # the sheet's UVs span it; a mesh's UVs are in mm
-        uv_scale = (sheet.width_mm, sheet.depth_mm) if is_sheet else 1.0
+    span = (sheet.width_mm, sheet.depth_mm) if is_sheet else (swatch.length_mm, swatch.depth_mm) if is_swatch \
+        else None  # a built-in surface's UVs span it
+    uv_scale = _btf_uv_scale(btf, maps, span, mesh)
     with variant_context(variant or DEFAULT_VARIANT):
         for mode in modes:
-            bsdf = None if btf is None else _btf_entry(btf, mode, curvature_mode, uv_scale, texel_filter)
+            bsdf = None
+            if btf is not None and uv_scale is not None:  # with the pixel's angle: the lookup filters its footprint
+                bsdf = {**_btf_entry(btf, mode, curvature_mode, uv_scale, texel_filter),
+                        "pixel_angle": _pixel_angle(camera, is_sheet or is_swatch, (w, h))}
             if is_sheet:
                 scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, bsdf=bsdf, **common)
+            elif is_swatch:
+                scene = swatch_scene(tbl, mode=mode, swatch=swatch, lighting=lighting, light=sun, envmap=envmap,
+                                     bsdf=bsdf, **common)
             else:
                 scene = mesh_scene(tbl, mesh, mode=mode, lighting=lighting, light=sun, envmap=envmap,
                                    up=str(up_axis), bsdf=bsdf, **common)
@@ -531,13 +560,38 @@ def _as_btf(table: Any) -> Any:
     return None
 
 
-def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: Any, texel_filter: str | None) -> dict[str, Any]:
-    """The plug-in's dict for a CD-BTF at ``uv_scale`` mm per UV unit."""
+def _btf_uv_scale(btf: Any, maps: Any, span: tuple[float, float] | None, mesh: Any) -> tuple[float, float] | None:
+    """The UV scale of a CD-BTF: given, a built-in surface's ``span``, or the mesh's (its maps', else detected)."""
+    from ..mesh import as_uv_scale, detect_uv_scale
+
+    if btf is None:
+        return None
+    if maps is not None and maps.uv_scale is not None:
+        return as_uv_scale(maps.uv_scale)
+    if span is not None:
+        return float(span[0]), float(span[1])
+    if mesh.metadata.get("uv_scale") is not None:
+        return as_uv_scale(mesh.metadata["uv_scale"])
+    uvs = detect_uv_scale(mesh.vertices, mesh.faces, mesh.uv, units=mesh.metadata.get("units", "mm"))
+    mesh.metadata["notes"] = [*mesh.metadata.get("notes", []), f"UV scale: {uvs}"]
+    return uvs.pair
+
+
+def _pixel_angle(camera: Camera, sheet: bool, size: tuple[int, int]) -> float:
+    """Radians per pixel of the picture's lens (its smaller side), as :func:`cdbrdf.render.plugin.pixel_angle`."""
+    from .camera import DEFAULT_MESH_FOV_DEG, DEFAULT_SHEET_FOV_DEG
+
+    lens = camera.resolved(view=(0.0, 0.0), fov_deg=DEFAULT_SHEET_FOV_DEG if sheet else DEFAULT_MESH_FOV_DEG)
+    return 2.0 * math.tan(math.radians(lens.lens_fov_deg) / 2.0) / max(min(size), 1)
+
+
+def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: tuple[float, float],
+               texel_filter: str | None) -> dict[str, Any]:
+    """The plug-in's dict for a CD-BTF at ``uv_scale`` mm per UV unit (two numbers, as they are)."""
     from ..mesh import ATTRIBUTES
 
-    su, sv = (uv_scale, uv_scale) if isinstance(uv_scale, (int, float)) else uv_scale
     entry = {"type": "cdbrdf", "table": btf, "mode": mode, "curvature": ATTRIBUTES[curvature_mode],
-             "uv_scale": f"{float(su)!r}, {float(sv)!r}"}
+             "uv_scale": (float(uv_scale[0]), float(uv_scale[1]))}
     if texel_filter is not None:
         entry["texel_filter"] = texel_filter
     return entry

@@ -23,31 +23,55 @@ itself.
 Plug-in ``cdbrdf`` parameters
 -----------------------------
 
-===================  ================  ================================================
-Parameter            Type              Description
-===================  ================  ================================================
-``filename``         string            A CDBRDF file (HDF5), found through Mitsuba's
-                                       file resolver (relative to the scene file).
-                                       Instead, a table object: ``"table": table`` in a
-                                       dict passed to :func:`load_dict`, or
-                                       :func:`make_bsdf`.
-``mode``             string            ``"cdbrdf"`` (default): 5-D lookup with the
-                                       curvature; ``"brdf"``: the plain BRDF (kappa = 0).
-``curvature``        string or float   Mesh attribute holding the curvature (mm^-1), or a
-                                       constant in mm^-1.
-``curvature_mode``   string            ``"max"`` (default, attribute ``vertex_curvature``)
-                                       or ``"directional"`` (``vertex_curvature_dir``).
-``curvature_scale``  float             Factor on the attribute (to_world scale and scene
-                                       unit; set by :func:`load_file`).
-``scale``            float or texture  Factor on the reflectance (default 1); any Mitsuba
-                                       texture multiplies it per channel.
-``sampling``         string            ``"table"`` (default): importance sampling from
-                                       the table; ``"cosine"``: cosine-weighted.
-``cosine_weight``    float             Share of cosine sampling in the table sampler
-                                       (default 0.1).
-``storage``          string            ``"auto"`` (default), ``"packed"`` (21-bit RGB) or
-                                       ``"float"`` (float32 packets, differentiable).
-===================  ================  ================================================
+=========================  ================  ================================================
+Parameter                  Type              Description
+=========================  ================  ================================================
+``filename``               string            A CDBRDF file (HDF5), found through Mitsuba's
+                                             file resolver (relative to the scene file).
+                                             Instead, a table object: ``"table": table`` in a
+                                             dict passed to :func:`load_dict`, or
+                                             :func:`make_bsdf`.
+``mode``                   string            ``"cdbrdf"`` (default): 5-D lookup with the
+                                             curvature; ``"brdf"``: the plain BRDF (kappa = 0).
+``curvature``              string or float   Mesh attribute holding the curvature (mm^-1), or a
+                                             constant in mm^-1.
+``curvature_mode``         string            ``"max"`` (default, attribute ``vertex_curvature``)
+                                             or ``"directional"`` (``vertex_curvature_dir``).
+``curvature_scale``        float             Factor on the attribute (to_world scale and scene
+                                             unit; set by :func:`load_file`).
+``scale``                  float or texture  Factor on the reflectance (default 1); any Mitsuba
+                                             texture multiplies it per channel.
+``sampling``               string            ``"table"`` (default): importance sampling from
+                                             the table; ``"cosine"``: cosine-weighted.
+``cosine_weight``          float             Share of cosine sampling in the table sampler
+                                             (default 0.1).
+``storage``                string            ``"auto"`` (default), ``"packed"`` (21-bit RGB) or
+                                             ``"float"`` (float32 packets, differentiable).
+``uv_scale``               float or string   Mm per UV unit (``"su, sv"`` in XML; two numbers
+                                             from Python): a map's and a CD-BTF's scale.
+                                             Default: a map's detected from its shape
+                                             (:func:`check_scene`); a CD-BTF's 1.
+``texel_filter``           string            A CD-BTF's: ``"stochastic"`` (default),
+                                             ``"bilinear"`` or ``"nearest"``.
+``normal_map``             string            A tangent-space normal map (next to the scene):
+                                             looked up per shading point, its curvature
+                                             added to the mesh's shape operator
+                                             (``vertex_shape``), its normals tilting the
+                                             shading frame.
+``normal_map_convention``  string            ``"opengl"`` (default, green up) or ``"directx"``.
+``height_map``             string            A height map instead, with ``height_scale``.
+``height_scale``           float             Mm per unit of the height map's values.
+``map_size``               float or string   Mm one repeat of the map covers (default: one
+                                             repeat per UV unit).
+``curvature_map``          object            From Python: a :class:`cdbrdf.mesh.CurvatureMap`.
+``neighbourhood``          float             Mm: the map's finest scale (default: the
+                                             table's measured patch, else 5).
+``pixel_angle``            float             The camera's radians per pixel, for the map's
+                                             level (set by :func:`check_scene`).
+``map_filter``             string            ``"trilinear"`` (default) or ``"none"``.
+``shading_normals``        boolean           Whether the map tilts the shading frame
+                                             (default true).
+=========================  ================  ================================================
 
 The BSDF is diffuse-like (non-delta) and two-sided: seen from the back, the
 local frame is turned 180 degrees about x (normal and y flip) and the curvature
@@ -62,7 +86,11 @@ direction ``wo`` in radiance transport (swapped in importance transport,
 where sampling is cosine). The local x axis is ``si.sh_frame.s`` (dP/du):
 meshes must have UVs; :func:`check_scene` refuses meshes without them or
 without the curvature attribute (Mitsuba's analytic shapes have their own UV
-parametrisation and are accepted, with a constant curvature). Spectral
+parametrisation and are accepted, with a constant curvature). A map (``normal_map``,
+``height_map``, ``curvature_map``; ``docs/rendering.md``, "Maps") is looked up at the
+hit's UV (:mod:`cdbrdf.render._maps_jit`): its curvature is added to the mesh's shape
+operator and its normal tilts the frame the table is read in, as Mitsuba's ``normalmap``
+does. Spectral
 variants blend the spectra of the table samples (Mitsuba's sRGB upsampling of
 pi f), mono variants use the luminance. ``mi.traverse`` exposes ``values``
 (the table) and ``scale``; see ``docs/rendering.md``.
@@ -73,15 +101,17 @@ from __future__ import annotations
 import logging
 import math
 import re
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
 
 from ..errors import OptionError, SceneError
+from ..mesh.curvature_map import SHAPE_MESH_ATTRIBUTE
 from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
+from ._maps_jit import MAP_PARAMETERS
 from ._units import curvature_warning, ply_unit_mm, scene_factor, scene_units, uniform_scale
 
 __all__ = [
@@ -108,6 +138,7 @@ __all__ = [
     "mitsuba_message",
     "check_scene",
     "cdbrdf_shapes",
+    "pixel_angle",
 ]
 
 _LOG = logging.getLogger(__name__)
@@ -125,7 +156,11 @@ VARIANTS: tuple[str, ...] = ("llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", 
 _APPLIED = "scene_scale_applied"
 
 _DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_mode", "curvature_scale", "scale",
-                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter", "unit", _APPLIED})
+                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter", "unit", _APPLIED,
+                        *MAP_PARAMETERS})
+
+#: Parameters given to the plug-in as Python values (numbers in pairs, objects), not through Mitsuba's properties.
+_PYTHON_VALUES = ("uv_scale", "map_size", "curvature_map")
 
 
 def available_variants() -> tuple[str, ...]:
@@ -279,6 +314,9 @@ def make_bsdf(
     uv_scale: float | str | tuple[float, float] | None = None,
     texel_filter: str | None = None,
     unit: str | float | None = None,
+    pixel_angle: float | None = None,
+    curvature_map: Any = None,
+    map_settings: Mapping[str, Any] | None = None,
 ) -> Any:
     """A ``cdbrdf`` BSDF instance from a table object (or file name).
 
@@ -301,25 +339,46 @@ def make_bsdf(
         in mm) and ``"stochastic"`` (default: one of the four nearest texels
         with probability its bilinear weight), ``"bilinear"`` (the four
         blended, as :meth:`cdbrdf.CDBTF.evaluate`) or ``"nearest"``.
+    pixel_angle
+        The angle one pixel of the camera subtends, radians: a neural
+        CD-BTF's texels and a map's levels are filtered over the pixel's
+        footprint at the hit (``docs/btf.md``, "Filtering"; ``docs/rendering.md``,
+        "Maps"). Default: a map takes the scene's camera's
+        (:func:`check_scene`), a CD-BTF 0 (the texels themselves).
     unit
         The scene's unit (applied by :func:`load_dict` with the shape's
         ``to_world``; ``docs/rendering.md``, "Curvature units").
+    curvature_map
+        A :class:`cdbrdf.mesh.CurvatureMap` (``prepare_mesh(...).metadata["curvature_map"]``):
+        looked up per shading point, added to the mesh's curvature, tilting the shading normal.
+    map_settings
+        The other map parameters of the table above (``normal_map``,
+        ``height_map``, ``height_scale``, ``map_size``, ``neighbourhood``,
+        ``map_filter``, ``shading_normals``, ...).
 
     Returns
     -------
     mitsuba.BSDF
         The plug-in instance, in the active variant.
     """
+    extra = dict(map_settings or {})
+    unknown = set(extra) - set(MAP_PARAMETERS)
+    if unknown:
+        raise OptionError(f"map_settings: unknown parameter(s) {sorted(unknown)}; valid: {', '.join(MAP_PARAMETERS)}")
+    if curvature_map is not None:
+        extra["curvature_map"] = curvature_map
+    if pixel_angle is not None:
+        extra["pixel_angle"] = pixel_angle
     return _make_bsdf(table, mode=mode, curvature=curvature, curvature_mode=curvature_mode,
                       curvature_scale=curvature_scale, scale=scale, sampling=sampling, cosine_weight=cosine_weight,
-                      storage=storage, uv_scale=uv_scale, texel_filter=texel_filter, unit=unit)
+                      storage=storage, uv_scale=uv_scale, texel_filter=texel_filter, unit=unit, **extra)
 
 
 def _make_bsdf(table: Any, *, mode: str = "cdbrdf", curvature: str | float | None = None,
                curvature_mode: str | None = None, curvature_scale: float = 1.0, scale: float | Any = 1.0,
                sampling: str = "table", cosine_weight: float | None = None, storage: str = "auto",
                uv_scale: float | str | tuple[float, float] | None = None, texel_filter: str | None = None,
-               unit: str | float | None = None, scene_scale_applied: bool = False) -> Any:
+               unit: str | float | None = None, scene_scale_applied: bool = False, **maps: Any) -> Any:
     import mitsuba as mi
 
     from ._bsdf import bsdf_class
@@ -344,12 +403,17 @@ def _make_bsdf(table: Any, *, mode: str = "cdbrdf", curvature: str | float | Non
     if cosine_weight is not None:
         props["cosine_weight"] = float(cosine_weight)
     props["storage"] = str(storage)
-    if uv_scale is not None:
-        props["uv_scale"] = (float(uv_scale) if isinstance(uv_scale, (int, float))
-                             else uv_scale if isinstance(uv_scale, str) else ", ".join(map(str, uv_scale)))
     if texel_filter is not None:
         props["texel_filter"] = str(texel_filter)
-    return bsdf_class()(props, table=table)
+    extras: dict[str, Any] = {} if uv_scale is None else {"uv_scale": uv_scale}  # numbers as they are
+    for key, value in maps.items():
+        if value is None:
+            continue
+        if key in _PYTHON_VALUES or not isinstance(value, (str, bool, int, float)):
+            extras[key] = value
+        else:
+            props[key] = value if isinstance(value, (str, bool)) else float(value)
+    return bsdf_class()(props, table=table, extras=extras)
 
 
 def _replace_tables(d: Any) -> Any:
@@ -555,9 +619,66 @@ def check_scene(scene: Any, *, curvature: bool = True) -> None:
                 f"{attr!r}, which the shape does not have ({hint}, or give the BSDF a constant "
                 "curvature); without it the curvature would read as 0"
             )
+        if getattr(bsdf, "surface", None) is not None and isinstance(shape, mi.Mesh) and attr is not None:
+            if not shape.has_attribute(SHAPE_MESH_ATTRIBUTE):
+                raise SceneError(
+                    f"shape {name!r}: the cdbrdf BSDF's map adds to the mesh's shape operator, and the shape has no "
+                    f"{SHAPE_MESH_ATTRIBUTE} (write the mesh with `cdbrdf curvature`, which stores it as shape_x, "
+                    "shape_y, shape_z, or give the BSDF a constant curvature)")
+    _attach_maps(scene)
     if not curvature:
         return
     shapes = [(shape, bsdf) for shape, bsdf, _ in cdbrdf_shapes(scene) if isinstance(shape, mi.Mesh)]
     msg = curvature_warning(shapes)
     if msg:
         _LOG.warning("%s", msg)
+
+
+def pixel_angle(scene: Any) -> float:
+    """The angle (radians) one pixel of the scene's first sensor spans at its centre; 0 for a sensor without a fov.
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        A loaded scene.
+
+    Returns
+    -------
+    float
+        ``2 tan(x_fov / 2) / width``.
+    """
+    import mitsuba as mi
+
+    if not scene.sensors():
+        return 0.0
+    sensor = scene.sensors()[0]
+    params = mi.traverse(sensor)
+    if "x_fov" not in params:
+        return 0.0
+    fov = float(np.asarray(params["x_fov"], dtype=np.float64).reshape(-1)[0])
+    width = int(sensor.film().crop_size()[0])
+    return 2.0 * math.tan(math.radians(fov) / 2.0) / max(width, 1)
+
+
+def _attach_maps(scene: Any) -> None:
+    """Give every ``cdbrdf`` BSDF with a map the camera's angle per pixel and, unless given, its shape's UV scale."""
+    import mitsuba as mi
+
+    from ..mesh import detect_uv_scale
+
+    angle = None
+    for shape, bsdf, _ in cdbrdf_shapes(scene):
+        m = getattr(bsdf, "surface", None)
+        if m is None:
+            continue
+        if not m.pixel_angle_given:
+            angle = pixel_angle(scene) if angle is None else angle
+            m.pixel_angle = angle
+        if m.uv_scale is None and isinstance(shape, mi.Mesh) and shape.has_vertex_texcoords():
+            p = mi.traverse(shape)
+            v = np.asarray(p["vertex_positions"], dtype=np.float64).reshape(-1, 3)
+            f = np.asarray(p["faces"], dtype=np.int64).reshape(-1, 3)
+            uv = np.asarray(p["vertex_texcoords"], dtype=np.float64).reshape(-1, 2)
+            uvs = detect_uv_scale(v, f, uv, units=bsdf.units.mm_per_unit)
+            m.set_uv_scale(uvs.pair)
+            _LOG.info("shape %r: UV scale of %s: %s", shape.id(), m.name, uvs)

@@ -109,15 +109,28 @@ def _substitute(text: str, values: dict[str, str]) -> str:
 def _check_includes(path: Path, params: dict[str, str], files: list[Path], depth: int = 0) -> None:
     """Check the files ``<include>`` elements name (recursively) before Mitsuba's parser opens them.
 
-    A file that is not XML is left to Mitsuba's parser, which reports it.
+    The file must be well-formed XML: Mitsuba's parser accepts some files
+    that are not (a duplicate attribute, an undefined entity), whose
+    includes could not be checked. A relative include must exist beside the
+    file that includes it: that is where Mitsuba looks first, and cdbrdf
+    does not let it look further (its resolver would try the scene's folder,
+    then the current folder).
     """
     import xml.etree.ElementTree as ET
 
     try:
         data = read_regular(path, max_bytes=_MAX_XML_BYTES)
-        root = ET.fromstring(data[:_MAX_XML_BYTES])
-    except (OSError, ET.ParseError, ValueError):
-        return
+    except OSError as exc:
+        raise SceneError(f"{exc}") from None
+    if len(data) > _MAX_XML_BYTES:
+        raise SceneError(f"{path}: larger than {_MAX_XML_BYTES // 2**20} MiB; not read")
+    try:
+        root = ET.fromstring(data)
+    except ET.ParseError as exc:
+        raise SceneError(f"{path}: not well-formed XML ({exc}); cdbrdf reads only scenes whose includes it can "
+                         "check") from None
+    except (ValueError, RecursionError) as exc:
+        raise SceneError(f"{path}: cannot be read as XML ({type(exc).__name__})") from None
     values = dict(params)
     for el in root.iter("default"):
         if el.get("name") and el.get("value") is not None:
@@ -129,8 +142,10 @@ def _check_includes(path: Path, params: dict[str, str], files: list[Path], depth
         inc = Path(_substitute(name, values))
         if not inc.is_absolute():
             inc = path.parent / inc
-        if _regular(inc, f"{path}: <include filename={name!r}>") is None:
-            continue  # Mitsuba's parser names the missing file
+        where = f"{path}: <include filename={name!r}>"
+        if _regular(inc, where) is None:
+            raise SceneError(f"{where}: no such file beside {path.name} (includes are read from the including "
+                             "file's folder only)")
         files.append(inc)
         if depth >= _MAX_INCLUDE_DEPTH:
             raise SceneError(f"{path}: includes nest deeper than {_MAX_INCLUDE_DEPTH} levels")

@@ -194,7 +194,7 @@ def params_class(name: str) -> type[ClothParams] | type[PileParams]:
     return PileParams if name in PILE_PRESETS else ClothParams
 
 
-def params(name: str, **overrides: Any) -> ClothParams | PileParams:
+def params(name: str, /, **overrides: Any) -> ClothParams | PileParams:
     """The parameters of a preset with ``overrides`` applied.
 
     Parameters
@@ -218,7 +218,7 @@ def params(name: str, **overrides: Any) -> ClothParams | PileParams:
     return params_class(name)().replace(**dict(PRESETS[name])).replace(**overrides)
 
 
-def model(name: str, **overrides: Any) -> ClothModel | PileModel:
+def model(name: str, /, **overrides: Any) -> ClothModel | PileModel:
     """The model of a preset.
 
     Parameters

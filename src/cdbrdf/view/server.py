@@ -15,6 +15,12 @@ Only the viewer's own page gets the user's table:
   ``Sec-Fetch-Site`` header says (a ``<script src>`` on another site's page),
   and every answer carries ``Cross-Origin-Resource-Policy: same-origin``,
   which makes browsers refuse to hand it to another origin;
+- a request with two ``Host`` (or ``Origin``, ``Referer``, ``Sec-Fetch-*``)
+  headers is refused (400), as HTTP requires; a malformed ``Origin`` is
+  another origin (403);
+- a connection silent for :data:`IDLE_TIMEOUT_S` seconds is closed, and at
+  most :data:`MAX_CONNECTIONS` are answered at once (more are closed at
+  once), so half-open connections cannot hold the server's threads;
 - a client that goes away mid-answer (a reset, a closed tab) is logged on
   one line (debug level), never with a traceback.
 """
@@ -33,7 +39,7 @@ from urllib.parse import unquote, urlsplit
 
 from ..errors import OptionError
 
-__all__ = ["HOST", "CONTENT_TYPES", "ViewerServer"]
+__all__ = ["HOST", "CONTENT_TYPES", "IDLE_TIMEOUT_S", "MAX_CONNECTIONS", "ViewerServer"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -57,15 +63,29 @@ _HEADERS = {"Cross-Origin-Resource-Policy": "same-origin", "X-Content-Type-Optio
             "X-Frame-Options": "DENY", "Cache-Control": "no-store"}
 
 
+#: Seconds a connection may stay silent before it is closed (a half-open connection holds a thread).
+IDLE_TIMEOUT_S = 10.0
+
+#: Connections answered at once; more are closed at once (a page opens a handful).
+MAX_CONNECTIONS = 32
+
+#: Request headers that must appear at most once (HTTP/1.1, RFC 9110 5.3 and 7.2: two Hosts are a 400).
+_SINGLE = ("Host", "Origin", "Referer", "Sec-Fetch-Site", "Sec-Fetch-Mode")
+
+
 def _origin(url: str) -> str:
-    """``scheme://host:port`` of a URL, lower case ("" when it has none)."""
-    parts = urlsplit(url.strip())
+    """``scheme://host:port`` of a URL, lower case ("" when it has none, "?" when it is malformed)."""
+    try:
+        parts = urlsplit(url.strip())
+    except ValueError:  # "http://[::1": an unclosed IPv6 literal
+        return "?"
     return f"{parts.scheme}://{parts.netloc}".lower() if parts.scheme and parts.netloc else ""
 
 
 def _handler(files: Mapping[str, bytes]) -> type[BaseHTTPRequestHandler]:
     class Handler(BaseHTTPRequestHandler):
         server_version = "cdbrdf-view"
+        timeout = IDLE_TIMEOUT_S  # socket timeout: a silent connection is closed (http.server logs it)
 
         def _lookup(self) -> tuple[str, bytes, str] | None:
             path = unquote(urlsplit(self.path).path).lstrip("/") or _PAGE
@@ -100,6 +120,10 @@ def _handler(files: Mapping[str, bytes]) -> type[BaseHTTPRequestHandler]:
                 self.send_error(404, "not part of the viewer")
                 return
             path, data, ctype = found
+            twice = [h for h in _SINGLE if len(self.headers.get_all(h) or ()) > 1]
+            if twice:
+                self.send_error(400, f"more than one {twice[0]} header")
+                return
             why = self._refusal(path)
             if why is not None:
                 _LOG.info("refused %s %s from %s: %s", self.command, path, self.address_string(), why)
@@ -127,9 +151,31 @@ def _handler(files: Mapping[str, bytes]) -> type[BaseHTTPRequestHandler]:
 
 
 class _Server(ThreadingHTTPServer):
-    """The HTTP server, whose errors while answering are one log line, not a traceback on stderr."""
+    """The HTTP server: at most :data:`MAX_CONNECTIONS` at once; errors while answering are one log line."""
 
     daemon_threads = True
+    request_queue_size = 2 * MAX_CONNECTIONS  # the listen backlog (5 by default: a burst waited for SYN retries)
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
+
+    def process_request(self, request: Any, client_address: Any) -> None:  # noqa: D102 - socketserver API
+        if not self._slots.acquire(blocking=False):
+            _LOG.info("refused a connection from %s: %d connections are open", client_address[0], MAX_CONNECTIONS)
+            self.shutdown_request(request)
+            return
+        try:
+            super().process_request(request, client_address)
+        except BaseException:
+            self._slots.release()
+            raise
+
+    def process_request_thread(self, request: Any, client_address: Any) -> None:  # noqa: D102 - socketserver API
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self._slots.release()
 
     def handle_error(self, request: Any, client_address: Any) -> None:  # noqa: D102 - socketserver API
         exc = sys.exc_info()[1]
