@@ -147,7 +147,7 @@ def test_mosaic_marks_direction_and_curvature_fills_apart():
     t = _measured()  # grazing views at -0.22 filled along the curvature
     valid = t.measured.copy()
     valid[:, 1, 0, 2, 0] = False  # a direction measured on no stand: the paper's rule fills it
-    t = refill(CDBRDF(t.values, **t.grid.axes(), measured=valid, attrs=t.attrs))
+    t = refill(CDBRDF(t.values, **t.grid.axes(), measured=valid, attrs=t.attrs), method="kappa-fit")
     m = mosaic_arrays(t)
     codes = set(np.unique(m.fill_method[0][m.filled[0]]).tolist())
     assert codes == {FILL_METHOD_CODES["kappa_fit"], FILL_METHOD_CODES["nearest"]}
@@ -245,7 +245,7 @@ def test_nearest_reproduces_the_paper_rule_bit_for_bit(wiggly_capture):
 
 def test_measure_fills_by_the_chosen_method_and_keeps_measured_samples(wiggly_capture):
     near, _ = measure(wiggly_capture, fill="nearest")
-    kfit, rep = measure(wiggly_capture)
+    kfit, rep = measure(wiggly_capture, fill="kappa-fit")
     assert rep.fill_method == "kappa-fit" and "filled by kappa-fit" in rep.summary()
     np.testing.assert_array_equal(kfit.values[kfit.measured], near.values[near.measured])
     np.testing.assert_array_equal(kfit.measured, near.measured)

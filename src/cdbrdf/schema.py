@@ -148,9 +148,10 @@ FILL_SLOT = "fill_slot"
 #: nearest measured direction at the same curvature (the paper's rule);
 #: ``nearest_stand``: copied from the same direction on the nearest stand that
 #: measured it; ``kappa_fit``: a line fitted along the curvature to the same
-#: direction on the stands that measured it (``docs/capture.md``); ``model`` (since 1.5): a fitted
-#: fabric model's change with curvature applied to the same direction measured at another curvature
-#: (``cdbrdf bend``: the flat measurement of the direction and of its mirror, :mod:`cdbrdf.bend`).
+#: direction on the stands that measured it; ``model`` (since 1.5): a fitted fabric model's change with
+#: curvature applied to the same direction measured at other curvatures: on the stands that measured it
+#: (the measurement's model fill, ``docs/capture.md``) or the flat measurement alone (``cdbrdf bend``:
+#: the direction and its mirror, :mod:`cdbrdf.bend`).
 FILL_METHOD_CODES: Mapping[str, int] = MappingProxyType({
     "measured": 0,
     "unknown": 1,

@@ -65,7 +65,7 @@ _DIFF_FILLED_COLOUR = "#4d4d4d"
 #: How filled samples are marked, by the per-sample fill method
 #: (:data:`cdbrdf.schema.FILL_METHOD_CODES`): ``(methods, colour, hatch, legend label)``.
 FILL_MARKS: tuple[tuple[tuple[str, ...], str, str, str], ...] = (
-    (("kappa_fit", "nearest_stand"), _CURVATURE_COLOUR, "\\\\\\",
+    (("kappa_fit", "nearest_stand", "model"), _CURVATURE_COLOUR, "\\\\\\",
      "filled along the curvature (same direction, other stands)"),
     (("nearest",), _FILLED_COLOUR, "//////", "filled from the nearest direction (same curvature)"),
     (("model",), _PREDICTED_COLOUR, "......",
