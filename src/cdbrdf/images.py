@@ -66,6 +66,7 @@ __all__ = [
     "ImageInfo",
     "FORMATS",
     "image_format",
+    "decode_image",
     "read_image",
     "read_window",
     "write_png",
@@ -600,6 +601,77 @@ def _read(path: Path, window: Any) -> tuple[NDArray, ImageInfo]:
         return a, info
     x0, y0, nx, ny = _resolve(path, info, window)
     return a[y0 : y0 + ny, x0 : x0 + nx].copy(), info
+
+
+def _jpeg_size(name: str, data: bytes) -> tuple[int, int]:
+    """A JPEG's ``(width, height)`` from its first SOF marker, before decoding (ITU T.81, B.2)."""
+    pos, n = 2, len(data)
+    while pos + 4 <= n:
+        if data[pos] != 0xFF:
+            raise ImageError(f"{name}: corrupt JPEG (no marker at byte {pos})")
+        marker = data[pos + 1]
+        if marker == 0xFF:  # fill byte
+            pos += 1
+            continue
+        (length,) = struct.unpack(">H", data[pos + 2 : pos + 4])
+        if 0xC0 <= marker <= 0xCF and marker not in (0xC4, 0xC8, 0xCC):
+            if pos + 9 > n:
+                break
+            height, width = struct.unpack(">HH", data[pos + 5 : pos + 9])
+            return width, height
+        if length < 2:
+            raise ImageError(f"{name}: corrupt JPEG (a segment of length {length})")
+        pos += 2 + length
+    raise ImageError(f"{name}: truncated JPEG (no frame header)")
+
+
+def decode_image(data: bytes, *, name: str) -> tuple[NDArray, ImageInfo]:
+    """Decode an image held in memory (a glTF's embedded texture): PNG or JPEG, by its signature.
+
+    A PNG passes every check of :func:`read_image`'s (structure, CRCs, the
+    ``image_pixels`` limit before decoding); a JPEG's declared size is
+    checked against the limit before it is decoded.
+
+    Parameters
+    ----------
+    data
+        The encoded image.
+    name
+        What to call it in messages (``"shirt.glb: images[0]"``).
+
+    Returns
+    -------
+    pixels, info
+        As :func:`read_image`.
+
+    Raises
+    ------
+    ImageError
+        For anything else, or a damaged or truncated image
+        (:class:`~cdbrdf.errors.LimitError` beyond the ``image_pixels`` limit).
+    """
+    label = Path(name)
+    if data[:8] == _PNG_SIGNATURE:
+        width, height = _png_check(label, data)
+        with _reading(label, "png"):
+            a = np.asarray(_png_decode(data))
+    elif data[:3] == b"\xff\xd8\xff":
+        width, height = _jpeg_size(name, data)
+        _check_size(label, width, height, "png")
+        import imagecodecs
+
+        try:
+            a = np.asarray(imagecodecs.jpeg8_decode(data))
+        except Exception as exc:  # noqa: BLE001 - any library failure is an unreadable image
+            raise ImageError(f"{name}: corrupt or truncated JPEG ({_one_line(exc)})") from None
+    else:
+        raise ImageError(f"{name}: neither a PNG nor a JPEG image (signature {data[:8]!r})")
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3 or a.shape[:2] != (height, width) or a.dtype not in (np.uint8, np.uint16):
+        raise ImageError(f"{name}: unsupported image layout (decoded {a.shape} {a.dtype})")
+    keep = _channels_kept(a.shape[-1])
+    return a[..., :keep], ImageInfo(width, height, keep, 65535 if a.dtype == np.uint16 else 255, False)
 
 
 def read_image(path: str | PathLike[str]) -> tuple[NDArray, ImageInfo]:
