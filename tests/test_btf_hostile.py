@@ -61,11 +61,14 @@ def _digest(f):
     from cdbrdf.btf import file as bf
 
     def get(n):
-        return np.asarray(f[n][()]) if n in f and isinstance(f[n], h5py.Dataset) else None
+        ok = n in f and isinstance(f[n], h5py.Dataset) and f[n].size is not None and f[n].size <= 1 << 24
+        return np.asarray(f[n][()]) if ok else None
 
     try:
         rep = np.asarray(f.attrs["btf_repeat_mm"], np.float64).reshape(-1)
         nu, nv = f["texel_u"].shape[0], f["texel_v"].shape[0]
+        if max(nu, nv) > 1 << 20:
+            raise ValueError("refused before the digest")
     except Exception:  # noqa: BLE001 - a forged layout the reader refuses before the digest
         return np.zeros(32, np.uint8)
     shape = f["reflectance"].shape
@@ -74,10 +77,11 @@ def _digest(f):
         w, b = np.zeros((nv, nu, 0), np.float32), np.zeros(shape[:-1] + (0, shape[-1]), np.float32)
     arrays = [(bf.TEXEL_U, (np.arange(nu) + 0.5) * rep[0] / nu), (bf.TEXEL_V, (np.arange(nv) + 0.5) * rep[-1] / nv),
               (bf.WEIGHTS, np.asarray(w, "<f4")), (bf.BASIS, np.asarray(b, "<f4"))]
-    for n, dt in ((bf.LATENTS, "<f2"), (bf.DECODER, "<f4")):
-        if get(n) is not None:
-            arrays.append((n, np.asarray(get(n), dt)))
-    return data_digest(arrays)
+    with np.errstate(all="ignore"):
+        for n, dt in ((bf.LATENTS, "<f2"), (bf.DECODER, "<f4")):
+            if get(n) is not None:
+                arrays.append((n, np.asarray(get(n), dt)))
+        return data_digest(arrays)
 
 
 def _refused(path, *words):

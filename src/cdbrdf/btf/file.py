@@ -197,6 +197,8 @@ def _array(path: Path, f: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
         raise fail(path, f"{name!r} cannot be read ({one_line(exc)})") from None
     if not np.all(np.isfinite(a)):
         raise fail(path, f"{name!r} holds NaN or infinite values")
+    if a.size and float(np.max(np.abs(a))) > float(np.finfo(np.float32).max):
+        raise fail(path, f"{name!r} holds values beyond float32 (up to {float(np.max(np.abs(a))):.3g})")
     return a
 
 
