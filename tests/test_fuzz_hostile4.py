@@ -381,9 +381,9 @@ def test_fuzz_btf_files_1000():
 
 
 @pytest.mark.slow
-def test_fuzz_synth_set_200():
-    report = _run("target_synth_set", 200, seed=2)
-    assert report.n == 200 and not report.bad, report.summary()
+def test_fuzz_synth_set_120():
+    report = _run("target_synth_set", 120, seed=2)
+    assert report.n == 120 and not report.bad, report.summary()
 
 
 @pytest.mark.slow

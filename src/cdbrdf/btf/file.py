@@ -186,6 +186,8 @@ def _array(path: Path, f: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
     if name not in f:
         raise fail(path, f"missing variable {name!r} of a CD-BTF file")
     ds = f[name]
+    if not isinstance(getattr(ds, "shape", None), tuple):
+        raise fail(path, f"{name!r} is not a variable (an HDF5 group?)")
     if tuple(ds.shape) != shape:
         raise fail(path, f"{name!r} has shape {tuple(ds.shape)}, expected {shape}")
     if ds.dtype.kind != "f":
