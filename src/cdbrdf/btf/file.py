@@ -295,7 +295,9 @@ def read(path: str | PathLike[str]) -> BTFParts:
 
     The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
     the CDBRDF file), then the CD-BTF variables: shapes against the mean and
-    each other, finite values, the digest ``btf_sha256``.
+    each other, finite values within float32, every number attribute in its
+    range (``docs/format.md``), the digest ``btf_sha256``, and the decoded
+    values within the table's bound (:data:`cdbrdf.table.MAX_ABS_VALUE`).
 
     Raises
     ------

@@ -97,7 +97,8 @@ class CDBTF:
     Raises
     ------
     TableError
-        When shapes disagree, values are not finite or sizes are not positive.
+        When shapes disagree, values are not finite, the repeat is outside 0.01 mm to 10 m, or the
+        factors could decode to values beyond the table's bound (1e30).
     """
 
     __slots__ = ("_mean", "_weights", "_basis", "_repeat", "_compression", "_lookup", "_neural")
@@ -581,7 +582,9 @@ def load(path: str | PathLike[str]) -> CDBTF:
 
     The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
     the CDBRDF file), then the CD-BTF variables: their shapes against the
-    mean and each other, finite values, the digest ``btf_sha256``.
+    mean and each other, finite values, every number attribute in its range
+    (``docs/format.md``), the digest ``btf_sha256``, and the decoded values
+    within the table's bound.
 
     Raises
     ------
