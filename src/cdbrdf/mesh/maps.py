@@ -302,7 +302,7 @@ def _file_maps(maps: SurfaceMaps, meta: dict[str, Any], notes: list[str], name: 
         got["height"] = maps.height_map
     elif maps.hires_mesh is not None:
         got["mesh"] = maps.hires_mesh
-    elif maps.from_file:
+    if maps.from_file and not any(k in got for k in ("normal", "height", "mesh")):
         if meta.get("normal_map") is not None:
             got["normal"] = meta["normal_map"]
         elif meta.get("height_map") is not None:
@@ -312,12 +312,16 @@ def _file_maps(maps: SurfaceMaps, meta: dict[str, Any], notes: list[str], name: 
         for key in ("normal", "height"):
             if isinstance(got.get(key), (str, PathLike)):
                 _read_file_map(maps, got, key, notes, name)
+    elif isinstance(got.get("height"), (str, PathLike)):  # the user's: an RGB normal map is said; errors raised
+        _read_file_map(maps, got, "height", notes, name, given=True)
     return got
 
 
-def _read_file_map(maps: SurfaceMaps, got: dict[str, Any], key: str, notes: list[str], name: str) -> None:
-    """Read the map a mesh file names into ``got`` (an MTL bump map that is an RGB normal map becomes the normal
-    map it is, said); one that cannot be used is dropped with a warning."""
+def _read_file_map(maps: SurfaceMaps, got: dict[str, Any], key: str, notes: list[str], name: str, *,
+                   given: bool = False) -> None:
+    """Read the map a mesh file names (or the user's height map, ``given``) into ``got`` (a bump map that is an
+    RGB normal map becomes the normal map it is, said); one the mesh names that cannot be used is dropped with a
+    warning, the user's raises."""
     from ..errors import CDBRDFError
     from ..images import read_image
     from .bake import height_map_from_values
@@ -341,6 +345,8 @@ def _read_file_map(maps: SurfaceMaps, got: dict[str, Any], key: str, notes: list
                 return
         got["height"] = height_map_from_values(v, name=path)
     except (CDBRDFError, OSError) as exc:
+        if given:
+            raise
         why = " ".join(str(exc).removeprefix(f"{path}: ").split())
         what = "normal map" if key == "normal" else "height map"
         unusable_map(notes, f"{name}: the {what} {path} its material names cannot be used ({why})")
