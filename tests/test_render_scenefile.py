@@ -224,7 +224,7 @@ def test_curvature_mode_selects_the_attribute(cr, tmp_path):
     path = write_scene(tmp_path / "m", bsdf_extra='<string name="curvature_mode" value="directional"/>')
     with pytest.raises(SceneError, match="'vertex_curvature_dir', which the shape does not have"):
         cr.load_file(path)
-    with pytest.raises(ValueError, match="curvature_mode 'min' is not one of max, directional"):
+    with pytest.raises(ValueError, match="curvature_mode: 'min' is not one of max, directional"):
         cr.make_bsdf(kappa_table(), curvature_mode="min")
     with pytest.raises(ValueError, match="not both"):
         cr.make_bsdf(kappa_table(), curvature_mode="max", curvature=0.1)

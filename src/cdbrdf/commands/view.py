@@ -27,7 +27,7 @@ def _grid(text: str) -> tuple[float, float, int | None]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..mesh import MESH_FORMATS, UP_AXES
+    from ..mesh import MESH_FORMATS
     from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
     from ._args import existing_file, int_range, keyword, mesh_file, output_folder
     from ._maps import add_uv_scale
@@ -57,9 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mesh", type=mesh_file(), metavar="MESH",
                    help=f"your own mesh ({', '.join(MESH_FORMATS)}; repaired, its curvature computed in "
                    "1/mm from --units unless the file has it, e.g. one written by cdbrdf curvature)")
-    mesh_options(p)
-    p.add_argument("--up", choices=UP_AXES, default="auto",
-                   help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
+    mesh_options(p, up_default="auto")
     p.add_argument("--grid", type=_grid, metavar="THETA_STEP,PHI_STEP[,N_KAPPA]",
                    help="resample the tables onto a regular grid first (degrees; e.g. 15,30), for a table "
                    "too large for the GPU's textures")

@@ -9,17 +9,14 @@ curvature along the material's x axis (the stands bend the fabric along x).
 :func:`surface_curvature` runs the whole path: :func:`~cdbrdf.mesh.repair.repair`,
 the scale-aware fit (:func:`~cdbrdf.mesh.estimate.fit_curvatures`) in mm^-1
 for the given unit and neighbourhood, the material's x axis
-(:mod:`cdbrdf.mesh.frames`) and both curvatures (:data:`CURVATURE_MODES`).
+(:mod:`cdbrdf.mesh.frames`) and both curvatures (:data:`cdbrdf.mesh.CURVATURE_MODES`).
 :func:`principal_curvatures` and :func:`max_curvature` give the same on
 arrays, one value per input vertex; :func:`neighbourhood_from_table` the
 default neighbourhood, the size of a table's measured patch.
 
-The per-vertex attributes the ``cdbrdf`` BSDF reads (:data:`ATTRIBUTES`) are
-written as PLY vertex properties (:data:`PLY_PROPERTIES`) that Mitsuba's PLY
-loader turns into exactly those mesh attributes (it keeps an unknown vertex
-property only when its name ends in a channel suffix, and strips it:
-``curvature_x`` -> ``vertex_curvature``); in memory the renderer sets them
-directly.
+Each curvature's name in a mesh, a PLY file and Mitsuba is given by
+:mod:`cdbrdf.mesh.attributes` (``curvature`` -> ``curvature_x`` ->
+``vertex_curvature``).
 """
 
 from __future__ import annotations
@@ -34,19 +31,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import MeshError
+from .attributes import curvature_mode
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, PrincipalCurvatures, fit_curvatures
 from .frames import FRAMES, face_frame_uv, face_uv_tangents, project_tangents, seam_jumps, vertex_tangents
 from .repair import RepairedMesh, repair
 from .units import Units, parse_units
 
 __all__ = [
-    "CURVATURE_MODES",
     "LOCATIONS",
     "outside_by_location",
     "dihedral_curvature",
-    "ATTRIBUTES",
-    "PLY_PROPERTIES",
-    "MESH_ATTRIBUTES",
     "SurfaceCurvature",
     "surface_curvature",
     "principal_curvatures",
@@ -56,9 +50,6 @@ __all__ = [
 ]
 
 _LOG = logging.getLogger(__name__)
-
-#: The curvatures the BSDF can be given: the paper's, and the normal curvature along x.
-CURVATURE_MODES: tuple[str, ...] = ("max", "directional")
 
 #: Smallest neighbourhood (diameter) in median edge lengths of the mesh: on a mesh coarser than the
 #: neighbourhood asked for, the fit is made over this many edges (a CAD garment's 9-14 mm edges).
@@ -164,11 +155,7 @@ class SurfaceCurvature:
         numpy.ndarray
             ``(n,)`` per output vertex.
         """
-        if mode == "max":
-            return self.kappa
-        if mode == "directional":
-            return self.directional
-        raise MeshError(f"curvature mode: {mode!r} is not one of {', '.join(CURVATURE_MODES)}")
+        return self.kappa if curvature_mode(mode).name == "max" else self.directional
 
 
 def check_neighbourhood(neighbourhood_mm: float) -> float:
@@ -529,16 +516,6 @@ def dihedral_curvature(vertices: ArrayLike, faces: ArrayLike, *, units: str | fl
     np.maximum.at(per, ea, bend)
     np.maximum.at(per, eb, bend)
     return per[wid]
-
-
-#: Mitsuba mesh attribute of each curvature mode (what the ``cdbrdf`` BSDF reads), mm^-1.
-ATTRIBUTES: Mapping[str, str] = {"max": "vertex_curvature", "directional": "vertex_curvature_dir"}
-
-#: PLY vertex property that Mitsuba loads as each attribute of :data:`ATTRIBUTES`.
-PLY_PROPERTIES: Mapping[str, str] = {"max": "curvature_x", "directional": "curvature_dir_x"}
-
-#: Name of each mode's per-vertex array in :attr:`cdbrdf.mesh.Mesh.attributes`.
-MESH_ATTRIBUTES: Mapping[str, str] = {"max": "curvature", "directional": "curvature_dir"}
 
 
 def neighbourhood_from_table(attrs: Mapping[str, Any] | None) -> tuple[float, str]:

@@ -41,10 +41,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MeshError
+from .attributes import CURVATURE_MODES, SHAPE_ATTRIBUTES
 from .bake import HeightMap, bake_height_map, bake_mesh, bake_normal_map, read_height_map
 from .core import Mesh
 from .curvature_map import (
-    SHAPE_ATTRIBUTES,
     CurvatureMap,
     averaged_share,
     lookup,
@@ -378,8 +378,8 @@ def _vertex_bake(cmap: CurvatureMap, mesh: Mesh, uvs: UVScale, level: float, not
         notes.append(f"the mesh (median edge {edge:.3g} mm) is coarse for {cmap.name}'s folds (about {fold:.3g} mm "
                      f"long): baked per vertex, they are sampled sparsely; bake per texel (the default) or "
                      f"subdivide the mesh to {fold / SAMPLES_PER_FOLD:.2g} mm edges")
-    return {"curvature": principal(sxx, sxy, syy), "curvature_dir": sxx, SHAPE_ATTRIBUTES[0]: sxx,
-            SHAPE_ATTRIBUTES[1]: sxy, SHAPE_ATTRIBUTES[2]: syy}
+    return {CURVATURE_MODES["max"].attribute: principal(sxx, sxy, syy), CURVATURE_MODES["directional"].attribute: sxx,
+            **dict(zip(SHAPE_ATTRIBUTES, (sxx, sxy, syy), strict=True))}
 
 
 def apply_maps(mesh: Mesh, maps: SurfaceMaps | None, *, name: str = "mesh",

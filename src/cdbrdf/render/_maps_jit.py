@@ -40,6 +40,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..mesh.curvature_map import CHANNELS, MIN_COS_VIEW, CurvatureMap
+from ._params import MAP_PARAMETERS
 
 __all__ = ["MapUpload", "SurfaceMap", "upload", "level", "level_choice", "sample", "detail", "frame", "Frame",
            "handedness", "principal", "scalar_values"]
@@ -279,12 +280,6 @@ class SurfaceMap:
         return sample(mi, self.up, si.uv, lv, active)
 
 
-#: The plug-in's parameters of maps (``docs/rendering.md``, the plug-in's table).
-MAP_PARAMETERS: tuple[str, ...] = ("curvature_map", "normal_map", "normal_map_convention", "height_map",
-                                   "height_scale", "map_size", "neighbourhood", "pixel_angle", "map_filter",
-                                   "shading_normals")
-
-
 def surface_from_props(get: Any, extras: dict[str, Any], resolve: Any, *, neighbourhood_mm: float,
                        uv_scale: tuple[float, float] | None) -> SurfaceMap | None:
     """The plug-in's :class:`SurfaceMap` from its parameters (``get(key, default)``), or None without a map.
@@ -301,7 +296,8 @@ def surface_from_props(get: Any, extras: dict[str, Any], resolve: Any, *, neighb
     nfile, hfile = get("normal_map"), get("height_map")
     given = [k for k, x in (("curvature_map", cmap), ("normal_map", nfile), ("height_map", hfile)) if x is not None]
     if not given:
-        stray = [k for k in MAP_PARAMETERS[2:6] + MAP_PARAMETERS[7:] if get(k) is not None]
+        stray = [k for k in MAP_PARAMETERS if k not in ("curvature_map", "normal_map", "neighbourhood")
+                 and get(k) is not None]
         if stray:
             raise OptionError(f"cdbrdf BSDF: {stray[0]} is for a map; give normal_map, height_map or curvature_map")
         return None
