@@ -29,8 +29,8 @@ from .errors import OptionError
 __all__ = ["Range"]
 
 
-def _fmt(x: float) -> str:
-    return f"{x:g}"
+def _fmt(x: float, integer: bool = False) -> str:
+    return str(int(x)) if integer else f"{x:g}"
 
 
 @dataclass(frozen=True)
@@ -71,8 +71,8 @@ class Range:
     def expect(self) -> str:
         """What is expected, for a message: ``"an integer in [1, 64]"``, ``"a number in (0, 1.5] mm"``."""
         if self.integer:
-            text = f"an integer in [{self.lo:g}, {self.hi:g}]" if self.lo is not None and self.hi is not None \
-                else "an integer"
+            bounded = self.lo is not None and self.hi is not None
+            text = f"an integer in [{_fmt(self.lo, True)}, {_fmt(self.hi, True)}]" if bounded else "an integer"  # type: ignore[arg-type]
         elif self.lo is None and self.hi is None:
             text = "a finite number"
         elif self.hi is None and self.lo == 0 and self.lo_open:
@@ -90,7 +90,7 @@ class Range:
         """The range for help text: ``"1 to 65536"``, ``"in (0, 1.5]"``, ``"> 0 mm"``."""
         unit = f" {self.unit}" if self.unit else ""
         if self.lo is not None and self.hi is not None and not (self.lo_open or self.hi_open):
-            return f"{_fmt(self.lo)} to {_fmt(self.hi)}{unit}"
+            return f"{_fmt(self.lo, self.integer)} to {_fmt(self.hi, self.integer)}{unit}"
         if self.lo is not None and self.hi is not None:
             return (f"in {'(' if self.lo_open else '['}{_fmt(self.lo)}, {_fmt(self.hi)}"
                     f"{')' if self.hi_open else ']'}{unit}")

@@ -59,41 +59,12 @@ __all__ = ["register", "run"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..colour import DELTA_E_METRICS
-    from ..mesh import CURVATURE_MODES, MESH_FORMATS, SineSheet
-    from ..mesh.surfaces import SHEET_RANGES_MM, SWATCH_MAX_FOLDS, SWATCH_MAX_RADIUS_MM
     from ..render import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS, VARIANTS
-    from ..render.camera import FOV_RANGE_DEG, LOOK_AT_ANCHORS, ZOOM_RANGE
-    from ..render.lighting import IRRADIANCE_RANGE, LIGHTINGS
-    from ..render.spec import (
-        DEFAULT_MAX_DEPTH,
-        DEFAULT_SIZE,
-        DEFAULT_SPP,
-        EXPOSURE_RANGE_EV,
-        EXPOSURES,
-        MAX_DEPTH_RANGE,
-        SCENES,
-        SEED_RANGE,
-        SIZE_RANGE,
-        SPP_RANGE,
-    )
-    from ._args import (
-        existing_file,
-        finite_float,
-        float_list,
-        in_range,
-        input_path,
-        key_value,
-        keyword,
-        mesh_file,
-        output_file,
-        seed,
-        size_wxh,
-    )
+    from ..render.spec import DEFAULT_SPP, EXPOSURE_RANGE_EV, EXPOSURES, SEED_RANGE, SPP_RANGE
+    from ._args import in_range, input_path, key_value, keyword, output_file, seed
     from ._maps import add_map_options
     from .curvature import mesh_options
 
-    sheet = SineSheet()
     p = sub.add_parser(
         "render",
         help="render a CDBRDF with Mitsuba 3 (the paper's sine sheet, a swatch or any mesh), or a Mitsuba scene",
@@ -126,8 +97,27 @@ def register(sub: argparse._SubParsersAction) -> None:
     scene_file.add_argument("-D", dest="define", action="append", default=None, type=key_value(),
                             metavar="NAME=VALUE", help="a scene parameter $NAME (as Mitsuba's -D; repeatable)")
 
-    table = p.add_argument_group("a CDBRDF file: the surface, its camera and light (every default below is "
-                                 "the table form's; none of these apply to a scene file)")
+    _table_options(p.add_argument_group("a CDBRDF file: the surface, its camera and light (every default below is "
+                                         "the table form's; none of these apply to a scene file)"))
+    add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\")"))
+    btf = p.add_argument_group("a CD-BTF file (docs/btf.md)")
+    btf.add_argument("--texel-filter", choices=TEXEL_FILTERS, default=None,
+                     help=f"between texels: {', '.join(TEXEL_FILTERS)} (default {DEFAULT_TEXEL_FILTER})")
+    p.set_defaults(func=run)
+
+
+def _table_options(table: Any) -> None:
+    """The options of the table form: the surface, its modes, light, camera and film (ranges from the records)."""
+    from ..colour import DELTA_E_METRICS
+    from ..mesh import CURVATURE_MODES, MESH_FORMATS, SineSheet
+    from ..mesh.surfaces import SHEET_RANGES_MM, SWATCH_MAX_FOLDS, SWATCH_MAX_RADIUS_MM
+    from ..render.camera import FOV_RANGE_DEG, LOOK_AT_ANCHORS, ZOOM_RANGE
+    from ..render.lighting import IRRADIANCE_RANGE, LIGHTINGS
+    from ..render.spec import DEFAULT_MAX_DEPTH, DEFAULT_SIZE, MAX_DEPTH_RANGE, SCENES, SIZE_RANGE
+    from ._args import existing_file, finite_float, float_list, in_range, keyword, mesh_file, size_wxh
+    from .curvature import mesh_options
+
+    sheet = SineSheet()
     what = table.add_mutually_exclusive_group()
     what.add_argument("--scene", choices=tuple(SCENES), default=None,
                       help="built-in scene: " + "; ".join(f"{k}: {v}" for k, v in SCENES.items()))
@@ -199,11 +189,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "in its file; the sheet and the swatch: mm, centred on the origin; a negative first "
                        "number as --look-at=-5,0,2), or " + "; ".join(f"{k}: {v}" for k, v in LOOK_AT_ANCHORS.items())
                        + " (default: the framed object's centre)")
-    add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\")"))
-    btf = p.add_argument_group("a CD-BTF file (docs/btf.md)")
-    btf.add_argument("--texel-filter", choices=TEXEL_FILTERS, default=None,
-                     help=f"between texels: {', '.join(TEXEL_FILTERS)} (default {DEFAULT_TEXEL_FILTER})")
-    p.set_defaults(func=run)
 
 
 #: Options of the table form (default None: not given), each refused with a scene file.

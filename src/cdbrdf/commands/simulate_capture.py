@@ -69,7 +69,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plan", type=existing_file(".csv"), default=None,
                    help="capture.csv to render (default: the material's grid, the paper's stands, white references)")
     p.add_argument("--size", type=square_size(lo=int(o.SIZE_RANGE_PX.lo), hi=int(o.SIZE_RANGE_PX.hi)),  # type: ignore[arg-type]
-                   default=None, help=f"image size in pixels, {o.SIZE_RANGE_PX.text()} ({o.DEFAULT_SIZE_PX}; "
+                   default=None, help=f"image size, {o.SIZE_RANGE_PX.text()} ({o.DEFAULT_SIZE_PX}; "
                    "a CD-BTF: from --px-per-texel)")
     p.add_argument("--field", type=in_range(o.FIELD_RANGE_MM), default=None,
                    help=f"camera field width at the stand, {o.FIELD_RANGE_MM.text()} ({o.DEFAULT_FIELD_MM:g}; "

@@ -221,11 +221,8 @@ def sine_scene(table: Any, spec: RenderSpec | None = None, *, mode: str = "cdbrd
 
     Parameters
     ----------
-    table, mode, bsdf, scale
-        As for :func:`table_scene`.
-    spec
-        A :class:`~cdbrdf.render.spec.RenderSpec` whose surface is a
-        :class:`~cdbrdf.mesh.SineSheet`; default ``RenderSpec()``.
+    table, spec, mode, bsdf, scale
+        As for :func:`table_scene`; ``spec``'s surface a :class:`~cdbrdf.mesh.SineSheet` (default ``RenderSpec()``).
 
     Returns
     -------
@@ -252,11 +249,9 @@ def swatch_scene(table: Any, spec: RenderSpec | None = None, *, mode: str = "cdb
 
     Parameters
     ----------
-    table, mode, bsdf, scale
-        As for :func:`table_scene`.
-    spec
-        A :class:`~cdbrdf.render.spec.RenderSpec` whose surface is a
-        :class:`~cdbrdf.mesh.Swatch`; default ``RenderSpec(surface="swatch")``.
+    table, spec, mode, bsdf, scale
+        As for :func:`table_scene`; ``spec``'s surface a :class:`~cdbrdf.mesh.Swatch`
+        (default ``RenderSpec(surface="swatch")``).
 
     Returns
     -------
@@ -283,10 +278,9 @@ def mesh_scene(table: Any, spec: RenderSpec, *, mode: str = "cdbrdf", bsdf: Any 
 
     Parameters
     ----------
-    table, mode, bsdf, scale
-        As for :func:`table_scene`.
-    spec
-        A :class:`~cdbrdf.render.spec.RenderSpec` whose surface is a mesh.
+    table, spec, mode, bsdf, scale
+        As for :func:`table_scene`; ``spec``'s surface a mesh (a file, a :class:`~cdbrdf.mesh.Mesh` or a
+        :class:`~cdbrdf.mesh.MeshSurface`).
 
     Returns
     -------
