@@ -69,7 +69,13 @@ class Range:
         return self.hi is None or (v < self.hi if self.hi_open else v <= self.hi)
 
     def expect(self) -> str:
-        """What is expected, for a message: ``"an integer in [1, 64]"``, ``"a number in (0, 1.5] mm"``."""
+        """What is expected, for a message.
+
+        Returns
+        -------
+        str
+            ``"an integer in [1, 64]"``, ``"a number in (0, 1.5] mm"``, ...
+        """
         if self.integer:
             bounded = self.lo is not None and self.hi is not None
             text = f"an integer in [{_fmt(self.lo, True)}, {_fmt(self.hi, True)}]" if bounded else "an integer"  # type: ignore[arg-type]
@@ -87,7 +93,13 @@ class Range:
         return text + (f" {self.unit}" if self.unit and not self.integer else "")
 
     def text(self) -> str:
-        """The range for help text: ``"1 to 65536"``, ``"in (0, 1.5]"``, ``"> 0 mm"``."""
+        """The range for help text.
+
+        Returns
+        -------
+        str
+            ``"1 to 65536"``, ``"in (0, 1.5]"``, ``"> 0 mm"``, ...
+        """
         unit = f" {self.unit}" if self.unit else ""
         if self.lo is not None and self.hi is not None and not (self.lo_open or self.hi_open):
             return f"{_fmt(self.lo, self.integer)} to {_fmt(self.hi, self.integer)}{unit}"

@@ -63,7 +63,7 @@ from .maps import BAKES, SurfaceMaps, UVScale, apply_maps, as_uv_scale, detect_u
 from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, normal_map_from_normals, read_normal_map
 from .prepare import UP_AXES, MeshSurface, check_up, detect_up, has_own_uv, prepare_mesh, to_z_up, z_up_mesh
 from .references import Reference, check_references, referenced_files
-from .repair import SEAM_TOLERANCE, WELD_TOLERANCE, RepairedMesh, repair, weld, weld_seams
+from .repair import RepairedMesh, repair
 from .surfaces import (
     DrapedCloth,
     SineSheet,
@@ -89,6 +89,7 @@ from .units import (
     infer_units,
     parse_units,
 )
+from .weld import SEAM_TOLERANCE, WELD_TOLERANCE, weld, weld_seams
 
 __all__ = [
     "Mesh",

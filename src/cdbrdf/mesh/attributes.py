@@ -55,8 +55,19 @@ _MITSUBA_PREFIX = "vertex_"
 def ply_property(name: str, *, shape: bool = True) -> str:
     """The PLY vertex property of the mesh attribute ``name`` (``curvature`` -> ``curvature_x``).
 
-    ``shape``: the mesh has the whole shape operator (:data:`SHAPE_ATTRIBUTES`), written as its three
-    properties; a lone one of them is named by the general rule.
+    Parameters
+    ----------
+    name
+        The array's name in :attr:`cdbrdf.mesh.Mesh.attributes`.
+    shape
+        The mesh has the whole shape operator (:data:`SHAPE_ATTRIBUTES`),
+        written as its three properties; a lone one of them is named by the
+        general rule.
+
+    Returns
+    -------
+    str
+        The property's name.
     """
     if shape and name in SHAPE_ATTRIBUTES:
         return SHAPE_PLY_PROPERTIES[SHAPE_ATTRIBUTES.index(name)]
@@ -64,17 +75,38 @@ def ply_property(name: str, *, shape: bool = True) -> str:
 
 
 def mitsuba_attribute(name: str) -> str:
-    """The Mitsuba mesh attribute of the mesh attribute ``name`` (``curvature`` -> ``vertex_curvature``)."""
+    """The Mitsuba mesh attribute of the mesh attribute ``name`` (``curvature`` -> ``vertex_curvature``).
+
+    Parameters
+    ----------
+    name
+        The array's name in :attr:`cdbrdf.mesh.Mesh.attributes`.
+
+    Returns
+    -------
+    str
+        Mitsuba's name (:data:`SHAPE_MESH_ATTRIBUTE` for the shape operator's three).
+    """
     if name in SHAPE_ATTRIBUTES:
         return SHAPE_MESH_ATTRIBUTE
     return _MITSUBA_PREFIX + name
 
 
 def attribute_of_ply(prop: str, *, shape: bool = True) -> str | None:
-    """The mesh attribute a PLY vertex property holds (``curvature_x`` -> ``curvature``), or None for another.
+    """The mesh attribute a PLY vertex property holds (``curvature_x`` -> ``curvature``).
 
-    ``shape``: the file has all three of :data:`SHAPE_PLY_PROPERTIES` (the shape operator); a lone one of them
-    is named by the general rule.
+    Parameters
+    ----------
+    prop
+        The vertex property's name.
+    shape
+        The file has all three of :data:`SHAPE_PLY_PROPERTIES` (the shape
+        operator); a lone one of them is named by the general rule.
+
+    Returns
+    -------
+    str or None
+        The attribute's name, or None for a property that holds none (no ``_x`` suffix).
     """
     if shape and prop in SHAPE_PLY_PROPERTIES:
         return SHAPE_ATTRIBUTES[SHAPE_PLY_PROPERTIES.index(prop)]

@@ -234,7 +234,7 @@ def _chart_sizes(faces: NDArray[np.int64], n: int) -> NDArray[np.int64]:
 def _uv_scraps(v: NDArray[np.float64], faces: NDArray[np.int64], chart: NDArray[np.int64]) -> bool:
     """Whether most faces lie in pieces of fewer than :data:`PANEL_FACES` faces cut out of a larger surface
     (a UV map cut at nearly every edge; a quad of two faces is one piece, and whole)."""
-    from .repair import weld
+    from .weld import weld
 
     small = chart < PANEL_FACES
     if not float(np.mean(small)) > 0.5:
@@ -489,7 +489,7 @@ def dihedral_curvature(vertices: ArrayLike, faces: ArrayLike, *, units: str | fl
                        name: str = "mesh") -> NDArray[np.float64]:
     """The sharpest bend the tessellation itself shows at each vertex, mm^-1, unsigned: a check of the fit.
 
-    For every edge of the surface (seams closed, :func:`cdbrdf.mesh.repair.weld_seams`)
+    For every edge of the surface (seams closed, :func:`cdbrdf.mesh.weld.weld_seams`)
     the angle between its two faces' planes over the mean height of the
     two triangles on it: the normal curvature across that edge a circle
     through the faces would have (a cylinder of radius R tessellated along
@@ -512,7 +512,8 @@ def dihedral_curvature(vertices: ArrayLike, faces: ArrayLike, *, units: str | fl
     numpy.ndarray
         ``(n,)`` per input vertex, mm^-1 (0 on a vertex of no two-face edge).
     """
-    from .repair import check_arrays, weld_seams
+    from .repair import check_arrays
+    from .weld import weld_seams
 
     v, f = check_arrays(vertices, faces, name=name)
     u = parse_units(units)

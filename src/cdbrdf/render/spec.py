@@ -315,17 +315,34 @@ class RenderSpec:
         return CURVATURE_MODES[self.curvature_mode]
 
     def resolved_camera(self) -> Camera:
-        """The camera with the surface's defaults (its view and field of view) where a field is None."""
+        """The camera with the surface's defaults (its view and field of view) where a field is None.
+
+        Returns
+        -------
+        Camera
+            The camera, its ``view`` and ``fov_deg`` set.
+        """
         view, fov = _VIEWS[self.kind]
         return self.camera.resolved(view=view, fov_deg=fov)
 
     def sun(self) -> tuple[float, float, float] | None:
-        """The directional light the scene places, ``(theta_deg, phi_deg, irradiance)``, or None."""
+        """The directional light the scene places (:meth:`cdbrdf.render.Light.resolve`).
+
+        Returns
+        -------
+        tuple or None
+            ``(theta_deg, phi_deg, irradiance)``, or None without a directional light.
+        """
         return self.light.resolve(self.lighting, self.resolved_camera().azimuth_deg)
 
     def uv_span(self) -> tuple[float, float] | None:
-        """The mm a built-in surface's UVs (0 to 1) span: the sheet's width and depth, the swatch's profile
-        length and depth; None for a mesh."""
+        """The mm a built-in surface's UVs (0 to 1) span.
+
+        Returns
+        -------
+        tuple or None
+            The sheet's width and depth, the swatch's profile length and depth; None for a mesh.
+        """
         s = self.surface
         if isinstance(s, SineSheet):
             return float(s.width_mm), float(s.depth_mm)
@@ -334,7 +351,20 @@ class RenderSpec:
         return None
 
     def with_mesh(self, mesh: Mesh, up: str) -> RenderSpec:
-        """This spec on a prepared mesh (its curvature computed) turned upright by ``up``."""
+        """This spec on a prepared mesh (its curvature computed) turned upright by ``up``.
+
+        Parameters
+        ----------
+        mesh
+            The prepared mesh (:meth:`cdbrdf.mesh.MeshSurface.prepare`).
+        up
+            Its up axis, ``"y"`` or ``"z"``.
+
+        Returns
+        -------
+        RenderSpec
+            The spec, its surface that mesh.
+        """
         surface = self.surface if isinstance(self.surface, MeshSurface) else MeshSurface(mesh)
         return replace(self, surface=replace(surface, mesh=mesh, up=up))
 
