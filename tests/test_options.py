@@ -36,7 +36,10 @@ def _ranges():
     from cdbrdf.render import lighting, spec
     from cdbrdf.rig import options as rig
 
+    from cdbrdf.mesh import maps
+
     return [
+        ("render", "--height-scale", maps.HEIGHT_SCALE_RANGE_MM),
         ("render", "--spp", spec.SPP_RANGE), ("render", "--max-depth", spec.MAX_DEPTH_RANGE),
         ("render", "--irradiance", lighting.IRRADIANCE_RANGE), ("render", "--seed", spec.SEED_RANGE),
         ("simulate-capture", "--spp", rig.SPP_RANGE), ("simulate-capture", "--gain", rig.GAIN_RANGE),
@@ -104,3 +107,30 @@ def test_the_plugin_refuses_a_name_outside_its_registry():
     assert get("uv_scale") == 2.0 and get("mode", "cdbrdf") == "cdbrdf"
     with pytest.raises(KeyError, match="not a parameter"):
         get("uv_scael")
+
+
+def test_render_help_says_percent_once(capsys):
+    """argparse formats help, not descriptions: the description's 18 % grey card is written with one %."""
+    from cdbrdf.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["render", "--help"])
+    out = " ".join(capsys.readouterr().out.split())  # as wrapped to the terminal's width
+    assert "an 18 % grey card" in out and "%%" not in out
+
+
+def test_curvature_command_records_the_up_axis_it_is_given(tmp_path, capsys):
+    """cdbrdf curvature --up y writes it into the PLY, and the mesh read back says so (render and view use it)."""
+    from cdbrdf.cli import main
+    from cdbrdf.mesh import Mesh, detect_up, read_ply, write_ply
+
+    from .mesh_helpers import cylinder_patch
+
+    v, f, uv, _ = cylinder_patch(10.0, n=12)
+    src = tmp_path / "patch.ply"
+    write_ply(src, Mesh(v, f, uv=uv))
+    assert main(["-q", "curvature", str(src), "-o", str(tmp_path / "y.ply"), "--up", "y"]) == 0
+    assert main(["-q", "curvature", str(src), "-o", str(tmp_path / "auto.ply")]) == 0
+    assert read_ply(tmp_path / "y.ply").metadata["up"] == "y"
+    assert detect_up(read_ply(tmp_path / "y.ply")) == ("y", "recorded in the file")
+    assert "up" not in read_ply(tmp_path / "auto.ply").metadata

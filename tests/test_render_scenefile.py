@@ -278,6 +278,16 @@ def test_render_command_with_a_scene_file(cr, tmp_path):
     grey = tmp_path / "grey.png"  # mono: one channel, written as grey
     assert main(["-q", "render", str(path), "-o", str(grey), "--spp", "2", "--variant", "llvm_ad_mono"]) == 0
     assert grey.stat().st_size > 0
+
+
+def test_a_scene_files_summary_says_the_samples_that_ran(cr, tmp_path, capsys):
+    """Without --spp the sensor's count renders (in passes of 16) and the summary says that count, not a pass's."""
+    from cdbrdf.cli import main
+
+    path = write_scene(tmp_path)
+    capsys.readouterr()
+    assert main(["render", str(path), "-o", str(tmp_path / "a.exr"), "-D", "spp=40"]) == 0
+    assert "(9x9, 40 spp, llvm_ad_rgb)" in capsys.readouterr().err
     def status(argv):
         try:
             return main(argv)
