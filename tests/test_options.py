@@ -33,10 +33,9 @@ def test_a_range_accepts_exactly_its_numbers(rng, inside, outside, expect):
 def _ranges():
     """Every range a record owns and the option of the command line that parses it."""
     from cdbrdf.measure.capture import WHITE_ALBEDO_RANGE
+    from cdbrdf.mesh import maps
     from cdbrdf.render import lighting, spec
     from cdbrdf.rig import options as rig
-
-    from cdbrdf.mesh import maps
 
     return [
         ("render", "--height-scale", maps.HEIGHT_SCALE_RANGE_MM),
