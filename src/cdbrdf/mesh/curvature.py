@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections import namedtuple
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -343,7 +344,7 @@ def surface_curvature(
     if frame is not None and undefined.any():
         notes.append(f"{int(undefined.sum())} vertices have no material x axis; their directional curvature "
                      "is the maximum one")
-        o.directional = np.where(undefined, o.pc.kappa, o.directional)
+        o = o._replace(directional=np.where(undefined, o.pc.kappa, o.directional))
     areas = _vertex_areas(v[o.src], o.faces, o.src.size)
     # a seam: a panel's (or UV chart's) boundary in the file that the analysis surface closes
     location = np.where(boundary_a[rep.out_vertex[o.src_first]], 1,
@@ -417,19 +418,9 @@ def _fit_radius(rep: RepairedMesh, nb: float, u: Units, notes: list[str]) -> flo
     return radius
 
 
-@dataclass
-class _Framed:
-    """The output mesh with its material frame: sources, faces, normals, UVs, curvatures, side, tangent."""
-
-    src: NDArray[np.int64]
-    src_first: NDArray[np.int64]
-    faces: NDArray[np.int64]
-    normals: NDArray[np.float64]
-    uv: NDArray[np.float64] | None
-    pc: PrincipalCurvatures
-    directional: NDArray[np.float64]
-    side: NDArray[np.float64]
-    tangent: NDArray[np.float64]
+#: The output mesh with its material frame: each vertex's input vertex and the repair's output vertex, faces,
+#: normals, UVs, principal curvatures, directional curvature, side and material x axis.
+_Framed = namedtuple("_Framed", "src src_first faces normals uv pc directional side tangent")
 
 
 def _framed(frame: str | None, v: NDArray[np.float64], rep: RepairedMesh, pc: PrincipalCurvatures,

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections import namedtuple
 from dataclasses import dataclass
 from typing import Any
 
@@ -402,17 +403,9 @@ def _non_degenerate(f_in: NDArray[np.int64], fw: NDArray[np.int64], vw: NDArray[
     return f_in[good], fw[good]
 
 
-@dataclass
-class _Layers:
-    """The front layer's faces (input and welded indices), the back layer's, each back face's front partner, and
-    the number of welded vertices."""
-
-    ff_in: NDArray[np.int64]
-    ffw: NDArray[np.int64]
-    fb_in: NDArray[np.int64]
-    fbw: NDArray[np.int64]
-    partner: NDArray[np.int64]
-    n_w: int
+#: The front layer's faces (input and welded indices), the back layer's, each back face's front partner, and
+#: the number of welded vertices.
+_Layers = namedtuple("_Layers", "ff_in ffw fb_in fbw partner n_w")
 
 
 def _layers(f_in: NDArray[np.int64], fw: NDArray[np.int64], ident: NDArray[np.int64], n_in: int, n_w: int,
@@ -456,18 +449,9 @@ def _orient_layers(vw: NDArray[np.float64], lay: _Layers, n_file: NDArray[np.flo
     return edges, comp
 
 
-@dataclass
-class _Analysis:
-    """The analysis surface: positions, faces, normals, areas; the class (vertex) of every front corner."""
-
-    va: NDArray[np.float64]
-    fa: NDArray[np.int64]
-    fna: NDArray[np.float64]
-    na: NDArray[np.float64]
-    areas: NDArray[np.float64]
-    cls: NDArray[np.int64]
-    n_cls: int
-    ok: NDArray[np.bool_]
+#: The analysis surface: positions, faces, face and vertex normals, vertex areas; the class (analysis vertex)
+#: of every front corner, how many, and which front edges join consistently oriented faces.
+_Analysis = namedtuple("_Analysis", "va fa fna na areas cls n_cls ok")
 
 
 def _analysis_surface(vw: NDArray[np.float64], lay: _Layers, edges: _Edges, repairs: list[str]) -> _Analysis:
