@@ -85,20 +85,21 @@ def _browser_available() -> bool:
 
 def _user_mesh(args: argparse.Namespace, table: object) -> Mesh:
     """``--mesh`` prepared as ``cdbrdf render`` prepares it, in the viewer's z-up frame; reported."""
-    from ..mesh import SurfaceMaps, prepare_mesh, read_mesh, z_up_mesh
+    from ..mesh import MeshSurface, SurfaceMaps, read_mesh, z_up_mesh
     from ._maps import uv_scale_pair
     from ._progress import ProgressBars
     from .curvature import LARGE_MESH_FACES, print_mesh_report
 
     source = read_mesh(args.mesh)
+    surface = MeshSurface(source, units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame,
+                          up=args.up)
     big = source.faces.shape[0] >= LARGE_MESH_FACES
     with ProgressBars(quiet=args.quiet or not big, unit="vtx") as bars:
         # the viewer reads the curvature per vertex: the file's maps are baked at the vertices there
         maps = SurfaceMaps(bake="vertex", uv_scale=uv_scale_pair(args))
-        mesh = prepare_mesh(source, units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame,
-                            table=table, maps=maps if _names_a_map(source) else None,
-                            progress=bars.callback("curvature"))
-    world, up, why = z_up_mesh(mesh, args.up)
+        mesh = surface.prepare(table=table, maps=maps if _names_a_map(source) else None,
+                               progress=bars.callback("curvature"))
+    world, up, why = z_up_mesh(mesh, surface.up)
     if not args.quiet:
         print_mesh_report(str(args.mesh), mesh)
         say(f"{args.mesh}: up axis: {up} ({why})", err=True)
