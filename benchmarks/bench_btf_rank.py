@@ -1,6 +1,7 @@
 """Why a CD-BTF of the cloth model compresses as it does: noise, symmetry and local PCA on a coarse grid.
 
-Run: ``python benchmarks/bench_btf_rank.py [--preset denim ...] [--texels 32] [--cache DIR]``.
+Run: ``python benchmarks/bench_btf_rank.py [--preset denim ...] [--texels 32] [--cache DIR]``;
+``--methods`` instead compares the representations on the paper's grid (below).
 
 For each preset the texels are tabulated (:func:`cdbrdf.synth.texels.tabulate_texels`) on a coarse grid
 (theta step 30, phi step 90 degrees, kappa 0 and 0.22) at 16, 64, 256 and 1,024 points per texel
@@ -19,6 +20,23 @@ For each preset the texels are tabulated (:func:`cdbrdf.synth.texels.tabulate_te
   many (``rank = k (r + 1) - 1``). On the paper's grid (many more samples per texel than texels) the
   ratio against raw float32 is about ``n_texels / stored vectors``: 100:1 at 32 x 32 texels is
   about 10 vectors.
+
+``--methods`` (``--preset denim --preset shot --preset velvet``, 32 x 32 texels on the paper's grid,
+64 points per texel; ``--cache`` keeps the texels as ``PRESET_paper_32.npy``): compression ratio against
+raw float32 and relative RMS error against the uncompressed texels (over all curvatures, and the worst
+curvature slice) for
+
+- ``pca``: one PCA over the texels at several ranks (mean, basis and weights in float32);
+- ``clustered_pca``: ``k`` clusters of rank ``r`` (as above; vectors in float32);
+- ``vq``: vector quantisation of every (texel, kappa, view) slice over the light directions and channels
+  (``72 x 3`` numbers) with a k-means codebook of ``K`` vectors (float32) and one index per slice
+  (``log2 K`` bits): the per-view light slices of Havran et al. 2010, one level;
+- ``neural``: :meth:`cdbrdf.CDBTF.from_values` with ``method="neural"`` (the tile mean and the codes in
+  float16, the decoder in float32; no residual components), at the default fit and at ``--fit-variants``;
+  with the fit's process CPU time.
+
+Prints one JSON object per preset (``"methods"``: a list of ``{method, setting, ratio, error,
+worst_kappa_error}``).
 """
 
 from __future__ import annotations
@@ -88,12 +106,120 @@ def _local_pca(x: np.ndarray, k: int, r: int, iters: int = 15, seed: int = 0) ->
     return best
 
 
+def _paper_texels(name: str, texels: int, cache: str | None) -> np.ndarray:
+    """The preset's texels on the paper's grid (cloth: 64 points per texel), cached as ``PRESET_paper_N.npy``."""
+    from cdbrdf.synth import PileModel
+    from cdbrdf.synth.pile_texels import tabulate_pile_texels
+
+    path = None if cache is None else os.path.join(cache, f"{name}_paper_{texels}.npy")
+    if path is not None and os.path.exists(path):
+        return np.load(path)
+    model = presets.model(name)
+    if isinstance(model, PileModel):
+        d = tabulate_pile_texels(model, Grid.paper(), texels=(texels, texels))[0]
+    else:
+        d = tabulate_texels(model, Grid.paper(), texels=texels)
+    if path is not None:
+        np.save(path, d)
+    return d
+
+
+def _errors(y: np.ndarray, pred: np.ndarray, nk: int) -> tuple[float, float]:
+    """Overall and worst-slice relative RMS error of ``pred`` against ``y`` (both ``(T, kappa-major columns)``)."""
+    a, b = y.reshape(y.shape[0], nk, -1), pred.reshape(y.shape[0], nk, -1)
+    num = np.sum((a - b) ** 2, axis=(0, 2))
+    den = np.sum(a.astype(np.float64) ** 2, axis=(0, 2))
+    return round(float(np.sqrt(num.sum() / den.sum())), 4), round(float(np.sqrt(np.max(num / den))), 4)
+
+
+def _vq(y: np.ndarray, grid: Grid, k: int, seed: int = 0) -> np.ndarray:
+    """Per-(texel, kappa, view) light slices quantised to a k-means codebook of ``k`` vectors."""
+    from scipy.cluster.vq import kmeans2
+
+    nk, npl, ntl, npv, ntv = grid.shape
+    t = y.shape[0]
+    x = y.reshape(t, nk, npl * ntl, npv * ntv, 3).transpose(0, 1, 3, 2, 4).reshape(-1, npl * ntl * 3)
+    x = x.astype(np.float32)
+    rng = np.random.default_rng(seed)
+    sub = x[rng.choice(len(x), size=min(len(x), 20 * k), replace=False)]
+    code, _ = kmeans2(sub, k, iter=10, minit="++", seed=seed)
+    label = np.empty(len(x), np.int64)
+    for s in range(0, len(x), 16384):  # nearest codeword of every slice
+        d = (x[s:s + 16384] ** 2).sum(1)[:, None] - 2 * x[s:s + 16384] @ code.T + (code ** 2).sum(1)[None]
+        label[s:s + 16384] = np.argmin(d, axis=1)
+    rec = code[label].reshape(t, nk, npv * ntv, npl * ntl, 3).transpose(0, 1, 3, 2, 4)
+    return rec.reshape(t, -1)
+
+
+class _Rows(list):
+    """The rows, each printed (one JSON line, flushed) as it is added: a long run shows its progress."""
+
+    def append(self, row: dict) -> None:  # type: ignore[override]
+        print(json.dumps(row), flush=True)
+        super().append(row)
+
+
+def _methods(name: str, a: argparse.Namespace) -> dict:
+    """Ratio and error of every representation on the preset's paper-grid texels."""
+    import time
+
+    from cdbrdf import CDBTF
+    from cdbrdf.btf._neural import FitOptions
+
+    grid = Grid.paper()
+    dense = _paper_texels(name, a.texels, a.cache)
+    t = a.texels * a.texels
+    y = dense.reshape(t, -1)
+    nk, d = grid.shape[0], y.shape[1]
+    raw = 4.0 * y.size
+    rows = _Rows()
+    which = set(a.only or ("pca", "clustered_pca", "vq", "neural"))
+    f = factorise(y, nk, max_error=0.0, max_rank=min(255, t - 1))
+    pca_ranks = [r for r in (0, 1, 2, 4, 9, 19, 39, 79, 159, 237) if r <= f.weights.shape[1]]
+    for r in pca_ranks if "pca" in which else ():
+        rec = f.mean + (f.weights[:, :r].astype(np.float64) @ f.basis[:r].astype(np.float64))
+        e, w = _errors(y, rec, nk)
+        rows.append({"method": "pca", "setting": f"rank {r}", "ratio": round(raw / (4.0 * (d * (r + 1) + t * r)), 1),
+                     "error": e, "worst_kappa_error": w})
+    for k, r in ((10, 0), (2, 4)) if "clustered_pca" in which else ():
+        rec = _local_pca(y.astype(np.float64), k, r, iters=6)
+        e, w = _errors(y, rec, nk)
+        rows.append({"method": "clustered_pca", "setting": f"{k} clusters x rank {r}",
+                     "ratio": round(raw / (4.0 * (d * k * (r + 1) + t * r)), 1), "error": e, "worst_kappa_error": w})
+    slices = t * nk * grid.shape[3] * grid.shape[4]
+    for k in (256, 1024) if "vq" in which else ():
+        rec = _vq(y, grid, k)
+        size = 4.0 * k * grid.shape[1] * grid.shape[2] * 3 + slices * np.ceil(np.log2(k)) / 8
+        rows.append({"method": "vq", "setting": f"{k} codewords", "ratio": round(raw / size, 1),
+                     **dict(zip(("error", "worst_kappa_error"), _errors(y, rec, nk)))})
+    variants = [FitOptions()] + [FitOptions(latent_dims=int(L), hidden=(int(h), int(h)), steps=int(n))
+                                 for L, h, n in (v.split(",") for v in a.fit_variants)]
+    for opts in variants if "neural" in which else ():
+        c0 = time.process_time()
+        b = CDBTF.from_values(dense, grid, repeat_mm=(1.0, 1.0), method="neural", max_error=0.99, fit=opts)
+        c = b.compression
+        rows.append({"method": "neural", "setting": f"codes {opts.latent_dims}, layers {b.neural.layers}, "
+                     f"{opts.steps} steps", "ratio": round(c["compression_ratio"], 1),
+                     "error": round(c["relative_rms_error"], 4),
+                     "worst_kappa_error": round(max(c["relative_rms_error_per_kappa"]), 4),
+                     "fit_cpu_seconds": round(time.process_time() - c0, 1)})
+    return {"preset": name, "texels": a.texels, "grid": "paper", "methods": rows}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", action="append", default=None)
     ap.add_argument("--texels", type=int, default=32)
     ap.add_argument("--cache", default=None, help="folder keeping the tabulated texels")
+    ap.add_argument("--methods", action="store_true", help="compare the representations on the paper's grid")
+    ap.add_argument("--only", action="append", default=None, help="with --methods: pca, clustered_pca, vq, neural")
+    ap.add_argument("--fit-variants", nargs="*", default=[], metavar="L,H,STEPS",
+                    help="more neural fits: code size, hidden width, steps")
     a = ap.parse_args()
+    if a.methods:
+        for name in a.preset or ["denim", "shot", "velvet"]:
+            print(json.dumps(_methods(name, a)), flush=True)
+        return
     grid = Grid.regular(theta_step_deg=30, phi_step_deg=90, kappa=[0.0, 0.22])
     for name in a.preset or ["denim", "shot"]:
         model = presets.model(name)

@@ -14,7 +14,8 @@ Run: ``python benchmarks/bench_btf_render.py FILE [--picture out.png] [--spp 64]
 - distant: the paper's 60 x 60 mm sheet with the CD-BTF (every texel filter)
   and with its tile mean (the CDBRDF), the ratio of the mean pixel values and
   the per-channel means;
-- time: the CDBRDF plug-in and the CD-BTF with every texel filter on the same
+- time (a neural CD-BTF with the camera's ``pixel_angle``, so its pyramid level follows the footprint):
+  the CDBRDF plug-in and the CD-BTF with every texel filter on the same
   built scene (same spp and seed), rendered in turn ``--repeat`` times; the
   shortest wall time and the shortest process CPU time of each and their
   ratios to the CDBRDF's of the same run (the CPU time is the steadier
@@ -27,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 from dataclasses import replace
 
@@ -103,10 +105,14 @@ def main() -> None:
     from cdbrdf.render.scenes import sine_scene
 
     scenes = {}
+    # the camera's pixel angle (the sine scene's field of view over the smaller side): a neural CD-BTF's footprint
+    pixel_angle = math.radians((sine_scene.__kwdefaults__ or {})["fov_deg"]) / 192
+    out["method"] = btf.method
     for kind in ("cdbrdf",) + TEXEL_FILTERS:
         t0 = time.perf_counter()
         bsdf = (make_bsdf(btf.mean()) if kind == "cdbrdf"
-                else make_bsdf(btf, uv_scale=(far.width_mm, far.depth_mm), texel_filter=kind))
+                else make_bsdf(btf, uv_scale=(far.width_mm, far.depth_mm), texel_filter=kind,
+                               pixel_angle=pixel_angle))
         out[f"setup_seconds_{kind}"] = round(time.perf_counter() - t0, 2)
         scenes[kind] = sine_scene(btf.mean(), RenderSpec(surface=far, size=(256, 192), spp=a.spp), bsdf=bsdf)
         dr.eval(mi.render(scenes[kind], spp=a.spp))  # compiles the kernels

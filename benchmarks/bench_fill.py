@@ -12,15 +12,16 @@ fill estimated (``fill_std``). It also checks that no measured sample changed
 and that ``nearest`` gives the file's own table when the file was measured
 with it.
 
-Target (issue 15): the default method's median <= 3 % at every concave stand
-of both fabrics on the full demo (the paper's grid).
+Targets: the default method's median <= 3 % at every concave stand of every
+fabric on the full demo (the paper's grid; issue 15), and at least 90 % of
+its filled samples within 2 of their standard deviations (issue 35).
 
 Usage::
 
-    python -m cdbrdf.cli demo -o demo-output            # the full demo (about 6 min on 2 cores)
+    python -m cdbrdf.cli demo -o demo-output --fabrics denim,shot,velvet,towel   # the full demo
     .venv/bin/python benchmarks/bench_fill.py demo-output [--json results.json]
 
-Exits 1 when the target is missed.
+Exits 1 when a target is missed.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 TARGET_MEDIAN = 0.03
+TARGET_WITHIN_2_SIGMA = 0.9
 
 
 def evaluate(folder: Path) -> list[dict]:
@@ -88,10 +90,12 @@ def main(argv: list[str] | None = None) -> int:
               f"{100 * r['p95']:7.1f}% {100 * r['within_1_sigma']:7.0f}% {100 * r['within_2_sigma']:7.0f}%")
     if args.json is not None:
         args.json.write_text(json.dumps(rows, indent=2) + "\n")
-    missed = [r for r in rows if r["method"] == DEFAULT_FILL and r["median"] > TARGET_MEDIAN]
+    missed = [r for r in rows if r["method"] == DEFAULT_FILL
+              and (r["median"] > TARGET_MEDIAN or r["within_2_sigma"] < TARGET_WITHIN_2_SIGMA)]
     for r in missed:
         print(f"target missed: {r['material']} at kappa {r['kappa']:+g}: median {100 * r['median']:.2f} % "
-              f"> {100 * TARGET_MEDIAN:g} %")
+              f"(target {100 * TARGET_MEDIAN:g} %), {100 * r['within_2_sigma']:.0f} % within 2 sigma "
+              f"(target {100 * TARGET_WITHIN_2_SIGMA:g} %)")
     return 1 if missed else 0
 
 

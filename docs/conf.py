@@ -86,9 +86,17 @@ _autosummary.WELL_KNOWN_ABBREVIATIONS = (*_autosummary.WELL_KNOWN_ABBREVIATIONS,
 # the other modules that re-export it link to that page.
 API_MODULES = {
     "The table and its file": ["cdbrdf", "cdbrdf.table", "cdbrdf.grid", "cdbrdf.io", "cdbrdf.interp", "cdbrdf.errors"],
-    "Fabrics": ["cdbrdf.materials", "cdbrdf.synth", "cdbrdf.synth.metrics"],
-    "Measurement and import": ["cdbrdf.measure", "cdbrdf.rig", "cdbrdf.importers", "cdbrdf.images"],
+    "Fabrics": ["cdbrdf.materials", "cdbrdf.synth", "cdbrdf.synth.metrics", "cdbrdf.fit"],
+    "Measurement and import": ["cdbrdf.measure", "cdbrdf.rig", "cdbrdf.importers", "cdbrdf.bend", "cdbrdf.images"],
     "Geometry and rendering": ["cdbrdf.frames", "cdbrdf.mesh", "cdbrdf.render"],
+    "Exchange: glTF 2.0 and MaterialX": [
+        "cdbrdf.gltf_table",
+        "cdbrdf.export.gltf",
+        "cdbrdf.export.fallback",
+        "cdbrdf.export.tangents",
+        "cdbrdf.export.materialx",
+        "cdbrdf.view.gltf_page",
+    ],
     "Colour, figures, the viewer, the demo": [
         "cdbrdf.colour",
         "cdbrdf.plot",

@@ -27,6 +27,8 @@ fi
 DEB_PKGS="libllvm19"
 # chromium: the tests open the demo's report in a headless browser (Playwright).
 [ "$WITH_TESTS" = 1 ] && DEB_PKGS="$DEB_PKGS chromium"
+# node and npm: the glTF renderer's build (three.js) and the glTF validator (js/); Debian's, unless one is there
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then DEB_PKGS="$DEB_PKGS nodejs npm"; fi
 missing=""
 for p in $DEB_PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
@@ -54,6 +56,30 @@ if [ "$(cat "$STAMP" 2>/dev/null)" != "$WANT" ] || ! .venv/bin/python -c 'import
   .venv/bin/python -m pip install -q --disable-pip-version-check -e ".[test]"
   echo "$WANT" > "$STAMP"
 fi
+# --- JavaScript (js/) -------------------------------------------------------------
+# The npm packages pinned by js/package-lock.json (three.js, fast-png; for the tests and the build: esbuild,
+# the Khronos glTF validator, MikkTSpace), installed once (npm's cache serves later installs offline), and
+# the glTF renderer bundled into the package data (src/cdbrdf/view/assets/gltf/), rebuilt when its sources change.
+if command -v npm >/dev/null 2>&1; then
+  JS_STAMP="js/node_modules/.cdbrdf-installed"
+  JS_WANT="$(cat js/package.json js/package-lock.json | sha256sum | cut -d' ' -f1)"
+  if [ "$(cat "$JS_STAMP" 2>/dev/null)" != "$JS_WANT" ]; then
+    log "installing the npm packages of js/ (npm ci)"
+    (cd js && npm ci --prefer-offline --no-audit --no-fund --ignore-scripts --loglevel=error >/dev/null)
+    echo "$JS_WANT" > "$JS_STAMP"
+  fi
+  BUNDLE="src/cdbrdf/view/assets/gltf"
+  BUILD_WANT="$(cat js/package-lock.json js/build.mjs js/src/*.js | sha256sum | cut -d' ' -f1)"
+  if [ "$(cat "$BUNDLE/.built" 2>/dev/null)" != "$BUILD_WANT" ] || [ ! -f "$BUNDLE/renderer.js" ] \
+      || [ ! -f "$BUNDLE/three-plain.js" ]; then
+    log "building the glTF renderer (js/build.mjs)"
+    (cd js && node build.mjs)
+    echo "$BUILD_WANT" > "$BUNDLE/.built"
+  fi
+else
+  log "npm not found: the glTF renderer is not built and the glTF checks are skipped (install node and npm)"
+fi
+
 # the numba kernels into their on-disk cache (a few seconds once cached; about 25 s the first time)
 .venv/bin/python -m cdbrdf._precompile >&2
 log "ready: $ROOT/.venv"

@@ -14,7 +14,11 @@ Implementations, each forced explicitly:
 - ``drjit_records``: the same lookup on the ``"records"`` layout (one float32
   record per sample: the CD-BTF's texels in spectral variants);
 - ``scalar_rgb``: the plug-in's ``eval`` in Mitsuba's ``scalar_rgb`` variant,
-  from directions (only where directions are well defined).
+  from directions (only where directions are well defined);
+- ``glsl_gltf``: the GLSL lookup of the browser renderers (``view/assets/lookup.js``,
+  shared by the viewer and the glTF renderer) in headless Chromium, through
+  the glTF renderer's three.js plugin on a ``cdbrdf export`` asset (the
+  table as its 16-bit lookup texture), on :data:`GLSL_TABLES`.
 
 Each implementation evaluates all the queries of one table in one call
 (:func:`results`, memoised); each test checks its case's slice. The tables
@@ -195,6 +199,90 @@ def _run_scalar(t: CDBRDF, q: np.ndarray) -> np.ndarray:
         cr.set_variant("llvm_ad_rgb")
 
 
+@functools.cache
+def _gltf_page():
+    """One page of the glTF renderer in headless Chromium (software WebGL2), kept for every table of a module."""
+    from playwright.sync_api import sync_playwright
+
+    from cdbrdf.view.gltf_page import gltf_viewer_files
+    from cdbrdf.view.server import ViewerServer
+
+    from .test_viewer import CHROMIUM, CHROMIUM_ARGS
+
+    opts = {"camera": {"position": [0.0, 0.05, 0.0], "target": [0.0, 0.0, 0.0], "up": [0.0, 0.0, -1.0],
+                       "fov_deg": 30.0}, "light": [45.0, 0.0, 3.14159], "exposure_ev": 0.0, "width": 16,
+            "height": 16, "environment": False}
+    first = tables()["small"]
+    server = ViewerServer(gltf_viewer_files(quad_asset(first), name="table.glb", options=opts)).start()
+    pw = sync_playwright().start()
+    browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
+    page = browser.new_page()
+    messages: list[str] = []
+    page.on("console", lambda m: messages.append(m.text))
+    page.on("pageerror", lambda e: messages.append(str(e)))
+    page.goto(server.url)
+    page.evaluate("window.cdbrdfGltf.ready")
+    _GLTF_SESSION.append((browser, pw, server))
+    return page, messages
+
+
+#: The browser session of :func:`_gltf_page` while it is open (closed by :func:`close_gltf_page`).
+_GLTF_SESSION: list = []
+
+
+def close_gltf_page() -> None:
+    """Close the glTF renderer's browser (the conformance module's teardown): a Playwright session left open
+    would keep its event loop running in the worker, and the next module's browser could not start."""
+    while _GLTF_SESSION:
+        browser, pw, server = _GLTF_SESSION.pop()
+        browser.close()
+        pw.stop()
+        server.close()
+    _gltf_page.cache_clear()
+
+
+def need_gltf_renderer() -> None:
+    """Skip without Chromium or the built glTF renderer (scripts/setup.sh builds it), except in CI."""
+    import os
+
+    from cdbrdf.view.gltf_page import bundle_missing
+
+    from .test_viewer import CHROMIUM
+
+    if os.environ.get("CI"):
+        return
+    if CHROMIUM is None:
+        pytest.skip("Debian's chromium is not installed (scripts/setup.sh --test installs it)")
+    if bundle_missing():
+        pytest.skip("the glTF renderer is not built (scripts/setup.sh builds it with npm)")
+
+
+def quad_asset(t: CDBRDF) -> bytes:
+    """A GLB of ``t`` on a flat 10 mm square (the lookup is what is tested; a fixed fallback material)."""
+    from cdbrdf.export.fallback import FallbackFit
+    from cdbrdf.export.gltf import ExportedMesh, build_gltf
+
+    pos = np.array([[-5.0, -5.0, 0.0], [5.0, -5.0, 0.0], [5.0, 5.0, 0.0], [-5.0, 5.0, 0.0]])
+    mesh = ExportedMesh(positions=pos, normals=np.tile([0.0, 0.0, 1.0], (4, 1)),
+                        tangents=np.tile([1.0, 0.0, 0.0, 1.0], (4, 1)), uv=(pos[:, :2] + 5.0) / 10.0,
+                        faces=np.array([[0, 1, 2], [0, 2, 3]]), attributes={"curvature": np.zeros(4),
+                                                                          "curvature_dir": np.zeros(4)},
+                        direction=np.tile([1.0, 0.0, 0.0], (4, 1)), name="quad")
+    fallback = FallbackFit((0.5, 0.5, 0.5), 0.8, (0.0, 0.0, 0.0), 0.5, 0.0, 0.0, 0.0, 0.0, 0)
+    return build_gltf(t, mesh, fallback=fallback).glb()
+
+
+def _run_gltf(t: CDBRDF, q: np.ndarray) -> np.ndarray:
+    """The glTF renderer's lookup (lookup.js through its three.js plugin, from the asset's 16-bit texture)."""
+    import base64
+
+    page, messages = _gltf_page()
+    glb = base64.b64encode(quad_asset(t)).decode("ascii")
+    got = np.array(page.evaluate("([g, q]) => cdbrdfGltf.evaluateAsset(g, q)", [glb, q.T.tolist()]), dtype=np.float64)
+    assert messages == [], messages
+    return got[:, : t.n_channels]
+
+
 @dataclass(frozen=True)
 class Impl:
     """One implementation of the rule and what the suite may ask of it."""
@@ -210,6 +298,8 @@ class Impl:
     #: invalid queries give NaN rows (else: caller masks; values stay in the table)
     nan_rows: bool
     needs_mitsuba: bool = False
+    #: runs in headless Chromium (the glTF renderer)
+    needs_browser: bool = False
     #: the only cases it runs (None: all)
     cases: tuple[str, ...] | None = None
 
@@ -221,7 +311,7 @@ class Impl:
             return t.lookup_grid().rgb_kernel
         if self.only_tables is not None and not any(tables()[n] is t for n in self.only_tables):
             return False
-        if self.needs_mitsuba:
+        if self.needs_mitsuba or self.needs_browser:
             return t.n_channels in (1, 3)
         return True
 
@@ -231,6 +321,11 @@ class Impl:
 #: the 720-azimuth tables: their index math is the packed layout's, and their packets are huge.
 LAYOUT_TABLES = ("rgb", "one_channel", "many_kappa", "uneven_float32", "virtual_pole", "single_azimuth",
                  "single_elevation", "kappa_1", "iso_rgb", "iso_uneven")
+
+
+#: The tables the browser's lookup runs on (a page each): every axis kind of LAYOUT_TABLES, an isotropic
+#: table at 2 degrees, uneven elevations, nine curvatures.
+GLSL_TABLES = LAYOUT_TABLES + ("iso_fine", "uneven_theta", "kappa_9", "small")
 
 
 IMPLS = {
@@ -248,6 +343,9 @@ IMPLS = {
              only_tables=LAYOUT_TABLES),
         Impl("scalar_rgb", _run_scalar, "float32", 3e-5, False, True, needs_mitsuba=True,
              cases=("pole", "directions")),
+        # the glTF renderer's GLSL (lookup.js, shared with the viewer) on the asset's 16-bit texture: within
+        # half a 16-bit step of the range (7.6e-6) plus float32 arithmetic
+        Impl("glsl_gltf", _run_gltf, "float32", 3e-5, False, True, needs_browser=True, only_tables=GLSL_TABLES),
     )
 }
 
@@ -582,6 +680,8 @@ def get_run(impl: str, table: str, case: str):
     im = IMPLS[impl]
     if im.needs_mitsuba:
         need_mitsuba()
+    if im.needs_browser:
+        need_gltf_renderer()
     t = tables()[table]
     got = _results(impl, table)[case]
     ref = _results("reference", table, im.precision)[case]

@@ -136,7 +136,7 @@ def test_file_round_trip_and_the_tile_mean_is_a_cdbrdf_file(exact, tmp_path):
     assert back.compression == btf.compression
     assert cdbrdf.load(path) == btf.mean()
     with h5py.File(path, "r") as f:
-        assert f.attrs["format_version"] == "1.4"
+        assert f.attrs["format_version"] == "1.5"
 
 
 def test_damaged_or_plain_files_are_refused(exact, tmp_path):
@@ -239,3 +239,135 @@ def test_mean_kwargs_reach_the_tile_mean_and_axes_are_refused():
     for key in ("kappa", "attrs", "values"):
         with pytest.raises(TableError, match=f"mean_kwargs: {key} cannot be given here"):
             CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, mean_kwargs={key: None})
+
+
+# -- the neural CD-BTF (schema 2) -----------------------------------------------------------------
+def _fit():
+    from cdbrdf.btf._neural import FitOptions
+
+    return FitOptions(steps=40, latent_dims=4, hidden=(16, 12), samples_per_batch=256, texels_per_batch=32)
+
+
+@pytest.fixture(scope="module")
+def neural():
+    vals = _dense(rank=4, noise=0.01)
+    return vals, CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, method="neural", max_error=0.9, fit=_fit())
+
+
+def _true_errors(vals, btf):
+    err = btf.decode() - vals
+    axes = (0, 1, 3, 4, 5, 6, 7)
+    return (float(np.sqrt(np.sum(err ** 2) / np.sum(vals ** 2))),
+            np.sqrt(np.sum(err ** 2, axis=axes) / np.sum(vals ** 2, axis=axes)))
+
+
+def test_neural_records_its_true_errors_and_a_ratio_from_its_stored_sizes(neural):
+    vals, btf = neural
+    c = btf.compression
+    assert btf.method == "neural" and btf.rank == 0 and c["method"] == "neural"
+    true, per_k = _true_errors(vals, btf)
+    assert c["relative_rms_error"] == pytest.approx(true, rel=1e-3)
+    np.testing.assert_allclose(c["relative_rms_error_per_kappa"], per_k, rtol=1e-3)
+    assert c["neural_relative_rms_error"] == pytest.approx(true, rel=1e-3)
+    assert 0.0 < true < 0.9  # the fit learnt something: less than the tile mean alone
+    mean_only = np.sqrt(np.sum((vals - vals.mean(axis=(0, 1))) ** 2) / np.sum(vals ** 2))
+    assert true < mean_only
+    net = btf.neural
+    raw = 4 * vals.size
+    stored = 2 * btf.mean().values.size + 2 * net.n_latent_values + 4 * net.n_parameters
+    assert c["compression_ratio"] == pytest.approx(raw / stored)
+    # the tile mean is the texels' mean, in float16 numbers
+    np.testing.assert_allclose(btf.mean().values, vals.mean(axis=(0, 1)), rtol=1e-3)
+    assert np.array_equal(btf.mean().values, btf.mean().values.astype(np.float16).astype(np.float32))
+
+
+def test_neural_meets_the_error_target_with_residual_components():
+    vals = _dense(rank=4, noise=0.01)
+    for target in (0.05, 0.01):
+        btf = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, method="neural", max_error=target, fit=_fit())
+        true, per_k = _true_errors(vals, btf)
+        c = btf.compression
+        assert true <= target and np.all(per_k <= target) and btf.rank > 0
+        assert c["relative_rms_error"] == pytest.approx(true, rel=1e-3, abs=1e-6)
+        assert c["neural_relative_rms_error"] > target
+        # the decoder plus residual components, or the PCA alone where that takes fewer bytes
+        pca = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, method="pca", max_error=target)
+        assert btf.nbytes_ratio() >= pca.nbytes_ratio()
+        assert btf.method == ("pca" if btf.neural is None else "neural")
+
+
+def test_neural_evaluate_decodes_the_nodes_and_is_the_tile_mean_from_far_away(neural):
+    vals, btf = neural
+    d = btf.decode()
+    cu, cv = btf.texel_centres_mm()
+    # at a texel centre and grid nodes: the decoded sample (footprint 0: the texel itself)
+    np.testing.assert_allclose(btf.evaluate(cu[3], cv[2], 30.0, 90.0, 60.0, 180.0, 0.2), d[2, 3, 2, 2, 2, 1, 1],
+                               rtol=1e-5)
+    rng = np.random.default_rng(3)
+    q = (rng.uniform(-5, 5, 200), rng.uniform(-5, 5, 200), rng.uniform(0, 90, 200), rng.uniform(0, 360, 200),
+         rng.uniform(0, 90, 200), rng.uniform(0, 360, 200), rng.uniform(-0.3, 0.3, 200))
+    far = btf.evaluate(*q, footprint_mm=10 * max(REPEAT))
+    np.testing.assert_allclose(far, btf.mean().evaluate(*q[2:]), rtol=1e-12)
+    near = btf.evaluate(*q)
+    assert np.abs(near - far).max() > 1e-3  # up close the texels differ from the mean
+    # between: a footprint of a few texels averages the codes; the values stay between near and far in the mean
+    mid = btf.evaluate(*q, footprint_mm=2 * REPEAT[0] / 8)
+    assert np.all(np.isfinite(mid))
+    assert np.abs(mid - far).mean() < np.abs(near - far).mean()
+
+
+def test_neural_file_round_trip_is_schema_2_and_a_newer_schema_is_refused(neural, tmp_path):
+    _, btf = neural
+    path = tmp_path / "n.h5"
+    btf.save(path)
+    with h5py.File(path, "r") as f:
+        assert np.asarray(f.attrs["btf_format_version"]).item() == 2
+        assert "btf_rank" not in f.attrs and np.asarray(f.attrs["btf_residual_rank"]).item() == 0
+        assert f["btf_latents"].dtype == np.float16 and f["btf_decoder"].dtype == np.float32
+    back = load(path)
+    assert back.method == "neural" and back.texels == btf.texels
+    np.testing.assert_array_equal(back.decode(), btf.decode())
+    assert back.compression["relative_rms_error"] == pytest.approx(btf.compression["relative_rms_error"])
+    assert cdbrdf.load(path) == btf.mean()
+    with h5py.File(path, "r+") as f:
+        f.attrs["btf_format_version"] = np.int64(3)
+    with pytest.raises(FormatError, match="schema 3"):
+        load(path)
+    btf.save(path)
+    with h5py.File(path, "r+") as f:
+        f.attrs["btf_decoder_layers"] = np.array([9, 16, 3], dtype=np.int64)
+    with pytest.raises(FormatError, match="btf_decoder_layers"):
+        load(path)
+
+
+def test_pca_weights_are_filtered_by_the_footprint(exact):
+    vals, btf = exact
+    rng = np.random.default_rng(4)
+    u, v = rng.uniform(-5, 5, 50), rng.uniform(-5, 5, 50)
+    np.testing.assert_allclose(btf.texel_weights(u, v, 0.0), btf.texel_weights(u, v))
+    assert np.all(btf.texel_weights(u, v, 20.0) == 0.0)  # from the repeat's size on: the tile mean
+    far = btf.evaluate(u, v, 30.0, 90.0, 60.0, 180.0, 0.1, footprint_mm=20.0)
+    np.testing.assert_allclose(far, np.broadcast_to(btf.mean().evaluate(30.0, 90.0, 60.0, 180.0, 0.1), far.shape))
+    # one level up: the weights of 2 x 2 blocks of texels, at their centres
+    from cdbrdf.btf._neural import block_means
+
+    w1 = block_means(btf.weights, (3, 4))
+    su, sv = REPEAT
+    got = btf.texel_weights((0 + 0.5) * su / 4, (1 + 0.5) * sv / 3, 2.0 * su / 8)
+    np.testing.assert_allclose(got, w1[1, 0], rtol=1e-5, atol=1e-7)
+
+
+def test_neural_residual_components_meet_the_target_and_their_errors_are_true():
+    """The decoder plus residual components (what from_values keeps where it takes fewer bytes than a PCA)."""
+    from cdbrdf.btf._neural import compress
+
+    vals = _dense(rank=4, noise=0.01)
+    m, net, res, comp = compress(vals, GRID, max_error=0.02, max_rank=64, options=_fit())
+    btf = CDBTF(CDBRDF(m, **GRID.axes()), res.weights.reshape(6, 8, -1),
+                np.moveaxis(res.basis.reshape((-1,) + GRID.shape + (3,)), 0, -2), repeat_mm=REPEAT,
+                compression=comp, neural=net)
+    true, per_k = _true_errors(vals, btf)
+    assert btf.rank > 0 and comp["neural_relative_rms_error"] > 0.02
+    assert true <= 0.02 and np.all(per_k <= 0.02)
+    assert comp["relative_rms_error"] == pytest.approx(true, rel=1e-3, abs=1e-6)
+    np.testing.assert_allclose(comp["relative_rms_error_per_kappa"], per_k, rtol=1e-3, atol=1e-6)

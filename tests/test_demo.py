@@ -14,7 +14,7 @@ import cdbrdf
 import cdbrdf.materials
 from cdbrdf.demo import DemoConfig, compare_with_truth, run_demo
 from cdbrdf.errors import OptionError
-from cdbrdf.measure.fill import refill
+from cdbrdf.measure.fill import DEFAULT_FILL, refill
 from cdbrdf.table import Grid
 
 from .conftest import make_table
@@ -65,11 +65,20 @@ def test_quick_demo_report_is_complete(quick_demo):
     bending = {m["name"]: {b["kappa"]: b["median_delta_e"] for b in m["contrast"]["table"]["measured"]}
                for m in results["materials"]}
     assert sorted(bending["velvet"]) == [-0.22, -0.13, 0.13, 0.22]
-    assert bending["velvet"][0.22] > bending["denim"][0.22] > 0
+    # a change of colour name at +0.22 on both (the bundled tables: velvet 8.6, denim 8.0; the quick
+    # grid's coarser directions give 7.2 and 8.6)
+    assert bending["velvet"][0.22] > 5 and bending["denim"][0.22] > 5
     for m in results["materials"]:
-        assert m["fill_method"] == "kappa-fit" and m["compared_fill"]["method"] == "nearest"
+        assert m["fill_method"] == DEFAULT_FILL and m["compared_fill"]["method"] == "nearest"
         for key in ("median_rel_error_filled", "p95_rel_error_filled", "fill_within_1_sigma"):
             assert 0 < m["error"][key] and all(0 < s[key] for s in m["per_stand"] if s["filled"])
+        # issue 35: the default fill is no worse than the paper's rule at any stand, and its
+        # uncertainty holds at least 90 % of the filled samples within 2 sigma of the truth
+        paper = {s["kappa"]: s for s in m["compared_fill"]["per_stand"]}
+        for s in m["per_stand"]:
+            if s["filled"]:
+                assert s["median_rel_error_filled"] <= paper[s["kappa"]]["median_rel_error_filled"], (m["name"], s)
+                assert s["fill_within_2_sigma"] >= 0.9, (m["name"], s)
 
 
 @pytest.mark.slow
@@ -88,14 +97,17 @@ def test_quick_demo_measures_the_ground_truth(quick_demo):
         per = int(np.prod(t.grid.shape[1:]))
         own = np.flatnonzero(~t.measured.ravel())[:, None]
         assert ((src % per == own % per) | ~used).all() and ((src // per != own // per) | ~used).all()
-        assert set(t.fill_method_names()[~t.measured]) == {"kappa_fit"} and m.fill_method == "kappa-fit"
+        # the default chooses, per stand, the fill whose check errs least: on the bundled fabrics the
+        # fitted fabric model (the preset that made the truth)
+        assert set(t.fill_method_names()[~t.measured]) == {"model"} and m.fill_method == DEFAULT_FILL
         # the paper's rule is reported beside it
         assert m.compared_fill["method"] == "nearest"
         # the filled samples are as good as the fill can be at all: near its error on the truth itself
         # (the same samples hidden and filled from the truth's values at the others: scripts/fill_study.py)
         g = t.grid.mesh()
         exact = cdbrdf.materials.load(m.name).evaluate(g["theta_v"], g["phi_v"], g["theta_l"], g["phi_l"], g["kappa"])
-        floor_table = cdbrdf.CDBRDF(exact, **t.grid.axes(), measured=t.measured, attrs={"quantity": "brdf"})
+        floor_table = cdbrdf.CDBRDF(exact, **t.grid.axes(), measured=t.measured,
+                                    attrs={"quantity": "brdf", "material": m.name})
         floor, _ = compare_with_truth(refill(floor_table), cdbrdf.materials.load(m.name))
         # plus the measurement's noise, which a line extrapolated along kappa amplifies (weights up to about 3)
         noise = m.error["median_rel_error_measured"]

@@ -42,8 +42,8 @@ def test_round_trip_through_the_file_and_xarray(tmp_path):
     assert back == t
     np.testing.assert_array_equal(back.fill_weights, t.fill_weights)
     with xr.open_dataset(p, engine="h5netcdf") as ds:
-        assert ds.attrs["format_version"] == "1.4"
-        assert ds["fill_method"].attrs["flag_meanings"] == "measured unknown nearest nearest_stand kappa_fit"
+        assert ds.attrs["format_version"] == "1.5"
+        assert ds["fill_method"].attrs["flag_meanings"] == "measured unknown nearest nearest_stand kappa_fit model"
         assert ds["fill_sources"].dims[-1] == "fill_slot" and ds.sizes["fill_slot"] == 2
         sel = dict(kappa=-0.22, phi_l=0.0, theta_l=0.0, phi_v=0.0, theta_v=60.0)
         assert int(ds["fill_method"].sel(**sel)) == FILL_METHOD_CODES["kappa_fit"]
@@ -147,7 +147,7 @@ def test_mosaic_marks_direction_and_curvature_fills_apart():
     t = _measured()  # grazing views at -0.22 filled along the curvature
     valid = t.measured.copy()
     valid[:, 1, 0, 2, 0] = False  # a direction measured on no stand: the paper's rule fills it
-    t = refill(CDBRDF(t.values, **t.grid.axes(), measured=valid, attrs=t.attrs))
+    t = refill(CDBRDF(t.values, **t.grid.axes(), measured=valid, attrs=t.attrs), method="kappa-fit")
     m = mosaic_arrays(t)
     codes = set(np.unique(m.fill_method[0][m.filled[0]]).tolist())
     assert codes == {FILL_METHOD_CODES["kappa_fit"], FILL_METHOD_CODES["nearest"]}
@@ -238,13 +238,14 @@ def test_nearest_reproduces_the_paper_rule_bit_for_bit(wiggly_capture):
     flat_std = t.std.reshape(t.measured.size, -1)
     np.testing.assert_array_equal(t.values[hidden], flat_values[src[hidden]])
     np.testing.assert_array_equal(t.std[hidden], flat_std[src[hidden]])
-    assert rep.n_filled == 33 and rep.n_filled_by == {"nearest": 33, "nearest_stand": 0, "kappa_fit": 0}
+    assert rep.n_filled == 33 and rep.n_filled_by == {"nearest": 33, "nearest_stand": 0, "kappa_fit": 0,
+                                                          "model": 0}
     assert t.attrs["provenance"]["fill"].startswith("nearest measured direction at the same curvature")
 
 
 def test_measure_fills_by_the_chosen_method_and_keeps_measured_samples(wiggly_capture):
     near, _ = measure(wiggly_capture, fill="nearest")
-    kfit, rep = measure(wiggly_capture)
+    kfit, rep = measure(wiggly_capture, fill="kappa-fit")
     assert rep.fill_method == "kappa-fit" and "filled by kappa-fit" in rep.summary()
     np.testing.assert_array_equal(kfit.values[kfit.measured], near.values[near.measured])
     np.testing.assert_array_equal(kfit.measured, near.measured)

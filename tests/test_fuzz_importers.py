@@ -1,4 +1,4 @@
-"""Mutated RGL, MERL and UTIA files through their readers: only cdbrdf errors, no crash or hang.
+"""Mutated RGL, MERL, UTIA and Neural-BRDF (Keras weights) files through their readers: only cdbrdf errors, no crash or hang.
 
 Seeds: a small RGB and a small spectral RGL material (the tensor layout of the
 database files, a 4 x 4 reflectance grid), a MERL file and a UTIA file written
@@ -46,6 +46,8 @@ def seeds(kind: str) -> tuple[bytes, ...]:
             return ((d / "a.bsdf").read_bytes(), (d / "b.bsdf").read_bytes())
         if kind == "merl":
             return (write_merl(d / "a.binary").read_bytes(),)
+        if kind == "nbrdf":
+            return (_network(d)[1].read_bytes(),)
         return (write_utia(d / "a.bin").read_bytes(),)
 
 
@@ -62,6 +64,20 @@ def _target(kind: str, suffix: str, data: bytes, workdir: Path) -> str:
     assert f.shape == (4, 3) and not np.isnan(f).any(), f
     assert m is None or (np.shape(m) == (4,) and np.all((np.asarray(m) >= 0) & (np.asarray(m) <= 1)))
     return "ok"
+
+
+def _network(folder: Path) -> tuple[Path, Path]:
+    """A small Neural-BRDF pair (6-4-3) in ``folder``: the weights are fuzzed, the architecture kept."""
+    from cdbrdf.importers import nbrdf
+
+    rng = np.random.default_rng(5)
+    return nbrdf.write(folder / "fuzzed.h5", [rng.normal(0, 0.3, (6, 4)), rng.normal(0, 0.3, (4, 3))],
+                       [np.zeros(4), np.full(3, -1.0)])
+
+
+def target_nbrdf(data: bytes, workdir: Path) -> str:
+    _network(workdir)
+    return _target("nbrdf", ".h5", data, workdir)
 
 
 def target_rgl(data: bytes, workdir: Path) -> str:
@@ -88,12 +104,13 @@ def test_seeds_read():
 
     need_mitsuba()
     with tempfile.TemporaryDirectory() as tmp:
-        for kind, target in (("rgl", target_rgl), ("merl", target_merl), ("utia", target_utia)):
+        for kind, target in (("rgl", target_rgl), ("merl", target_merl), ("utia", target_utia),
+                             ("nbrdf", target_nbrdf)):
             for data in seeds(kind):
                 assert target(data, Path(tmp)) == "ok"
 
 
-@pytest.mark.parametrize("kind,n", [("rgl", 120), ("merl", 12), ("utia", 60)])
+@pytest.mark.parametrize("kind,n", [("rgl", 120), ("merl", 12), ("utia", 60), ("nbrdf", 24)])
 def test_fuzz_readers_small(kind, n):
     if kind == "rgl":
         from .import_helpers import need_mitsuba
@@ -105,7 +122,7 @@ def test_fuzz_readers_small(kind, n):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("kind,n", [("rgl", 3000), ("merl", 400), ("utia", 3000)])
+@pytest.mark.parametrize("kind,n", [("rgl", 3000), ("merl", 400), ("utia", 3000), ("nbrdf", 600)])
 def test_fuzz_readers_large(kind, n):
     if kind == "rgl":
         from .import_helpers import need_mitsuba

@@ -161,7 +161,7 @@ def test_utia_negative_values_are_unmeasured_and_bad_files_refused(tmp_path, uti
 def test_unknown_files_name_the_formats(tmp_path):
     p = tmp_path / "x.dat"
     p.write_bytes(b"hello world, not a brdf")
-    with pytest.raises(FormatError, match="cannot tell its format .* give the format .rgl, merl, utia, cdbrdf."):
+    with pytest.raises(FormatError, match="cannot tell its format .* give the format .rgl, merl, utia, nbrdf, cdbrdf."):
         detect_format(p)
     with pytest.raises(FormatError, match="format: 'brdf' is not one of auto, rgl"):
         read_source(p, format="brdf")

@@ -78,7 +78,7 @@ def test_isotropic_file_round_trip_and_global_attribute(tmp_path):
     assert back == t and back.isotropic
     with h5py.File(p, "r") as f:
         assert f.attrs["symmetry"] == "isotropic"
-        assert f.attrs["format_version"] == FORMAT_VERSION == "1.4"
+        assert f.attrs["format_version"] == FORMAT_VERSION == "1.5"
     ds = t.to_xarray()
     assert ds.attrs["symmetry"] == "isotropic"
     assert CDBRDF.from_xarray(ds) == t

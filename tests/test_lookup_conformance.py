@@ -32,6 +32,7 @@ from .lookup_cases import (
     IMPLS,
     TABLE_NAMES,
     close,
+    close_gltf_page,
     get_run,
     has_off_pole,
     is_isotropic,
@@ -42,6 +43,13 @@ from .lookup_cases import (
     scipy_multilinear,
     tables,
 )
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _close_the_browser():
+    """The glTF renderer's browser, opened by the first browser case, is closed after the module."""
+    yield
+    close_gltf_page()
 
 
 # -- the cases ---------------------------------------------------------------------------------------

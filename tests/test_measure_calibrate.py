@@ -104,7 +104,7 @@ def test_brackets_and_saturation(tmp_path):
             rows.append(dict(file=f, kappa=0, theta_v=tv, phi_v=0, theta_l=0, phi_l=0, exposure=e))
             write_image(tmp_path / f, np.full((11, 11, 3), min(0.3 * e, 1.0)), "png16")
     write_csv(tmp_path / "capture.csv", rows)
-    table, rep = measure(tmp_path)
+    table, rep = measure(tmp_path, fill="kappa-fit")  # one stand: the paper's rule fills it
     assert table.values[0, 0, 0, 0, 0, 0] == pytest.approx(0.3, rel=1e-4)
     assert table.measured.tolist() == [[[[[True, False]]]]]
     assert table.fill_source[0, 0, 0, 0, 1] == 0
@@ -132,12 +132,12 @@ def test_hidden_by_stand_not_read_and_filled(tmp_path):
     hidden_files = [r.file for i, r in enumerate(cap.rows) if r.kind == "sample" and cap.hidden[cap.sample_index[i]]]
     for f in hidden_files:
         (tmp_path / f).unlink()
-    table, rep = measure(tmp_path)
+    table, rep = measure(tmp_path, fill="kappa-fit")
     np.testing.assert_array_equal(table.measured, ~cap.hidden)
     assert rep.n_hidden == int(cap.hidden.sum()) == rep.n_filled
     src = table.fill_source[~table.measured]
     assert np.all(src >= 0) and table.measured.ravel()[src].all()
-    # by default from the same direction on the other stands (flat first, then convex)
+    # kappa-fit: from the same direction on the other stands (flat first, then convex)
     per_k = int(np.prod(GRID.shape[1:]))
     hid = np.flatnonzero(~table.measured.ravel())
     np.testing.assert_array_equal(table.fill_sources[~table.measured], np.stack([hid + per_k, hid + 2 * per_k], 1))
@@ -152,7 +152,7 @@ def test_hidden_column_without_stand_file(tmp_path):
     rows = make_capture(tmp_path, GRID, pixel, kind="exr")
     rows[5]["hidden"] = "view"
     write_csv(tmp_path / "capture.csv", rows)
-    table, rep = measure(tmp_path)
+    table, rep = measure(tmp_path, fill="kappa-fit")
     assert rep.n_hidden == 1 and (~table.measured).sum() == 1
 
 

@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
 from cdbrdf import CDBRDF, Grid, TableError
 from cdbrdf.frames import direction_from_angles
 from cdbrdf.measure.fill import (
-    CHECK_FRACTION,
     DEFAULT_FILL,
     FILL_METHODS,
     MIN_CHECK_SAMPLES,
@@ -110,11 +107,12 @@ KGRID = Grid(kappa=[-0.22, -0.13, 0.0, 0.13, 0.22], theta_l=[0, 30, 60], phi_l=[
 
 
 def test_registry_lists_the_methods():
-    assert DEFAULT_FILL == "kappa-fit" and list(FILL_METHODS) == ["kappa-fit", "nearest-stand", "nearest"]
+    assert list(FILL_METHODS) == ["kappa-fit", "nearest-stand", "nearest", "model", "auto"]
+    assert DEFAULT_FILL == "auto"
     for name in FILL_METHODS:
         assert check_fill_method(name) == name
     for bad in ("Nearest", "", None, 3, "kappa"):
-        with pytest.raises(ValueError, match=r"fill: .* is not one of kappa-fit, nearest-stand, nearest$"):
+        with pytest.raises(ValueError, match=r"fill: .* is not one of kappa-fit, nearest-stand, nearest, model, auto$"):
             check_fill_method(bad)
     with pytest.raises(ValueError, match="is not one of kappa-fit"):
         fill(np.ones(KGRID.shape + (1,)), np.ones(KGRID.shape, bool), KGRID, method="linear")
@@ -152,12 +150,12 @@ def _hidden(grid):
 def test_kappa_fit_is_exact_for_a_log_linear_curvature_dependence():
     truth = _smooth_table(KGRID)
     valid = _hidden(KGRID)
-    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID)
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID, method="kappa-fit")
     np.testing.assert_allclose(r.values, truth, rtol=1e-12)
     # measured samples are kept bit for bit
     np.testing.assert_array_equal(r.values[valid], truth[valid])
     assert r.summary["samples"] == {"measured": int(valid.sum()), "nearest": 0, "nearest_stand": 0,
-                                    "kappa_fit": int((~valid).sum())}
+                                    "kappa_fit": int((~valid).sum()), "model": 0}
 
 
 def test_kappa_fit_error_is_the_second_order_term():
@@ -165,7 +163,7 @@ def test_kappa_fit_error_is_the_second_order_term():
     c = 3.0
     truth = _smooth_table(KGRID, quadratic=c)
     valid = _hidden(KGRID)
-    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID)
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID, method="kappa-fit")
     ks = KGRID.kappa
     for k, stands in ((0, [2, 3, 4]), (0, [1, 2, 3, 4]), (1, [2, 3, 4])):
         rest = [s for s in range(5) if s not in stands and s != k]
@@ -198,7 +196,7 @@ def test_provenance_reproduces_every_filled_value():
     valid[2, 3, 1, 1, 1] = False  # a saturated sample on the flat stand: measured on every other stand
     truth[2, 1, 2, 0, 0, 0] = -1e-4  # a dark-subtracted source below zero: that channel is combined linearly
     t = CDBRDF(np.where(valid[..., None], truth, 0.0), **KGRID.axes(), measured=valid)
-    r = refill(t)
+    r = refill(t, method="kappa-fit")
     flat = r.values.reshape(-1, 3)
     src = r.fill_sources.reshape(-1, r.fill_sources.shape[-1])
     w = r.fill_weights.reshape(src.shape)
@@ -222,7 +220,7 @@ def test_direction_no_stand_measured_falls_back_to_the_paper_rule():
     valid = np.ones(KGRID.shape, bool)
     valid[:, 1, 1, 1, 1] = False  # one direction unmeasured on every stand
     valid[3, 2, 1, 1, 1] = False  # another measured on four stands
-    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID)
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID, method="kappa-fit")
     near, src, _ = fill_nearest(np.where(valid[..., None], truth, np.nan), valid, KGRID)
     np.testing.assert_array_equal(r.values[:, 1, 1, 1, 1], near[:, 1, 1, 1, 1])
     np.testing.assert_array_equal(r.fill_source[:, 1, 1, 1, 1], src[:, 1, 1, 1, 1])
@@ -253,13 +251,15 @@ def test_uncertainty_is_calibrated_on_noisy_smooth_data():
     valid = np.ones(g.shape, bool)
     valid[0, :, 4:] = False
     valid[0, :, :, :, 4:] = False
-    r = fill(np.where(valid[..., None], noisy, np.nan), valid, g)
+    r = fill(np.where(valid[..., None], noisy, np.nan), valid, g, method="kappa-fit")
     z = np.abs(np.log(r.values / truth))[~valid] / (r.fill_std[~valid] / r.values[~valid])
-    assert 0.6 <= np.mean(z <= 1) <= 0.9 and np.mean(z <= 2) >= 0.93
+    assert 0.6 <= np.mean(z <= 1) <= 0.95 and np.mean(z <= 2) >= 0.93
     assert (r.fill_std[valid] == 0).all()
     (model,) = r.summary["uncertainty"]
-    # the check: the quarter of the stand's measured samples nearest to the filled ones
-    assert model["check_samples"] == math.ceil(CHECK_FRACTION * valid[0].sum()) and model["check_pooled"] == "group"
+    # the check: the directions the stand hides, measured on each other stand, hidden there too and
+    # filled the same way (the fill's own regime); calibrated to hold 95 % of its errors within 2 sigma
+    assert model["check_samples"] == 4 * (~valid[0]).sum() and model["check_pooled"] == "hidden-like"
+    assert model["sigma_scale"] >= 1.0
 
 
 def test_too_few_checks_give_an_unknown_uncertainty():
@@ -267,7 +267,7 @@ def test_too_few_checks_give_an_unknown_uncertainty():
     truth = _smooth_table(g)
     valid = np.ones(g.shape, bool)
     valid[0, :, 1, :, 1] = False
-    r = fill(np.where(valid[..., None], truth, np.nan), valid, g)
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, g, method="kappa-fit")
     assert valid[0].sum() < MIN_CHECK_SAMPLES
     np.testing.assert_allclose(r.fill_std[~valid], r.values[~valid])  # 100 %: no check was possible
     assert r.summary["uncertainty"][0]["check_pooled"] == "none"
@@ -279,3 +279,106 @@ def test_every_method_refuses_a_curvature_with_nothing_measured(grid):
     for method in FILL_METHODS:
         with pytest.raises(TableError, match="kappa = -0.2 1/mm: no sample was measured"):
             fill(np.ones(grid.shape + (3,)), valid, grid, method=method)
+
+
+# -- the model fill and the choice by evidence ------------------------------------------------
+def test_model_fill_carries_the_model_change_and_cancels_its_level():
+    """The model fill applies the fitted model's change with curvature to the measured values: a model
+    that is wrong by a factor per direction (its level) but right in its change fills exactly."""
+    from cdbrdf.measure.fill_model import ModelFit, model_fill_weights, model_predict
+
+    truth = _smooth_table(KGRID)
+    nk = KGRID.shape[0]
+    flat = truth.reshape(nk, -1, 3)
+    d = np.arange(flat.shape[1])
+    level = 1.0 + 0.5 * np.sin(d)[None, :, None]
+    fit = ModelFit(preset="test", weights=np.ones((3, 1)), fit_rel_rms=0.0, directions=d, values=flat * level)
+    ids = np.array([3, 17, 40])
+    value, reach, w = model_predict(fit, truth, 0, ids, (2, 3, 4), KGRID.kappa)
+    np.testing.assert_allclose(value, flat[0, ids], rtol=1e-12)
+    np.testing.assert_allclose(w, model_fill_weights(KGRID.kappa[[2, 3, 4]], KGRID.kappa[0]))
+    np.testing.assert_allclose(w, np.array([1 / 0.22, 1 / 0.35, 1 / 0.44]) / np.sum([1 / 0.22, 1 / 0.35, 1 / 0.44]))
+    np.testing.assert_allclose(reach, np.abs(np.log(flat[0, ids] / flat[2, ids])), rtol=1e-12)
+
+
+def test_auto_chooses_the_method_whose_check_errs_least():
+    """One channel (no model): kappa-fit is exact for a log-linear curvature dependence, so its check errs
+    least and auto fills with it, recording the choice and every candidate's check error."""
+    truth = _smooth_table(KGRID)[..., :1]
+    valid = _hidden(KGRID)
+    r = fill(np.where(valid[..., None], truth, np.nan), valid, KGRID, method="auto")
+    sel = r.summary["selection"]
+    assert set(sel) == {"-0.22", "-0.13"}
+    for v in sel.values():
+        assert v["method"] == "kappa-fit" and "model" not in v["check_median_abs_log_error"]
+    # at -0.22 every candidate could be checked (kappa-fit exactly); at -0.13 too few samples are hidden
+    # for any check, and the order of preference decides
+    scores = sel["-0.22"]["check_median_abs_log_error"]
+    assert scores["kappa-fit"] == 0.0 < scores["nearest-stand"] < scores["nearest"]
+    assert set(sel["-0.13"]["check_median_abs_log_error"].values()) == {None}
+    np.testing.assert_allclose(r.values, truth, rtol=1e-9)
+    assert r.method == "auto" and "model" not in r.summary
+
+
+def test_btf_takes_the_data_fills_only(tmp_path):
+    from cdbrdf.errors import OptionError
+    from cdbrdf.measure.btf import measure_btf
+
+    for method in ("model", "auto"):
+        with pytest.raises(OptionError, match=rf"fill: '{method}' fills a CDBRDF, not a CD-BTF's texels"):
+            measure_btf(tmp_path, None, texels=4, fill=method)
+
+
+def _quick_fill_errors(truth, name, methods, seed=3):
+    """Median / coverage of each method on the quick demo grid: the truth with 0.5 % noise, the paper's stands."""
+    from cdbrdf.colour import luminance
+    from cdbrdf.demo import CONFIGS
+    from cdbrdf.measure.stands import Stand, hidden_mask
+
+    cfg = CONFIGS["quick"]
+    g = cfg.grid
+    valid = hidden_mask(g, [Stand(float(k)) for k in g.kappa], pixel_mm=cfg.field_mm / cfg.image_px) == 0
+    meas = truth * (1 + 0.005 * np.random.default_rng(seed).standard_normal(truth.shape))
+    yt = luminance(truth)
+    out = {}
+    for method in methods:
+        r = fill(np.where(valid[..., None], meas, np.nan), valid, g, method=method, material=name)
+        err = np.abs(luminance(r.values) - yt)
+        sig = luminance(r.fill_std)
+        out[method] = [(float(np.median(err[k][~valid[k]] / yt[k][~valid[k]])),
+                        float(np.mean(err[k][~valid[k]] <= 2 * sig[k][~valid[k]])))
+                       for k in range(g.shape[0]) if (~valid[k]).any()]
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["denim", "shot", "velvet", "towel"])
+def test_default_fill_beats_the_paper_rule_on_the_bundled_fabrics(name):
+    """Issue 35 on the quick demo grid: the default fill is no worse than the paper's rule at any hidden
+    stand, and holds at least 90 % of its filled samples within 2 sigma of the truth."""
+    from cdbrdf import materials
+    from cdbrdf.demo import CONFIGS
+
+    g = CONFIGS["quick"].grid
+    m = g.mesh()
+    truth = materials.load(name).evaluate(m["theta_v"], m["phi_v"], m["theta_l"], m["phi_l"], m["kappa"])
+    res = _quick_fill_errors(truth, name, [DEFAULT_FILL, "nearest"])
+    for (med, cover), (med_near, _) in zip(res[DEFAULT_FILL], res["nearest"], strict=True):
+        assert med <= med_near and cover >= 0.9, (res)
+
+
+@pytest.mark.slow
+def test_model_fill_on_a_fabric_whose_parameters_it_does_not_know():
+    """The truth: velvet with a taller, sparser, more leaning pile than the preset the fill fits
+    (scripts/fill_model_study.py has the other cases). The model's change with curvature still fills the
+    hidden samples within a few percent, far better than the paper's rule; auto's uncertainty, checked where
+    the stands can see, holds 85 % or more of them within 2 sigma (measured: 89 % and 96 %)."""
+    from cdbrdf.demo import CONFIGS
+    from cdbrdf.synth import presets
+
+    g = CONFIGS["quick"].grid
+    truth = presets.model("velvet", pile_height_mm=2.4, strands_per_mm2=15.0, lean_deg=10.0).tabulate(g).values
+    res = _quick_fill_errors(truth.astype(np.float64), "velvet", ["model", "auto", "nearest"])
+    for (med_m, _), (med_a, cover_a), (med_n, _) in zip(res["model"], res["auto"], res["nearest"], strict=True):
+        assert med_m < 0.05 and med_m < med_n / 5
+        assert med_a <= med_n and cover_a >= 0.85

@@ -379,3 +379,78 @@ def test_a_mesh_without_its_own_uvs_renders_the_tile_mean_and_says_so(cr, btf):
     woven = render_table(btf, RenderSpec(surface=MeshSurface(flat_grid(20.0, 20.0), units="mm"), **kw))  # own UVs
     assert np.abs(woven.images["cdbrdf"] - mean.images["cdbrdf"]).max() > 0.02 * mean.images["cdbrdf"].max()
     assert not any("tile mean" in n for n in woven.mesh.metadata.get("notes", []))
+
+
+# -- a neural CD-BTF: the decoder in Dr.Jit ------------------------------------------------------------
+@pytest.fixture(scope="module")
+def neural(btf):
+    from cdbrdf.btf._neural import FitOptions
+
+    return CDBTF.from_values(btf.decode(), GRID, repeat_mm=REPEAT, method="neural", max_error=0.9,
+                             fit=FitOptions(steps=40, latent_dims=5, hidden=(16, 8)))
+
+
+def _far_si(wi, uv, t):
+    si = _si(wi, uv)
+    si.t = mi.Float(np.full(len(uv), t, np.float32))
+    return si
+
+
+@pytest.mark.parametrize("texel_filter", ["bilinear", "nearest"])
+def test_neural_eval_is_evaluate_at_every_footprint(cr, neural, texel_filter):
+    """The Dr.Jit decoder equals CDBTF.evaluate: footprint 0, between levels, and the tile mean from far away."""
+    assert neural.neural is not None and neural.rank == 0
+    wi, tv, pv, wo, tl, pl, uv = _queries(1500, seed=8)
+    angle = 1e-3
+    b = cr.make_bsdf(neural, curvature=0.1, uv_scale=UV_SCALE, texel_filter=texel_filter, pixel_angle=angle)
+    assert isinstance(b.texels, _btf_jit.NeuralUpload)
+    u, v = uv[:, 0] * UV_SCALE[0], uv[:, 1] * UV_SCALE[1]
+    if texel_filter == "nearest":  # the containing texel of each level: compare at the texel centres
+        nu, nv = neural.texels
+        u = (np.floor(u / REPEAT[0] * nu) + 0.5) * REPEAT[0] / nu
+        v = (np.floor(v / REPEAT[1] * nv) + 0.5) * REPEAT[1] / nv
+        uv = np.stack([u / UV_SCALE[0], v / UV_SCALE[1]], axis=1)
+    cos_l = np.cos(np.radians(tl))[:, None]
+    for t in (0.0, 300.0, 1e5):  # the hit distance, mm: footprint 0, about a texel and more, the whole repeat
+        fp = t * angle / np.maximum(np.cos(np.radians(tv)), 0.1)
+        got = np.array(b.eval(mi.BSDFContext(), _far_si(wi, uv, t), vec(wo))).T
+        want = neural.evaluate(u, v, tv, pv, tl, pl, 0.1, footprint_mm=fp) * cos_l
+        if texel_filter == "nearest" and t > 0:  # levels above 0 are read at their own texels: only far away
+            continue
+        np.testing.assert_allclose(got, want, rtol=3e-4, atol=3e-5 * want.max())
+    mean = neural.mean().evaluate(tv, pv, tl, pl, 0.1) * cos_l
+    np.testing.assert_allclose(got, mean, rtol=3e-4, atol=3e-5 * mean.max())
+
+
+def test_neural_mono_is_the_luminance_and_spectral_far_away_is_the_cdbrdf(cr, neural):
+    wi, tv, pv, wo, tl, pl, uv = _queries(800, seed=9)
+    rgb = np.array(cr.make_bsdf(neural, curvature=0.1, uv_scale=UV_SCALE).eval(
+        mi.BSDFContext(), _si(wi, uv), vec(wo))).T
+    cr.set_variant("llvm_ad_mono")
+    y = np.array(cr.make_bsdf(neural, curvature=0.1, uv_scale=UV_SCALE).eval(mi.BSDFContext(), _si(wi, uv), vec(wo)))
+    np.testing.assert_allclose(y.reshape(-1), rgb @ LUMINANCE_WEIGHTS, rtol=1e-4, atol=1e-6)
+    cr.set_variant("llvm_ad_spectral")
+    want = np.array(cr.make_bsdf(neural.mean(), curvature=0.1).eval(mi.BSDFContext(), _spectral_si(wi, uv), vec(wo)))
+    b = cr.make_bsdf(neural, curvature=0.1, uv_scale=UV_SCALE, pixel_angle=1.0)
+    si = _spectral_si(wi, uv)
+    si.t = mi.Float(np.full(len(uv), 1e4, np.float32))
+    got = np.array(b.eval(mi.BSDFContext(), si, vec(wo)))
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-7 * want.max())
+    near = np.array(b.eval(mi.BSDFContext(), _spectral_si(wi, uv), vec(wo)))  # t = 0: the texels
+    assert np.all(np.isfinite(near)) and np.abs(near - want).max() > 1e-3 * want.max()
+
+
+def test_neural_scalar_eval_equals_the_vectorised_one(cr, neural):
+    wi, tv, pv, wo, tl, pl, uv = _queries(40, seed=10)
+    want = np.array(cr.make_bsdf(neural, curvature=0.1, uv_scale=UV_SCALE, texel_filter="bilinear").eval(
+        mi.BSDFContext(), _si(wi, uv), vec(wo))).T
+    cr.set_variant("scalar_rgb")
+    b = cr.make_bsdf(neural, curvature=0.1, uv_scale=UV_SCALE, texel_filter="bilinear")
+    for i in range(len(uv)):
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(*map(float, wi[i]))
+        si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+        si.n = mi.Normal3f(0, 0, 1)
+        si.uv = mi.Point2f(float(uv[i, 0]), float(uv[i, 1]))
+        got = np.array(b.eval(mi.BSDFContext(), si, mi.Vector3f(*map(float, wo[i])))).reshape(-1)
+        np.testing.assert_allclose(got, want[i], rtol=1e-3, atol=1e-5 * want.max())

@@ -89,7 +89,7 @@ def _sigma_rel(x):
 def test_measured_agrees_within_noise(captured):
     mat, folder, rep = captured
     assert rep.n_images == CAPTURE_GRID.kappa.size * 144 + 12 and rep.n_saturated_pixels == 0
-    table, mrep = measure(folder)
+    table, mrep = measure(folder, fill="kappa-fit")  # the rig is tested here; docs/capture.md compares the fills
     assert table.quantity == "brdf"
     truth = _truth(mat, CAPTURE_GRID)
     cos_l = np.cos(np.radians(CAPTURE_GRID.mesh()["theta_l"]))[..., None]
@@ -107,12 +107,12 @@ def test_measured_agrees_within_noise(captured):
 
 def test_hidden_marked_and_filled(captured):
     mat, folder, _ = captured
-    table, rep = measure(folder)
+    table, rep = measure(folder, fill="kappa-fit")
     hid = hidden_mask(CAPTURE_GRID, [Stand(k) for k in CAPTURE_GRID.kappa], pixel_mm=2.0 / 32) > 0
     assert hid[0].any() and not hid[1:].any()
     np.testing.assert_array_equal(table.measured, ~hid)
     assert rep.n_hidden == hid.sum() == rep.n_filled
-    # by default from the same direction on the other stands
+    # kappa-fit: from the same direction on the other stands
     per_k = int(np.prod(CAPTURE_GRID.shape[1:]))
     src = table.fill_sources[hid]
     assert (src[src >= 0] // per_k != 0).all() and (src[:, 0] % per_k == np.flatnonzero(hid.ravel()) % per_k).all()
@@ -329,7 +329,7 @@ def test_preset_denim_end_to_end(tmp_path):
     mat = materials.load("denim")
     simulate_capture(mat, tmp_path / "cap", RigOptions(size=32, field_mm=2.0, noise=NOISE, gain=GAIN,
                                                        white_albedo=ALBEDO), grid=CAPTURE_GRID)
-    table, rep = measure(tmp_path / "cap")
+    table, rep = measure(tmp_path / "cap", fill="kappa-fit")
     assert rep.n_saturated == 0
     truth = _truth(mat, CAPTURE_GRID)
     cos_l = np.cos(np.radians(CAPTURE_GRID.mesh()["theta_l"]))[..., None]

@@ -80,7 +80,7 @@ def test_texels_seen_from_above_show_the_yarn_under_them(shot):
 
 def test_points_per_texel_is_recorded_and_validated(shot):
     btf = tabulate_btf(shot, Grid.regular(theta_step_deg=45, phi_step_deg=180, kappa=[0.0]), texels=4,
-                       points_per_texel=8, max_error=0.1)
+                       points_per_texel=8, max_error=0.1, method="pca")
     attrs = btf.mean().attrs
     assert attrs["btf_points_per_texel"] == 8 and attrs["btf_texels"] == [4, 4]
     assert attrs["provenance"]["parameters"]["points"] == 8 * 16
@@ -124,3 +124,24 @@ def test_synth_command_writes_a_cdbtf_file(tmp_path, capsys):
     assert cli_main(["synth", "shot", "--max-error", "0.1", "-o", str(tmp_path / "x.h5")]) == 2
     assert cli_main(["synth", "shot", "--points-per-texel", "8", "-o", str(tmp_path / "x.h5")]) == 2
     assert not (tmp_path / "x.h5").exists()
+
+
+@pytest.mark.slow
+def test_default_encoding_is_close_to_a_much_tighter_one():
+    """8 x 8 denim texels: the default encoding (neural, 3 %) within 3.5 % RMS of one at --max-error 0.002."""
+    from cdbrdf.btf import CDBTF
+    from cdbrdf.synth.texels import tabulate_texels
+
+    denim = presets.model("denim")
+    grid = Grid.regular(theta_step_deg=30, phi_step_deg=90, kappa=[0.0, 0.22])
+    dense = tabulate_texels(denim, grid, texels=8, points_per_texel=16)
+    repeat = denim.heightfield(0.0).size_mm
+    default = CDBTF.from_values(dense, grid, repeat_mm=repeat, method="neural")
+    tight = CDBTF.from_values(dense, grid, repeat_mm=repeat, method="neural", max_error=0.002)
+    for btf, target in ((default, 0.03), (tight, 0.002)):
+        c = btf.compression
+        assert c["relative_rms_error"] <= target and max(c["relative_rms_error_per_kappa"]) <= target
+        err = np.sqrt(np.sum((btf.decode() - dense) ** 2) / np.sum(dense ** 2))
+        assert err == pytest.approx(c["relative_rms_error"], rel=1e-3, abs=1e-6)
+    a, b = default.decode(), tight.decode()
+    assert np.sqrt(np.sum((a - b) ** 2) / np.sum(b ** 2)) <= 0.035

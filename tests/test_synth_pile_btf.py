@@ -26,7 +26,7 @@ def pile(request):
 
 @pytest.fixture(scope="module")
 def btf(pile):
-    return tabulate_btf(pile, GRID, texels=8, max_error=0.0)
+    return tabulate_btf(pile, GRID, texels=8, max_error=0.0, method="pca")
 
 
 def test_layout_follows_the_preset_density(pile):
@@ -75,7 +75,7 @@ def test_a_convex_bend_opens_the_tufts(btf):
 
 def test_texels_see_the_ground_in_the_gaps(pile):
     """From above, a texel in a gap between tufts shows more of the ground's colour than one on a tuft."""
-    b = tabulate_btf(pile, Grid.regular(theta_step_deg=30, phi_step_deg=90, kappa=[0.0]), texels=16)
+    b = tabulate_btf(pile, Grid.regular(theta_step_deg=30, phi_step_deg=90, kappa=[0.0]), texels=16, method="pca")
     lay = tuft_layout(pile)
     rgb = b.evaluate(np.array([lay.centres_mm[0, 0], 0.5 * lay.repeat_mm[0]]),
                      np.array([lay.centres_mm[0, 1], lay.repeat_mm[1]]), 0.0, 0.0, 30.0, 0.0)

@@ -301,3 +301,79 @@ def test_page_checks_the_gpus_limits_for_the_components(browser, tmp_path):
         page.close()
     assert "b.h5: the CD-BTF is too large for this GPU's textures (components texture 1000000 x" in err
     assert "--rank N" in err and shown == err
+
+
+# -- a neural CD-BTF: the decoder in GLSL ----------------------------------------------------------
+def neural_btf(grid: cdbrdf.Grid, *, rank: int = 0, seed: int = 3) -> cdbrdf.CDBTF:
+    """A small neural CD-BTF fitted to random low-rank texels (a short fit: what matters is its decoder)."""
+    from cdbrdf.btf._neural import FitOptions
+
+    base = random_btf(grid, rank=3, texels=(6, 5), seed=seed)
+    btf = cdbrdf.CDBTF.from_values(base.decode(), grid, repeat_mm=REPEAT_MM, method="neural", max_error=0.9,
+                                   fit=FitOptions(steps=60, latent_dims=5, hidden=(12, 8)))
+    if rank == 0:
+        return btf
+    # residual components on top of the decoder (as a tight error target makes them)
+    rng = np.random.default_rng(seed)
+    basis = (0.02 * rng.normal(size=grid.shape + (rank, 3))).astype(np.float32)
+    return cdbrdf.CDBTF(btf.mean(), rng.uniform(-1, 1, (5, 6, rank)), basis, repeat_mm=REPEAT_MM,
+                        neural=btf.neural)
+
+
+@pytest.fixture(scope="module")
+def neural_page(browser, tmp_path_factory):
+    tables = [("n-aniso.h5", neural_btf(aniso_grid())), ("n-iso.h5", neural_btf(iso_grid(), rank=2, seed=5))]
+    index = export_viewer(tmp_path_factory.mktemp("vn") / "v", viewer_files(tables, meshes={}))
+    page, messages = open_page(browser, index.resolve().as_uri(), width=240, height=160)
+    page.messages = messages
+    yield page, [b for _, b in tables]
+    page.close()
+
+
+@needs_chromium
+@pytest.mark.slow
+@pytest.mark.parametrize("index", [0, 1])
+def test_gpu_neural_decode_matches_evaluate_at_every_footprint(neural_page, index):
+    page, btfs = neural_page
+    btf = btfs[index]
+    assert page.messages == []
+    assert btf.neural is not None and btf.rank == (0 if index == 0 else 2)
+    text = page.evaluate("cdbrdfViewer.state()")["btfText"]
+    assert "n-aniso.h5: CD-BTF, neural (a 12-8 decoder on 3 levels of codes" in text
+    assert "+ 2 of 2 residual components" in text
+    rng = np.random.default_rng(11 + index)
+    q = random_queries(rng, 400)
+    texel = max(REPEAT_MM[0] / btf.texels[0], REPEAT_MM[1] / btf.texels[1])
+    # the finest level, between levels, the tile mean (components: the viewer fades them at the last level only)
+    fp = texel * rng.choice([0.0, 0.5, 1.7, 3.0, 9.0] if btf.rank == 0 else [0.0, 0.5, 9.0], len(q))
+    gq = np.concatenate([q[:, 2:], q[:, :2], fp[:, None]], axis=1)
+    gpu = np.array(page.evaluate("([q, t]) => cdbrdfViewer.evaluateMany(q, {table: t})", [gq.tolist(), index]))
+    ref = btf.evaluate(*q.T, footprint_mm=fp)
+    assert np.abs(gpu - ref).max() <= 2e-4 * scale_of(btf)
+    far = fp >= 8 * texel  # beyond the pyramid: the tile mean
+    assert far.any()
+    np.testing.assert_allclose(gpu[far], btf.mean().evaluate(*q[far, 2:].T), rtol=1e-4, atol=1e-5)
+
+
+def test_neural_export_of_32_by_32_texels_on_the_papers_grid_is_small(tmp_path):
+    """The export carries the tile mean, the codes and the decoder: about a CDBRDF's size, not the texels'."""
+    from cdbrdf.btf._neural import N_FEATURES, Neural, level_shapes
+
+    rng = np.random.default_rng(0)
+    mean = materials.load("denim")
+    dims, hidden = 12, (64, 64)
+    lat = tuple(rng.normal(size=sh + (dims,)).astype(np.float16).astype(np.float32) for sh in level_shapes(32, 32))
+    sizes = [dims + N_FEATURES, *hidden, 3]
+    ws = tuple((0.1 * rng.normal(size=(a, b))).astype(np.float32) for a, b in zip(sizes[:-1], sizes[1:]))
+    bs = tuple(np.zeros(b, np.float32) for b in sizes[1:])
+    net = Neural(lat, ws, bs, (0.22, 1e-3, 0.0))
+    btf = cdbrdf.CDBTF(mean, np.zeros((32, 32, 0)), np.zeros(mean.shape[:-1] + (0, 3), np.float32),
+                       repeat_mm=REPEAT_MM, neural=net)
+    a = btf_asset(btf, name="denim-btf.h5")
+    nn = a.header["btf"]["neural"]
+    assert nn["layers"] == [6, 64, 64, 3] and [lv[:2] for lv in nn["levels"]] == [[32, 32], [16, 16], [8, 8],
+                                                                                   [4, 4], [2, 2]]
+    assert len(a.blob) < 4e6  # the mean twice (table and components) in float32, codes and decoder: 2.6 MB
+    index = export_viewer(tmp_path / "v", viewer_files([("denim-btf.h5", btf)], meshes={}))
+    total = sum(p.stat().st_size for p in index.parent.rglob("*") if p.is_file())
+    assert total < 20e6, total

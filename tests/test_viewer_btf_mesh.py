@@ -105,6 +105,10 @@ def test_cli_uv_scale_reaches_the_mesh_asset(files_on_disk, tmp_path, capsys):
                  "--export", str(tmp_path / "b")]) == 0
     assert json.loads((tmp_path / "b" / "assets" / "mesh-user.json").read_text())["uv_scale_mm"] == [4.0, 4.0]
     capsys.readouterr()
+    # none given: detected and said, as cdbrdf render detects it (the grid's 40 mm per UV unit)
+    assert main(["view", str(d / "weave.h5"), "--mesh", str(d / "grid.obj"), "--export", str(tmp_path / "d")]) == 0
+    assert "grid.obj: note: UV scale: 40 mm per UV unit (from the mesh's edges" in capsys.readouterr().err
+    assert json.loads((tmp_path / "d" / "assets" / "mesh-user.json").read_text())["uv_scale_mm"] == [40.0, 40.0]
     assert main(["view", str(d / "weave.h5"), "--mesh", str(d / "bare.obj"), "--export", str(tmp_path / "c")]) == 0
     assert "bare.obj: no UVs: the viewer shows the CD-BTF's tile mean on it" in capsys.readouterr().err
     assert json.loads((tmp_path / "c" / "assets" / "mesh-user.json").read_text())["uv"] is False
@@ -122,16 +126,16 @@ def test_cli_bad_uv_scales_are_one_line_errors(files_on_disk, tmp_path, capsys, 
     assert not (tmp_path / "v").exists()
 
 
-def test_cli_refuses_uv_scale_without_a_btf_or_a_mesh_in_one_line(files_on_disk, tmp_path, capsys):
+def test_cli_refuses_uv_scale_without_a_mesh_in_one_line(files_on_disk, tmp_path, capsys):
     d = files_on_disk
+    # a plain table takes it too: the UV scale of the mesh's maps, as cdbrdf render (recorded and said)
     assert main(["view", str(d / "denim.h5"), "--mesh", str(d / "grid.obj"), "--uv-scale", "10",
-                 "--export", str(tmp_path / "v")]) == 2
+                 "--export", str(tmp_path / "v")]) == 0
+    assert "grid.obj: note: UV scale: 10 mm per UV unit (given)" in capsys.readouterr().err
+    assert main(["view", str(d / "weave.h5"), "--uv-scale", "10", "--export", str(tmp_path / "w")]) == 2
     err = capsys.readouterr().err
-    assert err == "cdbrdf view: error: --uv-scale: only for a CD-BTF file (denim.h5 has no texels)\n"
-    assert main(["view", str(d / "weave.h5"), "--uv-scale", "10", "--export", str(tmp_path / "v")]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("cdbrdf view: error: --uv-scale: scales the UVs of --mesh MESH") and err.count("\n") == 1
-    assert not (tmp_path / "v").exists()
+    assert err.startswith("cdbrdf view: error: --uv-scale: only for --mesh MESH") and err.count("\n") == 1
+    assert not (tmp_path / "w").exists()
 
 
 # -- the page in headless Chromium ----------------------------------------------------------

@@ -21,7 +21,7 @@ from ._hdf5 import fail, one_line
 from .errors import FormatError, LimitError
 from .schema import SAMPLE_AXES, TableParts
 
-__all__ = ["read_in_child"]
+__all__ = ["read_in_child", "arrays_in_child"]
 
 
 #: The child's program. It runs as ``python -I -S -c`` (no environment variables of Python, no user or
@@ -60,32 +60,14 @@ def _die_with_parent(parent, cpu_s):
     threading.Thread(target=watch, daemon=True).start()
 
 
-def main():
+def _table_arrays(file):
     import json
-    parent, cpu_s, path_json, file = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], sys.argv[4]
-    _die_with_parent(parent, cpu_s)
-    sys.path[:0] = json.loads(path_json)
-    import io
     from pathlib import Path
 
-    import h5py
     import numpy as np
-    try:
-        h5py.h5pl.set_loading_state(0)  # no filter plug-in is loaded from anywhere
-    except (AttributeError, RuntimeError):
-        pass
     from cdbrdf import io as cio
-    from cdbrdf.errors import FormatError, LimitError
 
-    out = sys.stdout.buffer
-    out.write(b"ready\n")
-    out.flush()
-    try:
-        parts = cio.read_guarded(Path(file))
-    except (FormatError, LimitError) as exc:
-        out.write(b"error\n" + json.dumps([type(exc).__name__, str(exc)]).encode() + b"\n")
-        out.flush()
-        return
+    parts = cio.read_guarded(Path(file))
     arrays = {"values": parts.values, "attrs": np.array(json.dumps(parts.attrs))}
     for name, a in parts.axes.items():
         arrays["axis_" + name] = a
@@ -93,6 +75,42 @@ def main():
         a = getattr(parts, name)
         if a is not None:
             arrays[name] = a
+    return arrays
+
+
+def main():
+    import json
+    parent, cpu_s, path_json, file = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], sys.argv[4]
+    reader = sys.argv[5] if len(sys.argv) > 5 else "table"
+    _die_with_parent(parent, cpu_s)
+    sys.path[:0] = json.loads(path_json)
+    import importlib
+    import io
+
+    import h5py
+    import numpy as np
+    try:
+        h5py.h5pl.set_loading_state(0)  # no filter plug-in is loaded from anywhere
+    except (AttributeError, RuntimeError):
+        pass
+    from cdbrdf.errors import FormatError, LimitError
+
+    if reader == "table":
+        read = _table_arrays
+    else:  # "cdbrdf.package.module:function", a function of the file's path answering a dict of arrays
+        module, _, name = reader.partition(":")
+        if not module.startswith("cdbrdf."):
+            raise SystemExit("the reader must be a function of cdbrdf")
+        read = getattr(importlib.import_module(module), name)
+    out = sys.stdout.buffer
+    out.write(b"ready\n")
+    out.flush()
+    try:
+        arrays = read(file)
+    except (FormatError, LimitError) as exc:
+        out.write(b"error\n" + json.dumps([type(exc).__name__, str(exc)]).encode() + b"\n")
+        out.flush()
+        return
     buf = io.BytesIO()
     np.savez(buf, **arrays)
     out.write(b"ok\n" + buf.getvalue())
@@ -153,6 +171,29 @@ def read_in_child(path: Path, *, timeout_s: float, start_timeout_s: float) -> Ta
     per 10 MB) counts from the moment the child has imported its libraries
     (at most ``start_timeout_s``). Ctrl-C in the parent stops the child too.
     """
+    return _parts_from_npz(path, _run_child(path, "table", timeout_s=timeout_s, start_timeout_s=start_timeout_s))
+
+
+def arrays_in_child(path: Path, reader: str, *, timeout_s: float, start_timeout_s: float) -> dict[str, np.ndarray]:
+    """The arrays ``reader`` reads from an HDF5 file of another format, run in the isolated child process.
+
+    As :func:`read_in_child` (the same isolation and time limits), for the
+    HDF5 files of other programs that cdbrdf imports (a Keras network's
+    weights): ``reader`` names a function of cdbrdf, ``"cdbrdf.module:function"``,
+    that takes the file's path and returns a dict of NumPy arrays (no object
+    arrays), or raises :class:`~cdbrdf.errors.FormatError` /
+    :class:`~cdbrdf.errors.LimitError`, which is raised here with its message.
+    """
+    data = _run_child(path, reader, timeout_s=timeout_s, start_timeout_s=start_timeout_s)
+    try:
+        with np.load(_bytes_io.BytesIO(data), allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except (ValueError, KeyError, OSError, EOFError) as exc:  # pragma: no cover - the child writes it
+        raise fail(path, f"the reader's answer cannot be read ({one_line(exc)})") from None
+
+
+def _run_child(path: Path, reader: str, *, timeout_s: float, start_timeout_s: float) -> bytes:
+    """Run :data:`_CHILD` with ``reader`` on ``path``; its .npz answer (bytes), or its error raised."""
     import os
     import selectors
     import shutil
@@ -165,7 +206,7 @@ def read_in_child(path: Path, *, timeout_s: float, start_timeout_s: float) -> Ta
     folder = tempfile.mkdtemp(prefix="cdbrdf-read-")
     cpu_s = int(start_s + timeout) + 5
     cmd = [sys.executable, "-I", "-S", "-c", _CHILD, str(os.getpid()), str(cpu_s), json.dumps(_child_path()),
-           str(path.absolute())]
+           str(path.absolute()), reader]
     chunks: dict[str, list[bytes]] = {"out": [], "err": []}
     proc = None
     try:
@@ -218,6 +259,6 @@ def read_in_child(path: Path, *, timeout_s: float, start_timeout_s: float) -> Ta
     if kind == b"error":
         name, message = json.loads(payload.decode("utf-8"))
         raise (LimitError if name == "LimitError" else FormatError)(message)
-    return _parts_from_npz(path, payload)
+    return payload
 
 

@@ -39,11 +39,13 @@ COMMANDS: tuple[str, ...] = (
     "mosaic",
     "import",
     "stack",
+    "bend",
     "plan",
     "measure",
     "simulate-capture",
     "curvature",
     "render",
+    "export",
     "synth",
     "view",
 )
@@ -152,6 +154,7 @@ _MEMORY_HINTS: dict[str, str] = {
     "plan": "CDBRDF_MAX_CAPTURE_ROWS",
     "simulate-capture": "CDBRDF_MAX_CAPTURE_ROWS, CDBRDF_MAX_RENDER_PIXELS",
     "synth": "CDBRDF_MAX_TABLE_SAMPLES",
+    "bend": "CDBRDF_MAX_TABLE_SAMPLES",
     "measure": "CDBRDF_MAX_IMAGE_PIXELS, CDBRDF_MAX_TABLE_SAMPLES",
 }
 

@@ -104,8 +104,9 @@ class DemoConfig:
         Width of the photographs' field at the stand, mm (the pixel size is
         ``field_mm / image_px``; the 7 x 7 patch the measurement averages is
         7 pixels of that size).
-    seconds_per_photo, seconds_per_render_spp_mpix
-        Rough costs on a 2-core machine, for the time estimate printed up front.
+    seconds_per_photo, seconds_per_render_spp_mpix, seconds_fill
+        Rough costs on a 2-core machine, for the time estimate printed up front
+        (``seconds_fill``: the default fill's model fit, per material).
     """
 
     name: str
@@ -118,6 +119,7 @@ class DemoConfig:
     field_mm: float = 1.0
     seconds_per_photo: float = 0.002  # rendering, noise, writing and measuring one photograph (2 cores)
     seconds_per_render_spp_mpix: float = 0.25
+    seconds_fill: float = 60.0
 
     @property
     def n_photos(self) -> int:
@@ -141,7 +143,7 @@ class DemoConfig:
         w, h = self.render_size
         photos = self.n_photos * self.seconds_per_photo
         renders = 4 * self.render_spp * w * h / 1e6 * self.seconds_per_render_spp_mpix
-        return n_materials * (photos + renders + 10.0) + 15.0
+        return n_materials * (photos + renders + self.seconds_fill + 10.0) + 15.0
 
 
 #: The two standard runs: the paper's grid, and a coarse one for a quick look.
@@ -160,6 +162,7 @@ CONFIGS: dict[str, DemoConfig] = {
         render_size=(384, 256),
         render_spp=16,
         keep_capture=True,
+        seconds_fill=20.0,
     ),
     "full": DemoConfig(
         name="full",

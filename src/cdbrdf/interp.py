@@ -2,10 +2,12 @@
 
 This module states the lookup rule once; every implementation (the numba
 kernels in :mod:`cdbrdf._kernels`, the Dr.Jit lookup of the renderer in
-:mod:`cdbrdf.render._lookup_jit`, the GLSL lookup of the browser viewer in
-``cdbrdf/view/assets/viewer.js`` (float32, texelFetch on the grid's values
-packed by :mod:`cdbrdf.view.asset`; tested against :func:`evaluate` in
-``tests/test_viewer.py``), and :func:`evaluate_reference`, the slow
+:mod:`cdbrdf.render._lookup_jit`, the GLSL lookup of the browser pages in
+``cdbrdf/view/assets/lookup.js`` (float32, texelFetch on the grid's values
+packed by :mod:`cdbrdf.view.asset` or decoded from a glTF asset's texture,
+:mod:`cdbrdf.gltf_table`; shared by the viewer and the glTF renderer, tested
+against :func:`evaluate` in ``tests/test_viewer.py`` and by the conformance
+suite), and :func:`evaluate_reference`, the slow
 readable statement) consumes the same :class:`LookupGrid` built by
 :func:`prepare` and the constants below.
 

@@ -87,7 +87,7 @@ __all__ = [
 #: Value of the global attribute ``format``.
 FORMAT_NAME = "cdbrdf"
 #: ``MAJOR.MINOR`` of the layout: readers accept any minor version of their major version.
-FORMAT_VERSION = "1.4"
+FORMAT_VERSION = "1.5"
 
 # -- dimensions -------------------------------------------------------------------------
 #: Dimension names of the reflectance, in storage order (``docs/conventions.md``).
@@ -148,13 +148,17 @@ FILL_SLOT = "fill_slot"
 #: nearest measured direction at the same curvature (the paper's rule);
 #: ``nearest_stand``: copied from the same direction on the nearest stand that
 #: measured it; ``kappa_fit``: a line fitted along the curvature to the same
-#: direction on the stands that measured it (``docs/capture.md``).
+#: direction on the stands that measured it; ``model`` (since 1.5): a fitted fabric model's change with
+#: curvature applied to the same direction measured at other curvatures: on the stands that measured it
+#: (the measurement's model fill, ``docs/capture.md``) or the flat measurement alone (``cdbrdf bend``:
+#: the direction and its mirror, :mod:`cdbrdf.bend`).
 FILL_METHOD_CODES: Mapping[str, int] = MappingProxyType({
     "measured": 0,
     "unknown": 1,
     "nearest": 2,
     "nearest_stand": 3,
     "kappa_fit": 4,
+    "model": 5,
 })
 #: Data variables and their dimensions, in the order they are written.
 DATA_VARIABLES: Mapping[str, tuple[str, ...]] = MappingProxyType({

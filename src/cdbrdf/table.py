@@ -33,6 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 from . import io as _io
 from . import limits
 from .errors import FormatError, TableError
+from .gltf_table import is_gltf, read_gltf
 from .grid import MAX_ABS_KAPPA, MIN_AXIS_STEP, PAPER_KAPPA, PAPER_PHI, PAPER_THETA, Grid, read_array
 from .provenance import (
     check_fill_method_codes,
@@ -665,12 +666,11 @@ def _same_optional(a: NDArray | None, b: NDArray | None) -> bool:
 
 
 def load(path: str | PathLike[str]) -> CDBRDF:
-    """Read a CDBRDF file written by :meth:`CDBRDF.save` (any 1.x version).
+    """Read a CDBRDF file written by :meth:`CDBRDF.save` (any 1.x version), or a glTF export's table.
 
-    The file is read and checked by
-    :func:`cdbrdf.io.read` (files without HDF5 metadata checksums in a child
-    process stopped after :data:`cdbrdf.io.LEGACY_READ_TIMEOUT_S` seconds plus
-    one per 20 MB; re-saving such a file makes it fast), then the table is built.
+    A ``.glb``/``.gltf`` of ``cdbrdf export``: :func:`cdbrdf.gltf_table.read_gltf`; else :func:`cdbrdf.io.read`
+    (files without HDF5 metadata checksums in a child process stopped after
+    :data:`cdbrdf.io.LEGACY_READ_TIMEOUT_S` seconds plus one per 20 MB; re-saving such a file makes it fast).
 
     Parameters
     ----------
@@ -693,7 +693,7 @@ def load(path: str | PathLike[str]) -> CDBRDF:
     LimitError
         When the file declares more samples than the ``table_samples`` limit.
     """
-    parts = _io.read(path)
+    parts = read_gltf(path) if is_gltf(path) else _io.read(path)
     try:
         return CDBRDF(parts.values, **parts.table_kwargs())
     except TableError as exc:

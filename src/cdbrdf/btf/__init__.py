@@ -11,6 +11,6 @@
 from __future__ import annotations
 
 from .file import is_btf
-from .table import CDBTF, COMPRESSION_ATTRS, DEFAULT_MAX_ERROR, MAX_RANK, load
+from .table import CDBTF, COMPRESSION_ATTRS, DEFAULT_MAX_ERROR, DEFAULT_METHOD, MAX_RANK, METHODS, load
 
-__all__ = ["CDBTF", "COMPRESSION_ATTRS", "DEFAULT_MAX_ERROR", "MAX_RANK", "is_btf", "load"]
+__all__ = ["CDBTF", "COMPRESSION_ATTRS", "DEFAULT_MAX_ERROR", "DEFAULT_METHOD", "MAX_RANK", "METHODS", "is_btf", "load"]

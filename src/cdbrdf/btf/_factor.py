@@ -45,8 +45,13 @@ class Factors(NamedTuple):
     spectrum: NDArray[np.float64]  # relative RMS error of every rank 0 .. max_rank (whole table)
 
 
-def factorise(dense: NDArray[np.floating], n_kappa: int, *, max_error: float, max_rank: int) -> Factors:
+def factorise(dense: NDArray[np.floating], n_kappa: int, *, max_error: float, max_rank: int,
+              energy_per_kappa: NDArray[np.floating] | None = None) -> Factors:
     """Factorise ``dense (n_texels, n_samples)`` (kappa-major columns) at the smallest rank meeting ``max_error``.
+
+    ``energy_per_kappa``: the squared norm of the uncompressed texels in each
+    curvature slice that the errors are relative to, when ``dense`` is what
+    another representation left of them (default: ``dense``'s own).
 
     When no rank up to ``max_rank`` meets the target the factorisation of
     ``max_rank`` is returned (its errors say how far it is); a warning is logged.
@@ -80,6 +85,8 @@ def factorise(dense: NDArray[np.floating], n_kappa: int, *, max_error: float, ma
         kk = np.arange(c0, c1) // per_k
         for k in np.unique(kk):
             energy_k[k] += np.einsum("ij,ij->i", p[:, kk == k], p[:, kk == k])
+    if energy_per_kappa is not None:
+        full_k = np.asarray(energy_per_kappa, dtype=np.float64).reshape(n_kappa)
     safe_k = np.where(full_k > 0, full_k, 1.0)
     cum = np.concatenate([np.zeros((n_kappa, 1)), np.cumsum(energy_k, axis=1)], axis=1)
     err_k = np.sqrt(np.maximum(dev_k[:, None] - cum, 0.0) / safe_k[:, None])  # (n_kappa, r_max + 1)

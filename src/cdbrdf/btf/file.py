@@ -13,6 +13,20 @@ fabric; the CD-BTF adds (``docs/format.md``, "The CD-BTF variables"):
   ``btf_relative_rms_error_per_kappa``, ``btf_compression_ratio``, optionally
   ``btf_truncated_from`` (:meth:`CDBTF.truncated`) and ``btf_sha256`` (the digest of the CD-BTF's variables as stored).
 
+A *neural* CD-BTF (schema 2 of these variables, ``btf_format_version = 2``;
+``docs/btf.md``) adds a dimension ``latent_texel`` (the texels of every
+pyramid level, level after level, row-major) and ``latent``,
+``btf_latents (latent_texel, latent)`` float16, ``decoder_parameter`` and
+``btf_decoder (decoder_parameter)`` float32 (each layer's weights, row-major
+``(n_in, n_out)``, then its biases), and the attributes
+``btf_format_version`` (2), ``btf_latent_levels`` (``n_v, n_u`` of each
+level), ``btf_decoder_layers`` (the widths), ``btf_decoder_constants``
+(kappa scale, luminance epsilon and offset of the decoder's inputs),
+``btf_neural_relative_rms_error`` and ``btf_fit_seconds``; its component count
+is ``btf_residual_rank`` (not ``btf_rank``, so that a reader of schema 1
+refuses the file instead of reading the residual components as the texels).
+Files without ``btf_format_version`` are schema 1 (PCA) and still load.
+
 Everything is written in the one atomic write of the CDBRDF file.
 """
 
@@ -32,13 +46,21 @@ from ..schema import SAMPLE_AXES
 
 if TYPE_CHECKING:
     from ..table import CDBRDF
+    from ._neural import Neural
 
-__all__ = ["BTFParts", "write", "read", "is_btf", "TEXEL_U", "TEXEL_V", "COMPONENT", "WEIGHTS", "BASIS"]
+__all__ = ["BTFParts", "write", "read", "is_btf", "TEXEL_U", "TEXEL_V", "COMPONENT", "WEIGHTS", "BASIS",
+           "LATENTS", "DECODER", "SCHEMA_VERSION"]
 
 TEXEL_U, TEXEL_V, COMPONENT = "texel_u", "texel_v", "component"
 WEIGHTS, BASIS = "btf_weights", "btf_basis"
+LATENT_TEXEL, LATENT, DECODER_PARAMETER = "latent_texel", "latent", "decoder_parameter"
+LATENTS, DECODER = "btf_latents", "btf_decoder"
 _DIGEST = "btf_sha256"
-_DIMS = {WEIGHTS: (TEXEL_V, TEXEL_U, COMPONENT), BASIS: (*SAMPLE_AXES, COMPONENT, "channel")}
+_DIMS = {WEIGHTS: (TEXEL_V, TEXEL_U, COMPONENT), BASIS: (*SAMPLE_AXES, COMPONENT, "channel"),
+         LATENTS: (LATENT_TEXEL, LATENT), DECODER: (DECODER_PARAMETER,)}
+
+#: The newest schema of the CD-BTF variables this version reads and writes (1: PCA; 2: neural).
+SCHEMA_VERSION = 2
 
 
 class BTFParts(NamedTuple):
@@ -49,6 +71,7 @@ class BTFParts(NamedTuple):
     basis: np.ndarray  # grid shape + (rank, channel) float32
     repeat_mm: tuple[float, float]
     compression: dict[str, Any]
+    neural: Neural | None = None
 
     @property
     def texels(self) -> tuple[int, int]:
@@ -63,10 +86,36 @@ class BTFParts(NamedTuple):
         return ((np.arange(nu) + 0.5) * self.repeat_mm[0] / nu, (np.arange(nv) + 0.5) * self.repeat_mm[1] / nv)
 
 
+def _flat_latents(net: Neural) -> np.ndarray:
+    return np.concatenate([z.reshape(-1, z.shape[-1]) for z in net.latents]).astype("<f2")
+
+
+def _flat_decoder(net: Neural) -> np.ndarray:
+    parts = [a.reshape(-1) for w, b in zip(net.weights, net.biases) for a in (w, b)]
+    return np.concatenate(parts).astype("<f4")
+
+
 def _stored(btf: BTFParts) -> list[tuple[str, np.ndarray]]:
     cu, cv = btf.texel_centres_mm()
-    return [(TEXEL_U, cu), (TEXEL_V, cv), (WEIGHTS, np.asarray(btf.weights, "<f4")),
-            (BASIS, np.asarray(btf.basis, "<f4"))]
+    out = [(TEXEL_U, cu), (TEXEL_V, cv), (WEIGHTS, np.asarray(btf.weights, "<f4")),
+           (BASIS, np.asarray(btf.basis, "<f4"))]
+    if btf.neural is not None:
+        out += [(LATENTS, _flat_latents(btf.neural)), (DECODER, _flat_decoder(btf.neural))]
+    return out
+
+
+def _write_neural(f: Any, net: Neural, storage: dict[str, Any]) -> None:
+    lat, dec = _flat_latents(net), _flat_decoder(net)
+    f.dimensions[LATENT_TEXEL], f.dimensions[LATENT] = lat.shape
+    f.dimensions[DECODER_PARAMETER] = dec.size
+    var = f.create_variable(LATENTS, _DIMS[LATENTS], "f2", data=lat, chunks=lat.shape, **storage)
+    var.attrs["long_name"] = "latent code of each texel of each pyramid level"
+    var = f.create_variable(DECODER, _DIMS[DECODER], "f4", data=dec, chunks=dec.shape, **storage)
+    var.attrs["long_name"] = "the decoder's weights and biases, layer after layer"
+    f.attrs["btf_format_version"] = np.int64(SCHEMA_VERSION)
+    f.attrs["btf_latent_levels"] = np.array([n for z in net.latents for n in z.shape[:2]], dtype=np.int64)
+    f.attrs["btf_decoder_layers"] = np.array(net.layers, dtype=np.int64)
+    f.attrs["btf_decoder_constants"] = np.array(net.constants, dtype=np.float64)
 
 
 def write(btf: BTFParts, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
@@ -102,9 +151,14 @@ def write(btf: BTFParts, path: str | PathLike[str], *, compression: str | None =
             b = f.create_variable(BASIS, _DIMS[BASIS], "f4", data=btf.basis, chunks=chunks, **storage)
             b.attrs["long_name"] = "components of the texels' deviation from the tile mean"
         f.attrs["btf_repeat_mm"] = np.array(btf.repeat_mm, dtype=np.float64)
-        f.attrs["btf_method"] = str(comp.get("method", "pca"))
-        f.attrs["btf_rank"] = np.int64(btf.rank)
-        for key in ("max_error", "relative_rms_error", "compression_ratio"):
+        f.attrs["btf_method"] = "pca" if btf.neural is None else "neural"
+        if btf.neural is None:
+            f.attrs["btf_rank"] = np.int64(btf.rank)
+        else:
+            f.attrs["btf_residual_rank"] = np.int64(btf.rank)
+            _write_neural(f, btf.neural, storage)
+        for key in ("max_error", "relative_rms_error", "compression_ratio", "neural_relative_rms_error",
+                    "fit_seconds"):
             if key in comp:
                 f.attrs[f"btf_{key}"] = float(comp[key])
         if "relative_rms_error_per_kappa" in comp:
@@ -152,6 +206,44 @@ def _scalar(path: Path, attrs: Any, name: str) -> float:
     return float(a[0])
 
 
+def _ints(path: Path, f: Any, name: str) -> list[int]:
+    a = np.asarray(get_attr(path, f.attrs, name)).reshape(-1)
+    if a.dtype.kind not in "iu" or a.size > 64 or np.any(a < 1) or np.any(a > 1 << 20):
+        raise fail(path, f"global attribute {name!r} is not a short list of positive integers")
+    return [int(x) for x in a]
+
+
+def _read_neural(path: Path, f: Any, nu: int, nv: int, n_channels: int) -> Neural:
+    """The neural part of a schema-2 file: the latent pyramid and the decoder, shapes checked."""
+    from ._neural import N_FEATURES, Neural, level_shapes
+
+    levels = _ints(path, f, "btf_latent_levels")
+    layers = _ints(path, f, "btf_decoder_layers")
+    shapes = [(levels[i], levels[i + 1]) for i in range(0, len(levels) - 1, 2)]
+    if len(levels) % 2 or shapes != level_shapes(nu, nv):
+        raise fail(path, f"'btf_latent_levels' {levels} do not match {nu} x {nv} texels")
+    if len(layers) < 2 or layers[-1] != n_channels or layers[0] <= N_FEATURES:
+        raise fail(path, f"'btf_decoder_layers' {layers} do not end in {n_channels} channels or take too few inputs")
+    dims = layers[0] - N_FEATURES
+    n_lat = sum(a * b for a, b in shapes)
+    n_par = sum(a * b + b for a, b in zip(layers[:-1], layers[1:]))
+    lat = _array(path, f, LATENTS, (n_lat, dims)).astype(np.float32)
+    dec = _array(path, f, DECODER, (n_par,)).astype(np.float32)
+    const = np.asarray(get_attr(path, f.attrs, "btf_decoder_constants"), dtype=np.float64).reshape(-1)
+    if const.size != 3 or not np.all(np.isfinite(const)) or const[0] <= 0 or const[1] <= 0:
+        raise fail(path, "global attribute 'btf_decoder_constants' is not (kappa scale > 0, epsilon > 0, offset)")
+    latents, start = [], 0
+    for a, b in shapes:
+        latents.append(lat[start : start + a * b].reshape(a, b, dims))
+        start += a * b
+    ws, bs, start = [], [], 0
+    for a, b in zip(layers[:-1], layers[1:]):
+        ws.append(dec[start : start + a * b].reshape(a, b))
+        bs.append(dec[start + a * b : start + a * b + b])
+        start += a * b + b
+    return Neural(tuple(latents), tuple(ws), tuple(bs), (float(const[0]), float(const[1]), float(const[2])))
+
+
 def read(path: str | PathLike[str]) -> BTFParts:
     """Read a CD-BTF file written by :meth:`cdbrdf.btf.CDBTF.save` (:func:`cdbrdf.btf.load` builds the object).
 
@@ -183,7 +275,13 @@ def read(path: str | PathLike[str]) -> BTFParts:
                           "cdbrdf.load")
         repeat = np.asarray(get_attr(p, f.attrs, "btf_repeat_mm"), dtype=np.float64).reshape(-1)
         method = get_attr_str(p, f.attrs, "btf_method")
-        rank = int(_scalar(p, f.attrs, "btf_rank"))
+        version = int(_scalar(p, f.attrs, "btf_format_version")) if "btf_format_version" in f.attrs else 1
+        if version not in (1, SCHEMA_VERSION):
+            raise fail(p, f"CD-BTF variables of schema {version}: this cdbrdf reads schemas 1 and {SCHEMA_VERSION} "
+                          "(a newer cdbrdf wrote it)")
+        if (method == "neural") != (version == 2):
+            raise fail(p, f"'btf_method' {method!r} does not match the CD-BTF schema {version}")
+        rank = int(_scalar(p, f.attrs, "btf_rank" if version == 1 else "btf_residual_rank"))
         nu, nv = (int(f[n].shape[0]) if n in f else -1 for n in (TEXEL_U, TEXEL_V))
         if nu < 1 or nv < 1 or not 0 <= rank <= 4096:
             raise fail(p, f"texel axes or rank missing or invalid (texels {nu} x {nv}, rank {rank})")
@@ -195,8 +293,10 @@ def read(path: str | PathLike[str]) -> BTFParts:
         else:
             weights = np.zeros((nv, nu, 0), np.float32)
             basis = np.zeros(mean.shape[:-1] + (0, mean.n_channels), np.float32)
+        net = _read_neural(p, f, nu, nv, mean.n_channels) if version == 2 else None
         comp: dict[str, Any] = {"method": method, "rank": rank}
-        for key in ("max_error", "relative_rms_error", "compression_ratio"):
+        for key in ("max_error", "relative_rms_error", "compression_ratio", "neural_relative_rms_error",
+                    "fit_seconds"):
             if f"btf_{key}" in f.attrs:
                 comp[key] = _scalar(p, f.attrs, f"btf_{key}")
         if "btf_relative_rms_error_per_kappa" in f.attrs:
@@ -207,7 +307,7 @@ def read(path: str | PathLike[str]) -> BTFParts:
         stored = np.asarray(get_attr(p, f.attrs, _DIGEST)) if _DIGEST in f.attrs else None
     if repeat.size != 2 or not np.all(np.isfinite(repeat)) or np.any(repeat <= 0):
         raise fail(p, f"global attribute 'btf_repeat_mm' is not two positive sizes: {repeat!r}")
-    btf = BTFParts(mean, weights, basis, (float(repeat[0]), float(repeat[1])), comp)
+    btf = BTFParts(mean, weights, basis, (float(repeat[0]), float(repeat[1])), comp, net)
     if stored is None or stored.dtype != np.uint8 or stored.shape != (32,):
         raise fail(p, f"global attribute {_DIGEST!r} is missing or not 32 bytes")
     if not np.array_equal(stored, data_digest(_stored(btf))):

@@ -22,6 +22,7 @@ measured in mm of the flat repeat.
 from __future__ import annotations
 
 import copy
+import logging
 from collections.abc import Mapping
 from os import PathLike
 from typing import TYPE_CHECKING, Any
@@ -35,8 +36,11 @@ from ..table import CDBRDF
 
 if TYPE_CHECKING:
     from ..interp import LookupGrid
+    from ._neural import FitOptions, Neural
 
-__all__ = ["CDBTF", "COMPRESSION_ATTRS", "DEFAULT_MAX_ERROR", "MAX_RANK", "load"]
+__all__ = ["CDBTF", "COMPRESSION_ATTRS", "DEFAULT_MAX_ERROR", "DEFAULT_METHOD", "MAX_RANK", "METHODS", "load"]
+
+_LOG = logging.getLogger(__name__)
 
 #: Relative RMS error the compression aims at unless told otherwise.
 DEFAULT_MAX_ERROR = 0.03
@@ -46,7 +50,14 @@ MAX_RANK = 256
 
 #: The entries of :attr:`CDBTF.compression`.
 COMPRESSION_ATTRS = ("method", "rank", "max_error", "relative_rms_error", "relative_rms_error_per_kappa",
-                     "compression_ratio", "truncated_from")
+                     "compression_ratio", "truncated_from", "neural_relative_rms_error", "fit_seconds")
+
+#: Valid values of :meth:`CDBTF.from_values`'s ``method``: the representation of the texels.
+METHODS = ("neural", "pca")
+
+#: The representation ``cdbrdf synth --btf`` makes (:func:`cdbrdf.synth.texels.tabulate_btf`);
+#: :meth:`CDBTF.from_values` keeps ``"pca"`` unless told (a measured CD-BTF, small tables).
+DEFAULT_METHOD = "neural"
 
 #: Queries looked up per chunk (bounds the memory of the ``(1 + rank) x channels`` lookups).
 _CHUNK = 1 << 15
@@ -85,10 +96,10 @@ class CDBTF:
         When shapes disagree, values are not finite or sizes are not positive.
     """
 
-    __slots__ = ("_mean", "_weights", "_basis", "_repeat", "_compression", "_lookup")
+    __slots__ = ("_mean", "_weights", "_basis", "_repeat", "_compression", "_lookup", "_neural")
 
     def __init__(self, mean: CDBRDF, weights: ArrayLike, basis: ArrayLike, *, repeat_mm: ArrayLike,
-                 compression: Mapping[str, Any] | None = None) -> None:
+                 compression: Mapping[str, Any] | None = None, neural: Neural | None = None) -> None:
         if not isinstance(mean, CDBRDF):
             raise TableError(f"mean: expected a cdbrdf.CDBRDF, got {type(mean).__name__}")
         w = read_array("weights", weights).astype(np.float32)
@@ -102,19 +113,25 @@ class CDBTF:
             if not np.all(np.isfinite(a)):
                 raise TableError(f"{name}: contains NaN or infinite values")
             a.setflags(write=False)
+        if neural is not None:
+            from ._neural import check
+
+            check(neural, texels=(w.shape[1], w.shape[0]), n_channels=mean.n_channels)
         self._mean = mean
         self._weights = w
         self._basis = b
         self._repeat = _positive_pair("repeat_mm", repeat_mm)
         self._compression = copy.deepcopy(dict(compression or {}))
         self._lookup: LookupGrid | None = None
+        self._neural = neural
 
     # -- construction from dense texels ---------------------------------------------
     @classmethod
     def from_values(cls, values: ArrayLike, grid: Grid, *, repeat_mm: ArrayLike,
                     max_error: float = DEFAULT_MAX_ERROR, max_rank: int = MAX_RANK,
-                    attrs: Mapping[str, Any] | None = None, mean_kwargs: Mapping[str, Any] | None = None) -> CDBTF:
-        """Compress dense texels: the tile mean and the smallest factorisation meeting ``max_error``.
+                    attrs: Mapping[str, Any] | None = None, mean_kwargs: Mapping[str, Any] | None = None,
+                    method: str = "pca", fit: FitOptions | None = None) -> CDBTF:
+        """Compress dense texels: the tile mean and the smallest representation meeting ``max_error``.
 
         Parameters
         ----------
@@ -136,6 +153,18 @@ class CDBTF:
             the measured mask and the fill's per-sample provenance of a
             measured CD-BTF (``measured``, ``fill_source``, ``fill_method``,
             ``fill_sources``, ``fill_weights``; the same for every texel).
+        method
+            One of :data:`METHODS`: ``"pca"`` (default: components only) or
+            ``"neural"`` (per-texel latent codes and a shared decoder
+            modulating the tile mean, plus as many residual components as
+            ``max_error`` needs; ``docs/btf.md``; what ``cdbrdf synth --btf``
+            makes, :data:`DEFAULT_METHOD`). When the decoder misses
+            ``max_error`` and a PCA alone meets it in fewer bytes than the
+            decoder plus residual components, the PCA is returned (its
+            record keeps the decoder's error, ``neural_relative_rms_error``).
+        fit
+            How the neural part is fitted (``cdbrdf.btf._neural.FitOptions``;
+            default: the measured choice).
 
         Returns
         -------
@@ -150,29 +179,52 @@ class CDBTF:
             raise TableError(f"max_error: expected a fraction in [0, 1), got {max_error!r}")
         if isinstance(max_rank, bool) or not isinstance(max_rank, int) or not 0 <= max_rank <= MAX_RANK:
             raise TableError(f"max_rank: expected an integer in [0, {MAX_RANK}], got {max_rank!r}")
+        if method not in METHODS:
+            raise TableError(f"method: {method!r} is not one of {', '.join(METHODS)}")
         v = read_array("values", values)
         if v.ndim != 8 or v.shape[2:7] != grid.shape:
             raise TableError(f"values: expected (n_v, n_u) + {grid.shape} + (channels,), got shape {v.shape}")
         if not np.all(np.isfinite(v)):
             raise TableError("values: contains NaN or infinite values")
-        nv, nu = v.shape[:2]
-        nc = v.shape[-1]
-        dense = v.reshape(nv * nu, -1)
-        f = factorise(dense, grid.shape[0], max_error=float(max_error), max_rank=max_rank)
         extra = dict(mean_kwargs or {})
         bad = sorted(set(extra) & {"values", "attrs", "symmetry", *grid.axes()})
         if bad:
             raise TableError(f"mean_kwargs: {', '.join(bad)} cannot be given here (from_values sets them)")
+        nv, nu = v.shape[:2]
+        nc = v.shape[-1]
+        dense = v.reshape(nv * nu, -1)
+        if method == "neural":
+            from ._neural import compress
+
+            m16, net, residual, comp = compress(v, grid, max_error=float(max_error), max_rank=max_rank, options=fit)
+            mean = CDBRDF(m16, **grid.axes(), attrs=attrs, symmetry=grid.symmetry, **extra)
+            out = cls(mean, residual.weights.reshape(nv, nu, -1),
+                      np.moveaxis(residual.basis.reshape((-1,) + grid.shape + (nc,)), 0, -2),
+                      repeat_mm=repeat_mm, compression=comp, neural=net)
+            out._compression["compression_ratio"] = out.nbytes_ratio()
+            if out.rank == 0:
+                return out
+            # the decoder missed the target: a PCA alone may need fewer bytes than the decoder plus components
+            pca = cls.from_values(v, grid, repeat_mm=repeat_mm, max_error=max_error, max_rank=max_rank, attrs=attrs,
+                                  mean_kwargs=mean_kwargs, method="pca")
+            if pca.nbytes_ratio() <= out.nbytes_ratio():
+                return out
+            for key in ("neural_relative_rms_error", "fit_seconds"):
+                pca._compression[key] = comp[key]
+            _LOG.info("the error target %g needs residual components after the decoder (%d, %.1f:1); the PCA "
+                      "alone is smaller (rank %d, %.1f:1) and is kept", max_error, out.rank, out.nbytes_ratio(),
+                      pca.rank, pca.nbytes_ratio())
+            return pca
+        f = factorise(dense, grid.shape[0], max_error=float(max_error), max_rank=max_rank)
         mean = CDBRDF(f.mean.reshape(grid.shape + (nc,)).astype(np.float32), **grid.axes(), attrs=attrs,
                       symmetry=grid.symmetry, **extra)
         rank = f.weights.shape[1]
         basis = np.moveaxis(f.basis.reshape((rank,) + grid.shape + (nc,)), 0, -2)
-        raw = dense.size * 4
-        stored = (f.mean.size + f.basis.size + f.weights.size) * 4
         comp = {"method": "pca", "rank": rank, "max_error": float(max_error),
-                "relative_rms_error": f.error, "relative_rms_error_per_kappa": [float(e) for e in f.error_per_kappa],
-                "compression_ratio": raw / stored}
-        return cls(mean, f.weights.reshape(nv, nu, rank), basis, repeat_mm=repeat_mm, compression=comp)
+                "relative_rms_error": f.error, "relative_rms_error_per_kappa": [float(e) for e in f.error_per_kappa]}
+        out = cls(mean, f.weights.reshape(nv, nu, rank), basis, repeat_mm=repeat_mm, compression=comp)
+        out._compression["compression_ratio"] = out.nbytes_ratio()
+        return out
 
     # -- properties -------------------------------------------------------------------
     @property
@@ -220,6 +272,16 @@ class CDBTF:
         """The factorisation's record: :data:`COMPRESSION_ATTRS` (a copy)."""
         return copy.deepcopy(self._compression)
 
+    @property
+    def neural(self) -> Neural | None:
+        """The neural part (latent pyramid and decoder), or None for a CD-BTF of components only (PCA)."""
+        return self._neural
+
+    @property
+    def method(self) -> str:
+        """``"neural"`` or ``"pca"``: the representation of the texels (:data:`METHODS`)."""
+        return "pca" if self._neural is None else "neural"
+
     def mean(self) -> CDBRDF:
         """The tile mean: what a patch of whole repeats reflects.
 
@@ -243,7 +305,7 @@ class CDBTF:
         return (np.arange(nu) + 0.5) * su / nu, (np.arange(nv) + 0.5) * sv / nv
 
     def decode(self) -> NDArray[np.float32]:
-        """The decoded texels at the grid's samples.
+        """The decoded texels at the grid's samples (the finest level).
 
         Returns
         -------
@@ -254,7 +316,12 @@ class CDBTF:
         m = self._mean.values.astype(np.float32)
         basis = np.moveaxis(self._basis, -2, 0).reshape(r, m.size)  # (rank, samples * channels)
         out = (self._weights.reshape(nv * nu, r) @ basis).reshape((nv, nu) + m.shape)
-        out += m
+        if self._neural is None:
+            out += m
+        else:
+            from ._neural import decode_grid
+
+            out += decode_grid(self._neural, self.grid, m).reshape(out.shape)
         return out
 
     def truncated(self, rank: int) -> CDBTF:
@@ -307,6 +374,9 @@ class CDBTF:
             stored[k] = nv * nu * float(m[k].reshape(-1) @ m[k].reshape(-1)) + 2.0 * float(wsum @ mb) \
                 + float(np.sum(gw * gb))
             dropped[k] = float(np.sum(gw[r:, r:] * gb[r:, r:]))
+        if self._neural is not None:  # the stored energy of the decoded texels (the neural part is not a mean)
+            d = self.decode().astype(np.float64)
+            stored = np.array([float(np.sum(d[:, :, k] ** 2)) for k in range(nk)])
         comp = self.compression
         err_k = np.asarray(comp.get("relative_rms_error_per_kappa", np.zeros(nk)), dtype=np.float64)
         if err_k.shape != (nk,) or not np.all((err_k >= 0) & (err_k < 1)):
@@ -319,7 +389,7 @@ class CDBTF:
         comp["rank"] = r
         comp["truncated_from"] = int(comp.get("truncated_from") or full)
         out = CDBTF(self._mean, self._weights[..., :r], self._basis[..., :r, :], repeat_mm=self._repeat,
-                    compression=comp)
+                    compression=comp, neural=self._neural)
         comp["compression_ratio"] = out.nbytes_ratio()
         out._compression = comp
         return out
@@ -330,12 +400,18 @@ class CDBTF:
         Returns
         -------
         float
-            Bytes of every texel's table in float32 over the float32 bytes of
-            the mean, the basis and the weights.
+            Bytes of every texel's table in float32 over the bytes of what
+            represents them: a PCA CD-BTF's mean, basis and weights in float32;
+            a neural one's tile mean and latent codes in float16 (their values
+            are float16 numbers), its decoder and residual components in float32.
         """
         nu, nv = self.texels
-        raw = nu * nv * self._mean.values.size
-        return raw / (self._mean.values.size + self._basis.size + self._weights.size)
+        raw = 4 * nu * nv * self._mean.values.size
+        comps = 4 * (self._basis.size + self._weights.size)
+        if self._neural is None:
+            return raw / (4 * self._mean.values.size + comps)
+        net = self._neural
+        return raw / (2 * self._mean.values.size + 2 * net.n_latent_values + 4 * net.n_parameters + comps)
 
     # -- lookup -----------------------------------------------------------------------
     def lookup_grid(self) -> LookupGrid:
@@ -355,42 +431,59 @@ class CDBTF:
             self._lookup = prepare(self.grid, stacked.reshape(stacked.shape[:-2] + (-1,)))
         return self._lookup
 
-    def texel_weights(self, u_mm: ArrayLike, v_mm: ArrayLike) -> NDArray[np.float64]:
+    def texel_weights(self, u_mm: ArrayLike, v_mm: ArrayLike, footprint_mm: ArrayLike = 0.0) -> NDArray[np.float64]:
         """The component weights at positions ``(u, v)`` (periodic bilinear between texel centres).
 
         Parameters
         ----------
         u_mm, v_mm
             Positions in the repeat, mm (broadcast; any value, wrapped).
+        footprint_mm
+            The width of the area a lookup stands for (a pixel's footprint on
+            the fabric), mm: the weights are those of the texels averaged over
+            it (the pyramid of the weights' block means, :func:`texel_level`);
+            0 (default): the texels themselves.
 
         Returns
         -------
         numpy.ndarray
             ``broadcast shape + (rank,)``; NaN rows where a position is not finite.
         """
-        u, v = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (u_mm, v_mm)))
+        from ._neural import bilinear_codes, block_means, level_shapes, level_weights
+
+        u, v, fp = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (u_mm, v_mm, footprint_mm)))
         nu, nv = self.texels
         su, sv = self._repeat
         with np.errstate(invalid="ignore"):
-            fu = np.mod(u, su) / su * nu - 0.5
-            fv = np.mod(v, sv) / sv * nv - 0.5
+            fu, fv = np.mod(u, su) / su, np.mod(v, sv) / sv
         bad = ~(np.isfinite(fu) & np.isfinite(fv))
         fu, fv = np.where(bad, 0.0, fu), np.where(bad, 0.0, fv)
-        iu, iv = np.floor(fu), np.floor(fv)
-        tu, tv = (fu - iu)[..., None], (fv - iv)[..., None]
-        i0, j0 = iu.astype(np.int64) % nu, iv.astype(np.int64) % nv
-        i1, j1 = (i0 + 1) % nu, (j0 + 1) % nv
-        w = self._weights.astype(np.float64)
-        out = ((w[j0, i0] * (1 - tu) + w[j0, i1] * tu) * (1 - tv) + (w[j1, i0] * (1 - tu) + w[j1, i1] * tu) * tv)
+        shapes = level_shapes(nu, nv)
+        lev, t, fade = level_weights(self.footprint_texels(fp), len(shapes))
+        out = np.zeros(u.shape + (self.rank,))
+        for level in np.unique(lev):
+            sel = lev == level
+            w = bilinear_codes(block_means(self._weights, shapes[level]), fu[sel], fv[sel])
+            if level + 1 < len(shapes):
+                w1 = bilinear_codes(block_means(self._weights, shapes[level + 1]), fu[sel], fv[sel])
+                w = w + t[sel][:, None] * (w1 - w)
+            out[sel] = w * fade[sel][:, None]
         out[bad] = np.nan
         return out
 
+    def footprint_texels(self, footprint_mm: ArrayLike) -> NDArray[np.float64]:
+        """A footprint on the fabric (mm) in texels: over the larger of the texels' two sides."""
+        nu, nv = self.texels
+        return np.asarray(footprint_mm, np.float64) / max(self._repeat[0] / nu, self._repeat[1] / nv)
+
     def evaluate(self, u_mm: ArrayLike, v_mm: ArrayLike, theta_v: ArrayLike, phi_v: ArrayLike,
-                 theta_l: ArrayLike, phi_l: ArrayLike, kappa: ArrayLike = 0.0) -> NDArray[np.float64]:
+                 theta_l: ArrayLike, phi_l: ArrayLike, kappa: ArrayLike = 0.0, *,
+                 footprint_mm: ArrayLike = 0.0) -> NDArray[np.float64]:
         """The reflectance at texel positions, directions (degrees) and curvatures (mm^-1).
 
         Arguments broadcast together; periodic bilinear in ``(u, v)``, the rule
-        of :mod:`cdbrdf.interp` in the other five axes.
+        of :mod:`cdbrdf.interp` in the other five axes (the tile mean and the
+        components), the decoder at the query (a neural CD-BTF).
 
         Parameters
         ----------
@@ -400,6 +493,11 @@ class CDBTF:
             View and light elevation in [0, 90] and azimuth, degrees.
         kappa
             Curvature, mm^-1 (clamped to the grid).
+        footprint_mm
+            The width of the fabric a lookup stands for (a pixel's footprint),
+            mm: the texels filtered over it (the pyramid levels,
+            ``docs/btf.md``, "Filtering"); from the size of the repeat on, the
+            tile mean. 0 (default): the texels themselves.
 
         Returns
         -------
@@ -414,11 +512,11 @@ class CDBTF:
         """
         from ..interp import evaluate as lookup
 
-        args = (u_mm, v_mm, theta_v, phi_v, theta_l, phi_l, kappa)
+        args = (u_mm, v_mm, theta_v, phi_v, theta_l, phi_l, kappa, footprint_mm)
         try:
             qs = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in args))
         except (TypeError, ValueError) as exc:
-            raise QueryError(f"u_mm, v_mm, theta_v, phi_v, theta_l, phi_l, kappa: {exc}") from None
+            raise QueryError(f"u_mm, v_mm, theta_v, phi_v, theta_l, phi_l, kappa, footprint_mm: {exc}") from None
         shape = qs[0].shape
         flat = [q.reshape(-1) for q in qs]
         n = flat[0].size
@@ -426,9 +524,18 @@ class CDBTF:
         out = np.empty((n, nc))
         for s in range(0, n, _CHUNK):
             e = min(n, s + _CHUNK)
-            comps = lookup(self, *(q[s:e] for q in flat[2:])).reshape(e - s, 1 + r, nc)
-            w = self.texel_weights(flat[0][s:e], flat[1][s:e])
-            out[s:e] = comps[:, 0] + np.einsum("nr,nrc->nc", w, comps[:, 1:])
+            q = [x[s:e] for x in flat]
+            comps = lookup(self, *q[2:7]).reshape(e - s, 1 + r, nc)
+            base = comps[:, 0]
+            if self._neural is not None:
+                from ._neural import neural_at
+
+                su, sv = self._repeat
+                with np.errstate(invalid="ignore"):
+                    fu, fv = np.mod(q[0], su) / su, np.mod(q[1], sv) / sv
+                base = neural_at(self._neural, self.grid, fu, fv, self.footprint_texels(q[7]), q[2:7], base)
+            w = self.texel_weights(q[0], q[1], q[7])
+            out[s:e] = base + np.einsum("nr,nrc->nc", w, comps[:, 1:])
         return out.reshape(shape + (nc,))
 
     # -- file -------------------------------------------------------------------------
@@ -444,7 +551,7 @@ class CDBTF:
         """
         from .file import BTFParts, write
 
-        write(BTFParts(self._mean, self._weights, self._basis, self._repeat, self.compression), path,
+        write(BTFParts(self._mean, self._weights, self._basis, self._repeat, self.compression, self._neural), path,
               compression=compression)
 
     def __repr__(self) -> str:
@@ -452,7 +559,8 @@ class CDBTF:
         err = self._compression.get("relative_rms_error")
         e = "?" if err is None else f"{100 * err:.2f}%"
         return (f"CDBTF(material={self.attrs.get('material', '?')!r}, texels={nu}x{nv}, "
-                f"repeat_mm=({self._repeat[0]:g}, {self._repeat[1]:g}), rank={self.rank}, error={e}, "
+                f"repeat_mm=({self._repeat[0]:g}, {self._repeat[1]:g}), method={self.method!r}, rank={self.rank}, "
+                f"error={e}, "
                 f"{self.grid!r})")
 
 
@@ -477,6 +585,6 @@ def load(path: str | PathLike[str]) -> CDBTF:
 
     p = read(path)
     try:
-        return CDBTF(p.mean, p.weights, p.basis, repeat_mm=p.repeat_mm, compression=p.compression)
+        return CDBTF(p.mean, p.weights, p.basis, repeat_mm=p.repeat_mm, compression=p.compression, neural=p.neural)
     except TableError as exc:
         raise FormatError(f"{Path(path)}: {exc}") from None

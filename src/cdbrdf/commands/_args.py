@@ -42,6 +42,8 @@ __all__ = [
     "size_wxh",
     "square_size",
     "existing_file",
+    "brdf_file",
+    "partner_files",
     "input_path",
     "output_path",
     "output_file",
@@ -354,6 +356,35 @@ def mesh_file() -> _Type:
     func = _named(parse, "mesh", "input")
     setattr(func, "pulls_in", pulls_in)  # noqa: B010 - an attribute functions do not declare
     return func
+
+
+def brdf_file() -> _Type:
+    """A BRDF file to import (an input), with the other file of a Neural-BRDF pair as an input too.
+
+    A Neural-BRDF network is ``NAME.json`` + ``NAME.h5``
+    (:func:`cdbrdf.importers.nbrdf.pair`): an output named as the partner of
+    the file given would overwrite the network's other half, so it is an
+    input for :func:`guarded` as well.
+    """
+    base = existing_file()
+
+    def parse(text: str) -> str:
+        return base(text)
+
+    func = _named(parse, "file", "input")
+    setattr(func, "pulls_in", partner_files)  # noqa: B010 - an attribute functions do not declare
+    return func
+
+
+def partner_files(path: str) -> list[str]:
+    """The other file of a Neural-BRDF pair beside ``path``, if there is one (inputs for :func:`guarded`)."""
+    from ..errors import FormatError
+    from ..importers.nbrdf import pair
+
+    try:
+        return [str(q) for q in pair(path) if q != Path(path) and q.exists()]
+    except (FormatError, OSError):
+        return []
 
 
 def with_role(func: _Type, role: str) -> _Type:

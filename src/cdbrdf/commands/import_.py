@@ -1,4 +1,4 @@
-"""``cdbrdf import FILE -o OUT.h5``: a plain BRDF file (RGL, MERL, UTIA) as a one-curvature CDBRDF."""
+"""``cdbrdf import FILE -o OUT.h5``: a plain BRDF file (RGL, MERL, UTIA, Neural-BRDF) as a one-curvature CDBRDF."""
 
 from __future__ import annotations
 
@@ -88,11 +88,12 @@ def summary(table: Any) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._args import existing_file, finite_float, output_file
+    from ._args import brdf_file, finite_float, output_file
 
     p = sub.add_parser(
         "import",
-        help="import a plain BRDF file (RGL .bsdf, MERL .binary, UTIA .bin) as a one-curvature CDBRDF",
+        help="import a plain BRDF file (RGL .bsdf, MERL .binary, UTIA .bin, Neural-BRDF .h5/.json) as a "
+        "one-curvature CDBRDF",
         description=(
             "Read a plain BRDF in the format of a public database and write it as a CDBRDF file "
             "with one curvature. Each table sample is the mean of the data over its cell (not a "
@@ -102,7 +103,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "grid, the resampling and the error it expects. See docs/import.md."),
         epilog="example: cdbrdf import cc_ibiza_sunset_rgb.bsdf -o ibiza.h5",
     )
-    p.add_argument("file", metavar="FILE", type=existing_file(), help="the BRDF file")
+    p.add_argument("file", metavar="FILE", type=brdf_file(),
+                   help="the BRDF file (a Neural-BRDF network: NAME.h5 or NAME.json of the pair)")
     p.add_argument("-o", "--output", required=True, type=output_file(".h5", ".nc"), help="the CDBRDF file to write")
     p.add_argument("--kappa", type=finite_float(-100, 100, unit="1/mm"), default=0.0, metavar="K",
                    help="the curvature of the stand the material was measured on, 1/mm (default 0: flat)")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -107,6 +108,13 @@ def run(args: argparse.Namespace) -> int:
         lines.append(f"compression   {printable(str(c.get('method', '?')))} rank {btf.rank}, relative RMS error "
                      + ("?" if err is None else f"{100 * err:.2f} %") + f" (per kappa {per_k} %), "
                      f"{btf.nbytes_ratio():.1f}:1 against float32")
+    gx = table.attrs.get("gltf_export")
+    if isinstance(gx, dict):
+        enc, fb = gx.get("encoding") or {}, gx.get("fallback") or {}
+        lines.append(f"glTF export   {printable(str(gx.get('extension')))} {printable(str(gx.get('version')))}: "
+                     f"16-bit lookup texture (largest error {float(enc.get('maxAbsoluteOverRange', math.nan)):.2g} "
+                     f"of each channel's range, median relative {float(enc.get('medianRelative', math.nan)):.2g}); "
+                     f"fallback material's relative RMS error {float(fb.get('relativeRmsError', math.nan)):.1%}")
     for name, r in info["channels"].items():
         lines.append(f"channel {printable(name):5s} min {r['min']:.4g}  mean {r['mean']:.4g}  max {r['max']:.4g}")
     prov = info["provenance"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..measure.fill import DEFAULT_FILL, FILL_METHODS
+from ..measure.fill import BTF_DEFAULT_FILL, DEFAULT_FILL, FILL_METHODS
 from ._args import finite_float, int_range, keyword, output_path
 from ._text import say
 
@@ -39,10 +39,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--white-albedo", type=finite_float(0, 1, lo_open=True), default=None,
                    help="albedo of the white reference (default: stands.json's, else 1)")
     p.add_argument("--material", default=None, help="material name written to the file")
-    p.add_argument("--fill", type=keyword(FILL_METHODS), default=DEFAULT_FILL, metavar="METHOD",
+    p.add_argument("--fill", type=keyword(FILL_METHODS), default=None, metavar="METHOD",
                    help="how invalid samples are filled: "
                    + "; ".join(f"{name}: {text}" for name, text in FILL_METHODS.items())
-                   + f" (default {DEFAULT_FILL})")
+                   + f" (default {DEFAULT_FILL}; with --btf {BTF_DEFAULT_FILL})")
     p.add_argument("--btf", type=int_range(1, 256), default=None, metavar="N",
                    help="measure a CD-BTF of N x N texels per weave repeat instead (the capture's stands.json "
                    "must register the fabric's (u, v) on the stands): every photograph is rectified onto the "

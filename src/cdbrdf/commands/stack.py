@@ -29,7 +29,7 @@ def _kappa_or_file(text: str) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ._args import output_file, with_role
+    from ._args import output_file, partner_files, with_role
     from .import_ import add_import_options
 
     p = sub.add_parser(
@@ -38,13 +38,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=(
             "Stack plain BRDFs, one per measurement stand, along the curvature axis: each "
             "--kappa K FILE gives a stand's curvature (1/mm, > 0 convex) and its file (RGL, MERL, "
-            "UTIA or a one-curvature CDBRDF file). Every file is resampled onto one grid (CDBRDF "
+            "UTIA, Neural-BRDF or a one-curvature CDBRDF file). Every file is resampled onto one grid (CDBRDF "
             "files on that grid are copied exactly, with their masks); the files must agree on "
             "quantity, units, colour space and material."),
         epilog="example: cdbrdf stack --kappa 0 flat.h5 --kappa 0.13 stand1.h5 --kappa 0.22 stand2.h5 -o denim.h5",
     )
+    kind = with_role(_kappa_or_file, "input")
+    setattr(kind, "pulls_in", partner_files)  # noqa: B010 - the other half of a Neural-BRDF pair is an input too
     p.add_argument("--kappa", dest="entries", nargs=2, action="append", required=True, metavar=("K", "FILE"),
-                   type=with_role(_kappa_or_file, "input"),
+                   type=kind,
                    help="a stand's curvature in 1/mm and its plain BRDF file (repeat for every stand)")
     p.add_argument("-o", "--output", required=True, type=output_file(".h5", ".nc"), help="the CDBRDF file to write")
     add_import_options(p)

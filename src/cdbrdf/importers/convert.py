@@ -52,6 +52,7 @@ FORMATS: Mapping[str, tuple[str, ...]] = {
     "rgl": (".bsdf",),
     "merl": (".binary",),
     "utia": (".bin",),
+    "nbrdf": (".json",),
     "cdbrdf": (".h5", ".nc", ".hdf5"),
 }
 #: Grid names ``grid=`` takes besides ``regular:THETA_STEP,PHI_STEP[,THETA_MAX]`` and a Grid.
@@ -87,6 +88,7 @@ def detect_format(path: str | PathLike[str]) -> str:
     """
     from ..fsutil import check_regular
     from .merl import DIMS
+    from .nbrdf import looks_like
     from .rgl import MAGIC
     from .utia import FILE_BYTES
 
@@ -107,6 +109,8 @@ def detect_format(path: str | PathLike[str]) -> str:
         raise FormatError(f"{p}: cannot be read ({exc.strerror or exc})") from None
     if head == MAGIC:
         return "rgl"
+    if looks_like(head, p):  # a Keras network's weights (HDF5) or architecture (JSON)
+        return "nbrdf"
     if head[:8] == _HDF5:
         return "cdbrdf"
     if len(head) == 12 and tuple(int(x) for x in np.frombuffer(head, dtype="<i4")) == DIMS:
@@ -118,8 +122,8 @@ def detect_format(path: str | PathLike[str]) -> str:
         if suffix in suffixes:
             return name
     raise FormatError(
-        f"{p}: cannot tell its format (not an RGL tensor file, HDF5, a MERL header or the size of a UTIA "
-        f"file, and the suffix {suffix or '(none)'!r} names none); give the format ({', '.join(FORMATS)})")
+        f"{p}: cannot tell its format (not an RGL tensor file, HDF5, a Keras network, a MERL header or the size "
+        f"of a UTIA file, and the suffix {suffix or '(none)'!r} names none); give the format ({', '.join(FORMATS)})")
 
 
 def read_source(path: str | PathLike[str], *, format: str = "auto", material: str | None = None,
@@ -159,6 +163,8 @@ def read_source(path: str | PathLike[str], *, format: str = "auto", material: st
         from .merl import read
     elif fmt == "utia":
         from .utia import read
+    elif fmt == "nbrdf":
+        from .nbrdf import read
     else:
         from .tablefile import read
     return read(path, material=material, **options)
@@ -331,7 +337,8 @@ def import_brdf(
     Parameters
     ----------
     path
-        An RGL ``.bsdf``, MERL ``.binary``, UTIA ``.bin`` or one-curvature CDBRDF file.
+        An RGL ``.bsdf``, MERL ``.binary``, UTIA ``.bin``, Neural-BRDF (``NAME.h5`` or ``NAME.json`` of the
+        pair) or one-curvature CDBRDF file.
     format
         ``"auto"`` (from the content, then the suffix) or one of :data:`FORMATS`.
     grid

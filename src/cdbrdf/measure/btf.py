@@ -55,7 +55,7 @@ from .btf_geometry import GRAZING_COS, SUBPIXELS, ViewGeometry, btf_hidden, view
 from .calibrate import MeasureReport, _nearest_white, calibration
 from .capture import Capture, CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
-from .fill import DEFAULT_FILL, check_fill_method, fill
+from .fill import BTF_DEFAULT_FILL, BTF_FILLS, check_fill_method, fill
 from .patch import decode_codes, merge_exposures
 from .preflight import bad_list_path, read_patch_status, remove_bad_list
 from .registration import Registration
@@ -310,7 +310,7 @@ def measure_btf(
     num_workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
     overwrite: bool = True,
-    fill: str = DEFAULT_FILL,
+    fill: str = BTF_DEFAULT_FILL,
     max_error: float = DEFAULT_BTF_ERROR,
     _interrupt_after: int | None = None,
 ) -> tuple[CDBTF, BTFReport]:
@@ -371,6 +371,9 @@ def measure_btf(
     if isinstance(max_error, bool) or not isinstance(max_error, (int, float)) or not 0 <= max_error < 1:
         raise OptionError(f"max_error: expected a fraction in [0, 1), got {max_error!r:.40}")
     fill = check_fill_method(fill)
+    if fill not in BTF_FILLS:
+        raise OptionError(f"fill: {fill!r} fills a CDBRDF, not a CD-BTF's texels; for --btf use one of "
+                          f"{', '.join(BTF_FILLS)}")
     out_path = None if output is None else check_output_file(output)
     if out_path is not None:
         check_output_file(bad_list_path(out_path))  # what refuse_bad writes beside it

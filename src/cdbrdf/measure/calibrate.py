@@ -89,10 +89,11 @@ class MeasureReport:
         ]
         if self.n_filled:
             by = self.n_filled_by
-            along = by.get("kappa_fit", 0) + by.get("nearest_stand", 0)
+            along = by.get("kappa_fit", 0) + by.get("nearest_stand", 0) + by.get("model", 0)
             lines.append(
                 f"filled by {self.fill_method}: {along} from the same direction on other stands "
-                f"({by.get('kappa_fit', 0)} fitted along the curvature, {by.get('nearest_stand', 0)} copied), "
+                f"({by.get('model', 0)} by the fitted fabric model's change with curvature, "
+                f"{by.get('kappa_fit', 0)} fitted along the curvature, {by.get('nearest_stand', 0)} copied), "
                 f"{by.get('nearest', 0)} from the nearest measured direction at the same curvature"
             )
         if self.skipped_files:
@@ -322,7 +323,8 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
     rep.n_not_photographed = int((~photographed).sum())
     rep.n_images = n_used + rep.n_white + rep.n_dark
     try:
-        result = fill(values, valid, grid, method=fill_method, std=std)
+        result = fill(values, valid, grid, method=fill_method, std=std,
+                      material=material or cap.settings.get("material"))
     except TableError as exc:
         raise CaptureError(f"{cap.folder}: {exc}") from None
     rep.fill_method = fill_method

@@ -48,7 +48,6 @@ from __future__ import annotations
 
 import copy
 import logging
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -58,13 +57,26 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import OptionError, TableError
-from ..frames import direction_from_angles
 from ..schema import FILL_METHOD_CODES
 from ..table import CDBRDF, Grid
+from ._fill_estimate import (
+    CHECK_FRACTION,
+    TIE_TOLERANCE_DEG,
+    _checks,
+    _estimate,
+    _nearest_sources,
+    _select,
+    angle_between_deg,
+    kappa_fit_weights,
+)
+from ._fill_sigma import MIN_CHECK_SAMPLES, TINY
+from .fill_model import ModelFit, fit_model
 
 __all__ = [
     "FILL_METHODS",
     "DEFAULT_FILL",
+    "BTF_FILLS",
+    "BTF_DEFAULT_FILL",
     "check_fill_method",
     "Fill",
     "fill",
@@ -80,8 +92,6 @@ __all__ = [
 
 _LOG = logging.getLogger(__name__)
 
-#: Distances closer than this (degrees) are ties.
-TIE_TOLERANCE_DEG = 1e-9
 
 #: The fill methods, by name, with a one-line description (``cdbrdf measure --fill``).
 FILL_METHODS: Mapping[str, str] = MappingProxyType({
@@ -90,22 +100,23 @@ FILL_METHODS: Mapping[str, str] = MappingProxyType({
     "nearest-stand": "the same direction on the nearest stand that measured it, copied",
     "nearest": "nearest measured direction at the same curvature (angle(view) + angle(light); "
                "ties: lowest flat index)",
+    "model": "the fabric model fitted to the measured samples of every stand: its change with curvature "
+             "applied to the same direction's measured values on the other stands",
+    "auto": "per hidden stand, the method of the others (model for RGB tables) whose fills of the samples "
+            "it hides, hidden on the other stands too, err least; its uncertainty includes the runner-up's",
 })
-#: The method :func:`fill`, :func:`cdbrdf.measure.measure` and ``cdbrdf measure`` use by default.
-DEFAULT_FILL = "kappa-fit"
+#: The fills a CD-BTF's texels take (``cdbrdf measure --btf``): the fill must be the same for every texel
+#: (it depends on the mask and the grid only), so the methods that choose or fit from the values are not
+#: offered; and the one it uses by default.
+BTF_FILLS: tuple[str, ...] = ("kappa-fit", "nearest-stand", "nearest")
+BTF_DEFAULT_FILL = "kappa-fit"
 
-#: Fewest measured samples a check must have for its own uncertainty fit; smaller
-#: checks are pooled over the stand, then over the table.
-MIN_CHECK_SAMPLES = 30
+#: The method :func:`fill`, :func:`cdbrdf.measure.measure` and ``cdbrdf measure`` use by default
+#: (``docs/capture.md``, "Filling", has the evidence).
+DEFAULT_FILL = "auto"
 
-#: Share of a stand's measured samples the check of a curvature fit uses: those nearest (in
-#: ``angle(v, v') + angle(l, l')``) to the samples it fills, which resemble them most.
-CHECK_FRACTION = 0.25
 
-#: Relative uncertainty given when no check is possible (too few measured samples).
-_UNKNOWN_SIGMA = 1.0
-#: Values at or below this are not taken in logarithms.
-_TINY = 1e-300
+_TINY = TINY
 
 _CODE = FILL_METHOD_CODES
 
@@ -121,23 +132,6 @@ def check_fill_method(method: object) -> str:
     if not isinstance(method, str) or method not in FILL_METHODS:
         raise OptionError(f"fill: {method!r} is not one of {', '.join(FILL_METHODS)}")
     return method
-
-
-def angle_between_deg(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Angle in degrees between unit vectors ``(..., 3)``, accurate also for tiny angles.
-
-    ``atan2(|a x b|, a . b)``: identical directions give exactly 0.
-    """
-    cross = np.linalg.norm(np.cross(a, b), axis=-1)
-    dot = np.sum(a * b, axis=-1)
-    return np.degrees(np.arctan2(cross, dot))
-
-
-def _pair_distances(theta: NDArray, phi: NDArray) -> NDArray[np.float64]:
-    """Angles (degrees) between every pair of the directions ``(phi, theta)`` in C order."""
-    t, p = np.meshgrid(theta, phi, indexing="xy")  # (n_phi, n_theta) with phi outer
-    d = direction_from_angles(t.ravel(), p.ravel())
-    return angle_between_deg(d[:, None, :], d[None, :, :])
 
 
 # -- the paper's rule -------------------------------------------------------------------
@@ -194,199 +188,6 @@ def fill_nearest(
     if flat_std is not None:
         flat_std[i] = flat_std[j]
     return out, fill_src, out_std
-
-
-def _nearest_sources(
-    valid: NDArray[np.bool_], grid: Grid, targets: NDArray[np.bool_], *, exclude_self: bool = False
-) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-    """The paper's nearest measured sample at the same curvature of each target sample.
-
-    Returns the flat source index (-1 for non-targets) and the distance
-    ``angle(v, v') + angle(l, l')`` in degrees (NaN for non-targets). With
-    ``exclude_self`` a target that is itself valid never picks itself (the
-    check of the uncertainty).
-
-    Raises
-    ------
-    TableError
-        When a curvature with targets has no measured sample at all.
-    """
-    shape = grid.shape
-    src = np.full(shape, -1, dtype=np.int64)
-    dist = np.full(shape, np.nan)
-    nk, npl, ntl, npv, ntv = shape
-    n_l, n_v = npl * ntl, npv * ntv
-    d_l = _pair_distances(grid.theta_l, grid.phi_l)  # (n_l, n_l)
-    d_v = _pair_distances(grid.theta_v, grid.phi_v)  # (n_v, n_v)
-    for k in range(nk):
-        t = targets[k].reshape(n_l, n_v)
-        if not t.any():
-            continue
-        m = valid[k].reshape(n_l, n_v)
-        if not m.any() or (exclude_self and m.sum() < 2):
-            raise TableError(
-                f"kappa = {grid.kappa[k]:g} 1/mm: no sample was measured, so none can be filled"
-            )
-        base = k * n_l * n_v
-        src_k = src[k].reshape(-1)
-        dist_k = dist[k].reshape(-1)
-        for li, vi in zip(*np.nonzero(t), strict=True):
-            d = d_l[li][:, None] + d_v[vi][None, :]
-            mask = m
-            if exclude_self and m[li, vi]:
-                mask = m.copy()
-                mask[li, vi] = False
-            d = np.where(mask, d, np.inf)
-            best = d.min()
-            j = int(np.flatnonzero(d.ravel() <= best + TIE_TOLERANCE_DEG)[0])
-            src_k[li * n_v + vi] = base + j
-            dist_k[li * n_v + vi] = best
-    return src, dist
-
-
-# -- the curvature axis -----------------------------------------------------------------
-def kappa_fit_weights(kappa_sources: NDArray[np.float64], kappa_target: float) -> NDArray[np.float64]:
-    """Weights of the ``kappa-fit`` estimate at ``kappa_target`` from values at ``kappa_sources``.
-
-    The weighted least-squares line ``y = a + b (kappa - kappa_target)``
-    through the points ``(kappa_s, y_s)`` with weights ``1 / |kappa_s -
-    kappa_target|``, evaluated at ``kappa_target``, is ``sum_s w_s y_s``;
-    this returns ``w`` (they sum to 1). One source gives ``[1]``.
-
-    Parameters
-    ----------
-    kappa_sources
-        Curvatures of the stands that measured the direction, mm^-1 (distinct,
-        none equal to the target).
-    kappa_target
-        Curvature of the sample to fill, mm^-1.
-    """
-    x = np.asarray(kappa_sources, dtype=np.float64) - float(kappa_target)
-    if x.size == 1:
-        return np.ones(1)
-    w = 1.0 / np.abs(x)
-    a = np.stack([np.ones_like(x), x], axis=1)
-    aw = a * w[:, None]
-    return np.linalg.solve(a.T @ aw, aw.T)[0]
-
-
-def _source_stands(valid: NDArray[np.bool_], k: int, kappa: NDArray[np.float64], nearest_only: bool
-                   ) -> dict[tuple[int, ...], NDArray[np.intp]]:
-    """Invalid directions of stand ``k`` grouped by the stands used for them (nearest first).
-
-    ``nearest_only``: just the nearest stand (in curvature; ties to the lower
-    curvature) that measured the direction.
-    """
-    nk = valid.shape[0]
-    flat = valid.reshape(nk, -1)
-    hid = np.flatnonzero(~flat[k])
-    others = [s for s in range(nk) if s != k]
-    order = sorted(others, key=lambda s: (abs(kappa[s] - kappa[k]), kappa[s]))
-    groups: dict[tuple[int, ...], list[int]] = {}
-    if not hid.size:
-        return {}
-    meas = flat[order][:, hid]  # (n_other, n_hid) in nearest-first order
-    for col, i in enumerate(hid.tolist()):
-        stands = [order[r] for r in np.flatnonzero(meas[:, col])]
-        if nearest_only:
-            stands = stands[:1]
-        groups.setdefault(tuple(stands), []).append(i)
-    return {s: np.array(ids, dtype=np.intp) for s, ids in groups.items()}
-
-
-def _combine(v: NDArray[np.float64], w: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``exp(sum w log v)`` over axis 0, channel by channel; linear where a source is <= 0."""
-    pos = np.all(v > _TINY, axis=0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        logv = np.log(np.where(v > _TINY, v, 1.0))
-    out = np.exp(np.einsum("s,s...->...", w, logv))
-    lin = np.einsum("s,s...->...", w, v)
-    return np.where(pos, out, lin)
-
-
-# -- the uncertainty --------------------------------------------------------------------
-@dataclass(frozen=True)
-class _SigmaModel:
-    """``sigma_rel = sqrt(s0^2 + (alpha x)^2)`` with its fit's provenance."""
-
-    s0: float
-    alpha: float
-    n_check: int
-    pooled: str  # "group", "stand", "table" or "none"
-
-    def __call__(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.sqrt(self.s0**2 + (self.alpha * x) ** 2)
-
-
-def _fit_sigma(x: NDArray[np.float64], e: NDArray[np.float64]) -> tuple[float, float]:
-    """Maximum-likelihood ``s0, alpha`` of ``e ~ N(0, s0^2 + (alpha x)^2)`` (Nelder-Mead, deterministic)."""
-    from scipy.optimize import minimize
-
-    x = np.abs(np.asarray(x, dtype=np.float64)).ravel()
-    e = np.asarray(e, dtype=np.float64).ravel()
-    rms = float(np.sqrt(np.mean(e**2)))
-    if rms == 0.0:
-        return 0.0, 0.0
-    xs = float(np.sqrt(np.mean(x**2)))
-    if xs == 0.0:  # nothing to scale with: a constant sigma
-        return rms, 0.0
-    xn = x / xs
-    floor = 1e-6 * rms
-
-    def nll(p: NDArray[np.float64]) -> float:
-        s0, a = np.exp(p)
-        var = s0**2 + (a * xn) ** 2 + floor**2
-        return float(np.mean(0.5 * np.log(var) + 0.5 * e**2 / var))
-
-    start = np.log([rms / math.sqrt(2), rms / math.sqrt(2)])
-    res = minimize(nll, start, method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-10, "maxiter": 2000})
-    s0, a = np.exp(res.x)
-    return float(s0), float(a / xs)
-
-
-class _Checks:
-    """Checks (measured samples predicted like the filled ones) and the sigma models fitted to them."""
-
-    def __init__(self) -> None:
-        self.items: dict[tuple[str, int, tuple[int, ...]], tuple[NDArray, NDArray, int]] = {}
-
-    def add(self, kind: str, k: int, stands: tuple[int, ...], x: NDArray, e: NDArray) -> None:
-        """Record the reach ``x`` and log error ``e`` (``(samples, channels)``) of a check."""
-        ok = np.isfinite(e) & np.isfinite(x)
-        n = int(np.count_nonzero(ok.any(axis=-1))) if ok.ndim > 1 else int(np.count_nonzero(ok))
-        self.items[(kind, k, stands)] = (x[ok], e[ok], n)
-
-    def model(self, kind: str, k: int, stands: tuple[int, ...]) -> _SigmaModel:
-        """The model of one group: its own check, else pooled over the stand, else over the table."""
-        levels = (
-            ("group", [key for key in self.items if key == (kind, k, stands)]),
-            ("stand", [key for key in self.items if key[0] == kind and key[1] == k]),
-            ("table", [key for key in self.items if key[0] == kind]),
-        )
-        for pooled, keys in levels:
-            n = sum(self.items[key][2] for key in keys)
-            if n >= MIN_CHECK_SAMPLES:
-                x = np.concatenate([self.items[key][0] for key in keys])
-                e = np.concatenate([self.items[key][1] for key in keys])
-                s0, a = _fit_sigma(x, e)
-                return _SigmaModel(s0=s0, alpha=a, n_check=n, pooled=pooled)
-        return _SigmaModel(s0=_UNKNOWN_SIGMA, alpha=0.0, n_check=0, pooled="none")
-
-
-def _log_error(pred: NDArray[np.float64], meas: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``log(pred / meas)`` where both are positive, NaN elsewhere."""
-    ok = (pred > _TINY) & (meas > _TINY)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(ok, np.log(np.where(ok, pred, 1.0) / np.where(ok, meas, 1.0)), np.nan)
-
-
-def _reach(value: NDArray[np.float64], first: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``|log(value / first)|`` (relative change where a value is not positive)."""
-    ok = (value > _TINY) & (first > _TINY)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        lg = np.abs(np.log(np.where(ok, value, 1.0) / np.where(ok, first, 1.0)))
-        rel = np.abs(value - first) / np.maximum(np.maximum(np.abs(value), np.abs(first)), _TINY)
-    return np.where(ok, lg, rel)
 
 
 # -- the result -------------------------------------------------------------------------
@@ -447,6 +248,7 @@ def fill(
     *,
     method: str = DEFAULT_FILL,
     std: NDArray[np.floating] | None = None,
+    material: str | None = None,
 ) -> Fill:
     """Fill the invalid samples of a table by one of :data:`FILL_METHODS`.
 
@@ -460,10 +262,13 @@ def fill(
     grid
         The sample axes.
     method
-        ``"kappa-fit"`` (default), ``"nearest-stand"`` or ``"nearest"`` (the
-        paper's rule, bit for bit as :func:`fill_nearest`).
+        ``"model"`` (default), ``"kappa-fit"``, ``"nearest-stand"`` or
+        ``"nearest"`` (the paper's rule, bit for bit as :func:`fill_nearest`).
     std
         Optional per-sample (patch) standard deviations, filled too.
+    material
+        The fabric (``"model"`` only): a preset of that name is the model
+        fitted; otherwise the best-fitting preset.
 
     Returns
     -------
@@ -476,7 +281,8 @@ def fill(
         For an unknown method (the message lists them).
     TableError
         When a curvature has no measured sample at all (nothing to fill from
-        by the paper's rule, nothing to check a fill against by the others).
+        by the paper's rule, nothing to check a fill against by the others),
+        or for ``"model"`` on values that are not RGB.
     """
     method = check_fill_method(method)
     shape = grid.shape
@@ -489,131 +295,80 @@ def fill(
     nk, nc = shape[0], vals.shape[-1]
     n = valid.size
     per = n // nk
-    out_std = None if std is None else np.array(std, dtype=np.float64, copy=True)
-    valid_k = valid.reshape(nk, per)
-    vk = vals.reshape(nk, per, nc)  # views: filling writes into vals
-    std_k = None if out_std is None else out_std.reshape(nk, per, nc)
     for k in range(nk):
-        if not valid_k[k].any():  # no sample of this curvature can be checked, nor filled by the paper's rule
+        if not valid.reshape(nk, per)[k].any():  # nothing to fill from, nothing to check against
             raise TableError(f"kappa = {grid.kappa[k]:g} 1/mm: no sample was measured, so none can be filled")
+    fit = _model_fit(method, vals, valid, grid, material)
+    spread: NDArray[np.float64] | None = None
+    selection: dict[str, Any] | None = None
+    if method == "auto" and not valid.all():
+        est, checks, spread, selection = _select(vals, valid, grid, fit)
+    else:
+        est = _estimate(method, vals, valid, grid, ~valid, fit)
+        checks = _checks(method, vals, valid, grid, fit, est)
+    flat_vals = vals.reshape(n, nc)
+    flat_vals[est.idx] = est.values
     code = np.where(valid, _CODE["measured"], _CODE["unknown"]).astype(np.uint8)
-    code_k = code.reshape(nk, per)
-    fstd = np.zeros((nk, per, nc))
-    groups: list[tuple[int, tuple[int, ...], NDArray[np.intp], NDArray[np.float64]]] = []
-    checks = _Checks()
-    nearest_targets = ~valid if method == "nearest" else np.zeros(shape, dtype=bool)
-    if method != "nearest":
-        for k in range(nk):
-            for stands, ids in _source_stands(valid, k, grid.kappa, nearest_only=method == "nearest-stand").items():
-                if not stands:
-                    nearest_targets.reshape(nk, per)[k, ids] = True
-                    continue
-                w = kappa_fit_weights(grid.kappa[list(stands)], float(grid.kappa[k]))
-                src = vk[list(stands)][:, ids]  # (n_stands, n_ids, nc); sources are measured
-                filled = _combine(src, w)
-                vk[k, ids] = filled
-                code_k[k, ids] = _CODE["kappa_fit" if len(stands) > 1 else "nearest_stand"]
-                if std_k is not None:
-                    first = src[0]
-                    ok = (first > _TINY) & (filled > _TINY)
-                    std_k[k, ids] = std_k[stands[0], ids] * np.where(ok, filled / np.where(ok, first, 1.0), 1.0)
-                groups.append((k, stands, ids, w))
-                # the check: the measured samples of this stand nearest to these, predicted from the same stands
-                chk = _nearest_checks(np.flatnonzero(valid_k[k] & valid_k[list(stands)].all(axis=0)), ids, grid)
-                if chk.size:
-                    pred = _combine(vk[list(stands)][:, chk], w)
-                    checks.add("kappa", k, stands, _reach(pred, vk[stands[0], chk]), _log_error(pred, vk[k, chk]))
-    near: tuple[NDArray[np.int64], NDArray[np.float64]] | None = None
-    if nearest_targets.any():
-        nsrc, ndist = _nearest_sources(valid, grid, nearest_targets)
-        i = np.flatnonzero(nearest_targets.ravel())
-        j = nsrc.ravel()[i]
-        flat_vals = vals.reshape(n, nc)
-        flat_vals[i] = flat_vals[j]
-        if out_std is not None:
-            flat_std = out_std.reshape(n, nc)
-            flat_std[i] = flat_std[j]
-        code.reshape(-1)[i] = _CODE["nearest"]
-        near = (nsrc, ndist)
-        # the check: every measured sample of these stands from its nearest other measured direction
-        for k in np.flatnonzero(nearest_targets.reshape(nk, per).any(axis=1)).tolist():
-            if valid_k[k].sum() >= 2:
-                csrc, cdist = _nearest_sources(valid, grid, _stand_mask(valid, k), exclude_self=True)
-                ci = np.flatnonzero(valid_k[k]) + k * per
-                e = _log_error(vals.reshape(n, nc)[csrc.ravel()[ci]], vals.reshape(n, nc)[ci])
-                checks.add("nearest", k, (), np.broadcast_to(cdist.ravel()[ci][:, None], e.shape), e)
-
-    # provenance and uncertainty, once every check is known
-    n_slot = max([1] + [len(g[1]) for g in groups])
-    fill_sources = np.full((nk, per, n_slot), -1, dtype=np.int64)
-    fill_weights = np.zeros((nk, per, n_slot))
+    code.reshape(-1)[est.idx] = est.code
+    out_std = None if std is None else np.array(std, dtype=np.float64, copy=True)
+    if out_std is not None:
+        flat_std = out_std.reshape(n, nc)
+        first = est.sources[:, 0]
+        ratio = np.ones((est.idx.size, nc))
+        scaled = np.isin(est.code, [_CODE["kappa_fit"], _CODE["model"]])
+        ok = scaled[:, None] & (flat_vals[first] > _TINY) & (est.values > _TINY)
+        ratio[ok] = est.values[ok] / flat_vals[first][ok]
+        flat_std[est.idx] = flat_std[first] * ratio
+    fstd = np.zeros((n, nc))
     models: list[dict[str, Any]] = []
-    for k, stands, ids, w in groups:
-        for slot, s_k in enumerate(stands):
-            fill_sources[k, ids, slot] = s_k * per + ids
-            fill_weights[k, ids, slot] = w[slot]
-        sig = checks.model("kappa", k, stands)
-        filled = vk[k, ids]
-        fstd[k, ids] = np.abs(filled) * sig(_reach(filled, vk[stands[0], ids]))
-        models.append({"kappa": float(grid.kappa[k]), "method": "kappa_fit" if len(stands) > 1 else "nearest_stand",
-                       "source_kappa": [float(grid.kappa[s_k]) for s_k in stands], "source_weights": w.tolist(),
-                       "samples": int(ids.size), **_model_doc(sig)})
-    if near is not None:
-        nsrc, ndist = near
-        for k in np.flatnonzero(nearest_targets.reshape(nk, per).any(axis=1)).tolist():
-            ids = np.flatnonzero(nearest_targets.reshape(nk, per)[k])
-            fill_sources[k, ids, 0] = nsrc.reshape(nk, per)[k, ids]
-            fill_weights[k, ids, 0] = 1.0
-            sig = checks.model("nearest", k, ())
-            d = np.broadcast_to(ndist.reshape(nk, per)[k, ids][:, None], (ids.size, nc))
-            fstd[k, ids] = np.abs(vk[k, ids]) * sig(d)
-            models.append({"kappa": float(grid.kappa[k]), "method": "nearest", "source_kappa": [float(grid.kappa[k])],
-                           "samples": int(ids.size), **_model_doc(sig, x="distance_deg")})
-    fill_source = np.where(valid, -1, fill_sources[..., 0].reshape(shape)).astype(np.int64)
+    ks = est.idx // per
+    for c, k in sorted({(int(c), int(k)) for c, k in zip(est.code, ks, strict=True)}):
+        sel = (est.code == c) & (ks == k)
+        sig = checks.model(c, k)
+        rel = sig(est.reach[sel]) if spread is None else np.hypot(sig(est.reach[sel]), spread[sel])
+        fstd[est.idx[sel]] = np.abs(est.values[sel]) * rel
+        name = _CODE_NAME[c]
+        models.append({"kappa": float(grid.kappa[k]), "method": name, "samples": int(sel.sum()),
+                       **sig.doc(_REACH_NAME[name])})
+    n_slot = est.sources.shape[1]
+    fill_sources = np.full((n, n_slot), -1, dtype=np.int64)
+    fill_weights = np.zeros((n, n_slot))
+    fill_sources[est.idx] = est.sources
+    fill_weights[est.idx] = est.weights
+    fill_source = np.where(valid, -1, fill_sources[:, 0].reshape(shape)).astype(np.int64)
     counts = {name: int(np.count_nonzero(code == c)) for name, c in _CODE.items() if name != "unknown"}
-    return Fill(
-        method=method,
-        values=vals,
-        std=out_std,
-        fill_source=fill_source,
-        fill_method=code,
-        fill_sources=fill_sources.reshape(*shape, n_slot),
-        fill_weights=fill_weights.reshape(*shape, n_slot),
-        fill_std=fstd.reshape(vals.shape),
-        summary={"method": method, "samples": counts, "uncertainty": models},
-    )
+    summary: dict[str, Any] = {"method": method, "samples": counts, "uncertainty": models}
+    if fit is not None:
+        summary["model"] = fit.summary()
+    if selection is not None:
+        summary["selection"] = selection
+    return Fill(method=method, values=vals, std=out_std, fill_source=fill_source, fill_method=code,
+                fill_sources=fill_sources.reshape(*shape, n_slot), fill_weights=fill_weights.reshape(*shape, n_slot),
+                fill_std=fstd.reshape(vals.shape), summary=summary)
 
 
-def _nearest_checks(candidates: NDArray[np.intp], targets: NDArray[np.intp], grid: Grid) -> NDArray[np.intp]:
-    """The :data:`CHECK_FRACTION` of ``candidates`` (at least :data:`MIN_CHECK_SAMPLES`) nearest to ``targets``.
-
-    Indices are over the four direction axes of one curvature; the distance
-    of a candidate is ``angle(v, v') + angle(l, l')`` to its nearest target.
-    """
-    n_keep = min(candidates.size, max(MIN_CHECK_SAMPLES, math.ceil(CHECK_FRACTION * candidates.size)))
-    if n_keep == candidates.size:
-        return candidates
-    n_v = grid.phi_v.size * grid.theta_v.size
-    d_l = _pair_distances(grid.theta_l, grid.phi_l)
-    d_v = _pair_distances(grid.theta_v, grid.phi_v)
-    tl, tv = np.divmod(targets, n_v)
-    dmin = np.empty(candidates.size)
-    for a in range(0, candidates.size, 256):
-        cl, cv = np.divmod(candidates[a : a + 256], n_v)
-        dmin[a : a + 256] = (d_l[cl][:, tl] + d_v[cv][:, tv]).min(axis=1)
-    return np.sort(candidates[np.argsort(dmin, kind="stable")[:n_keep]])
+_CODE_NAME = {v: k for k, v in _CODE.items()}
+#: What a per-sample method's uncertainty grows with.
+_REACH_NAME = {"kappa_fit": "abs_log_change", "nearest_stand": "none", "nearest": "distance_deg",
+               "model": "abs_log_model_change"}
 
 
-def _stand_mask(valid: NDArray[np.bool_], k: int) -> NDArray[np.bool_]:
-    """The measured samples of stand ``k`` (the targets of its nearest-direction check)."""
-    m = np.zeros(valid.shape, dtype=bool)
-    m[k] = valid[k]
-    return m
-
-
-def _model_doc(sig: _SigmaModel, *, x: str = "abs_log_change") -> dict[str, Any]:
-    return {"sigma_s0": round(sig.s0, 6), "sigma_alpha": round(sig.alpha, 6), "sigma_x": x,
-            "check_samples": sig.n_check, "check_pooled": sig.pooled}
+def _model_fit(method: str, vals: NDArray[np.float64], valid: NDArray[np.bool_], grid: Grid,
+               material: str | None) -> ModelFit | None:
+    """The model of a ``"model"`` fill, evaluated at every direction some stand did not measure."""
+    if method not in ("model", "auto") or valid.all():
+        return None
+    nk = grid.shape[0]
+    flat = valid.reshape(nk, -1)
+    if method == "auto":
+        # the model only where its fill can be checked (enough hidden directions measured on other stands)
+        checkable = max(int(((~flat[k]) & flat).sum() - ((~flat[k]) & flat[k]).sum()) for k in range(nk))
+        if vals.shape[-1] != 3 or checkable < MIN_CHECK_SAMPLES:
+            return None
+    elif vals.shape[-1] != 3:
+        raise TableError(f"fill: 'model' fills RGB tables; this one has {vals.shape[-1]} channel(s)")
+    hidden = np.flatnonzero((~flat).any(axis=0))
+    return fit_model(vals, valid, grid, material=material, directions=hidden)
 
 
 # -- provenance and tables --------------------------------------------------------------
@@ -650,7 +405,7 @@ def refill(table: CDBRDF, *, method: str = DEFAULT_FILL) -> CDBRDF:
     valid = table.measured
     vals = np.where(valid[..., None], table.values, np.nan)
     std = None if table.std is None else np.where(valid[..., None], table.std, np.nan)
-    result = fill(vals, valid, table.grid, method=method, std=std)
+    result = fill(vals, valid, table.grid, method=method, std=std, material=table.attrs.get("material"))
     kw = result.table_kwargs()
     if table.std is not None and result.std is not None:
         kw["std"] = result.std.astype(table.std.dtype)

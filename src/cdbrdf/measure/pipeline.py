@@ -48,7 +48,7 @@ from ..table import CDBRDF
 from .calibrate import MeasureReport, assemble
 from .capture import CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
-from .fill import DEFAULT_FILL, check_fill_method
+from .fill import BTF_DEFAULT_FILL, DEFAULT_FILL, check_fill_method
 from .preflight import (
     bad_list_path,
     preflight,
@@ -185,7 +185,7 @@ def measure(  # type: ignore[misc]  # the overloads give the options as **option
     num_workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
     overwrite: bool = True,
-    fill: str = DEFAULT_FILL,
+    fill: str | None = None,
     btf: int | tuple[int, int] | None = None,
     _interrupt_after: int | None = None,
 ) -> tuple[CDBRDF, MeasureReport] | tuple[CDBTF, BTFReport]:
@@ -234,11 +234,15 @@ def measure(  # type: ignore[misc]  # the overloads give the options as **option
         photograph, found also through links) is always refused.
     fill
         How invalid samples are filled, one of
-        :data:`cdbrdf.measure.fill.FILL_METHODS`: ``"kappa-fit"`` (default:
-        the same direction on the other stands, fitted along the curvature),
-        ``"nearest-stand"``, or ``"nearest"`` (the paper's rule: the nearest
-        measured direction at the same curvature). It does not change what
-        is read, so a checkpoint serves every method.
+        :data:`cdbrdf.measure.fill.FILL_METHODS`: ``"auto"`` (the default,
+        :data:`cdbrdf.measure.fill.DEFAULT_FILL`: per hidden stand the method
+        whose check errs least), ``"model"`` (the fabric model fitted to the
+        measured samples), ``"kappa-fit"`` (the same direction on the other
+        stands, fitted along the curvature), ``"nearest-stand"``, or
+        ``"nearest"`` (the paper's rule: the nearest measured direction at the
+        same curvature); with ``btf`` one of
+        :data:`cdbrdf.measure.fill.BTF_FILLS`, default ``"kappa-fit"``. It
+        does not change what is read, so a checkpoint serves every method.
     btf
         Texels per repeat side (``n`` or ``(n_u, n_v)``): measure a CD-BTF
         instead (:func:`cdbrdf.measure.btf.measure_btf`; the capture's
@@ -297,9 +301,10 @@ def measure(  # type: ignore[misc]  # the overloads give the options as **option
         return measure_btf(folder, output, texels=btf, patch=patch, linear=linear, skip_bad=skip_bad,
                            scheduler=scheduler, white_albedo=white_albedo, material=material,
                            checkpoint=checkpoint, batch_size=batch_size, num_workers=num_workers,
-                           progress=progress, overwrite=overwrite, fill=fill, _interrupt_after=_interrupt_after)
+                           progress=progress, overwrite=overwrite, fill=BTF_DEFAULT_FILL if fill is None else fill,
+                           _interrupt_after=_interrupt_after)
     out_path = None if output is None else check_output_file(output)  # a folder, a device: refused now
-    fill = check_fill_method(fill)
+    fill = check_fill_method(DEFAULT_FILL if fill is None else fill)
     if out_path is not None:
         check_output_file(bad_list_path(out_path))
         if not overwrite and (out_path.exists() or out_path.is_symlink()):

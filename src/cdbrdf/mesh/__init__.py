@@ -59,7 +59,7 @@ from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, Principa
 from .frames import FRAMES
 from .garments import Garment, bust_mesh, garment_mesh, head_mesh
 from .io import MESH_FORMATS, ply_metadata, read_mesh, read_obj, read_ply, write_ply
-from .maps import BAKES, SurfaceMaps, UVScale, apply_maps, as_uv_scale, detect_uv_scale
+from .maps import BAKES, SurfaceMaps, UVScale, apply_maps, as_uv_scale, detect_uv_scale, mesh_uv_scale
 from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, normal_map_from_normals, read_normal_map
 from .prepare import UP_AXES, MeshSurface, check_up, detect_up, has_own_uv, prepare_mesh, to_z_up, z_up_mesh
 from .references import Reference, check_references, referenced_files
@@ -174,6 +174,7 @@ __all__ = [
     "SurfaceMaps",
     "UVScale",
     "detect_uv_scale",
+    "mesh_uv_scale",
     "as_uv_scale",
     "apply_maps",
 ]

@@ -57,7 +57,7 @@ from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, normal_map_from_normal
 from .units import UNITS_MM, parse_units
 
 __all__ = ["BAKES", "UV_SCALE_RANGE_MM", "MAP_SIZE_RANGE_MM", "HEIGHT_SCALE_RANGE_MM", "MESH_TEXELS_RANGE",
-           "SurfaceMaps", "UVScale", "detect_uv_scale", "as_uv_scale", "apply_maps",
+           "SurfaceMaps", "UVScale", "detect_uv_scale", "mesh_uv_scale", "as_uv_scale", "apply_maps",
            "NOTHING_LEFT_SHARE", "SAMPLES_PER_FOLD", "UV_UNIT_TOLERANCE"]
 
 _LOG = logging.getLogger(__name__)
@@ -270,6 +270,35 @@ def detect_uv_scale(vertices: NDArray[np.float64], faces: NDArray[np.int64], uv:
             return UVScale(mm, mm, f"the UVs are lengths in {name}{own}: the UV and 3-D lengths of the edges "
                                    f"agree (median {med / mm:.3f} {name} per UV unit)", spread)
     return UVScale(su, sv, "from the mesh's edges: their median 3-D length per UV length", spread)
+
+
+def mesh_uv_scale(mesh: Mesh) -> UVScale:
+    """The UV scale of a prepared mesh's UVs: the one its maps were laid at, else detected (:func:`detect_uv_scale`).
+
+    Parameters
+    ----------
+    mesh
+        A mesh with UVs, as :func:`cdbrdf.mesh.prepare_mesh` made it (its
+        ``metadata["uv_scale"]`` and ``"uv_scale_rule"`` when it has maps or
+        was given a UV scale).
+
+    Returns
+    -------
+    UVScale
+        The scale and its rule.
+
+    Raises
+    ------
+    MeshError
+        For a mesh without UVs, or UVs that give no scale.
+    """
+    meta = mesh.metadata
+    if meta.get("uv_scale") is not None:
+        su, sv = as_uv_scale(meta["uv_scale"])
+        return UVScale(su, sv, str(meta.get("uv_scale_rule", "given")))
+    if mesh.uv is None:
+        raise MeshError("UV scale: the mesh has no UV coordinates")
+    return detect_uv_scale(mesh.vertices, mesh.faces, mesh.uv, units=meta.get("units", "mm"))
 
 
 def _file_maps(maps: SurfaceMaps, meta: dict[str, Any], notes: list[str]) -> dict[str, Any]:

@@ -59,14 +59,17 @@ KAPPA_ATOL = 1e-6
 
 _FILLED_COLOUR = "#ff2bd6"  # magenta: stands out on fabrics and on the diff map
 _CURVATURE_COLOUR = "#ffa31a"  # orange: filled along the curvature
+_PREDICTED_COLOUR = "#1ad1ff"  # cyan: predicted by a fitted model's change with curvature
 _DIFF_FILLED_COLOUR = "#4d4d4d"
 
 #: How filled samples are marked, by the per-sample fill method
 #: (:data:`cdbrdf.schema.FILL_METHOD_CODES`): ``(methods, colour, hatch, legend label)``.
 FILL_MARKS: tuple[tuple[tuple[str, ...], str, str, str], ...] = (
-    (("kappa_fit", "nearest_stand"), _CURVATURE_COLOUR, "\\\\\\",
+    (("kappa_fit", "nearest_stand", "model"), _CURVATURE_COLOUR, "\\\\\\",
      "filled along the curvature (same direction, other stands)"),
     (("nearest",), _FILLED_COLOUR, "//////", "filled from the nearest direction (same curvature)"),
+    (("model",), _PREDICTED_COLOUR, "......",
+     "predicted by a fitted model's change with curvature"),
     (("unknown",), _FILLED_COLOUR, "//////", "filled (not measured)"),
 )
 _DIFF_CMAP = "RdBu_r"

@@ -150,14 +150,15 @@ class _VectorLayer(BSDFCore):
 
         full = self.grid if self.settings.mode == "cdbrdf" else prepare(self.btf.grid, self.btf.mean().values)
         self.texels = _btf_jit.upload(self._mi, self.btf, full, self.record, uv_scale=self.uv_scale,
-                                      texel_filter=self.texel_filter)
+                                      texel_filter=self.texel_filter, pixel_angle=self.pixel_angle,
+                                      mm_per_unit=self.units.mm_per_unit)
 
     def _lookup(self, si: Any, tv: Any, pv: Any, tl: Any, pl: Any, kappa: Any, valid: Any) -> Any:
         mi = self._mi
         if self.texels is not None:
             from . import _btf_jit
 
-            f = _btf_jit.lookup(mi, self.texels, si.uv, tv, pv, tl, pl, kappa, valid, si.wavelengths)
+            f = _btf_jit.evaluate(mi, self.texels, si, tv, pv, tl, pl, kappa, valid, self.record)
         else:
             f = lj.lookup_jit(mi, self.grid, self.packed, tv, pv, tl, pl, kappa, valid, si.wavelengths)
         return mi.UnpolarizedSpectrum(f) if self.record == "one" else f

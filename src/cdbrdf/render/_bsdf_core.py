@@ -232,7 +232,8 @@ class BSDFCore:
         if self.btf is not None:
             from ._btf_jit import DEFAULT_TEXEL_FILTER
 
-            self._upload_btf(1.0 if uv_scale is None else uv_scale, get("texel_filter", DEFAULT_TEXEL_FILTER))
+            self._upload_btf(1.0 if uv_scale is None else uv_scale, get("texel_filter", DEFAULT_TEXEL_FILTER),
+                             float(get("pixel_angle", 0.0)))
         self.surface = self._surface_map(get, extras, uv_scale)
         flags = (mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
                  | mi.BSDFFlags.Anisotropic)
@@ -297,11 +298,14 @@ class BSDFCore:
             _sampling.build_sampler(self.grid) if self.settings.sampling == "table" else None)
         self._hold_table(values, differentiable)
 
-    def _upload_btf(self, uv_scale: Any, texel_filter: Any) -> None:
-        """A CD-BTF: its UV scale and texel filter; the layer holds its texels (:mod:`cdbrdf.render._btf_jit`)."""
+    def _upload_btf(self, uv_scale: Any, texel_filter: Any, pixel_angle: float) -> None:
+        """A CD-BTF: its UV scale, texel filter and footprint; the layer holds its texels (:mod:`._btf_jit`)."""
         from . import _btf_jit
 
         self.uv_scale = _btf_jit.as_pair("uv_scale", uv_scale)
+        if not (math.isfinite(pixel_angle) and pixel_angle >= 0.0):
+            raise OptionError(f"cdbrdf BSDF: pixel_angle must be finite and >= 0 (radians), got {pixel_angle}")
+        self.pixel_angle = pixel_angle
         self.texel_filter = _choice("texel_filter", texel_filter, _btf_jit.TEXEL_FILTERS)
         self._texel_cache: dict[tuple[int, int], tuple[LookupGrid, np.ndarray]] = {}
         self._hold_texels()

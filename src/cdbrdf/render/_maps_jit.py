@@ -296,7 +296,8 @@ def surface_from_props(get: Any, extras: dict[str, Any], resolve: Any, *, neighb
     nfile, hfile = get("normal_map"), get("height_map")
     given = [k for k, x in (("curvature_map", cmap), ("normal_map", nfile), ("height_map", hfile)) if x is not None]
     if not given:
-        stray = [k for k in MAP_PARAMETERS if k not in ("curvature_map", "normal_map", "neighbourhood")
+        # pixel_angle serves a CD-BTF's footprint too; the others only a map
+        stray = [k for k in MAP_PARAMETERS if k not in ("curvature_map", "normal_map", "neighbourhood", "pixel_angle")
                  and get(k) is not None]
         if stray:
             raise OptionError(f"cdbrdf BSDF: {stray[0]} is for a map; give normal_map, height_map or curvature_map")

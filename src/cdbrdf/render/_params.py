@@ -115,8 +115,10 @@ PARAMETERS: Mapping[str, Parameter] = MappingProxyType({p.name: p for p in (
     _P("neighbourhood", "float", "the table's measured patch, else `5`",
        "Mm: the map is never resolved finer than a quarter of it."),
     _P("pixel_angle", "float", "`0`",
-       "The camera's angle per pixel in radians, for the map's level; `render_table`, `load_file` and "
-       "`check_scene` set it from the scene's first perspective sensor. 0: the neighbourhood's level alone."),
+       "The camera's angle per pixel in radians: the footprint a map's level and a neural CD-BTF's texels are "
+       "filtered over (see \"Maps\" and \"CD-BTF\"). `render_table` sets it from the camera; for a map, "
+       "`load_file` and `check_scene` set it from the scene's first perspective sensor. 0: a map's "
+       "neighbourhood level alone, a CD-BTF's texels themselves."),
     _P("map_filter", "string", "`stochastic`",
        "Between the two levels around the footprint's: `stochastic` (one of them, chosen with the trilinear "
        "weights by a hash of the UV, so a render converges to the trilinear one; half the texel reads), "

@@ -406,8 +406,10 @@ def _render_mode(tbl: Any, btf: Any, uv_scale: tuple[float, float] | None, spec:
     from .contrast import curvature_image
     from .scenes import table_scene
 
-    bsdf = None if btf is None or uv_scale is None else _btf_entry(btf, mode, spec.curvature_mode, uv_scale,
-                                                                   spec.texel_filter)
+    bsdf = None
+    if btf is not None and uv_scale is not None:  # with the pixel's angle: the lookup filters its footprint
+        bsdf = {**_btf_entry(btf, mode, spec.curvature_mode, uv_scale, spec.texel_filter),
+                "pixel_angle": _pixel_angle(spec)}
     scene = table_scene(tbl, spec, mode=mode, bsdf=bsdf)
     cb = None if progress is None else (lambda done, total: progress(f"rendering {mode}", done, total))
     image = render_scene(scene, spp=spec.spp, seed=spec.seed, alpha=True, progress=cb)
@@ -459,6 +461,12 @@ def _btf_uv_scale(btf: Any, spec: RenderSpec, mesh: Any) -> tuple[float, float] 
     uvs = detect_uv_scale(mesh.vertices, mesh.faces, mesh.uv, units=mesh.metadata.get("units", "mm"))
     mesh.metadata["notes"] = [*mesh.metadata.get("notes", []), f"UV scale: {uvs}"]
     return uvs.pair
+
+
+def _pixel_angle(spec: RenderSpec) -> float:
+    """Radians per pixel of the picture's lens (its smaller side), as :func:`cdbrdf.render.checks.pixel_angle`."""
+    lens = spec.resolved_camera().lens_fov_deg
+    return 2.0 * math.tan(math.radians(lens) / 2.0) / max(min(spec.size), 1)
 
 
 def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: tuple[float, float],

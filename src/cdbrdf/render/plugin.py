@@ -146,8 +146,10 @@ Plug-in ``cdbrdf`` parameters
    * - ``pixel_angle``
      - float
      - ``0``
-     - The camera's angle per pixel in radians, for the map's level; ``render_table``, ``load_file`` and
-       ``check_scene`` set it from the scene's first perspective sensor. 0: the neighbourhood's level alone.
+     - The camera's angle per pixel in radians: the footprint a map's level and a neural CD-BTF's texels are
+       filtered over (see "Maps" and "CD-BTF"). ``render_table`` sets it from the camera; for a map,
+       ``load_file`` and ``check_scene`` set it from the scene's first perspective sensor. 0: a map's
+       neighbourhood level alone, a CD-BTF's texels themselves.
    * - ``map_filter``
      - string
      - ``stochastic``
@@ -394,6 +396,7 @@ def make_bsdf(
     uv_scale: float | str | tuple[float, float] | None = None,
     texel_filter: str | None = None,
     unit: str | float | None = None,
+    pixel_angle: float | None = None,
     curvature_map: Any = None,
     map_settings: Mapping[str, Any] | None = None,
 ) -> Any:
@@ -418,6 +421,12 @@ def make_bsdf(
         in mm) and ``"stochastic"`` (default: one of the four nearest texels
         with probability its bilinear weight), ``"bilinear"`` (the four
         blended, as :meth:`cdbrdf.CDBTF.evaluate`) or ``"nearest"``.
+    pixel_angle
+        The angle one pixel of the camera subtends, radians: a neural
+        CD-BTF's texels and a map's levels are filtered over the pixel's
+        footprint at the hit (``docs/btf.md``, "Filtering"; ``docs/rendering.md``,
+        "Maps"). Default: a map takes the scene's camera's
+        (:func:`check_scene`), a CD-BTF 0 (the texels themselves).
     unit
         The scene's unit (applied by :func:`load_dict` with the shape's
         ``to_world``; ``docs/rendering.md``, "Curvature units").
@@ -427,7 +436,7 @@ def make_bsdf(
     map_settings
         The other map parameters of the table above (``normal_map``,
         ``height_map``, ``height_scale``, ``map_size``, ``neighbourhood``,
-        ``pixel_angle``, ``map_filter``, ``shading_normals``, ...).
+        ``map_filter``, ``shading_normals``, ...).
 
     Returns
     -------
@@ -440,6 +449,8 @@ def make_bsdf(
         raise OptionError(f"map_settings: unknown parameter(s) {sorted(unknown)}; valid: {', '.join(MAP_PARAMETERS)}")
     if curvature_map is not None:
         extra["curvature_map"] = curvature_map
+    if pixel_angle is not None:
+        extra["pixel_angle"] = pixel_angle
     return _make_bsdf(table, mode=mode, curvature=curvature, curvature_mode=curvature_mode,
                       curvature_scale=curvature_scale, scale=scale, sampling=sampling, cosine_weight=cosine_weight,
                       storage=storage, uv_scale=uv_scale, texel_filter=texel_filter, unit=unit, **extra)

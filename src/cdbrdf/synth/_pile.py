@@ -9,7 +9,8 @@ The fibre's scattering per unit length, for a fibre of diameter ``d`` and
 direction ``t``, light ``l`` and view ``v`` (unit vectors away from the
 surface), is ``d sigma(l, v)`` with (per steradian)::
 
-    sigma = cos_i cos_o [A k_d / pi^2 + w_s K F(eta, cos_d cos(phi / 2)) g(theta_h) cos(phi / 2) / (4 cos_d^2)]
+    sigma = cos_i cos_o [A k_d T(theta_i) T(theta_o) / (Tbar pi^2)
+                         + w_s K F(eta, cos_d cos(phi / 2)) g(theta_h) cos(phi / 2) / (4 cos_d^2)]
 
 where ``cos_i = |l x t|``, ``cos_o = |v x t|`` (the cosines of the
 longitudinal angles ``theta_i = asin(l . t)``, ``theta_o = asin(v . t)``),
@@ -17,8 +18,14 @@ longitudinal angles ``theta_i = asin(l . t)``, ``theta_o = asin(v . t)``),
 azimuth between ``l`` and ``v`` around the fibre, ``g`` a normalised Gaussian
 of width ``beta``: a diffuse cylinder (coloured, albedo ``A``) plus the
 specular ``R`` lobe of Marschner et al. (2003), normalised numerically by
-``K``. It is symmetric in ``l`` and ``v`` (reciprocal); the fibre's
-extinction cross-section per unit length is ``d cos_i``.
+``K``. The diffuse part enters and leaves the fibre through its surface:
+``T(theta) = 1 - a_s(theta)`` is what the specular lobe does not reflect
+at that longitudinal angle (``a_s`` its albedo, tabulated over ``theta``
+in ``trans``), and ``Tbar = (4 / pi) int_0^(pi/2) T cos^2`` makes the
+diffuse part's albedo ``A T(theta_i)``, so that the fibre's whole albedo is
+``a_s + A (1 - a_s) <= 1``. It is symmetric in ``l`` and ``v``
+(reciprocal); the fibre's extinction cross-section per unit length is
+``d cos_i``.
 """
 
 from __future__ import annotations
@@ -32,9 +39,9 @@ from .fibre import _fibre_angles, _fresnel
 
 __all__: list[str] = []
 
-# Layout of the fibre parameter row.
-F_R, F_G, F_B, F_KD, F_WS, F_BETA, F_ETA, F_K, F_SCALE = range(9)
-N_FIBRE = 9
+# Layout of the fibre parameter row (F_TINV: 1 / Tbar).
+F_R, F_G, F_B, F_KD, F_WS, F_BETA, F_ETA, F_K, F_SCALE, F_TINV = range(10)
+N_FIBRE = 10
 
 _INV_PI2 = 1.0 / (math.pi * math.pi)
 _SQRT_2PI = math.sqrt(2.0 * math.pi)
@@ -49,8 +56,20 @@ def _spec(tx, ty, tz, lx, ly, lz, vx, vy, vz, beta, eta):
     return _fresnel(eta, cd * chalf) * g * chalf / (4.0 * max(cd * cd, 1e-6))
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _trans(trans, s):
+    """``T`` at the longitudinal angle ``asin(|s|)``: linear in the table over 0..89 degrees, clamped."""
+    n = trans.shape[0]
+    x = math.asin(min(abs(s), 1.0)) / math.radians(89.0) * (n - 1)
+    if x >= n - 1:
+        return trans[n - 1]
+    i = int(x)
+    f = x - i
+    return trans[i] * (1.0 - f) + trans[i + 1] * f
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
-def fibre_albedo(thetas, fibre, mode, n_theta, n_phi, out, start, stop):
+def fibre_albedo(thetas, fibre, trans, mode, n_theta, n_phi, out, start, stop):
     """Albedo ``int sigma(l, v) / cos_i dw_v`` over the whole sphere of a fibre along z.
 
     ``thetas``: longitudinal angles of the light (radians); mode 0: the bare
@@ -74,15 +93,16 @@ def fibre_albedo(thetas, fibre, mode, n_theta, n_phi, out, start, stop):
                 if mode == 0:
                     f = co * _spec(0.0, 0.0, 1.0, lx, ly, lz, vx, vy, vz, beta, 1e6)
                 else:
-                    f = co * (fibre[F_KD] * _INV_PI2 + fibre[F_WS] * fibre[F_K]
+                    dif = fibre[F_KD] * _INV_PI2 * fibre[F_TINV] * _trans(trans, lz) * _trans(trans, ca)
+                    f = co * (dif + fibre[F_WS] * fibre[F_K]
                               * _spec(0.0, 0.0, 1.0, lx, ly, lz, vx, vy, vz, beta, fibre[F_ETA]))
                 acc += f * sa
         out[i] = acc * dt * dp
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def pile_pairs(views, lights, tangents, weights, caps, z_edges, layer_scale, diameter, fibre, ground, corr_mm, out,
-               slabs, start, stop):
+def pile_pairs(views, lights, tangents, weights, caps, z_edges, layer_scale, diameter, fibre, trans, ground, corr_mm,
+               out, slabs, start, stop):
     """Pile and ground reflectance of pairs ``start`` to ``stop``.
 
     Parameters (arrays)
@@ -102,7 +122,9 @@ def pile_pairs(views, lights, tangents, weights, caps, z_edges, layer_scale, dia
     layer_scale
         ``(L,)`` factor on each layer's density (the bend).
     fibre
-        The fibre row; ``ground`` the ground's Lambertian albedo ``(3,)``.
+        The fibre row; ``trans`` the transmission ``T`` of its surface over
+        longitudinal angles 0..89 degrees; ``ground`` the ground's
+        Lambertian albedo ``(3,)``.
     corr_mm
         Horizontal correlation length of the gaps (the hot spot), mm.
     out
@@ -120,6 +142,7 @@ def pile_pairs(views, lights, tangents, weights, caps, z_edges, layer_scale, dia
     eta = fibre[F_ETA]
     ks = fibre[F_WS] * fibre[F_K]
     scale = fibre[F_SCALE]
+    tinv = fibre[F_TINV]
     e_l = np.empty(M)
     e_v = np.empty(M)
     e_d = np.empty(M)
@@ -142,7 +165,7 @@ def pile_pairs(views, lights, tangents, weights, caps, z_edges, layer_scale, dia
             co = math.sqrt(max(0.0, 1.0 - pv * pv))
             e_l[m] = ci
             e_v[m] = co
-            e_d[m] = ci * co
+            e_d[m] = ci * co * _trans(trans, pl) * _trans(trans, pv) * tinv
             c_l[m] = abs(pl)
             c_v[m] = abs(pv)
             c_d[m] = max(pl, 0.0) * max(pv, 0.0)

@@ -67,7 +67,8 @@ from . import _trace
 from ._model import SampledModel
 from ._params import NOT_SPECIAL, ModelParams, is_real
 from .bending import Bend, bend
-from .fibre import FibreLobes
+from .fibre import P_B, P_R, FibreLobes
+from .multiple import SCATTERING, Compensation, compensation, hemisphere_grid
 from .surface import SurfacePoints, surface_points
 from .weave import (
     Heightfield,
@@ -82,10 +83,17 @@ log = logging.getLogger(__name__)
 
 MODEL_NAME = "cdbrdf.synth.cloth"
 #: Bump when a change alters any computed value.
-MODEL_VERSION = "2.0"
+MODEL_VERSION = "3.0"
 
 #: Largest visibility table (directions x points) held at once, bytes.
 _VIS_BYTES = 64 * 2**20
+#: The white cloth's directional albedo (the compensation's ``E``) is computed on views of
+#: this many rings x azimuths (and the pole), by a light quadrature of this many rings x azimuths.
+_E_VIEWS = (6, 8)
+_E_LIGHTS = (8, 16)
+#: Share of the white cloth's missing energy the compensation returns: all of it but the
+#: quadrature error of ``E`` (about 1 %), so that the albedo stays <= 1.
+_E_FRACTION = 0.98
 
 RGB = tuple[float, float, float]
 
@@ -140,6 +148,11 @@ class ClothParams(ModelParams):
         Width ``gamma_v`` of the coloured forward-scattering lobe.
     warp_isotropic, weft_isotropic
         ``k_d`` in [0, 1]: isotropic fraction of the volume scattering.
+    scattering
+        ``"multiple"`` (the single scattering of the micro-surface plus the
+        light it loses, returned by an energy-compensation term:
+        :mod:`cdbrdf.synth.multiple`) or ``"single"`` (single scattering
+        only, the model before 3.0).
     texels
         Height-field texels along the longer side of the repeat.
     points
@@ -178,6 +191,7 @@ class ClothParams(ModelParams):
     weft_sheen_deg: float = 20.0
     warp_isotropic: float = 0.7
     weft_isotropic: float = 0.7
+    scattering: str = "multiple"
     texels: int = 192
     points: int = 4181
     tilt_samples: int = 5
@@ -191,6 +205,8 @@ class ClothParams(ModelParams):
             weave_matrix(w)
         if self.warp_along not in ("x", "y"):
             raise OptionError(f"warp_along: expected 'x' or 'y', got {self.warp_along!r}")
+        if self.scattering not in SCATTERING:
+            raise OptionError(f"scattering: unknown {self.scattering!r}; valid values: {', '.join(SCATTERING)}")
         if not isinstance(self.name, str) or not self.name:
             raise OptionError("name: must be a non-empty string")
         for f in ("warp_rgb", "weft_rgb", "backing_rgb"):
@@ -313,6 +329,42 @@ class ClothModel(SampledModel):
         self._kernel_params = rows
         self._weave = p.weave_matrix
         self._geometry: dict[float, tuple[Bend, Heightfield, SurfacePoints]] = {}
+        self._white_albedo: dict[float, NDArray[np.float64]] = {}
+        self._compensation: dict[float, Compensation] = {}
+
+    def recoloured(self, *, warp_rgb: RGB | None = None, weft_rgb: RGB | None = None, backing_rgb: RGB | None = None,
+                   scattering: str | None = None) -> ClothModel:
+        """The same cloth with other colours (or scattering), sharing this model's geometry and lobes.
+
+        The geometry, the fibre lobes' normalisation and the white cloth's
+        albedo do not depend on the colours, so the copy computes none of
+        them again (a fit of the colours evaluates many such copies).
+
+        Parameters
+        ----------
+        warp_rgb, weft_rgb, backing_rgb, scattering
+            New values (None: unchanged).
+
+        Returns
+        -------
+        ClothModel
+            The model with ``params`` changed accordingly.
+        """
+        changes = {k: v for k, v in (("warp_rgb", warp_rgb), ("weft_rgb", weft_rgb), ("backing_rgb", backing_rgb),
+                                     ("scattering", scattering)) if v is not None}
+        p = self.params.replace(**changes)
+        new = ClothModel.__new__(ClothModel)
+        new.params = p
+        rows = self._kernel_params.copy()
+        for i, rgb in enumerate((p.warp_rgb, p.weft_rgb, p.backing_rgb)):
+            rows[i, P_R:P_B + 1] = rgb
+        rows.setflags(write=False)
+        new._kernel_params = rows
+        new._weave = self._weave
+        new._geometry = self._geometry
+        new._white_albedo = self._white_albedo
+        new._compensation = {}
+        return new
 
     # -- geometry -------------------------------------------------------------------
     def bend(self, kappa: float) -> Bend:
@@ -376,6 +428,59 @@ class ClothModel(SampledModel):
         x = ((np.arange(k) + 0.5) / k - 0.5) * self.params.footprint_mm
         return kappa * x
 
+    # -- multiple scattering ----------------------------------------------------------
+    def compensation(self, kappa: float = 0.0) -> Compensation | None:
+        """The energy-compensation term at curvature ``kappa`` (None with ``scattering = "single"``).
+
+        ``E`` is the directional albedo of the same cloth with every albedo 1
+        and single scattering, on the bent micro-surface in the flat frame
+        (:data:`_E_VIEWS` views, :data:`_E_LIGHTS` light directions, Gauss-
+        Legendre in cos theta); the bounce colour ``a`` is the yarns' and the
+        backing's colours weighted by their share of the micro-surface's area.
+
+        Parameters
+        ----------
+        kappa
+            Curvature, mm^-1.
+
+        Returns
+        -------
+        Compensation or None
+            The term (:func:`cdbrdf.synth.multiple.compensation`).
+        """
+        if self.params.scattering != "multiple":
+            return None
+        k = float(kappa)
+        got = self._compensation.get(k)
+        if got is None:
+            got = self._make_compensation(k)
+            if len(self._compensation) > 16:
+                self._compensation.clear()
+            self._compensation[k] = got
+        return got
+
+    def _make_compensation(self, kappa: float) -> Compensation:
+        views = hemisphere_grid(*_E_VIEWS)
+        albedo = self._white_albedo.get(kappa)
+        if albedo is None:
+            white = self.recoloured(warp_rgb=(1.0, 1.0, 1.0), weft_rgb=(1.0, 1.0, 1.0), backing_rgb=(1.0, 1.0, 1.0),
+                                    scattering="single")
+            lights = hemisphere_grid(*_E_LIGHTS)
+            vdirs = np.concatenate([views.dirs, [[0.0, 0.0, 1.0]]])
+            nv, nl = vdirs.shape[0], lights.size
+            v = np.repeat(vdirs, nl, axis=0)
+            l = np.tile(lights.dirs, (nv, 1))
+            g = white._flat(v, l, kappa)[:, 0].reshape(nv, nl)  # f cos theta_v cos theta_l
+            albedo = (g @ lights.weights) / vdirs[:, 2]
+            if len(self._white_albedo) > 16:
+                self._white_albedo.clear()
+            self._white_albedo[kappa] = albedo
+        pts = self.surface_points(kappa)
+        area = np.bincount(pts.kind, weights=pts.weight, minlength=3)[:3]
+        colours = self._kernel_params[:, P_R:P_B + 1]
+        bounce = area @ colours / area.sum()
+        return compensation(albedo, views, bounce, fraction=_E_FRACTION)
+
     # -- evaluation -------------------------------------------------------------------
     def _flat(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float,
               texels: tuple[int, int] | None = None) -> NDArray[np.float64]:
@@ -420,6 +525,9 @@ class ClothModel(SampledModel):
                       pts.normal, pts.tangent, pts.kind, pts.weight, self._kernel_params, texel_grid, part,
                       grain=16)
             out[c0:c1] = part / (area / nbin)
+        comp = self.compensation(kappa)
+        if comp is not None:  # the same diffuse term for every texel: their mean keeps it
+            out += (comp(v, l) * (v[:, 2] * l[:, 2])[:, None])[:, None, :]
         return out if texels is not None else out[:, 0]
 
     def _pairs(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float,

@@ -1,5 +1,10 @@
 """Summary numbers of a cloth's appearance, used by the presets' targets.
 
+:func:`colour_45_0` is the colour a spectrophotometer of 45/0 geometry
+reads: CIE 1976 L*a*b* (D65) of pi times the BRDF with the light at 45
+degrees all round (annular, the mean over light azimuths) and the view along
+the normal.
+
 All take a reflectance array or a table whose last axis is linear Rec. 709
 RGB. ``REC709_Y`` and ``luminance`` are :data:`cdbrdf.colour.LUMINANCE_WEIGHTS`
 and :func:`cdbrdf.colour.luminance`, re-exported.
@@ -37,6 +42,7 @@ __all__ = [
     "BendContrast",
     "bend_contrast",
     "bend_summary",
+    "colour_45_0",
 ]
 
 #: Largest light and view elevation of the near-normal comparison, degrees.
@@ -321,3 +327,32 @@ def bend_summary(table: CDBRDF, **options: Any) -> list[dict[str, Any]]:
                      "chroma_change": ch - ch0, "hue_change_deg": (h - h0 + 180.0) % 360.0 - 180.0,
                      "srgb8": bent.tolist(), "flat_srgb8": flat.tolist()})
     return rows
+
+
+def colour_45_0(source: CDBRDF | Any, kappa: float = 0.0) -> tuple[float, float, float, float, float]:
+    """The 45/0 colour of a table or a fabric model: ``(L*, a*, b*, C*ab, h_ab)``.
+
+    A reflectance factor as a 45 deg annular / 0 deg colorimeter reads it
+    (CIE 15:2004, 45 deg a : 0 deg): pi times the BRDF with the view along the
+    normal and the light at 45 degrees elevation, averaged over the light
+    azimuths 0, 30, ..., 330 degrees, as linear Rec. 709 to CIE 1976
+    L*a*b* (D65, white = 1).
+
+    Parameters
+    ----------
+    source
+        A :class:`cdbrdf.CDBRDF` or a model with ``evaluate(theta_v, phi_v,
+        theta_l, phi_l, kappa)`` (:mod:`cdbrdf.synth`).
+    kappa
+        Curvature, mm^-1.
+
+    Returns
+    -------
+    tuple of float
+        L*, a*, b*, chroma C*ab and hue angle h_ab (degrees).
+    """
+    azimuths = np.arange(0.0, 360.0, 30.0)
+    rgb = np.asarray(source.evaluate(0.0, 0.0, 45.0, azimuths, kappa), dtype=np.float64).mean(axis=0)
+    lab = linear_to_lab(np.pi * rgb)
+    c, h = lab_chroma_hue(lab)
+    return float(lab[0]), float(lab[1]), float(lab[2]), float(c), float(h)

@@ -77,6 +77,7 @@ def seen_fractions(model: ClothModel, kappa: float) -> dict[str, float]:
     is ``pi`` times its mean BRDF: the reflected colour of a cloth of
     Lambertian yarns is ``sum_kind share * albedo``. Shadowing, masking and
     the surfaces' tilt are included; what is hidden or unlit has no share.
+    Single scattering only: the light of further bounces mixes the kinds.
 
     Returns
     -------
@@ -87,6 +88,7 @@ def seen_fractions(model: ClothModel, kappa: float) -> dict[str, float]:
     probe = p.replace(
         warp_rgb=(1.0, 0.0, 0.0), weft_rgb=(0.0, 1.0, 0.0), backing_rgb=(0.0, 0.0, 1.0),
         warp_specular=0.0, weft_specular=0.0, warp_isotropic=1.0, weft_isotropic=1.0, ior=1.0,
+        scattering="single",
     )
     azimuths = np.arange(0.0, 360.0, 30.0)
     g = Grid(kappa=[float(kappa)], theta_l=_NEAR_NORMAL_THETA, phi_l=azimuths, theta_v=_NEAR_NORMAL_THETA,

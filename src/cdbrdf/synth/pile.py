@@ -76,14 +76,25 @@ from ..errors import OptionError
 from . import _pile
 from ._model import SampledModel
 from ._params import ModelParams, is_real
+from .multiple import (
+    PILE_AZIMUTHS,
+    PILE_RINGS,
+    SCATTERING,
+    HemisphereGrid,
+    PileMedium,
+    hemisphere_grid,
+    interpolate_pairs,
+    pile_multiple,
+    pile_reflectance,
+)
 
-__all__ = ["PILE_KINDS", "PileParams", "PileModel", "PILE_MODEL_NAME", "PILE_MODEL_VERSION"]
+__all__ = ["PILE_KINDS", "PileParams", "PileModel", "PILE_MODEL_NAME", "PILE_MODEL_VERSION", "strand_albedo"]
 
 log = logging.getLogger(__name__)
 
 PILE_MODEL_NAME = "cdbrdf.synth.pile"
 #: Bump when a change alters any computed value.
-PILE_MODEL_VERSION = "1.0"
+PILE_MODEL_VERSION = "2.0"
 
 #: Kinds of pile: straight cut fibres (velvet, plush) or yarn loops (terry).
 PILE_KINDS: Mapping[str, str] = MappingProxyType({
@@ -141,6 +152,11 @@ class PileParams(ModelParams):
     correlation_mm
         Horizontal size of the gaps in the pile: the view and light paths see
         the same gaps when closer than this (the hot spot).
+    scattering
+        ``"multiple"`` (every order of scattering: the single scattering
+        exactly, the further orders by the adding-doubling solution of the
+        pile's radiative transfer, :mod:`cdbrdf.synth.multiple`) or
+        ``"single"`` (single scattering and one ground bounce only).
     layers
         Slabs the pile is integrated over.
     azimuths
@@ -166,6 +182,7 @@ class PileParams(ModelParams):
     fibre_gloss_deg: float = 8.0
     ior: float = 1.53
     correlation_mm: float = 0.1
+    scattering: str = "multiple"
     layers: int = 16
     azimuths: int = 12
     rings: int = 6
@@ -175,6 +192,8 @@ class PileParams(ModelParams):
             raise OptionError("name: must be a non-empty string")
         if self.kind not in PILE_KINDS:
             raise OptionError(f"kind: unknown pile kind {self.kind!r}; valid kinds: {', '.join(PILE_KINDS)}")
+        if self.scattering not in SCATTERING:
+            raise OptionError(f"scattering: unknown {self.scattering!r}; valid values: {', '.join(SCATTERING)}")
         for f in ("fibre_rgb", "ground_rgb"):
             v = getattr(self, f)
             try:
@@ -329,13 +348,41 @@ class PileModel(SampledModel):
         row[_pile.F_WS] = p.fibre_specular
         row[_pile.F_BETA] = math.radians(p.fibre_gloss_deg)
         row[_pile.F_ETA] = p.ior
-        row[_pile.F_K] = 1.0 / (_fibre_albedo(row, 0).max() * _NORM_MARGIN)
+        row[_pile.F_TINV] = 1.0
+        ones = np.ones(_ALBEDO_THETAS)
+        row[_pile.F_K] = 1.0 / (_fibre_albedo(row, 0, ones).max() * _NORM_MARGIN)
+        # What the specular lobe does not reflect enters the fibre: T(theta) = 1 - a_s(theta).
+        spec = row.copy()
+        spec[_pile.F_KD] = 0.0
+        spec_albedo = _fibre_albedo(spec, 1, ones)
+        self._trans = np.clip(1.0 - spec_albedo, 0.0, 1.0)
+        self._trans.setflags(write=False)
+        th = np.radians(np.linspace(0.0, 89.0, _ALBEDO_THETAS))
+        fine = np.linspace(0.0, 0.5 * math.pi, 2001)
+        tbar = 4.0 / math.pi * np.trapezoid(np.interp(fine, th, self._trans) * np.cos(fine) ** 2, fine)
+        row[_pile.F_TINV] = 1.0 / tbar
         probe = row.copy()
         probe[_pile.F_KD] = max(p.fibre_rgb)
-        row[_pile.F_SCALE] = 1.0 / max(1.0, float(_fibre_albedo(probe, 1).max()) * _NORM_MARGIN)
+        row[_pile.F_SCALE] = 1.0 / max(1.0, float(_fibre_albedo(probe, 1, self._trans).max()) * _NORM_MARGIN)
+        # The mean albedo of the specular lobe (weights cos theta: directions spread evenly over the sphere).
+        self._spec_mean = float(np.sum(spec_albedo * np.cos(th)) / np.sum(np.cos(th)))
         row.setflags(write=False)
         self._fibre = row
         self._ground = np.asarray(p.ground_rgb, dtype=np.float64)
+        self._medium: PileMedium | None = None
+        self._grid: HemisphereGrid | None = None
+        if p.scattering == "multiple":
+            # In the further orders a strand scatters, like a diffuse cylinder, its whole mean albedo
+            # a_s + A (1 - a_s) (normalised exactly on the direction grid: no quadrature margin).
+            rgb = np.asarray(p.fibre_rgb, dtype=np.float64)
+            self._medium = PileMedium(
+                tangents=self._tangents, weights=self._weights, caps=self._caps, z_edges=self._edges,
+                diameter_mm=p.strand_diameter_mm,
+                diffuse_rgb=np.clip(self._spec_mean + rgb * (1.0 - self._spec_mean), 0.0, 1.0),
+                cap_rgb=rgb, ground_rgb=self._ground,
+            )
+            self._grid = hemisphere_grid(PILE_RINGS, PILE_AZIMUTHS)
+        self._multiple: dict[float, tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
 
     @property
     def top_mm(self) -> float:
@@ -384,9 +431,61 @@ class PileModel(SampledModel):
             return out, per_slab
         run_split(_pile.pile_pairs, n, np.ascontiguousarray(v), np.ascontiguousarray(l),
                   self._tangents, self._weights, self._caps, self._edges, self.layer_scale(kappa),
-                  self.params.strand_diameter_mm, self._fibre, self._ground, self.params.correlation_mm, out,
-                  per_slab, grain=64)
+                  self.params.strand_diameter_mm, self._fibre, self._trans, self._ground, self.params.correlation_mm,
+                  out, per_slab, grain=64)
+        if self._medium is not None:
+            self._add_multiple(v, l, kappa, out, per_slab)
         return out, per_slab
+
+    def multiple_scattering(self, kappa: float) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """The further orders of scattering at curvature ``kappa`` (None with ``scattering = "single"``).
+
+        Parameters
+        ----------
+        kappa
+            Curvature, mm^-1.
+
+        Returns
+        -------
+        tuple of numpy.ndarray or None
+            The BRDF matrices ``(pile, ground)`` over the model's direction
+            grid (:func:`cdbrdf.synth.multiple.pile_multiple`): the light that
+            scattered two or more times and never reached the ground, and
+            that which reached it at least once (besides the ground's single
+            bounce).
+        """
+        if self._medium is None or self._grid is None:
+            return None
+        k = float(kappa)
+        got = self._multiple.get(k)
+        if got is None:
+            got = pile_multiple(self._medium, self.layer_scale(k), self._grid)
+            if len(self._multiple) > 16:
+                self._multiple.clear()
+            self._multiple[k] = got
+        return got
+
+    def _add_multiple(self, v: NDArray[np.float64], l: NDArray[np.float64], kappa: float,
+                      out: NDArray[np.float64], per_slab: NDArray[np.float64]) -> None:
+        """Add the further orders to ``out`` (pile, ground); the pile's shared by the slabs as its single scattering."""
+        ms = self.multiple_scattering(kappa)
+        assert ms is not None and self._grid is not None
+        ok = (v[:, 2] > 0.0) & (l[:, 2] > 0.0)
+        pile = np.zeros((v.shape[0], 3))
+        ground = np.zeros((v.shape[0], 3))
+        if ok.any():
+            pile[ok] = interpolate_pairs(self._grid, ms[0], v[ok], l[ok])
+            ground[ok] = interpolate_pairs(self._grid, ms[1], v[ok], l[ok])
+        if per_slab.shape[0]:
+            L = self.params.layers
+            single = out[:, :3]
+            has = single > 0.0
+            ratio = np.where(has, (single + pile) / np.where(has, single, 1.0), 1.0)
+            per_slab[:, :L, :] *= ratio[:, None, :]
+            # where nothing scattered once (it cannot scatter twice either, but to keep the sum) the top slab
+            per_slab[:, L - 1, :] += np.where(has, 0.0, pile)
+        out[:, :3] += pile
+        out[:, 3:] += ground
 
     @property
     def slab_edges_mm(self) -> NDArray[np.float64]:
@@ -485,9 +584,71 @@ class PileModel(SampledModel):
         }
 
 
-def _fibre_albedo(row: NDArray[np.float64], mode: int) -> NDArray[np.float64]:
+def strand_albedo(params: PileParams, reflectance_rgb: ArrayLike, *, stacked: int = 16,
+                  tolerance: float = 1e-5) -> RGB:
+    """The strand colour ``fibre_rgb`` for which a thick layer of the pile's strands reflects ``reflectance_rgb``.
+
+    A material's published reflectance is that of an optically thick sample
+    (``R_inf``, e.g. a pad of the fibre or a folded fabric), the result of
+    many scattering events among its fibres; a strand of the pile model is
+    one such scatterer. This finds, channel by channel (bisection), the
+    strand albedo ``A`` whose pile, ``stacked`` layers deep over nothing,
+    reflects ``R_inf`` under diffuse light in the model's own multiple
+    scattering (:func:`cdbrdf.synth.multiple.pile_reflectance`).
+
+    Parameters
+    ----------
+    params
+        The pile (its strands' geometry, gloss and density; its colours are ignored).
+    reflectance_rgb
+        ``R_inf`` of the strands' material, linear Rec. 709, each in [0, 1).
+    stacked
+        Layers of the pile stacked to make it optically thick.
+    tolerance
+        On ``A``.
+
+    Returns
+    -------
+    tuple of float
+        ``fibre_rgb``.
+    """
+    target = np.asarray(reflectance_rgb, dtype=np.float64)
+    if target.shape != (3,) or np.any(~np.isfinite(target)) or np.any(target < 0) or np.any(target >= 1):
+        raise OptionError(f"reflectance_rgb: expected three reflectances in [0, 1), got {reflectance_rgb!r}")
+    model = PileModel(params.replace(fibre_rgb=(1.0, 1.0, 1.0), scattering="multiple"))
+    med, grid, s = model._medium, model._grid, model._spec_mean
+    assert med is not None and grid is not None
+    def excess(a: NDArray[np.float64]) -> NDArray[np.float64]:
+        m = PileMedium(tangents=med.tangents, weights=med.weights, caps=med.caps, z_edges=med.z_edges,
+                       diameter_mm=med.diameter_mm, diffuse_rgb=s + a * (1.0 - s), cap_rgb=a,
+                       ground_rgb=np.zeros(3))
+        return pile_reflectance(m, grid, stacked=stacked) - target
+
+    # Regula falsi (Illinois) on [0, 1], channel by channel: R_inf grows with A.
+    lo, hi = np.zeros(3), np.ones(3)
+    f_lo, f_hi = excess(lo), excess(hi)
+    if np.any(f_hi < 0):
+        raise OptionError(f"reflectance_rgb: {reflectance_rgb!r} is more than a layer of white strands reflects")
+    a = lo.copy()
+    side = np.zeros(3)
+    for _ in range(60):
+        a = np.where(f_hi != f_lo, (lo * f_hi - hi * f_lo) / np.where(f_hi != f_lo, f_hi - f_lo, 1.0), 0.5 * (lo + hi))
+        a = np.clip(a, lo, hi)
+        f = excess(a)
+        right = f > 0
+        hi, f_hi = np.where(right, a, hi), np.where(right, f, f_hi)
+        lo, f_lo = np.where(right, lo, a), np.where(right, f_lo, f)
+        f_lo = np.where(right & (side > 0), 0.5 * f_lo, f_lo)
+        f_hi = np.where(~right & (side < 0), 0.5 * f_hi, f_hi)
+        side = np.where(right, 1.0, -1.0)
+        if float(np.max(np.abs(f))) < tolerance * 0.1 or float(np.max(hi - lo)) < tolerance:
+            break
+    return float(a[0]), float(a[1]), float(a[2])
+
+
+def _fibre_albedo(row: NDArray[np.float64], mode: int, trans: NDArray[np.float64]) -> NDArray[np.float64]:
     """Fibre albedo over longitudinal light angles 0..89 degrees (:func:`_pile.fibre_albedo`)."""
     th = np.radians(np.linspace(0.0, 89.0, _ALBEDO_THETAS))
     out = np.zeros(th.size)
-    run_split(_pile.fibre_albedo, th.size, th, row, mode, _ALBEDO_N_THETA, _ALBEDO_N_PHI, out, grain=4)
+    run_split(_pile.fibre_albedo, th.size, th, row, trans, mode, _ALBEDO_N_THETA, _ALBEDO_N_PHI, out, grain=4)
     return out

@@ -23,6 +23,11 @@ neighbours leave or to the flattening of the yarn type.
   dupion weft, 30 picks per cm. The two mix to an ochre yellow; a convex bend
   spreads the warp and shows more of the weft (lighter, yellower).
 
+The yarn colours are the colours of the dyed (or undyed) fibres'
+reflectance spectra, from the dyes' and fibres' published data
+(:mod:`cdbrdf.synth.colorants`, which cites them; ``python
+scripts/preset_colours.py`` recomputes every preset colour from them).
+
 References
 ----------
 F. T. Peirce, "The geometry of cloth structure", Journal of the Textile
@@ -51,10 +56,13 @@ _WOVEN: Mapping[str, Mapping[str, Any]] = MappingProxyType(
                 "weave": "twill_3_1",
                 # Warp along the stand's axis: bending across the warp opens it.
                 "warp_along": "y",
-                # Indigo-dyed cotton, L* 18, a* 11, b* -28 (dark raw indigo).
-                "warp_rgb": (0.012, 0.022, 0.090),
-                # Undyed (ecru) cotton, L* 84, a* -2, b* 9.
-                "weft_rgb": (0.66, 0.64, 0.53),
+                # Indigo on greige cotton, a dark rope-dyed shade (K/S 30 at indigo's 660 nm maximum):
+                # L* 26, a* 1.5, b* -32 (colorants.linear_rgb("indigo_cotton_dark"); the dye and fibre
+                # data and their sources in cdbrdf.synth.colorants).
+                "warp_rgb": (0.0, 0.0502, 0.1539),
+                # Undyed greige cotton, Rd 65 %, +b 6 (USDA colour chart): L* 85, b* 6.4
+                # (colorants.linear_rgb("ecru_cotton")).
+                "weft_rgb": (0.6592, 0.6577, 0.5714),
                 # Seen through holes: the stand under the cloth (white, as the
                 # paper's stands' walls in its Fig. 7b).
                 "backing_rgb": (0.80, 0.80, 0.80),
@@ -107,10 +115,12 @@ _WOVEN: Mapping[str, Mapping[str, Any]] = MappingProxyType(
                 "weave": "plain",
                 # Warp along the stand's axis: bending across the warp opens it.
                 "warp_along": "y",
-                # Red-orange silk, L* 44, a* 43, b* 40.
-                "warp_rgb": (0.45, 0.06, 0.02),
-                # Golden-yellow silk, L* 81, a* -11, b* 75 (hue angle 99 deg).
-                "weft_rgb": (0.70, 0.60, 0.02),
+                # Red-orange silk: C.I. Acid Orange 7 (485 nm) shaded with C.I. Acid Yellow 23 (427 nm)
+                # on degummed silk, L* 40, a* 25, b* 26 (colorants.linear_rgb("red_orange_silk")).
+                "warp_rgb": (0.2625, 0.0715, 0.0343),
+                # Golden-yellow silk: tartrazine (C.I. Acid Yellow 23, 427 nm) on degummed silk,
+                # L* 81, a* 9, b* 56, hue angle 81 deg (colorants.linear_rgb("golden_yellow_silk")).
+                "weft_rgb": (0.919, 0.524, 0.1093),
                 # The white stand under the cloth (as for denim).
                 "backing_rgb": (0.80, 0.80, 0.80),
                 # 80 ends per cm.

@@ -23,7 +23,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from ..btf import CDBTF, DEFAULT_MAX_ERROR, MAX_RANK
+from ..btf import CDBTF, DEFAULT_MAX_ERROR, DEFAULT_METHOD, MAX_RANK
 from ..errors import OptionError
 from ..frames import direction_from_angles
 from ..grid import Grid
@@ -154,6 +154,7 @@ def tabulate_btf(
     max_error: float = DEFAULT_MAX_ERROR,
     max_rank: int = MAX_RANK,
     progress: Callable[[int, int], None] | None = None,
+    method: str = DEFAULT_METHOD,
 ) -> CDBTF:
     """Sample a fabric model per texel of one repeat and compress it.
 
@@ -172,6 +173,10 @@ def tabulate_btf(
     max_error, max_rank
         The compression's target relative RMS error and most components
         (:meth:`cdbrdf.CDBTF.from_values`).
+    method
+        The representation (:data:`cdbrdf.btf.METHODS`; default
+        ``"neural"``: latent codes and a decoder, plus residual components
+        while ``max_error`` needs them; ``docs/btf.md``).
 
     Returns
     -------
@@ -207,4 +212,5 @@ def tabulate_btf(
         attrs["btf_texels"] = [nu, nv]
         attrs["btf_points_per_texel"] = ppt
         repeat = model.heightfield(0.0).size_mm
-    return CDBTF.from_values(dense, g, repeat_mm=repeat, max_error=max_error, max_rank=max_rank, attrs=attrs)
+    return CDBTF.from_values(dense, g, repeat_mm=repeat, max_error=max_error, max_rank=max_rank, attrs=attrs,
+                             method=method)

@@ -5,13 +5,16 @@
   the surfaces' meshes;
 - :mod:`cdbrdf.view.export`: the self-contained static folder (HTML, JS, the
   assets embedded so that it opens from ``file://``);
-- :mod:`cdbrdf.view.server`: the local web server of ``cdbrdf view``.
+- :mod:`cdbrdf.view.server`: the local web server of ``cdbrdf view``;
+- :mod:`cdbrdf.view.gltf_page`: the browser renderer of a glTF export
+  (``cdbrdf view x.glb``: three.js, bundled from ``js/``).
 
-The page itself (``assets/viewer.html``, ``assets/viewer.js``) is package
+The page itself (``assets/viewer.html``, ``assets/viewer.js``, the GLSL
+lookup ``assets/lookup.js``) is package
 data; ``docs/viewer.md`` describes it, its JavaScript interface
 (``window.cdbrdfViewer``) and the GPU layout.
 """
 
 from __future__ import annotations
 
-__all__ = ["asset", "export", "server"]
+__all__ = ["asset", "export", "gltf_page", "server"]

@@ -18,6 +18,14 @@ A table asset holds, in one little-endian blob:
 - ``measured`` (uint8), ``fill_method`` (uint8 codes, names in the header)
   and ``fill_source`` (int32 flat index, -1 measured, -2 unknown) per sample.
 
+A mesh asset (:func:`mesh_asset`) holds positions, normals, tangents, the
+curvature, UVs and indices; a mesh with a curvature map
+(:class:`cdbrdf.mesh.CurvatureMap`, ``metadata["curvature_map"]``) also holds
+its own shape operator per vertex with the UV layout's handedness
+(``shape``) and the map's prefiltered levels (``map``: every level's texels,
+level 0 first, two RGBA texels each, :func:`cdbrdf.view.map_asset.map_atlas`),
+which the page looks up per fragment by the rule of :mod:`cdbrdf.mesh.curvature_map`.
+
 The header names the axes (degrees, 1/mm), the lookup's nodes and steps, the
 symmetry (an isotropic table is uploaded as it is and the shader applies the
 rotation rule of :mod:`cdbrdf.interp`), channels, quantity, material, and
@@ -43,6 +51,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import LimitError, OptionError
+from .map_asset import map_atlas, uv_handedness
 
 __all__ = [
     "ASSET_FORMAT",
@@ -50,6 +59,8 @@ __all__ = [
     "FLOAT16_ABOVE_BYTES",
     "PRECISIONS",
     "WEBGL2_MIN_LIMITS",
+    "VIEWER_CANVAS",
+    "VIEWER_FOV_DEG",
     "Asset",
     "check_texture",
     "mesh_asset",
@@ -75,6 +86,11 @@ FLOAT16_ABOVE_BYTES = 64 * 2**20
 PRECISIONS: tuple[str, ...] = ("auto", "float32", "float16")
 
 _FLOAT16_MAX = 65504.0
+
+#: The page's canvas (pixels) and its lens's vertical field of view (degrees): what a mesh is first framed for.
+VIEWER_CANVAS: tuple[int, int] = (960, 600)
+VIEWER_FOV_DEG = 35.0
+
 
 
 @dataclass(frozen=True)
@@ -384,7 +400,8 @@ def table_asset(table: Any, *, name: str = "table", precision: str = "auto") -> 
     return Asset(header, blob.bytes())
 
 
-def mesh_asset(mesh: Any, *, name: str, uv_scale_mm: float | tuple[float, float] = 1.0) -> Asset:
+def mesh_asset(mesh: Any, *, name: str, uv_scale_mm: float | tuple[float, float] = 1.0,
+               precision: str = "auto") -> Asset:
     """Pack a mesh with per-vertex curvature (mm^-1) for the viewer: one draw call.
 
     Positions are centred (mm); the tangent is the material's x axis (dP/du
@@ -398,6 +415,14 @@ def mesh_asset(mesh: Any, *, name: str, uv_scale_mm: float | tuple[float, float]
     the renderer's ``uv_scale``. Without UVs the header's ``uv`` is false and
     the viewer shows a CD-BTF's tile mean there.
 
+    A mesh with a curvature map (``metadata["curvature_map"]``, baked per
+    texel by :func:`cdbrdf.mesh.apply_maps`) also carries the block ``shape``
+    (float32 ``(n, 4)``: its shape operator ``sxx, sxy, syy`` in 1/mm in the
+    frame x = dP/du, y = n x x, and the UV layout's handedness, +1 or -1 where
+    it is mirrored), the block ``map`` and the header's ``map``
+    (:func:`cdbrdf.view.map_asset.map_atlas`), the map's levels at the mesh's UV scale
+    (``metadata["uv_scale"]``) and neighbourhood.
+
     Parameters
     ----------
     mesh
@@ -407,8 +432,10 @@ def mesh_asset(mesh: Any, *, name: str, uv_scale_mm: float | tuple[float, float]
     name
         Its label in the viewer.
     uv_scale_mm
-        Millimetres of fabric per UV unit: one number for both, or ``(su, sv)``
-        (default 1: the UVs are in mm).
+        Millimetres of fabric per UV unit of a CD-BTF: one number for both,
+        or ``(su, sv)`` (default 1: the UVs are in mm).
+    precision
+        The map's texture: one of :data:`PRECISIONS` (``"auto"``: float32).
 
     Returns
     -------
@@ -418,27 +445,21 @@ def mesh_asset(mesh: Any, *, name: str, uv_scale_mm: float | tuple[float, float]
     Raises
     ------
     OptionError
-        For a ``uv_scale_mm`` that is not one or two positive finite numbers.
+        For a ``uv_scale_mm`` that is not one or two positive finite numbers,
+        an unknown precision.
     """
-    from ..mesh.frames import face_uv_tangents, vertex_tangents
+    from ..mesh import SHAPE_ATTRIBUTES
     from ..mesh.prepare import has_own_uv
     from ..mesh.units import parse_units
 
     su, sv = _uv_scale_pair(uv_scale_mm)
+    if precision not in PRECISIONS:
+        raise OptionError(f"precision: {precision!r} is not one of {', '.join(PRECISIONS)}")
     scale = float(parse_units(mesh.metadata.get("units", "mm")).mm_per_unit)
     v = np.asarray(mesh.vertices, dtype=np.float64) * scale
     f = np.asarray(mesh.faces, dtype=np.int64)
     n = np.asarray(mesh.normals, dtype=np.float64)
-    if mesh.uv is not None:
-        ft, ok = face_uv_tangents(v, f, np.asarray(mesh.uv, dtype=np.float64))
-        t = vertex_tangents(f, ft, ok.astype(np.float64), n)
-    else:
-        t = np.full_like(n, np.nan)
-    bad = ~np.isfinite(t).all(axis=1)
-    if bad.any():
-        a = np.where(np.abs(n[bad, 0:1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
-        p = a - np.einsum("ij,ij->i", a, n[bad])[:, None] * n[bad]
-        t[bad] = p / np.linalg.norm(p, axis=1, keepdims=True)
+    t = _vertex_frame_tangents(mesh, v, f, n)
     lo, hi = v.min(axis=0), v.max(axis=0)
     centre = (lo + hi) / 2
     kappa = np.asarray(mesh.attributes["curvature"], dtype=np.float64)
@@ -461,9 +482,58 @@ def mesh_asset(mesh: Any, *, name: str, uv_scale_mm: float | tuple[float, float]
         "uv": uv is not None, "uv_scale_mm": [su, sv],
         "size_mm": (hi - lo).tolist(), "units": "mm",
         "curvature_range": [float(kappa.min()), float(kappa.max())],
-        "blocks": blob.blocks,
+        "frame": _framing(v - centre),
     }
+    cmap = mesh.metadata.get("curvature_map")
+    if cmap is not None and uv is None:
+        _LOG.warning("%s: its curvature map needs its own finite UVs; the viewer shows the mesh's own curvature",
+                     name)
+    elif cmap is not None and uv is not None:
+        shape = np.stack([np.asarray(mesh.attributes[k], dtype=np.float64) for k in SHAPE_ATTRIBUTES]
+                         + [uv_handedness(v, f, uv, n)], axis=1)
+        blob.add("shape", shape, "float32")
+        header["map"], atlas = map_atlas(cmap, uv_scale=mesh.metadata["uv_scale"],
+                                         neighbourhood_mm=float(mesh.metadata.get("neighbourhood_mm", 5.0)),
+                                         max_width=WEBGL2_MIN_LIMITS["MAX_TEXTURE_SIZE"],
+                                         max_texels=WEBGL2_MIN_LIMITS["MAX_TEXTURE_SIZE"] ** 2)
+        half = precision == "float16"
+        if half and float(np.max(np.abs(atlas), initial=0.0)) > _FLOAT16_MAX:
+            raise OptionError(f"precision: float16 cannot hold {cmap.name}'s values (up to "
+                              f"{float(np.max(np.abs(atlas))):g})")
+        header["map"]["atlas"]["type"] = "float16" if half else "float32"
+        blob.add("map", atlas, "float16" if half else "float32")
+    header["blocks"] = blob.blocks
     return Asset(header, blob.bytes())
+
+
+def _vertex_frame_tangents(mesh: Any, v: NDArray[np.float64], f: NDArray[np.int64],
+                           n: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Unit tangents per vertex: dP/du projected (the renderer's frame), else any unit vector perpendicular to n."""
+    from ..mesh.frames import face_uv_tangents, vertex_tangents
+
+    if mesh.uv is not None:
+        ft, ok = face_uv_tangents(v, f, np.asarray(mesh.uv, dtype=np.float64))
+        t = vertex_tangents(f, ft, ok.astype(np.float64), n)
+    else:
+        t = np.full_like(n, np.nan)
+    bad = ~np.isfinite(t).all(axis=1)
+    if bad.any():
+        a = np.where(np.abs(n[bad, 0:1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+        p = a - np.einsum("ij,ij->i", a, n[bad])[:, None] * n[bad]
+        t[bad] = p / np.linalg.norm(p, axis=1, keepdims=True)
+    return t
+
+
+def _framing(points: NDArray[np.float64]) -> dict[str, float]:
+    """The page's first view of a mesh (centred points, mm): ``cdbrdf render``'s view, framed by its rule."""
+    from ..render.camera import DEFAULT_MESH_VIEW, frame_camera
+
+    el, az = DEFAULT_MESH_VIEW
+    w, h = VIEWER_CANVAS
+    _, target, dist = frame_camera(points, width=w, height=h, elevation_deg=el, azimuth_deg=az,
+                                   fov_deg=VIEWER_FOV_DEG)
+    # the page orbits the box's centre (the origin): the distance there that frames what frame_camera framed
+    return {"elevation_deg": el, "azimuth_deg": az, "distance_mm": float(dist + np.linalg.norm(target))}
 
 
 def _uv_scale_pair(uv_scale_mm: Any) -> tuple[float, float]:

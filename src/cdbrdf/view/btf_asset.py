@@ -17,6 +17,15 @@ the tile mean (the mosaic, the polar slice, the meshes without UVs and the
 - ``weights``: float32 RGBA texture array ``(layers, n_v, n_u, 4)``, layer
   ``j`` holding components ``4 j .. 4 j + 3`` of every texel (zero padded).
 
+A neural CD-BTF (``btf.neural``) adds ``latents`` (RGBA32F, the codes of
+every pyramid level in groups of four numbers, folded into rows) and
+``decoder`` (RGBA32F, a row per neuron: its weights in groups of four, the
+first layer's code part and feature part each padded to whole groups and the
+hidden layers to multiples of four neurons, then the bias) and the header's
+``btf.neural``; the shader computes the modulation of the mean as
+:func:`cdbrdf.btf._neural.neural_at` does, the pyramid level from the
+pixel's footprint (``dFdx``/``dFdy`` of the fabric position).
+
 The shader decodes ``mean + sum_i w_i(u, v) basis_i`` at each pixel with the
 lookup rule of the table (:mod:`cdbrdf.interp`) and periodic bilinear weights
 between texel centres, as :meth:`cdbrdf.CDBTF.evaluate`. Components are
@@ -33,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from ..btf._neural import level_shapes
 from ..errors import LimitError, OptionError
 from .asset import WEBGL2_MIN_LIMITS, Asset, _Blob, _precision, check_texture, table_asset
 
@@ -136,6 +146,7 @@ def btf_asset(btf: Any, *, name: str = "btf", precision: str = "auto", max_rank:
     blob.add("components", folded.reshape(k, height, width, 4), "float16" if prec == "float16" else "float32")
     # (layer, v, u, 4): RGBA of layer j = components 4j .. 4j+3
     blob.add("weights", np.moveaxis(w.reshape(layers, 4, nv, nu), 1, -1), "float32")
+    neural = None if btf.neural is None else _neural_blocks(btf, blob, name=name, tex=tex)
     header = dict(base.header)
     header["kind"] = "btf"
     header["blocks"] = blob.blocks
@@ -143,10 +154,60 @@ def btf_asset(btf: Any, *, name: str = "btf", precision: str = "auto", max_rank:
     err = btf.compression.get("relative_rms_error")
     header["btf"] = {
         "rank": rank, "rank_total": total, "rank_fits": fits, "texels": [nu, nv], "repeat_mm": [su, sv],
+        "levels": len(level_shapes(nu, nv)),
         "relative_rms_error": None if err is None else float(err),
         "relative_rms_error_used": None if err_used is None else float(err_used),
         "components": {"width": width, "height": height, "layers": k, "per_sample": per,
                        "format": "RGBA", "type": prec},
         "weights": {"width": nu, "height": nv, "layers": layers, "format": "RGBA", "type": "float32"},
+        "neural": neural,
     }
     return Asset(header, blob.bytes())
+
+
+def _neural_blocks(btf: Any, blob: _Blob, *, name: str, tex: int) -> dict[str, Any]:
+    """Add the ``latents`` and ``decoder`` blocks of a neural CD-BTF; its header entry."""
+    from ..btf._neural import N_FEATURES
+
+    net = btf.neural
+    if len(net.weights) != 3:
+        raise OptionError(f"{name}: the viewer decodes decoders of two hidden layers; this one has layers {net.layers}")
+    dims = net.latent_dims
+    groups = -(-dims // 4)
+    if groups > 8 or max(net.layers[1:3]) > 128:
+        raise OptionError(f"{name}: the viewer decodes codes of at most 32 numbers and hidden layers of at most 128 "
+                          f"(layers {net.layers})")
+    codes = np.concatenate([z.reshape(-1, dims) for z in net.latents])
+    lat = np.zeros((codes.shape[0], groups * 4), np.float32)
+    lat[:, :dims] = codes
+    flat = lat.reshape(-1, 4)
+    width = min(flat.shape[0], tex)
+    height = -(-flat.shape[0] // width)
+    padded = np.zeros((width * height, 4), np.float32)
+    padded[: flat.shape[0]] = flat
+    blob.add("latents", padded.reshape(height, width, 4), "float32")
+    w0, w1, w2 = (np.asarray(w, np.float32) for w in net.weights)
+    b0, b1, b2 = (np.asarray(b, np.float32) for b in net.biases)
+    h1, h2, nc = -(-w0.shape[1] // 4) * 4, -(-w1.shape[1] // 4) * 4, w2.shape[1]
+    gin = groups + 3
+    cols = max(gin, h1 // 4, h2 // 4) + 1
+    rows = np.zeros((h1 + h2 + nc, cols * 4), np.float32)
+    rows[: w0.shape[1], :dims] = w0[:dims].T
+    rows[: w0.shape[1], 4 * groups : 4 * groups + N_FEATURES] = w0[dims:].T
+    rows[: w0.shape[1], 4 * gin] = b0
+    rows[h1 : h1 + w1.shape[1], : w1.shape[0]] = w1.T
+    rows[h1 : h1 + w1.shape[1], 4 * (h1 // 4)] = b1
+    rows[h1 + h2 :, : w2.shape[0]] = w2.T
+    rows[h1 + h2 :, 4 * (h2 // 4)] = b2
+    blob.add("decoder", rows.reshape(rows.shape[0], cols, 4), "float32")
+    levels, first = [], 0
+    for z in net.latents:
+        levels.append([int(z.shape[1]), int(z.shape[0]), first])
+        first += int(z.shape[0] * z.shape[1])
+    g = btf.grid
+    nu, nv = btf.texels
+    return {"latents": {"width": width, "height": height, "groups": groups},
+            "decoder": {"width": cols, "height": rows.shape[0]}, "levels": levels,
+            "layers": [gin, h1, h2, nc], "constants": [float(c) for c in net.constants],
+            "clamp": [float(g.theta_v[0]), float(g.theta_v[-1]), float(g.theta_l[0]), float(g.theta_l[-1])],
+            "texel_mm": max(btf.repeat_mm[0] / nu, btf.repeat_mm[1] / nv)}

@@ -2,7 +2,8 @@
 
 :func:`viewer_files` builds every file of the viewer in memory:
 
-- ``index.html`` and ``viewer.js``: the page (package data, ``assets/``);
+- ``index.html``, ``lookup.js`` (the GLSL lookup, shared with the glTF
+  renderer) and ``viewer.js``: the page (package data, ``assets/``);
 - ``data.js``: ``window.CDBRDF_VIEWER_DATA``, every asset's JSON header and
   its binary blob in base64, loaded by a ``<script>`` tag, so that the page
   opens from ``file://`` (where a browser refuses ``fetch()`` of local files)
@@ -61,7 +62,7 @@ EXPORT_SIGNATURE: tuple[str, ...] = ("index.html", "data.js")
 MAX_TABLES = 2
 
 #: The page's own files (package data under ``cdbrdf/view/assets``) and their names in the folder.
-PAGE_FILES: Mapping[str, str] = {"viewer.html": "index.html", "viewer.js": "viewer.js"}
+PAGE_FILES: Mapping[str, str] = {"viewer.html": "index.html", "lookup.js": "lookup.js", "viewer.js": "viewer.js"}
 
 #: Vertices along each side of the draped cloth shown in the viewer.
 DRAPE_RESOLUTION = 101
@@ -127,6 +128,7 @@ def viewer_files(
     precision: str = "auto",
     exposure_ev: float | None = None,
     max_rank: int | None = None,
+    open_on: str | None = None,
 ) -> dict[str, bytes]:
     """Every file of the viewer, by relative path.
 
@@ -140,16 +142,22 @@ def viewer_files(
         ``{key: (label, prepared Mesh)}`` or ``{key: (label, prepared Mesh,
         uv_scale_mm)}`` (mm of fabric per UV unit, one number or ``(su, sv)``;
         default 1: the UVs in mm, as the renderer's ``uv_scale``): a CD-BTF
-        shows its weave on a mesh with UVs, its tile mean on one without.
+        shows its weave on a mesh with UVs, its tile mean on one without; a
+        mesh with a curvature map (``metadata["curvature_map"]``) shows its
+        wrinkles (:func:`cdbrdf.view.asset.mesh_asset`).
         Default: the draped cloth (:func:`drape_entry`). The sine sheet and
         the stand are drawn by the shader and need no mesh.
     precision
-        Texture precision (:data:`cdbrdf.view.asset.PRECISIONS`).
+        Texture precision (:data:`cdbrdf.view.asset.PRECISIONS`), of the
+        tables and the curvature maps.
     exposure_ev
         The page's initial exposure, stops (default: from the first table).
     max_rank
         For a CD-BTF: use at most this many leading components (default:
         all that fit the GPU's guaranteed texture size).
+    open_on
+        The key of ``meshes`` the page opens on, framed as ``cdbrdf render``
+        frames it (default: the sine sheet).
 
     Returns
     -------
@@ -159,7 +167,8 @@ def viewer_files(
     Raises
     ------
     OptionError
-        For no table or more than :data:`MAX_TABLES`, a bad ``uv_scale_mm``.
+        For no table or more than :data:`MAX_TABLES`, a bad ``uv_scale_mm``,
+        an ``open_on`` that is not a key of ``meshes``.
     LimitError
         For a table too large for WebGL2's textures.
     """
@@ -174,7 +183,9 @@ def viewer_files(
         else:
             a = table_asset(table, name=label, precision=precision)
         assets.append((f"table-{i}", a))
-    mesh_assets = [(key, mesh_asset(e[1], name=e[0], uv_scale_mm=e[2] if len(e) > 2 else 1.0))
+    if open_on is not None and open_on not in meshes:
+        raise OptionError(f"open_on: {open_on!r} is not one of the meshes ({', '.join(meshes) or 'none'})")
+    mesh_assets = [(key, mesh_asset(e[1], name=e[0], uv_scale_mm=e[2] if len(e) > 2 else 1.0, precision=precision))
                    for key, e in meshes.items()]
     files: dict[str, bytes] = {}
     pkg = resources.files("cdbrdf.view") / "assets"
@@ -191,7 +202,8 @@ def viewer_files(
         # the surfaces the shader draws, with the sizes the renderer uses (cdbrdf.mesh)
         "surfaces": {"sheet": {"amplitude_mm": sheet.amplitude_mm, "wavelength_mm": sheet.wavelength_mm,
                                "width_mm": sheet.width_mm, "depth_mm": sheet.depth_mm}},
-        "options": {} if exposure_ev is None else {"exposure_ev": float(exposure_ev)},
+        "options": {**({} if exposure_ev is None else {"exposure_ev": float(exposure_ev)}),
+                    **({} if open_on is None else {"surface": _label(open_on)})},
     }
     files["data.js"] = ("window.CDBRDF_VIEWER_DATA = " + json.dumps(data, separators=(",", ":"), allow_nan=False)
                         + ";\n").encode("ascii")

@@ -39,93 +39,8 @@
   }
 
   // ---------------------------------------------------------------- GLSL
-  const LOOKUP_GLSL = `
-precision highp float; precision highp int;
-precision highp sampler2DArray; precision highp sampler2D;
-uniform sampler2DArray uTab;  // RGBA, a layer per kappa: the Fig. 7 image row-major, folded into rows of uTexW
-uniform int uTexW;            // texture width: texel i = row * n_columns + column lies at (i % uTexW, i / uTexW)
-uniform sampler2D uAxes;      // R32F rows: 0 kappa, 1 theta_l, 2 theta_v (lookup nodes)
-uniform ivec3 uN;             // node counts: kappa, theta_l, theta_v
-uniform ivec2 uNphi;          // n_phi_l, n_phi_v
-uniform vec4 uPhi;            // phi_l0, phi_l_step, phi_v0, phi_v_step
-uniform int uIso;             // 1: isotropic (phi_v holds phi_v - phi_l)
-uniform vec3 uInvStep;        // 1 / step of evenly spaced axes (kappa: always 0, theta_l, theta_v), 0 where uneven
-const float SNAP = 1e-6;      // cdbrdf.interp.SNAP_TOLERANCE["float32"]
-
-float snapw(float w) { return w < SNAP ? 0.0 : (w > 1.0 - SNAP ? 1.0 : w); }
-float wrapAz(float x) { return abs(x) < 360.0 ? x : x - 360.0 * trunc(x / 360.0); }
-float axisAt(int row, int i) { return texelFetch(uAxes, ivec2(i, row), 0).r; }
-
-// the two nodes of x on a sorted axis (clamped at both ends): node i, weight w of node i+1
-void linearNodes(int row, int n, float inv, float x, out int i, out float w) {
-  i = 0; w = 0.0;
-  if (n < 2) return;
-  float a0 = axisAt(row, 0);
-  x = clamp(x, a0, axisAt(row, n - 1));
-  int lo = 0, hi = n - 1;  // largest lo <= n-2 with axis[lo] <= x
-  if (inv > 0.0) {         // evenly spaced: by multiplication (as the RGB kernel), kept within the axis
-    lo = clamp(int((x - a0) * inv), 0, n - 2);
-    if (axisAt(row, lo) > x) lo = max(lo - 1, 0);
-    else if (lo < n - 2 && axisAt(row, lo + 1) <= x) lo += 1;
-  } else {
-    while (hi - lo > 1) { int mid = (lo + hi) / 2; if (axisAt(row, mid) <= x) lo = mid; else hi = mid; }
-  }
-  float a = axisAt(row, lo), b = axisAt(row, lo + 1);
-  i = lo; w = snapw((x - a) / (b - a));
-}
-
-// the two nodes of an azimuth on the evenly spaced circle
-void periodicNodes(float phi0, float step, int n, float x, out int i0, out int i1, out float w) {
-  i0 = 0; i1 = 0; w = 0.0;
-  if (n < 2) return;
-  float u = (wrapAz(x) - phi0) / step;
-  float f = floor(u);
-  w = snapw(u - f);
-  int fi = int(f);
-  i0 = ((fi % n) + n) % n; i1 = (i0 + 1) % n;
-}
-
-// The 5-D rule (cdbrdf.interp), written once: cell() finds the nodes and weights (the pole rule
-// included); FOR_CORNERS(c, BODY) runs BODY for each corner of non-zero weight with I (the flat
-// sample index, row * n_columns + column), L (the layer: the kappa node) and W (its weight). A
-// macro, not a function filling arrays: the plain lookup stays as fast as a hand-written loop.
-struct Cell { int ik, itl, itv, ipl0, ipl1, ipv0, ipv1; float wk, wtl, wtv, wpl, wpv; };
-Cell cell(float tv, float pv, float tl, float pl, float k) {
-  Cell c;
-  if (uIso == 1) { pv = wrapAz(wrapAz(pv) - wrapAz(pl)); pl = 0.0; }
-  linearNodes(0, uN.x, uInvStep.x, k, c.ik, c.wk);
-  linearNodes(1, uN.y, uInvStep.y, tl, c.itl, c.wtl);
-  linearNodes(2, uN.z, uInvStep.z, tv, c.itv, c.wtv);
-  periodicNodes(uPhi.x, uPhi.y, uNphi.x, pl, c.ipl0, c.ipl1, c.wpl);
-  periodicNodes(uPhi.z, uPhi.w, uNphi.y, pv, c.ipv0, c.ipv1, c.wpv);
-  // pole rule: on elevation node 0 with weight 1 the azimuth must not matter
-  if (c.itl == 0 && c.wtl == 0.0) { c.wpl = 0.0; if (uIso == 1) c.wpv = 0.0; }
-  if (c.itv == 0 && c.wtv == 0.0) c.wpv = 0.0;
-  return c;
-}
-#define FOR_CORNERS(c, BODY) \
-  for (int a_ = 0; a_ < 2; a_++) { \
-    float fa_ = a_ == 0 ? 1.0 - c.wk : c.wk; if (fa_ == 0.0) continue; \
-    for (int b_ = 0; b_ < 2; b_++) { \
-      float fb_ = fa_ * (b_ == 0 ? 1.0 - c.wpl : c.wpl); if (fb_ == 0.0) continue; \
-      for (int c_ = 0; c_ < 2; c_++) { \
-        float fc_ = fb_ * (c_ == 0 ? 1.0 - c.wtl : c.wtl); if (fc_ == 0.0) continue; \
-        int row_ = (b_ == 0 ? c.ipl0 : c.ipl1) * uN.y + c.itl + c_; \
-        for (int d_ = 0; d_ < 2; d_++) { \
-          float fd_ = fc_ * (d_ == 0 ? 1.0 - c.wpv : c.wpv); if (fd_ == 0.0) continue; \
-          for (int e_ = 0; e_ < 2; e_++) { \
-            float W = fd_ * (e_ == 0 ? 1.0 - c.wtv : c.wtv); if (W == 0.0) continue; \
-            int I = row_ * uNphi.y * uN.z + (d_ == 0 ? c.ipv0 : c.ipv1) * uN.z + c.itv + e_; \
-            int L = c.ik + a_; \
-            BODY \
-          } } } } }
-
-vec3 lookup(float tv, float pv, float tl, float pl, float k) {
-  Cell c = cell(tv, pv, tl, pl, k);
-  vec3 acc = vec3(0.0);
-  FOR_CORNERS(c, acc += W * texelFetch(uTab, ivec3(I % uTexW, I / uTexW, L), 0).rgb;)
-  return acc;
-}
+  // the 5-D lookup of cdbrdf.interp: written once, in lookup.js (shared with the glTF renderer)
+  const LOOKUP_GLSL = window.CDBRDF_LOOKUP_GLSL + `
 
 #ifdef BTF
 // CD-BTF (cdbrdf.view.btf_asset): mean + sum_i w_i(u, v) basis_i, every term looked up by the rule above.
@@ -137,18 +52,102 @@ uniform sampler2DArray uWts;      // RGBA32F (layer j: components 4j..4j+3) per 
 uniform ivec2 uTexels;            // n_u, n_v
 uniform vec2 uRepeat;             // the repeat's size, mm
 uniform int uRank;                // components used (<= uPer - 1)
+uniform float uFadeLevels;        // levels of the texels' pyramid (cdbrdf.btf._neural.level_shapes)
+uniform float uTexelSize;         // the larger side of a texel, mm
 
 vec3 comp(int s, int layer, int j) { int i = s * uPer + j; return texelFetch(uComp, ivec3(i % uCompW, i / uCompW, layer), 0).rgb; }
 vec4 wts(ivec2 t, int g) { return texelFetch(uWts, ivec3(t, g), 0); }
-// p: the position on the fabric, mm (periodic over the repeat)
-vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p) {
+
+// A neural CD-BTF (cdbrdf.btf._neural): max(0, M (1 + fade o)), o the decoder on the texel's latent code (a
+// pyramid level chosen by the footprint, bilinear between texel centres, linear between levels) and the query.
+uniform int uNeural;            // 1: the bound CD-BTF has a decoder
+uniform sampler2D uLat;         // RGBA32F: group g of code c at i = c * uLatG + g, texel (i % uLatW, i / uLatW)
+uniform int uLatW, uLatG;       // its width; groups of 4 numbers per code
+uniform ivec4 uLev[8];          // per level: n_u, n_v, first code
+uniform int uNLev;
+uniform sampler2D uDec;         // RGBA32F: a row per neuron, its weights in groups of 4 then (bias, 0, 0, 0)
+uniform ivec4 uLay;             // groups of the first layer's input (code + 3 of features), hidden 1, hidden 2, outputs
+uniform vec3 uDecC;             // kappa scale, luminance epsilon, offset
+uniform vec4 uClampT;           // theta_v min, max, theta_l min, max
+uniform float uTexelMM;         // the larger side of a level-0 texel, mm
+vec4 latG(int c, int g) { int i = c * uLatG + g; return texelFetch(uLat, ivec2(i % uLatW, i / uLatW), 0); }
+vec4 dec(int row, int g) { return texelFetch(uDec, ivec2(g, row), 0); }
+void addCode(int lv, vec2 f, float s, inout vec4 z[8]) {
+  ivec4 L = uLev[lv]; ivec2 n = L.xy;
+  vec2 x = f * vec2(n) - 0.5, x0 = floor(x), t = x - x0;
+  ivec2 i0 = (ivec2(x0) % n + n) % n, i1 = (i0 + 1) % n;
+  for (int k = 0; k < 4; k++) {
+    ivec2 c = ivec2(k % 2 == 0 ? i0.x : i1.x, k < 2 ? i0.y : i1.y);
+    float w = s * (k % 2 == 0 ? 1.0 - t.x : t.x) * (k < 2 ? 1.0 - t.y : t.y);
+    if (w == 0.0) continue;
+    int code = L.z + c.y * n.x + c.x;
+    for (int g = 0; g < 8; g++) { if (g >= uLatG) break; z[g] += w * latG(code, g); }
+  }
+}
+vec3 neural(vec3 mean, float tv, float pv, float tl, float pl, float k, vec2 p, float fp) {
+  float lam = log2(max(fp / uTexelMM, 1.0));
+  float fade = clamp(float(uNLev) - lam, 0.0, 1.0);
+  if (fade == 0.0) return mean;
+  int lv = min(int(floor(lam)), uNLev - 1);
+  float t = lv < uNLev - 1 ? lam - float(lv) : 0.0;
+  vec4 x[11];
+  for (int g = 0; g < 11; g++) x[g] = vec4(0.0);
+  vec2 f = p / uRepeat; f -= floor(f);
+  vec4 z[8];
+  for (int g = 0; g < 8; g++) z[g] = vec4(0.0);
+  addCode(lv, f, 1.0 - t, z);
+  if (t > 0.0) addCode(lv + 1, f, t, z);
+  for (int g = 0; g < 8; g++) { if (g >= uLatG) break; x[g] = z[g]; }
+  if (uIso == 1) { pv = wrapAz(wrapAz(pv) - wrapAz(pl)); pl = 0.0; }
+  tv = radians(clamp(tv, uClampT.x, uClampT.y)); tl = radians(clamp(tl, uClampT.z, uClampT.w));
+  pv = radians(pv); pl = radians(pl);
+  vec3 l = vec3(sin(tl) * cos(pl), sin(tl) * sin(pl), cos(tl)), v = vec3(sin(tv) * cos(pv), sin(tv) * sin(pv), cos(tv));
+  vec3 h = l + v; h *= inversesqrt(max(dot(h, h), 1e-24));
+  float lm = log(max(dot(mean, vec3(0.2126, 0.7152, 0.0722)), 0.0) + uDecC.y) - uDecC.z;
+  x[uLatG] = vec4(l, v.x); x[uLatG + 1] = vec4(v.yz, h.xy); k = clamp(k, axisAt(0, 0), axisAt(0, uN.x - 1));
+  x[uLatG + 2] = vec4(h.z, k / uDecC.x, lm, 0.0);
+  vec4 a[32], b[32];
+  int gin = uLay.x, h1 = uLay.y / 4, h2 = uLay.z / 4;
+  for (int j = 0; j < 32; j++) {
+    if (j >= h1) break;
+    vec4 acc = vec4(0.0);
+    for (int q = 0; q < 4; q++) {
+      int row = 4 * j + q; float s = dec(row, gin).x;
+      for (int g = 0; g < 11; g++) { if (g >= gin) break; s += dot(dec(row, g), x[g]); }
+      acc[q] = max(s, 0.0);
+    }
+    a[j] = acc;
+  }
+  for (int j = 0; j < 32; j++) {
+    if (j >= h2) break;
+    vec4 acc = vec4(0.0);
+    for (int q = 0; q < 4; q++) {
+      int row = uLay.y + 4 * j + q; float s = dec(row, h1).x;
+      for (int g = 0; g < 32; g++) { if (g >= h1) break; s += dot(dec(row, g), a[g]); }
+      acc[q] = max(s, 0.0);
+    }
+    b[j] = acc;
+  }
+  vec3 o;
+  for (int c = 0; c < 3; c++) {
+    int row = uLay.y + uLay.z + min(c, uLay.w - 1); float s = dec(row, h2).x;
+    for (int g = 0; g < 32; g++) { if (g >= h2) break; s += dot(dec(row, g), b[g]); }
+    o[c] = s;
+  }
+  return max(mean * (1.0 + fade * o), 0.0);
+}
+// p: the position on the fabric, mm (periodic over the repeat); fp: the footprint there, mm (0: the texels)
+vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p, float fp) {
   int ci[32]; int cl[32]; float cw[32];
   int n = 0;
   Cell cc = cell(tv, pv, tl, pl, k);
   FOR_CORNERS(cc, ci[n] = I; cl[n] = L; cw[n] = W; n++;)
   vec3 acc = vec3(0.0);
   for (int c = 0; c < 32; c++) { if (c >= n) break; acc += cw[c] * comp(ci[c], cl[c], 0); }
-  if (uRank == 0) return acc;
+  if (uNeural == 1) acc = neural(acc, tv, pv, tl, pl, k, p, fp);
+  // the components fade out over the last level of the pyramid (the texels' pyramid itself is not built here)
+  float fadeC = clamp(uFadeLevels - log2(max(fp / uTexelSize, 1.0)), 0.0, 1.0);
+  if (uRank == 0 || fadeC == 0.0) return acc;
   // the weights: periodic bilinear between texel centres (CDBTF.texel_weights)
   vec2 r = p / uRepeat;
   vec2 f = (r - floor(r)) * vec2(uTexels) - 0.5, f0 = floor(f), t = f - f0;
@@ -161,7 +160,7 @@ vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p) {
       if (w[q] == 0.0) continue;
       vec3 s = vec3(0.0);
       for (int c = 0; c < 32; c++) { if (c >= n) break; s += cw[c] * comp(ci[c], cl[c], j); }
-      acc += w[q] * s;
+      acc += fadeC * w[q] * s;
     }
   }
   return acc;
@@ -173,22 +172,124 @@ vec3 srgb(vec3 c) {
 }
 `;
 
+  // A curvature map (cdbrdf.mesh.curvature_map, packed by cdbrdf.view.asset.map_atlas): the lookup rule of
+  // CurvatureMap (the level of the footprint, bilinear between texel centres, periodic, row 0 at the top, linear
+  // between levels: trilinear, on the map's own prefiltered levels read with texelFetch, not WebGL's mip maps) and
+  // the plug-in's use of it (cdbrdf.render._maps_jit: the detail's shape operator at the UV scale added to the
+  // mesh's own, the eigenvalue of larger magnitude or the xx entry; the shading frame tilted as Mitsuba's
+  // normalmap builds it). Written once; tested against the Python rule in tests/test_viewer_maps.py.
+  const MAPS_GLSL = `
+precision highp float; precision highp int; precision highp sampler2D;
+uniform sampler2D uMap;     // RGBA: map texel j of a level at atlas texels 2 (offset + j), 2 (offset + j) + 1
+uniform int uMapW;          // the atlas's width: texel i at (i % uMapW, i / uMapW)
+uniform ivec4 uMapLev[16];  // per level: width, height, offset (map texels)
+uniform int uMapN;          // levels
+uniform vec4 uMapTr;        // texture transform: t = (ru u + ou, rv v + ov)
+uniform vec2 uMapScale;     // UV scale, mm per UV unit (su, sv)
+uniform float uMapMin;      // the finest level read (the curvature's neighbourhood)
+uniform int uMapDir;        // 1: the directional curvature (xx), 0: the eigenvalue of larger magnitude
+struct MapTexel { vec4 a; vec2 b; };  // (p, q, dp/du, dp/dv), (dq/du, dq/dv)
+struct MapDetail { float p, q; vec3 k; };  // slopes and the shape operator (kxx, kxy, kyy), 1/mm, shading frame
+
+// the level of a footprint (fu, fv) in UV units: log2 in level-0 texels along the map's longer axis
+float mapLevel(vec2 f) {
+  vec2 n = vec2(uMapLev[0].xy) * abs(uMapTr.xy);
+  float t = max(f.x * n.x, f.y * n.y);
+  return clamp(max(log2(max(t, 1e-30)), uMapMin), 0.0, float(uMapN - 1));
+}
+MapTexel mapFetch(int lv, ivec2 c) {
+  ivec4 L = uMapLev[lv];
+  int i = 2 * (L.z + c.y * L.x + c.x);
+  MapTexel m;
+  m.a = texelFetch(uMap, ivec2(i % uMapW, i / uMapW), 0);
+  m.b = texelFetch(uMap, ivec2((i + 1) % uMapW, (i + 1) / uMapW), 0).xy;
+  return m;
+}
+void mapAdd(inout MapTexel acc, MapTexel m, float w) { acc.a += w * m.a; acc.b += w * m.b; }
+// level lv at texture coordinates t: bilinear between the four nearest texel centres, periodic
+void mapBilinear(int lv, vec2 t, float s, inout MapTexel acc) {
+  ivec2 n = uMapLev[lv].xy;
+  vec2 x = vec2(t.x - floor(t.x), (1.0 - t.y) - floor(1.0 - t.y)) * vec2(n) - 0.5;
+  vec2 x0 = floor(x), f = x - x0;
+  ivec2 i0 = ivec2(x0);  // in [-1, n - 1]
+  if (i0.x < 0) i0.x += n.x;
+  if (i0.y < 0) i0.y += n.y;
+  ivec2 i1 = ivec2(i0.x + 1 < n.x ? i0.x + 1 : 0, i0.y + 1 < n.y ? i0.y + 1 : 0);
+  mapAdd(acc, mapFetch(lv, i0), s * (1.0 - f.x) * (1.0 - f.y));
+  mapAdd(acc, mapFetch(lv, ivec2(i1.x, i0.y)), s * f.x * (1.0 - f.y));
+  mapAdd(acc, mapFetch(lv, ivec2(i0.x, i1.y)), s * (1.0 - f.x) * f.y);
+  mapAdd(acc, mapFetch(lv, i1), s * f.x * f.y);
+}
+// the six values at mesh UVs and a (fractional) level: trilinear
+MapTexel mapTexel(vec2 uv, float level) {
+  vec2 t = uv * uMapTr.xy + uMapTr.zw;
+  float l = clamp(level, 0.0, float(uMapN - 1));
+  int l0 = int(floor(l));
+  float f = l - float(l0);
+  MapTexel acc; acc.a = vec4(0.0); acc.b = vec2(0.0);
+  mapBilinear(l0, t, l0 + 1 < uMapN ? 1.0 - f : 1.0, acc);
+  if (l0 + 1 < uMapN && f > 0.0) mapBilinear(l0 + 1, t, f, acc);
+  return acc;
+}
+// the detail at the UV scale in the shading frame; hand = -1 on a mirrored UV layout (flips q and kxy)
+MapDetail mapDetail(MapTexel m, float hand) {
+  MapDetail d;
+  d.p = m.a.x; d.q = m.a.y * hand;
+  d.k = vec3(m.a.z / uMapScale.x, (0.5 * m.a.w / uMapScale.y + 0.5 * m.b.x / uMapScale.x) * hand, m.b.y / uMapScale.y);
+  return d;
+}
+// the curvature of the mesh's shape operator (sxx, sxy, syy) plus the detail's
+float mapCurvature(vec3 mesh, MapDetail d, int directional) {
+  vec3 s = mesh + d.k;
+  if (directional == 1) return s.x;
+  float mean = 0.5 * (s.x + s.z), half_ = sqrt(0.25 * (s.x - s.z) * (s.x - s.z) + s.y * s.y);
+  return mean >= 0.0 ? mean + half_ : mean - half_;
+}
+// the tilted frame (columns s', t', n' in shading-frame coordinates) for the view direction wi there
+mat3 mapFrame(float p, float q, vec3 wi) {
+  vec3 n = normalize(vec3(p, q, 1.0));
+  if (wi.z * dot(wi, n) <= 0.0) n.xy = -n.xy;  // mirrored about the normal when it faces away from the viewer
+  vec3 s = normalize(vec3(1.0 - n.x * n.x, -n.x * n.y, -n.x * n.z));
+  return mat3(s, cross(n, s), n);
+}
+`;
+
   const FULLSCREEN_VS = `#version 300 es
 void main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2)); gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }`;
 
   const EVAL_FS = `#version 300 es
 ${LOOKUP_GLSL}
-uniform sampler2D uQ;  // two texels per query: (theta_v, phi_v, theta_l, phi_l), (kappa, u_mm, v_mm, 1: at (u, v))
+uniform sampler2D uQ;  // two texels per query: (theta_v, phi_v, theta_l, phi_l), (kappa, u_mm, v_mm, 1 + footprint mm: at (u, v))
 out vec4 o;
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   vec4 a = texelFetch(uQ, ivec2(2 * p.x, p.y), 0);
   vec4 b = texelFetch(uQ, ivec2(2 * p.x + 1, p.y), 0);
 #ifdef BTF
-  o = vec4(uBtf == 1 && b.w > 0.5 ? lookupBTF(a.x, a.y, a.z, a.w, b.x, b.yz) : lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
+  o = vec4(uBtf == 1 && b.w > 0.5 ? lookupBTF(a.x, a.y, a.z, a.w, b.x, b.yz, b.w - 1.0) : lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
 #else
   o = vec4(lookup(a.x, a.y, a.z, a.w, b.x), 1.0);
 #endif
+}`;
+
+  // the map's rule at given points, for the tests: queries of three texels (u, v, level or -1: from the
+  // footprint, fu), (fv, sxx, sxy, syy), (hand, wi in the shading frame); uOut picks four of the outputs
+  const MAP_EVAL_FS = `#version 300 es
+${MAPS_GLSL}
+uniform sampler2D uQ; uniform int uOut;
+out vec4 o;
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  vec4 a = texelFetch(uQ, ivec2(3 * p.x, p.y), 0), b = texelFetch(uQ, ivec2(3 * p.x + 1, p.y), 0);
+  vec4 c = texelFetch(uQ, ivec2(3 * p.x + 2, p.y), 0);
+  float lv = a.z >= 0.0 ? a.z : mapLevel(vec2(a.w, b.x));
+  MapTexel m = mapTexel(a.xy, lv);
+  MapDetail d = mapDetail(m, c.x);
+  mat3 f = mapFrame(d.p, d.q, c.yzw);
+  if (uOut == 0) o = m.a;
+  else if (uOut == 1) o = vec4(m.b, lv, mapCurvature(b.yzw, d, 0));
+  else if (uOut == 2) o = vec4(mapCurvature(b.yzw, d, 1), f[2]);
+  else o = vec4(f[0], d.q);
 }`;
 
   const POLAR_FS = `#version 300 es
@@ -207,14 +308,23 @@ void main() {
   const SURFACE_VS = `#version 300 es
 in vec3 aPos; in vec3 aNrm; in vec3 aTan; in float aK;
 uniform mat4 uMVP; uniform int uSurf; uniform float uAmp, uWave, uStandK, uWidth, uDepth;
-#ifdef BTF
+#if defined(BTF) || defined(MAPS)
 in vec2 aUV;            // a mesh's UVs (zero without)
+#endif
+#ifdef BTF
 uniform vec2 uUvScale;  // mm of fabric per UV unit (cdbrdf view --uv-scale, the renderer's uv_scale)
+#endif
+#ifdef MAPS
+in vec4 aShape;         // the mesh's own shape operator (sxx, sxy, syy; 1/mm, x = dP/du) and the UV handedness
+out vec2 vMapUV; out vec4 vShape;
 #endif
 out vec3 vWorld; out vec3 vN; out vec3 vT; out float vK; out float vS; out vec2 vUV;
 void main() {
   vec3 p = aPos;
   vN = aNrm; vT = aTan; vK = aK; vS = 0.0; vUV = vec2(0.0);
+#ifdef MAPS
+  vMapUV = aUV; vShape = aShape;
+#endif
   if (uSurf == 1) {          // sine sheet: z = A sin(2 pi x / L)
     float x = (aPos.x - 0.5) * uWidth;
     p = vec3(x, (aPos.y - 0.5) * uDepth, uAmp * sin(6.283185307179586 * x / uWave));
@@ -239,6 +349,10 @@ void main() {
 
   const SURFACE_FS = `#version 300 es
 ${LOOKUP_GLSL}
+#ifdef MAPS
+${MAPS_GLSL}
+in vec2 vMapUV; in vec4 vShape;
+#endif
 in vec3 vWorld; in vec3 vN; in vec3 vT; in float vK; in float vS; in vec2 vUV;
 uniform int uSurf; uniform float uAmp, uWave, uStandK;
 uniform float uWeaveScale;  // BTF: decode the CD-BTF at (u, v) / scale (sheet, stand, a mesh with UVs)
@@ -246,9 +360,10 @@ uniform vec3 uEye; uniform vec3 uLight; uniform float uExpo;  // uExpo = pi * 2^
 uniform int uEnv; uniform vec3 uEnvDir[9]; uniform float uEnvW[9];
 uniform int uMode; uniform float uSplitX; uniform int uOverlay; uniform float uKmax; uniform int uPick;
 out vec4 o;
+float gFootprint = 0.0;  // the pixel's extent on the fabric (mm), from the derivatives in main (uniform control flow)
 vec3 reflectance(vec2 av, vec2 al, float k) {
 #ifdef BTF
-  return lookupBTF(av.x, av.y, al.x, al.y, k, vUV / uWeaveScale);
+  return lookupBTF(av.x, av.y, al.x, al.y, k, vUV / uWeaveScale, gFootprint);
 #else
   return lookup(av.x, av.y, al.x, al.y, k);
 #endif
@@ -260,7 +375,17 @@ vec2 angles(vec3 d, vec3 n, vec3 t, vec3 b) {
   if (ph < 0.0) ph += 360.0;
   return vec2(min(th, 90.0), ph);
 }
+// the cosine of a light direction at the point: 0 below the shading normal ns or the (tilted) normal n
+float cosLight(vec3 l, vec3 n, vec3 ns) { return dot(l, ns) > 0.0 ? max(dot(l, n), 0.0) : 0.0; }
 void main() {
+#ifdef BTF
+  vec2 pUV = vUV / uWeaveScale;
+  gFootprint = max(length(dFdx(pUV)), length(dFdy(pUV)));
+#endif
+#ifdef MAPS
+  // the footprint in UV units along u and v: the UV partials of the pixel (the plug-in's duv_dx, duv_dy)
+  float mapLv = mapLevel(max(abs(dFdx(vMapUV)), abs(dFdy(vMapUV))));
+#endif
   vec3 n, t; float k;
   if (uSurf == 1) {
     float w = 6.283185307179586 / uWave, d1 = uAmp * w * cos(w * vS);
@@ -275,19 +400,27 @@ void main() {
   vec3 b = cross(n, t);
   vec3 v = normalize(uEye - vWorld);
   bool front = dot(v, n) > 0.0;
+  vec3 ns = n;  // the shading normal
+#ifdef MAPS
+  // the map's detail: its curvature added to the mesh's shape operator, the frame tilted by its slopes
+  MapDetail md = mapDetail(mapTexel(vMapUV, mapLv), vShape.w < 0.0 ? -1.0 : 1.0);
+  k = mapCurvature(vShape.xyz, md, uMapDir);
+  mat3 sh = mat3(t, b, n), tilt = mapFrame(md.p, md.q, vec3(dot(v, t), dot(v, b), dot(v, n)));
+  t = sh * tilt[0]; b = sh * tilt[1]; n = sh * tilt[2];
+#endif
   float kq = (uMode == 0 || (uMode == 2 && gl_FragCoord.x < uSplitX)) ? 0.0 : k;
   vec2 av = angles(v, n, t, b);
   if (uPick == 1) { vec2 al = angles(uLight, n, t, b); o = front ? vec4(av, al) : vec4(-1.0); return; }
-  if (uPick == 2) { o = vec4(kq, k, front ? 1.0 : 0.0, dot(uLight, n)); return; }
+  if (uPick == 2) { o = vec4(kq, k, front ? 1.0 : 0.0, dot(uLight, ns) > 0.0 ? dot(uLight, n) : dot(uLight, ns)); return; }
   vec3 c = vec3(0.0);
   if (!front) {
     c = vec3(0.02);
   } else if (uEnv == 0) {
-    float cl = dot(uLight, n);
+    float cl = cosLight(uLight, n, ns);
     if (cl > 0.0) { vec2 al = angles(uLight, n, t, b); c = reflectance(av, al, kq) * cl * uExpo; }
   } else {
     for (int i = 0; i < 9; i++) {
-      float cl = dot(uEnvDir[i], n);
+      float cl = cosLight(uEnvDir[i], n, ns);
       if (cl <= 0.0) continue;
       vec2 al = angles(uEnvDir[i], n, t, b);
       c += uEnvW[i] * reflectance(av, al, kq) * cl * uExpo;
@@ -343,12 +476,13 @@ void main() {
     surface: 'sheet', amplitude: NaN, wavelength: NaN, width: NaN, depth: NaN, standKappa: 0.13,
     lightTheta: 45.0, lightPhi: 0.0, env: false, exposure: 0.0, mode: 'cdbrdf', split: 0.5, overlay: false,
     side: false, cam: { elevation: 50.0, azimuth: -90.0, distance: 150.0 }, mosaicTable: 0, mosaicK: 0,
-    pick: null, drawCalls: 0, weave: true, weaveScale: 1.0, components: 0,
+    pick: null, drawCalls: 0, weave: true, weaveScale: 1.0, components: 0, maps: true,
   };
   const viewer = { errors: [] };
   window.cdbrdfViewer = viewer;
 
-  const ATTRIBS = ['aPos', 'aNrm', 'aTan', 'aK', 'aUV'];  // their locations: aUV only in the CD-BTF programs
+  // their locations: aUV only in the CD-BTF and map programs, aShape only in the map programs
+  const ATTRIBS = ['aPos', 'aNrm', 'aTan', 'aK', 'aUV', 'aShape'];
   function compile(vs, fs) {
     const p = gl.createProgram();
     for (const [type, src] of [[gl.VERTEX_SHADER, vs], [gl.FRAGMENT_SHADER, fs]]) {
@@ -429,9 +563,28 @@ void main() {
     };
     tex(BTF_UNIT + 2 * index, c.width, c.height, c.layers, block(asset, 'components'), half);
     tex(BTF_UNIT + 2 * index + 1, w.width, w.height, w.layers, block(asset, 'weights'), false);
-    return { unit: BTF_UNIT + 2 * index, compW: c.width, per: c.per_sample, rank: b.rank, rankTotal: b.rank_total,
-      texels: b.texels, repeat: b.repeat_mm };
+    const out = { unit: BTF_UNIT + 2 * index, compW: c.width, per: c.per_sample, rank: b.rank, rankTotal: b.rank_total,
+      texels: b.texels, repeat: b.repeat_mm, neural: null, fadeLevels: b.levels };
+    if (b.neural) {  // the latent pyramid and the decoder: 2D float textures, units NEURAL_UNIT + 2 index (+ 1)
+      const nn = b.neural, tex2 = (unit, t, data) => {
+        const x = gl.createTexture();
+        gl.activeTexture(gl.TEXTURE0 + unit);
+        gl.bindTexture(gl.TEXTURE_2D, x);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+        gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+        gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, t.width, t.height, 0, gl.RGBA, gl.FLOAT, data);
+      };
+      for (const [what, t] of [['latents', nn.latents], ['decoder', nn.decoder]]) {
+        if (t.width > limits.MAX_TEXTURE_SIZE || t.height > limits.MAX_TEXTURE_SIZE) throw fail(`${h.name}: the CD-BTF's ${what} texture ${t.width} x ${t.height} exceeds MAX_TEXTURE_SIZE ${limits.MAX_TEXTURE_SIZE}`);
+      }
+      tex2(NEURAL_UNIT + 2 * index, nn.latents, block(asset, 'latents'));
+      tex2(NEURAL_UNIT + 2 * index + 1, nn.decoder, block(asset, 'decoder'));
+      out.neural = { unit: NEURAL_UNIT + 2 * index, latW: nn.latents.width, latG: nn.latents.groups,
+        levels: nn.levels, layers: nn.layers, constants: nn.constants, clamp: nn.clamp, texelMM: nn.texel_mm };
+    }
+    return out;
   }
+  const NEURAL_UNIT = 20;
   // the components a table uses now: the slider's cap, at most what was packed
   const rankUsed = (tab) => (tab.btf ? Math.max(0, Math.min(tab.btf.rank, state.components)) : 0);
 
@@ -452,6 +605,22 @@ void main() {
       gl.uniform2i(prog.u.uTexels, b.texels[0], b.texels[1]);
       gl.uniform2f(prog.u.uRepeat, b.repeat[0], b.repeat[1]);
       gl.uniform1i(prog.u.uRank, rankUsed(tab));
+      gl.uniform1f(prog.u.uFadeLevels, b.fadeLevels);
+      gl.uniform1f(prog.u.uTexelSize, Math.max(b.repeat[0] / b.texels[0], b.repeat[1] / b.texels[1]));
+      const nn = b.neural;
+      gl.uniform1i(prog.u.uNeural, nn ? 1 : 0);
+      if (nn) {
+        gl.uniform1i(prog.u.uLat, nn.unit); gl.uniform1i(prog.u.uDec, nn.unit + 1);
+        gl.uniform1i(prog.u.uLatW, nn.latW); gl.uniform1i(prog.u.uLatG, nn.latG);
+        const lev = new Int32Array(32);
+        nn.levels.forEach((l, i) => lev.set([l[0], l[1], l[2], 0], 4 * i));
+        gl.uniform4iv(prog.u.uLev, lev);
+        gl.uniform1i(prog.u.uNLev, nn.levels.length);
+        gl.uniform4i(prog.u.uLay, nn.layers[0], nn.layers[1], nn.layers[2], nn.layers[3]);
+        gl.uniform3f(prog.u.uDecC, nn.constants[0], nn.constants[1], nn.constants[2]);
+        gl.uniform4f(prog.u.uClampT, nn.clamp[0], nn.clamp[1], nn.clamp[2], nn.clamp[3]);
+        gl.uniform1f(prog.u.uTexelMM, nn.texelMM);
+      }
     }
   }
 
@@ -466,14 +635,15 @@ void main() {
     return { pos, idx };
   }
 
-  function makeVAO(pos, nrm, tan, kap, idx, uv) {  // at the bound locations (ATTRIBS), for every program
+  function makeVAO(pos, nrm, tan, kap, idx, uv, shape) {  // at the bound locations (ATTRIBS), for every program
     const vao = gl.createVertexArray();
     gl.bindVertexArray(vao);
     const attr = (name, data, size) => {
       const loc = ATTRIBS.indexOf(name);
       if (!data) {
         gl.disableVertexAttribArray(loc);
-        if (size === 1) gl.vertexAttrib1f(loc, 0); else if (size === 2) gl.vertexAttrib2f(loc, 0, 0); else gl.vertexAttrib3f(loc, 0, 0, 1);
+        if (size === 1) gl.vertexAttrib1f(loc, 0); else if (size === 2) gl.vertexAttrib2f(loc, 0, 0);
+        else if (size === 4) gl.vertexAttrib4f(loc, 0, 0, 0, 1); else gl.vertexAttrib3f(loc, 0, 0, 1);
         return;
       }
       const b = gl.createBuffer();
@@ -483,6 +653,7 @@ void main() {
       gl.vertexAttribPointer(loc, size, gl.FLOAT, false, 0, 0);
     };
     attr('aPos', pos, 3); attr('aNrm', nrm, 3); attr('aTan', tan, 3); attr('aK', kap, 1); attr('aUV', uv || null, 2);
+    attr('aShape', shape || null, 4);
     const ib = gl.createBuffer();
     gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ib);
     gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, idx, gl.STATIC_DRAW);
@@ -491,7 +662,40 @@ void main() {
   }
 
   let surfProg, evalProg, polarProg, surfBtfProg = null, evalBtfProg = null, tables = [], surfaces = {}, emptyVAO;
+  let surfMapProg = null, surfBtfMapProg = null, mapEvalProg = null;
   const withBTF = (src) => src.replace('#version 300 es', '#version 300 es\n#define BTF 1');
+  const withMaps = (src) => src.replace('#version 300 es', '#version 300 es\n#define MAPS 1');
+
+  // a mesh's curvature map (cdbrdf.view.asset.map_atlas): its levels in one RGBA texture, bound to MAP_UNIT to draw
+  const MAP_UNIT = 12;
+  function uploadMap(asset) {
+    const m = asset.header.map, at = m.atlas, max = gl.getParameter(gl.MAX_TEXTURE_SIZE);
+    if (at.width > max || at.height > max) throw fail(`${m.name}: its levels' texture ${at.width} x ${at.height} exceeds this GPU's MAX_TEXTURE_SIZE ${max}`);
+    const half = at.type === 'float16', t = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE0 + MAP_UNIT);
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+    gl.texImage2D(gl.TEXTURE_2D, 0, half ? gl.RGBA16F : gl.RGBA32F, at.width, at.height, 0, gl.RGBA,
+      half ? gl.HALF_FLOAT : gl.FLOAT, block(asset, 'map'));
+    const lev = new Int32Array(64);
+    m.levels.forEach((l, i) => lev.set([l[0], l[1], l[2], 0], 4 * i));
+    return { tex: t, h: m, lev };
+  }
+  function bindMap(prog, map) {
+    const u = prog.u, m = map.h;
+    gl.activeTexture(gl.TEXTURE0 + MAP_UNIT);
+    gl.bindTexture(gl.TEXTURE_2D, map.tex);
+    gl.uniform1i(u.uMap, MAP_UNIT);
+    gl.uniform1i(u.uMapW, m.atlas.width);
+    gl.uniform4iv(u.uMapLev, map.lev);
+    gl.uniform1i(u.uMapN, m.levels.length);
+    gl.uniform4f(u.uMapTr, m.transform[0], m.transform[1], m.transform[2], m.transform[3]);
+    gl.uniform2f(u.uMapScale, m.uv_scale_mm[0], m.uv_scale_mm[1]);
+    gl.uniform1f(u.uMapMin, m.min_level);
+    gl.uniform1i(u.uMapDir, 0);  // the viewer reads the curvature of larger magnitude, as cdbrdf render's default
+  }
   let pickFBO = null, evalFBO = null, polarFBO = null;
 
   function floatFBO(w, h, depth) {
@@ -534,7 +738,8 @@ void main() {
   function drawSurface(vp, pick) {
     const s = surfaces[state.surface];
     const weave = !!(vp.tab.btf && state.weave && (s.kind !== 0 || s.uv));  // a mesh without UVs: the tile mean
-    const prog = weave ? surfBtfProg : surfProg, u = prog.u, e = eye();
+    const mapped = !!(s.map && state.maps);
+    const prog = weave ? (mapped ? surfBtfMapProg : surfBtfProg) : (mapped ? surfMapProg : surfProg), u = prog.u, e = eye();
     gl.viewport(vp.x, vp.y, vp.w, vp.h);
     gl.useProgram(prog.p);
     bindTable(prog, vp.tab);
@@ -556,6 +761,7 @@ void main() {
     gl.uniform1f(u.uKmax, KMAX_OVERLAY);
     gl.uniform1i(u.uPick, pick || 0);
     if (weave) { gl.uniform1f(u.uWeaveScale, state.weaveScale); gl.uniform2fv(u.uUvScale, s.uvScale || [1, 1]); }
+    if (mapped) bindMap(prog, s.map);
     gl.bindVertexArray(s.vao);
     gl.drawElements(gl.TRIANGLES, s.count, gl.UNSIGNED_INT, 0);  // one draw call per surface
     state.drawCalls++;
@@ -593,6 +799,21 @@ void main() {
     $('compsOut').textContent = String(state.components);
     $('scaleOut').textContent = `${state.weaveScale.toFixed(1)}x`;
     $('btfInfo').textContent = btfText();
+    const s = surfaces[state.surface];
+    $('mapsLabel').style.display = s && s.map ? '' : 'none';
+    $('mapInfo').textContent = mapText();
+  }
+
+  // what the surface panel says of the shown mesh's curvature map
+  function mapText() {
+    const s = surfaces[state.surface];
+    if (!s || !s.map) return '';
+    const m = s.map.h, f = (x) => Number(x).toPrecision(4).replace(/\.?0+$/, '');
+    const scale = m.uv_scale_mm[0] === m.uv_scale_mm[1] ? f(m.uv_scale_mm[0]) : m.uv_scale_mm.map(f).join(' x ');
+    return `${m.name}: ${m.source}, one repeat per ${m.tile_mm.map(f).join(' x ')} mm (UV scale ${scale} mm per UV ` +
+      `unit); looked up per pixel by its footprint on ${m.levels.length} levels from ${m.texels[0]} x ${m.texels[1]} ` +
+      `texels of ${f(m.texel_mm)} mm (none finer than the curvature's ${f(m.neighbourhood_mm)} mm neighbourhood)` +
+      (state.maps ? '' : '; off: the mesh\'s own curvature and normals') + (m.note ? `\n${m.note}` : '');
   }
 
   // what the weave panel says: per CD-BTF, the components used of the file's rank, and why fewer
@@ -608,7 +829,9 @@ void main() {
       if (used < b.rank) why += `; the leading ${used}${state.software ? ' on software rendering' : ''}, the components slider goes up to ${b.rank}`;
       const shown = !state.weave ? 'showing the tile mean' : mesh && !s.uv ? 'this mesh has no UVs: tile mean' :
         `weave at ${state.weaveScale === 1 ? 'true size' : `${state.weaveScale.toFixed(1)}x size`}${uvs}`;
-      return `${t.h.name}: CD-BTF, rank ${used} used of ${b.rankTotal}${why}; ${tex}; ${shown}`;
+      const nn = b.neural ? `neural (a ${b.neural.layers[1]}-${b.neural.layers[2]} decoder on ${b.neural.levels.length} levels of codes, filtered by the pixel's footprint)` +
+        (b.rankTotal ? ` + ${used} of ${b.rankTotal} residual components` : '') : null;
+      return `${t.h.name}: CD-BTF, ${nn || `rank ${used} used of ${b.rankTotal}`}${why}; ${tex}; ${shown}`;
     }).join('\n');
   }
 
@@ -676,12 +899,12 @@ void main() {
     queries.forEach((x, i) => {
       // azimuths reduced exactly in float64 (fmod, as cdbrdf.interp.wrap_azimuth) before float32 loses them
       const wrap = (a) => (Math.abs(a) < 360 ? a : a % 360);
-      const [tv, pv0, tl, pl0, k, u, v] = x.map(Number);
+      const [tv, pv0, tl, pl0, k, u, v, fp] = x.map(Number);
       const pv = wrap(pv0), pl = wrap(pl0), at = x.length >= 7;  // a position (u, v) in mm: the CD-BTF there
       ok[i] = [tv, pv, tl, pl, k].every(Number.isFinite) && tv >= 0 && tv <= 90 && tl >= 0 && tl <= 90 &&
         (!at || (Number.isFinite(u) && Number.isFinite(v)));
       const r = Math.floor(i / per), c = i % per, o = (r * cols * 2 + 2 * c) * 4;
-      if (ok[i]) q.set([tv, pv, tl, pl, k, at ? u : 0, at ? v : 0, at ? 1 : 0], o);
+      if (ok[i]) q.set([tv, pv, tl, pl, k, at ? u : 0, at ? v : 0, at ? 1 + (Number.isFinite(fp) && fp > 0 ? fp : 0) : 0], o);
     });
     const qt = gl.createTexture();
     gl.activeTexture(gl.TEXTURE6);
@@ -707,6 +930,45 @@ void main() {
       if (!ok[i]) return new Array(nc).fill(NaN);
       const r = Math.floor(i / per), c = i % per, o = (r * cols + c) * 4;
       return nc === 3 ? [out[o], out[o + 1], out[o + 2]] : [out[o]];
+    });
+  }
+
+  function mapEvaluate(queries, key) {
+    const s = surfaces[key || state.surface];
+    if (!s || !s.map) throw new Error(`surface ${key || state.surface}: has no curvature map`);
+    if (!mapEvalProg) mapEvalProg = compile(FULLSCREEN_VS, MAP_EVAL_FS);
+    const n = queries.length, per = 512, rows = Math.max(1, Math.ceil(n / per)), cols = Math.min(per, Math.max(1, n));
+    const q = new Float32Array(cols * 3 * rows * 4);
+    queries.forEach((x, i) => {
+      const r = Math.floor(i / per), c = i % per;
+      q.set(x.slice(0, 12).map(Number), (r * cols * 3 + 3 * c) * 4);
+    });
+    const qt = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE6);
+    gl.bindTexture(gl.TEXTURE_2D, qt);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, cols * 3, rows, 0, gl.RGBA, gl.FLOAT, q);
+    if (!evalFBO || evalFBO.w !== cols || evalFBO.h !== rows) { freeFBO(evalFBO); evalFBO = floatFBO(cols, rows, false); }
+    gl.useProgram(mapEvalProg.p);
+    bindMap(mapEvalProg, s.map);
+    gl.uniform1i(mapEvalProg.u.uQ, 6);
+    const outs = [];
+    for (let k = 0; k < 4; k++) {
+      gl.bindFramebuffer(gl.FRAMEBUFFER, evalFBO.fb);
+      gl.viewport(0, 0, cols, rows);
+      gl.disable(gl.DEPTH_TEST);
+      gl.uniform1i(mapEvalProg.u.uOut, k);
+      gl.bindVertexArray(emptyVAO);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      gl.bindVertexArray(null);
+      outs.push(readFloatPass(evalFBO, 0, 0, cols, rows));
+    }
+    gl.deleteTexture(qt);
+    return queries.map((_, i) => {
+      const o = (Math.floor(i / per) * cols + (i % per)) * 4;
+      const [a, b, c, d] = outs.map((x) => Array.from(x.subarray(o, o + 4)));
+      return [...a, b[0], b[1], b[2], b[3], ...c, d[0], d[1], d[2], d[3]];
     });
   }
 
@@ -883,6 +1145,7 @@ void main() {
     $('mode').addEventListener('change', (e) => { state.mode = e.target.value; draw(); });
     num('comps', 'components'); num('scale', 'weaveScale');
     $('weave').addEventListener('change', (e) => { state.weave = e.target.checked; draw(); });
+    $('maps').addEventListener('change', (e) => { state.maps = e.target.checked; draw(); });
     $('surface').addEventListener('change', (e) => { state.surface = e.target.value; setDefaultCamera(); draw(); });
     $('mosaicTable').addEventListener('change', (e) => { state.mosaicTable = Number(e.target.value); fillKappaSelect(); drawMosaic(); draw(); });
     $('mosaicK').addEventListener('change', (e) => { state.mosaicK = Number(e.target.value); drawMosaic(); draw(); });
@@ -940,15 +1203,29 @@ void main() {
     surfaces.sheet = Object.assign(makeVAO(grid.pos, null, null, null, grid.idx), { kind: 1, label: 'sine sheet', distance: 150 });
     surfaces.stand = Object.assign(makeVAO(grid.pos, null, null, null, grid.idx), { kind: 2, label: 'cylinder stand', distance: 150 });
     for (const [key, m] of Object.entries(DATA.meshes || {})) {
-      const a = { header: m.header, buffer: decode(m.data) };
-      const size = Math.max(...a.header.size_mm);
-      const uv = a.header.uv && a.header.blocks.uv ? block(a, 'uv') : null;  // older assets: no UVs
+      const a = { header: m.header, buffer: decode(m.data) }, h = a.header;
+      const size = Math.max(...h.size_mm);
+      const uv = h.uv && h.blocks.uv ? block(a, 'uv') : null;  // older assets: no UVs
+      const map = uv && h.map && h.blocks.map && h.blocks.shape ? uploadMap(a) : null;
       surfaces[key] = Object.assign(makeVAO(block(a, 'position'), block(a, 'normal'), block(a, 'tangent'),
-        block(a, 'curvature'), block(a, 'index'), uv), { kind: 0, label: a.header.name, distance: 2.2 * size,
-        uv: !!uv, uvScale: uv ? a.header.uv_scale_mm.map(Number) : null });
+        block(a, 'curvature'), block(a, 'index'), uv, map ? block(a, 'shape') : null), { kind: 0, label: h.name,
+        distance: h.frame ? h.frame.distance_mm : 2.2 * size, frame: h.frame || null,
+        uv: !!uv, uvScale: uv ? h.uv_scale_mm.map(Number) : null, map });
     }
-    const sel = $('surface');
+    if (Object.values(surfaces).some((x) => x.map)) {  // the map programs only where a mesh has a map
+      surfMapProg = compile(withMaps(SURFACE_VS), withMaps(SURFACE_FS));
+      if (btfs.length) surfBtfMapProg = compile(withMaps(withBTF(SURFACE_VS)), withMaps(withBTF(SURFACE_FS)));
+    }
+    const sel = $('surface'), opt = DATA.options || {};
     for (const [key, s] of Object.entries(surfaces)) { const o = document.createElement('option'); o.value = key; o.textContent = s.label; sel.appendChild(o); }
+    const first = surfaces[opt.surface];
+    if (first) {  // cdbrdf view --mesh: the page opens on the mesh, framed as cdbrdf render frames it
+      state.surface = opt.surface;
+      const f = first.frame;
+      if (f) state.cam = { elevation: f.elevation_deg, azimuth: f.azimuth_deg, distance: f.distance_mm };
+      else state.cam.distance = first.distance;
+    }
+    sel.value = state.surface;
     const ms = $('mosaicTable');
     tables.forEach((t, i) => { const o = document.createElement('option'); o.value = String(i); o.textContent = t.h.name; ms.appendChild(o); });
     $('tables').textContent = tables.map((t) => `${t.h.name} (${t.h.material || 'table'}, ${t.h.quantity}, ${t.h.symmetry}${t.btf ? ', CD-BTF' : ''})`).join('  |  ');
@@ -960,7 +1237,6 @@ void main() {
     state.amplitude = sheet.amplitude_mm; state.wavelength = sheet.wavelength_mm;
     state.width = sheet.width_mm; state.depth = sheet.depth_mm;
     $('bend').value = state.amplitude; $('wave').value = state.wavelength;
-    const opt = DATA.options || {};
     state.exposure = Number.isFinite(opt.exposure_ev) ? opt.exposure_ev : tables[0].h.exposure_ev;
     $('expo').value = state.exposure;
     const k0 = tables[0].h.axes.kappa;
@@ -1000,6 +1276,11 @@ void main() {
     setSideBySide: redraw((on) => { state.side = !!on; $('side').checked = state.side; }),
     // a CD-BTF: the weave (true) or the tile mean (false); the components used; the weave drawn `s` times its size
     setWeave: redraw((on) => { state.weave = !!on; $('weave').checked = state.weave; }),
+    // a mesh's curvature map: looked up (true) or left out (false: the mesh's own curvature and normals)
+    setMaps: redraw((on) => { state.maps = !!on; $('maps').checked = state.maps; }),
+    // the map's rule at points (tests): rows [u, v, level (-1: from the footprint), fu, fv, sxx, sxy, syy, hand,
+    // wi.x, wi.y, wi.z] -> [p, q, dp/du, dp/dv, dq/du, dq/dv, level, kappa max, kappa directional, n'.xyz, s'.xyz, q]
+    mapEvaluate: (queries, opts) => Promise.resolve(mapEvaluate(queries, (opts || {}).surface)),
     setComponents: redraw((n) => { state.components = Math.max(0, Math.round(Number(n))); $('comps').value = n; }),
     setWeaveScale: redraw((x) => {
       if (!(Number(x) > 0)) throw new Error(`weave scale: expected a positive number, got ${x}`);
@@ -1044,6 +1325,7 @@ void main() {
     },
     state: () => JSON.parse(JSON.stringify(Object.assign({}, state, {
       crestCurvatureText: $('crest').textContent, crestCurvature: crestCurvature(), btfText: $('btfInfo').textContent,
+      mapText: mapText(), mapped: Object.keys(surfaces).filter((k) => surfaces[k].map),
       btf: tables.map((t) => (t.btf ? { rank: t.btf.rank, rankTotal: t.btf.rankTotal, used: rankUsed(t) } : null)),
       tables: tables.map((t) => t.h.name), surfaces: Object.keys(surfaces) }))),
   });
