@@ -30,6 +30,7 @@ import argparse
 import json
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -51,7 +52,7 @@ def main() -> None:
     from cdbrdf.btf import load
     from cdbrdf.colour import LUMINANCE_WEIGHTS
     from cdbrdf.mesh import SineSheet
-    from cdbrdf.render import Camera, render_table
+    from cdbrdf.render import Camera, RenderSpec, render_table
     from cdbrdf.render._btf_jit import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS
 
     btf = load(a.file)
@@ -62,7 +63,7 @@ def main() -> None:
         close = SineSheet(width_mm=20.0, depth_mm=14.0, vertices_per_wavelength=256)
         size = (640, 448)
         t0 = time.perf_counter()
-        pic = render_table(btf, close, size=size, camera=Camera(view=(90.0, -90.0)), **kw)
+        pic = render_table(btf, RenderSpec(surface=close, size=size, camera=Camera(view=(90.0, -90.0)), **kw))
         out["close_up_seconds"] = round(time.perf_counter() - t0, 1)
         img = pic.images["cdbrdf"][..., :3].astype(np.float64)
         if a.picture:
@@ -82,17 +83,18 @@ def main() -> None:
             d, m = detail[rows][:, band], lum[rows][:, band]
             out[f"texel_variation_{name}"] = round(float(d.std() / m.mean()), 4)
             out[f"mean_luminance_{name}"] = round(float(m.mean()), 5)
-        ex = {"size": size, "view": (90.0, -90.0), "exposure": 0.0, **kw}
-        bil = [render_table(btf, close, texel_filter="bilinear", seed=s, **ex).images["cdbrdf"][..., :3]
+        ex = {"surface": close, "size": size, "camera": Camera(view=(90.0, -90.0)), "exposure": 0.0, **kw}
+        bil = [render_table(btf, RenderSpec(texel_filter="bilinear", seed=s, **ex)).images["cdbrdf"][..., :3]
                for s in (0, 1)]
-        sto = render_table(btf, close, texel_filter="stochastic", **ex).images["cdbrdf"][..., :3]
+        sto = render_table(btf, RenderSpec(texel_filter="stochastic", **ex)).images["cdbrdf"][..., :3]
         m = float(np.mean(bil[0]))
         out["close_up_stochastic_vs_bilinear"] = round(float(np.abs(sto - bil[0]).mean()) / m, 4)
         out["close_up_bilinear_seed_noise"] = round(float(np.abs(bil[1] - bil[0]).mean()) / m, 4)
     far = SineSheet()
-    imgs = {"cdbrdf": render_table(btf.mean(), far, size=(256, 192), exposure=0.0, **kw).images["cdbrdf"][..., :3]}
+    distant = RenderSpec(surface=far, size=(256, 192), exposure=0.0, **kw)
+    imgs = {"cdbrdf": render_table(btf.mean(), distant).images["cdbrdf"][..., :3]}
     for f in TEXEL_FILTERS:
-        imgs[f] = render_table(btf, far, size=(256, 192), exposure=0.0, texel_filter=f, **kw).images["cdbrdf"][..., :3]
+        imgs[f] = render_table(btf, replace(distant, texel_filter=f)).images["cdbrdf"][..., :3]
     c = imgs["cdbrdf"].astype(np.float64)
     for f in TEXEL_FILTERS:
         b = imgs[f].astype(np.float64)
@@ -112,7 +114,7 @@ def main() -> None:
                 else make_bsdf(btf, uv_scale=(far.width_mm, far.depth_mm), texel_filter=kind,
                                pixel_angle=pixel_angle))
         out[f"setup_seconds_{kind}"] = round(time.perf_counter() - t0, 2)
-        scenes[kind] = sine_scene(btf.mean(), sheet=far, bsdf=bsdf, size=(256, 192), spp=a.spp)
+        scenes[kind] = sine_scene(btf.mean(), RenderSpec(surface=far, size=(256, 192), spp=a.spp), bsdf=bsdf)
         dr.eval(mi.render(scenes[kind], spp=a.spp))  # compiles the kernels
     wall = dict.fromkeys(scenes, np.inf)
     cpu = dict.fromkeys(scenes, np.inf)

@@ -85,7 +85,7 @@ def _reference_seconds_per_photo(table, grid, stand, lights, size, field_mm, spp
 
 def _rig_seconds_per_photo(table, grid, stand, lights, size, field_mm, spp, folder: Path) -> float:
     from cdbrdf.grid import Grid
-    from cdbrdf.rig import simulate_capture
+    from cdbrdf.rig import RigOptions, simulate_capture
 
     # the same photographs: one stand, every view, the lights (no white references)
     tl = sorted({t for t, _ in lights})
@@ -94,8 +94,8 @@ def _rig_seconds_per_photo(table, grid, stand, lights, size, field_mm, spp, fold
         raise ValueError("lights: every elevation with every azimuth")
     g = Grid(kappa=[stand.kappa], theta_l=tl, phi_l=pl, theta_v=grid.theta_v, phi_v=grid.phi_v)
     t0 = time.perf_counter()
-    rep = simulate_capture(table, folder, grid=g, stands=[stand], size=size, field_mm=field_mm, spp=spp,
-                           white=False)
+    rep = simulate_capture(table, folder, RigOptions(size=size, field_mm=field_mm, spp=spp, white=False), grid=g,
+                           stands=[stand])
     return (time.perf_counter() - t0) / rep.n_images
 
 

@@ -71,6 +71,7 @@ def main(argv=None) -> int:
     import drjit as dr
     import mitsuba as mi
 
+    from cdbrdf.render import RenderSpec
     from cdbrdf.render.scenes import mesh_scene
 
     table = cdbrdf.materials.load("shot")
@@ -86,13 +87,13 @@ def main(argv=None) -> int:
     cmap = mapped.metadata["curvature_map"]
     kw = dict(size=(args.size, args.size), spp=args.spp, max_depth=3)
     scenes = {
-        "no map": mesh_scene(table, plain, **kw),
-        "curvature map": mesh_scene(table, mapped, **kw),
+        "no map": mesh_scene(table, RenderSpec(surface=plain, **kw)),
+        "curvature map": mesh_scene(table, RenderSpec(surface=mapped, **kw)),
     }
     for how in ("trilinear", "none"):
-        scenes[f"curvature map, {how}"] = mesh_scene(table, mapped, bsdf={"type": "cdbrdf", "table": table,
-                                                                          "curvature": "vertex_curvature",
-                                                                          "map_filter": how}, **kw)
+        scenes[f"curvature map, {how}"] = mesh_scene(table, RenderSpec(surface=mapped, **kw),
+                                                     bsdf={"type": "cdbrdf", "table": table,
+                                                           "curvature": "vertex_curvature", "map_filter": how})
     for sc in scenes.values():
         timed(mi, dr, sc, args.spp, 0)
     cpu: dict[str, list[float]] = {name: [] for name in scenes}

@@ -72,16 +72,17 @@ def main(argv=None) -> int:
     import drjit as dr
     import mitsuba as mi
 
+    from cdbrdf.render import RenderSpec
     from cdbrdf.render.scenes import sine_scene
 
     table = _table()
-    kw = dict(size=(args.size, args.size), spp=args.spp, max_depth=3)
+    spec = RenderSpec(size=(args.size, args.size), spp=args.spp, max_depth=3)
 
     def plugin(**p):
-        return sine_scene(table, bsdf={"type": "cdbrdf", "table": table, **p}, **kw)
+        return sine_scene(table, spec, bsdf={"type": "cdbrdf", "table": table, **p})
 
     scenes = {
-        "diffuse": sine_scene(table, bsdf={"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.5}}, **kw),
+        "diffuse": sine_scene(table, spec, bsdf={"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.5}}),
         "cdbrdf cosine": plugin(sampling="cosine"),
         "cdbrdf table": plugin(sampling="table"),
         "cdbrdf cosine, float": plugin(sampling="cosine", storage="float"),
@@ -90,7 +91,7 @@ def main(argv=None) -> int:
         "brdf mode, cosine": plugin(sampling="cosine", mode="brdf"),
     }
     if args.rgl.is_file():
-        scenes["measured (C++)"] = sine_scene(table, bsdf={"type": "measured", "filename": str(args.rgl)}, **kw)
+        scenes["measured (C++)"] = sine_scene(table, spec, bsdf={"type": "measured", "filename": str(args.rgl)})
     else:
         print(f"({args.rgl} not found: Mitsuba's measured is skipped)")
 

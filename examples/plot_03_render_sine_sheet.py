@@ -14,10 +14,10 @@ import matplotlib.pyplot as plt
 
 import cdbrdf.materials
 from cdbrdf.plot import plot_render_comparison
-from cdbrdf.render import render_table
+from cdbrdf.render import RenderSpec, render_table
 
 table = cdbrdf.materials.load("shot")
-picture = render_table(table, "sine", modes=("brdf", "cdbrdf"), size=(192, 144), spp=8)
+picture = render_table(table, RenderSpec(surface="sine", modes=("brdf", "cdbrdf"), size=(192, 144), spp=8))
 print(picture.surface, "lit by", picture.lighting, "light at", picture.light)
 print("exposure (EV):", round(picture.exposure_ev, 2))
 

@@ -23,14 +23,14 @@ import cdbrdf.materials
 from cdbrdf import Grid
 from cdbrdf.measure import measure
 from cdbrdf.plot import plot_mosaic
-from cdbrdf.rig import simulate_capture
+from cdbrdf.rig import RigOptions, simulate_capture
 
 truth = cdbrdf.materials.load("denim")
 grid = Grid(kappa=[-0.22, 0.0, 0.22], theta_l=[15.0, 45.0], phi_l=[0.0, 180.0],
             theta_v=[0.0, 30.0, 60.0], phi_v=[0.0, 180.0])
 work = tempfile.TemporaryDirectory()  # removed when the example ends
 folder = Path(work.name) / "capture"
-report = simulate_capture(truth, folder, grid=grid, size=16, field_mm=1.0, seed=1)
+report = simulate_capture(truth, folder, RigOptions(size=16, field_mm=1.0, seed=1), grid=grid)
 print(f"{report.n_images} photographs and {report.n_white} white frames in {report.seconds_rendering:.1f} s")
 
 # %%

@@ -14,13 +14,15 @@ plain BRDF and the CDBRDF differ at the crests and troughs, as they do on
 the same wrinkles modelled as geometry.
 """
 
+from dataclasses import replace
+
 import matplotlib.pyplot as plt
 import numpy as np
 
 import cdbrdf.materials
 from cdbrdf.colour import delta_e_ab, ev_to_factor, linear_to_lab, srgb_encode
 from cdbrdf.mesh import Mesh, SurfaceMaps, normal_map_from_normals
-from cdbrdf.render import Camera, Picture, render_table
+from cdbrdf.render import Camera, Light, Picture, RenderSpec, render_table
 
 A, L, S = 0.4, 10.0, 100.0  # mm: amplitude, period, the quad's side
 t = (np.arange(512) + 0.5) / 512 * S
@@ -33,10 +35,10 @@ v = np.array([[0, 0, 0], [S, 0, 0], [S, S, 0], [0, S, 0]], dtype=float)
 quad = Mesh(v, np.array([[0, 1, 2], [0, 2, 3]]), None, v[:, :2] / S)
 
 shot = cdbrdf.materials.load("shot")
-kw = dict(modes=("brdf", "cdbrdf"), size=(160, 160), spp=32, lighting="paper",
-          camera=Camera(view=(60.0, -90.0)))  # 60 degrees above the quad
-mapped = render_table(shot, quad, maps=SurfaceMaps(normal_map=wrinkles, uv_scale=S), **kw)
-bare = render_table(shot, quad, **kw)
+bare_spec = RenderSpec(surface=quad, modes=("brdf", "cdbrdf"), size=(160, 160), spp=32, light=Light(lighting="paper"),
+                       camera=Camera(view=(60.0, -90.0)))  # 60 degrees above the quad
+mapped = render_table(shot, replace(bare_spec, maps=SurfaceMaps(normal_map=wrinkles, uv_scale=S)))
+bare = render_table(shot, bare_spec)
 for note in mapped.mesh.metadata["notes"]:
     if "UV scale" in note or "wrinkles" in note:
         print(note)

@@ -26,11 +26,12 @@ import cdbrdf.materials
 from cdbrdf.colour import tonemap_srgb8
 from cdbrdf.mesh import Skirt, Swatch, skirt_mesh
 from cdbrdf.plot import displayed_delta_e, plot_render_comparison
-from cdbrdf.render import Camera, render_table
+from cdbrdf.render import Camera, RenderSpec, render_table
 
 table = cdbrdf.materials.load("shot")
 swatch = Swatch()
-pic = render_table(table, swatch, modes=("brdf", "cdbrdf"), size=(240, 168), spp=8, curvature=True)
+pic = render_table(table, RenderSpec(surface=swatch, modes=("brdf", "cdbrdf"), size=(240, 168), spp=8,
+                                     curvature_image=True))
 print(pic.surface, "in the", pic.lighting, "lighting; exposure", round(pic.exposure_ev, 2), "EV")
 
 fig = plt.figure(figsize=(9.0, 2.6), layout="constrained")
@@ -54,7 +55,7 @@ skirt = skirt_mesh(Skirt(around=81, down=61, sash=False))
 views = {"framed": Camera(), "look_at='crest', zoom=5": Camera(look_at="crest", zoom=5.0)}
 fig, axes = plt.subplots(1, 2, figsize=(7.0, 4.0), layout="constrained")
 for ax, (title, camera) in zip(axes, views.items()):
-    shot = render_table(table, skirt, size=(160, 192), spp=8, camera=camera)
+    shot = render_table(table, RenderSpec(surface=skirt, size=(160, 192), spp=8, camera=camera))
     ax.imshow(tonemap_srgb8(shot.display(), exposure_ev=shot.exposure_ev))
     ax.set_title(title, fontsize=10)
     ax.set_axis_off()

@@ -13,6 +13,7 @@ grey card).
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
 
@@ -31,7 +32,7 @@ def main(argv: list[str] | None = None) -> int:
     from cdbrdf.btf import load
     from cdbrdf.colour import tonemap_srgb8
     from cdbrdf.mesh import SineSheet
-    from cdbrdf.render import Camera, render_table, variant
+    from cdbrdf.render import Camera, RenderSpec, render_table, variant
 
     sheet = SineSheet(width_mm=20.0, depth_mm=14.0, vertices_per_wavelength=256)
     rows = []
@@ -39,9 +40,10 @@ def main(argv: list[str] | None = None) -> int:
         for f in a.files:
             btf = load(f)
             top = Camera(view=(90.0, -90.0))
-            pic = render_table(btf, sheet, size=(640, 448), spp=a.spp, camera=top, texel_filter="bilinear")
+            spec = RenderSpec(surface=sheet, size=(640, 448), spp=a.spp, camera=top)
+            pic = render_table(btf, replace(spec, texel_filter="bilinear"))
             ev = pic.exposure_ev
-            mean = render_table(btf.mean(), sheet, size=(640, 448), spp=a.spp, camera=top, exposure=ev)
+            mean = render_table(btf.mean(), replace(spec, exposure=ev))
             name = btf.attrs.get("material", Path(f).stem)
             nu, nv = btf.texels
             su, sv = btf.repeat_mm

@@ -42,7 +42,7 @@ from cdbrdf import CDBTF, Grid
 from cdbrdf.errors import CaptureError
 from cdbrdf.frames import direction_from_angles
 from cdbrdf.measure import measure
-from cdbrdf.rig import simulate_capture
+from cdbrdf.rig import RigOptions, simulate_capture
 
 GRID = Grid.regular(theta_step_deg=30, phi_step_deg=90, theta_max_deg=60, kappa=[-0.22, 0.0, 0.22])
 
@@ -83,11 +83,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.study == "repeat":
         for rp, shifts in (((1.6, 1.2), 1), ((0.8, 0.6), 1), ((0.4, 0.3), 1), ((1.6, 1.2), 4)):
             btf, t0 = texture(rp), time.perf_counter()
-            simulate_capture(btf, cap, seed=1, shifts=shifts)
+            simulate_capture(btf, cap, RigOptions(seed=1, shifts=shifts))
             print(line(f"repeat {rp[0]:g} x {rp[1]:g} mm, {shifts} position(s)", btf, cap, t0), flush=True)
     elif args.study == "registration":
         btf, t0 = texture((0.4, 0.3)), time.perf_counter()
-        simulate_capture(btf, cap, seed=1)
+        simulate_capture(btf, cap, RigOptions(seed=1))
         print(line("registered", btf, cap, t0), flush=True)
         for axis, frac in ((0, 0.1), (0, 0.25), (0, 0.5), (1, 0.25), (1, 0.5)):
             moved = work / "moved"
@@ -103,7 +103,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         btf = texture((0.4, 0.3))
         for ppt in (1.5, 2.0, 2.5, 3.0, 4.0, 6.0):
             t0 = time.perf_counter()
-            simulate_capture(btf, cap, seed=1, px_per_texel=ppt)
+            simulate_capture(btf, cap, RigOptions(seed=1, px_per_texel=ppt))
             try:
                 print(line(f"{ppt:g} px/texel", btf, cap, t0), flush=True)
             except CaptureError as exc:
@@ -116,7 +116,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for spp, shifts, exps in ((4, 1, (1.0,)), (16, 1, (1.0,)), (16, 4, (1.0,)), (16, 4, (1.0, 8.0)),
                                   (16, 8, (1.0, 8.0))):
             t0 = time.perf_counter()
-            simulate_capture(btf, cap, seed=1, spp=spp, shifts=shifts, exposures=exps)
+            simulate_capture(btf, cap, RigOptions(seed=1, spp=spp, shifts=shifts, exposures=exps))
             print(line(f"denim, {spp} spp, {shifts} position(s), exposures {exps}", btf, cap, t0), flush=True)
     if args.folder is None:
         shutil.rmtree(work, ignore_errors=True)

@@ -54,24 +54,27 @@ def main(argv: list[str] | None = None) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
+    from dataclasses import replace
+
     import matplotlib.pyplot as plt
 
     from cdbrdf.btf import load
     from cdbrdf.colour import tonemap_srgb8
-    from cdbrdf.render import render_table, variant
-    from cdbrdf.render.plugin import make_bsdf  # noqa: F401  (registers the plug-in)
+    from cdbrdf.mesh import MeshSurface, SurfaceMaps
+    from cdbrdf.render import Camera, RenderSpec, render_table, variant
 
     btf = load(a.file)
-    kw = {"units": a.units, "uv_scale": a.uv_scale, "spp": a.spp, "size": (a.size, a.size),
-          "texel_filter": "bilinear", "view": (10.0, -90.0), "up": a.up}
+    spec = RenderSpec(surface=MeshSurface(a.mesh, units=a.units, up=a.up), maps=SurfaceMaps(uv_scale=a.uv_scale),
+                      spp=a.spp, size=(a.size, a.size), texel_filter="bilinear", camera=Camera(view=(10.0, -90.0)))
     panels = []
     with variant("llvm_ad_rgb"), tempfile.TemporaryDirectory() as tmp:
-        far = render_table(btf, a.mesh, **kw)
+        far = render_table(btf, spec)
         ev = far.exposure_ev
         panels.append(("whole shirt: footprint filtering (pyramid, tile mean)", tonemap_srgb8(far.display("cdbrdf"),
                                                                                                 exposure_ev=ev)))
         patch = _patch(a.mesh, Path(tmp) / "patch.obj", a.patch)
-        close = render_table(btf, str(patch), **{**kw, "exposure": ev})
+        close = render_table(btf, replace(spec, surface=MeshSurface(str(patch), units=a.units, up=a.up),
+                                          exposure=ev))
         panels.append(("close-up: the faces nearest the chest's centre", tonemap_srgb8(close.display("cdbrdf"),
                                                                                           exposure_ev=ev)))
     fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 5.2))

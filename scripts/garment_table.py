@@ -95,10 +95,10 @@ def shared_garments(data: Path | None) -> Path:
 
 
 def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) -> Row:
-    from cdbrdf.mesh import Mesh, detect_up, prepare_mesh, read_mesh
+    from cdbrdf.mesh import Mesh, MeshSurface, detect_up, prepare_mesh, read_mesh
     from cdbrdf.mesh.curvature import LOCATIONS, dihedral_curvature
     from cdbrdf.plot import displayed_delta_e
-    from cdbrdf.render import curvature_image, mesh_scene, render_table, variant
+    from cdbrdf.render import RenderSpec, curvature_image, mesh_scene, render_table, variant
     from cdbrdf.render.plugin import DEFAULT_VARIANT
 
     log = _Collect()
@@ -124,12 +124,13 @@ def measure(path: Path, name: str, table, *, size: tuple[int, int], spp: int) ->
     a = "xyz".index(up)
     h = prep.vertices[:, a]
     where = f"{LOCATIONS[loc[i]]}, {100 * (h[i] - h.min()) / max(np.ptp(h), 1e-300):.0f} % up"
-    pic = render_table(table, prep, modes=("brdf", "cdbrdf"), size=size, spp=spp, up=up)
+    pic = render_table(table, RenderSpec(surface=MeshSurface(prep, up=up), modes=("brdf", "cdbrdf"), size=size,
+                                         spp=spp))
     d = displayed_delta_e(pic.display("brdf"), pic.display("cdbrdf"), exposure_ev=pic.exposure_ev, metric="ab")
     marked = prep.copy()
     marked.attributes = {**prep.attributes, "seam": (loc == LOCATIONS.index("seam")).astype(np.float64)}
     with variant(DEFAULT_VARIANT):
-        scene = mesh_scene(table, marked, size=size, spp=1, up=up)
+        scene = mesh_scene(table, RenderSpec(surface=MeshSurface(marked, up=up), size=size, spp=1))
         seam_img = curvature_image(scene, attribute="vertex_seam")
     seen = np.isfinite(seam_img)
     on_seam = seen & (seam_img > 0.5)

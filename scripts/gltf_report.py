@@ -45,7 +45,7 @@ def assets(denim, out: Path) -> None:
 
     import cdbrdf
     from cdbrdf.export.gltf import build_gltf, export_mesh, write_gltf
-    from cdbrdf.mesh import garment_mesh
+    from cdbrdf.mesh import MeshSurface, garment_mesh
 
     print("| garment | vertices | triangles | GLB | validator errors/warnings | read back: median relative error |")
     print("|---|---|---|---|---|---|")
@@ -55,7 +55,7 @@ def assets(denim, out: Path) -> None:
             print(f"| {name} | (absent) | | | | |")
             continue
         t0 = time.perf_counter()
-        mesh = export_mesh(src, table=denim, units=units)
+        mesh = export_mesh(MeshSurface(src, units=units), table=denim)
         asset = build_gltf(denim, mesh)
         path = out / (name.split()[0] + ".glb")
         write_gltf(asset, path)

@@ -45,7 +45,7 @@ def main(argv=None) -> int:
         tables[label] = import_brdf(args.data / name)
     fig, axes = plt.subplots(1, len(tables), figsize=(4 * len(tables), 3.4), layout="constrained")
     for ax, (label, t) in zip(axes, tables.items()):
-        img = render_scene(sine_scene(t, size=(480, 360), spp=args.spp, max_depth=2), spp=args.spp)
+        img = render_scene(sine_scene(t, cr.RenderSpec(size=(480, 360), spp=args.spp, max_depth=2)), spp=args.spp)
         ax.imshow(tonemap_srgb8(img, exposure_ev=0.0))
         ax.set_title(label, fontsize=10)
         ax.set_axis_off()

@@ -224,11 +224,14 @@ def _square(up="z", n=11, half=50.0):
 
 
 def _alpha(mesh, camera, up="z", size=(64, 64)):
+    from cdbrdf.mesh import MeshSurface
+    from cdbrdf.render import Light, RenderSpec
     from cdbrdf.render.picture import render_scene
     from cdbrdf.render.scenes import mesh_scene
 
-    scene = mesh_scene(white_table(), mesh, up=up, camera=camera, lighting="paper", light=(0.0, 0.0, np.pi),
-                       size=size, spp=2, max_depth=2)
+    scene = mesh_scene(white_table(), RenderSpec(surface=MeshSurface(mesh, up=up), camera=camera,
+                                                 light=Light(lighting="paper", direction=(0.0, 0.0)), size=size,
+                                                 spp=2, max_depth=2))
     return render_scene(scene, alpha=True)[..., 3]
 
 
@@ -269,9 +272,9 @@ def test_zoom_and_fov_change_the_visible_extent_as_promised(variant):
 
 @needs_llvm
 def test_render_table_takes_the_camera(variant):
-    from cdbrdf.render import render_table
+    from cdbrdf.render import RenderSpec, render_table
 
-    pic = render_table(white_table(), "sine", size=(24, 16), spp=1, camera=Camera(zoom=2.0, look_at="crest"))
+    pic = render_table(white_table(), RenderSpec(size=(24, 16), spp=1, camera=Camera(zoom=2.0, look_at="crest")))
     assert pic.images["cdbrdf"].shape == (16, 24, 4)
     with pytest.raises(ValueError, match="camera: expected a cdbrdf.render.Camera, got tuple"):
-        render_table(white_table(), "sine", size=(24, 16), spp=1, camera=(40.0, -90.0))
+        RenderSpec(size=(24, 16), spp=1, camera=(40.0, -90.0))

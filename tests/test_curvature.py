@@ -13,7 +13,7 @@ import pytest
 
 from cdbrdf.errors import MeshError
 from cdbrdf.mesh import (
-    ATTRIBUTES,
+    CURVATURE_MODES,
     DEFAULT_NEIGHBOURHOOD_MM,
     SineSheet,
     Skirt,
@@ -410,7 +410,22 @@ def test_tangent_attribute_frame():
 
 
 def test_attribute_names_for_the_plugin():
-    assert ATTRIBUTES == {"max": "vertex_curvature", "directional": "vertex_curvature_dir"}
+    """One name map: a mode's array in a Mesh, its PLY property (Mitsuba keeps ``_x`` ones) and Mitsuba's name."""
+    from cdbrdf.errors import OptionError
+    from cdbrdf.mesh import attribute_of_ply, curvature_mode, mitsuba_attribute, ply_property
+    from cdbrdf.mesh.attributes import SHAPE_ATTRIBUTES, SHAPE_MESH_ATTRIBUTE, SHAPE_PLY_PROPERTIES
+
+    names = {m: (r.attribute, r.ply_property, r.mitsuba_attribute) for m, r in CURVATURE_MODES.items()}
+    assert names == {"max": ("curvature", "curvature_x", "vertex_curvature"),
+                     "directional": ("curvature_dir", "curvature_dir_x", "vertex_curvature_dir")}
+    for a in ("curvature", "curvature_dir", "seam", *SHAPE_ATTRIBUTES):  # the PLY name reads back as the array's
+        assert attribute_of_ply(ply_property(a)) == a
+    assert [ply_property(a) for a in SHAPE_ATTRIBUTES] == list(SHAPE_PLY_PROPERTIES)
+    assert {mitsuba_attribute(a) for a in SHAPE_ATTRIBUTES} == {SHAPE_MESH_ATTRIBUTE}  # one three-channel one
+    assert ply_property("shape_xx", shape=False) == "shape_xx_x" and attribute_of_ply("shape_x", shape=False) == "shape"
+    assert attribute_of_ply("nx") is None and curvature_mode("max") is CURVATURE_MODES["max"]
+    with pytest.raises(OptionError, match="curvature mode: 'min' is not one of max, directional"):
+        curvature_mode("min")
 
 
 def test_neighbourhood_from_the_tables_provenance():

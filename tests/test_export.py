@@ -20,7 +20,7 @@ from cdbrdf.errors import FormatError
 from cdbrdf.export.fallback import FallbackFit, fit_fallback, gltf_brdf
 from cdbrdf.export.gltf import build_gltf, export_mesh, write_gltf
 from cdbrdf.gltf_table import EXTENSION, decode_table, encode_table
-from cdbrdf.mesh import garment_mesh, prepare_mesh
+from cdbrdf.mesh import MeshSurface, garment_mesh, prepare_mesh
 
 from .conftest import make_table
 from .gltf_helpers import accessor, errors, mikktspace, needs_node, read_glb, validate
@@ -153,7 +153,7 @@ def test_mesh_without_uvs_is_welded_again(denim, tmp_path):
     v, f = sphere_mesh(20.0, n=600)
     prepared = prepare_mesh(Mesh(v, f), units="mm")
     assert prepared.n_vertices == 3 * f.shape[0]  # one per corner: the principal frame's per-face UVs
-    mesh = export_mesh(Mesh(v, f), units="mm")
+    mesh = export_mesh(MeshSurface(Mesh(v, f), units="mm"))
     assert mesh.n_vertices == v.shape[0] and mesh.uv is None and mesh.faces.shape == f.shape
     np.testing.assert_allclose(np.einsum("ij,ij->i", mesh.tangents[:, :3], mesh.normals), 0, atol=1e-9)
     # a sphere of radius 20 mm: convex everywhere, 1/20 per mm
@@ -175,7 +175,7 @@ def test_the_asset_and_its_extension_follow_the_schema(shirt):
     from .maps_helpers import quad, sine_normals
 
     maps = SurfaceMaps(normal_map=normal_map_from_normals(sine_normals(32)))
-    wrinkled = build_gltf(materials.load("denim"), export_mesh(quad(), units="mm", maps=maps),
+    wrinkled = build_gltf(materials.load("denim"), export_mesh(MeshSurface(quad(), units="mm"), maps=maps),
                           fallback=FIXED_FALLBACK).document
     jsonschema.validate(wrinkled["materials"][0]["extensions"][EXTENSION], schema)  # with its curvature map
     broken = {k: v for k, v in ext.items() if k != "lookup"}
@@ -284,7 +284,8 @@ def test_every_asset_passes_the_khronos_validator(shirt, denim, tmp_path):
 
     wrinkled = tmp_path / "quad.glb"  # a normal map baked per texel: the curvature map's textures
     maps = SurfaceMaps(normal_map=normal_map_from_normals(sine_normals(64)))
-    write_gltf(build_gltf(denim, export_mesh(quad(), table=denim, units="mm", maps=maps), fallback=FIXED_FALLBACK),
+    write_gltf(build_gltf(denim, export_mesh(MeshSurface(quad(), units="mm"), table=denim, maps=maps),
+                          fallback=FIXED_FALLBACK),
                wrinkled)
     reports = validate(shirt[0], sine, swatch, tee, wrinkled)
     for r in reports:

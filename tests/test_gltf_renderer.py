@@ -17,7 +17,7 @@ import pytest
 from cdbrdf import materials
 from cdbrdf.cli import main
 from cdbrdf.export.gltf import build_gltf, export_mesh
-from cdbrdf.mesh import garment_mesh
+from cdbrdf.mesh import MeshSurface, garment_mesh
 from cdbrdf.view.export import write_viewer
 from cdbrdf.view.gltf_page import bundle_missing, gltf_viewer_files, view_options
 from cdbrdf.view.server import ViewerServer
@@ -65,6 +65,7 @@ def mitsuba_view(denim, width, height, mesh=None, view=(15.0, -70.0)):
     import mitsuba as mi
 
     from cdbrdf.mesh import prepare_mesh
+    from cdbrdf.render import Light, RenderSpec
     from cdbrdf.render.camera import Camera
     from cdbrdf.render.picture import render_scene
     from cdbrdf.render.plugin import variant
@@ -75,8 +76,10 @@ def mitsuba_view(denim, width, height, mesh=None, view=(15.0, -70.0)):
     need_mitsuba()
     prepared = prepare_mesh(garment_mesh(), table=denim) if mesh is None else mesh
     with variant("llvm_ad_rgb"):
-        scene = mesh_scene(denim, prepared, lighting="paper", light=LIGHT, size=(width, height), spp=32,
-                           max_depth=2, camera=Camera(view=view), up="auto" if mesh is None else "z")
+        spec = RenderSpec(surface=MeshSurface(prepared, up="auto" if mesh is None else "z"),
+                          light=Light(lighting="paper", direction=LIGHT[:2], irradiance=LIGHT[2]),
+                          size=(width, height), spp=32, max_depth=2, camera=Camera(view=view))
+        scene = mesh_scene(denim, spec)
         sensor = scene.sensors()[0]
         m = np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4)
         x_fov = float(np.ravel(mi.traverse(sensor)["x_fov"])[0])
@@ -260,7 +263,7 @@ def test_curvature_map_in_the_asset_and_the_page(browser, tmp_path):
 
     shot = materials.load("shot")
     maps = SurfaceMaps(normal_map=normal_map_from_normals(sine_normals(256)))
-    mesh = export_mesh(quad(), table=shot, units="mm", maps=maps)
+    mesh = export_mesh(MeshSurface(quad(), units="mm"), table=shot, maps=maps)
     assert mesh.curvature_map is not None and mesh.uv_scale == (100.0, 100.0)
     asset = build_gltf(shot, mesh, fallback=FIXED_FALLBACK)
     (tmp_path / "q.glb").write_bytes(asset.glb())
@@ -278,7 +281,7 @@ def test_curvature_map_in_the_asset_and_the_page(browser, tmp_path):
     image, camera = mitsuba_view(shot, *SIZE, mesh=prepared, view=(50.0, -80.0))
     ev = card_exposure_ev(card_irradiance(LIGHT, None))
     ours, _, theirs, seen = _compare(browser, asset.glb(), image, camera, ev, tmp_path / "a")
-    flat = build_gltf(shot, export_mesh(quad(), table=shot, units="mm"), fallback=FIXED_FALLBACK).glb()
+    flat = build_gltf(shot, export_mesh(MeshSurface(quad(), units="mm"), table=shot), fallback=FIXED_FALLBACK).glb()
     nomap, _, _, _ = _compare(browser, flat, image, camera, ev, tmp_path / "b")
     de = delta_e(srgb_to_lab(ours), srgb_to_lab(theirs), metric="ab")[seen]
     de_nomap = delta_e(srgb_to_lab(nomap), srgb_to_lab(theirs), metric="ab")[seen]

@@ -161,9 +161,10 @@ def test_isotropic_stack_renders_with_the_plug_in(tmp_path):
     import cdbrdf.render as cr
     from cdbrdf.render.picture import render_scene
     from cdbrdf.render.scenes import sine_scene
+    from cdbrdf.render.spec import RenderSpec
 
     cr.set_variant("llvm_ad_rgb")
     g = Grid.regular(theta_step_deg=15, phi_step_deg=30, kappa=[-0.2, 0.2], symmetry="isotropic")
     t = CDBRDF(np.full(g.shape + (3,), 0.5 / np.pi), **g.axes(), symmetry="isotropic")
-    img = render_scene(sine_scene(t, size=(32, 24), spp=4, max_depth=2), spp=4)
+    img = render_scene(sine_scene(t, RenderSpec(size=(32, 24), spp=4, max_depth=2)), spp=4)
     assert np.isfinite(img).all() and img.mean() > 0

@@ -33,7 +33,7 @@ from .render_helpers import require_llvm_module  # noqa: E402
 
 require_llvm_module()
 
-from cdbrdf.rig import simulate_capture  # noqa: E402
+from cdbrdf.rig import RigOptions, simulate_capture  # noqa: E402
 
 SMALL = Grid.regular(theta_step_deg=40, phi_step_deg=90, theta_max_deg=40, kappa=[0.0, 0.22])
 FULL = Grid.regular(theta_step_deg=30, phi_step_deg=90, theta_max_deg=60, kappa=[-0.22, 0.0, 0.22])
@@ -65,7 +65,7 @@ def errors(truth: CDBTF, got: CDBTF, measured: np.ndarray) -> tuple[float, list[
 def small(tmp_path_factory):
     btf = texture(SMALL, 4, (0.3, 0.3))
     folder = tmp_path_factory.mktemp("btf") / "cap"
-    simulate_capture(btf, folder, seed=1)
+    simulate_capture(btf, folder, RigOptions(seed=1))
     return btf, folder
 
 
@@ -209,7 +209,7 @@ def test_denim_sized_repeat_on_the_paper_stands(tmp_path, shifts):
     stand. The tile mean agrees with the model's tile mean, and (four positions, so the plain patches
     sample four places of the repeat) with the plain measurement of the same photographs."""
     btf = texture(FULL, 8, (1.6, 1.2))
-    simulate_capture(btf, tmp_path / "cap", seed=1, shifts=shifts)
+    simulate_capture(btf, tmp_path / "cap", RigOptions(seed=1, shifts=shifts))
     got, rep = measure(tmp_path / "cap", btf=8)
     med, per = errors(btf, got, rep.measured)
     assert med <= 0.03 and per[1] <= 0.01, (med, per)

@@ -25,7 +25,7 @@ from .render_helpers import require_llvm_module  # noqa: E402
 
 require_llvm_module()
 
-from cdbrdf.rig import simulate_capture  # noqa: E402
+from cdbrdf.rig import RigOptions, simulate_capture  # noqa: E402
 
 from .measure_helpers import kill_after_first_batch  # noqa: E402
 from .test_measure_btf import SMALL, texture  # noqa: E402
@@ -35,7 +35,7 @@ from .test_measure_btf import SMALL, texture  # noqa: E402
 def capture(tmp_path_factory):
     """The fast capture (4 x 4 texels, a flat and a convex stand) and its CD-BTF measured synchronously."""
     folder = tmp_path_factory.mktemp("btfscale") / "cap"
-    simulate_capture(texture(SMALL, 4, (0.3, 0.3)), folder, seed=1)
+    simulate_capture(texture(SMALL, 4, (0.3, 0.3)), folder, RigOptions(seed=1))
     ref, rep = measure(folder, btf=4, scheduler="synchronous")
     return folder, ref, rep
 

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 import cdbrdf
-from cdbrdf.render import Camera, _llvm
+from cdbrdf.mesh import MeshSurface
+from cdbrdf.render import Camera, Light, RenderSpec, _llvm
 from cdbrdf.render._llvm import find_llvm
 
 from .mesh_helpers import R_CYL, cylinder_patch, shared_mesh, write_obj
@@ -57,17 +58,22 @@ def silhouette(img):
 
 # -- the attributes of the plug-in --------------------------------------------------------------
 def test_written_properties_load_as_the_plugins_attributes(variant, tmp_path):
-    from cdbrdf.mesh import ATTRIBUTES, Mesh, prepare_mesh, write_ply
+    from cdbrdf.mesh import CURVATURE_MODES, Mesh, prepare_mesh, write_ply
 
     v, f, uv, _ = cylinder_patch(R_CYL, n=12)
     m = prepare_mesh(Mesh(v, f, None, uv))
     path = tmp_path / "c.ply"
     write_ply(path, m)
     shape = mi.load_dict({"type": "ply", "filename": str(path)})
-    for mode, attr in ATTRIBUTES.items():
+    for mode in CURVATURE_MODES.values():  # the one name map: a mesh's attribute, its PLY property, Mitsuba's
+        attr = mode.mitsuba_attribute
         assert shape.has_attribute(attr), attr
-        key = "curvature" if mode == "max" else "curvature_dir"
-        assert np.allclose(np.array(shape.attribute_buffer(attr)), m.attributes[key], atol=1e-6)
+        assert np.allclose(np.array(shape.attribute_buffer(attr)), m.attributes[mode.attribute], atol=1e-6)
+    from cdbrdf.mesh._ply_format import ply_header
+
+    vertex = next(e for e in ply_header(path.read_bytes(), str(path))[1] if e.name == "vertex")
+    assert {m.ply_property for m in CURVATURE_MODES.values()} <= {p.name for p in vertex.props}
+    assert [m.ply_property for m in CURVATURE_MODES.values()] == ["curvature_x", "curvature_dir_x"]
 
 
 def test_directional_mode_reads_the_curvature_along_x(variant):
@@ -82,8 +88,9 @@ def test_directional_mode_reads_the_curvature_along_x(variant):
     table = kappa_table()
     got = {}
     for mode in ("max", "directional"):
-        scene = mesh_scene(table, mesh, curvature_mode=mode, lighting="paper", light=(0.0, 0.0, np.pi),
-                           size=(33, 33), spp=4, max_depth=2, camera=Camera(view=(89.0, -90.0), fov_deg=10.0))
+        scene = mesh_scene(table, RenderSpec(surface=mesh, curvature_mode=mode,
+                                             light=Light(lighting="paper", direction=(0.0, 0.0)), size=(33, 33),
+                                             spp=4, max_depth=2, camera=Camera(view=(89.0, -90.0), fov_deg=10.0)))
         got[mode] = render_scene(scene)[14:19, 14:19].mean()
     assert got["max"] == pytest.approx(np.pi * (0.5 + 0.13), rel=0.03)
     assert got["directional"] == pytest.approx(np.pi * 0.5, rel=0.03)
@@ -99,9 +106,9 @@ def test_each_visible_side_of_the_garment_shows_its_sign(variant):
     curved = kappa_table(gain=30.0, kappa=(-0.01, 0.0, 0.01))  # 0.5 + 30 kappa: 0.7 at kappa = 1/150 mm
     flat = kappa_table(gain=0.0, kappa=(-0.01, 0.0, 0.01))
     for azimuth in (-90.0, 90.0):  # the front panel (and the sash), then the back panel
-        imgs = [render_scene(mesh_scene(t, mesh, lighting="paper", light=(30.0, azimuth, np.pi), size=(40, 40),
-                                        spp=2, max_depth=2, camera=Camera(view=(10.0, azimuth))),
-                             alpha=True) for t in (curved, flat)]
+        spec = RenderSpec(surface=mesh, light=Light(lighting="paper", direction=(30.0, azimuth)), size=(40, 40),
+                          spp=2, max_depth=2, camera=Camera(view=(10.0, azimuth)))
+        imgs = [render_scene(mesh_scene(t, spec), alpha=True) for t in (curved, flat)]
         cover = (imgs[0][..., 3] > 0.99) & (imgs[1][..., 0] > 0.05)
         ratio = imgs[0][..., 0][cover] / imgs[1][..., 0][cover]
         assert np.median(ratio) > 1.2, azimuth  # convex: more than the flat table everywhere seen
@@ -122,8 +129,9 @@ def test_up_axis_is_detected_and_can_be_given(variant, tmp_path):
     assert up == "y" and "convention" not in why  # from its geometry
     w_h = {}
     for up in ("auto", "z"):
-        img = render_scene(mesh_scene(white_table(), mesh, up=up, size=(40, 40), spp=1, max_depth=2,
-                                      camera=Camera(view=(10.0, 0.0))), alpha=True)
+        img = render_scene(mesh_scene(white_table(), RenderSpec(surface=MeshSurface(mesh, up=up), size=(40, 40),
+                                                                spp=1, max_depth=2, camera=Camera(view=(10.0, 0.0)))),
+                           alpha=True)
         w_h[up] = silhouette(img)
     assert w_h["auto"][1] > 3 * w_h["auto"][0]  # standing
     assert w_h["z"][0] > 3 * w_h["z"][1]  # lying along the view's horizontal
@@ -141,7 +149,8 @@ def test_the_object_fills_three_quarters_of_the_frame(variant, which):
     else:
         mesh = prepare_mesh(skirt_mesh(Skirt(around=41, down=25)))
     for size in ((96, 72), (60, 90)):
-        img = render_scene(mesh_scene(white_table(), mesh, size=size, spp=1, max_depth=2), alpha=True)
+        img = render_scene(mesh_scene(white_table(), RenderSpec(surface=mesh, size=size, spp=1, max_depth=2)),
+                           alpha=True)
         fill = max(silhouette(img))
         assert 0.70 <= fill <= 0.80, (which, size, fill)
     assert DEFAULT_MESH_VIEW == (20.0, -65.0) and FRAME_FILL == 0.75
@@ -155,8 +164,8 @@ def test_studio_lighting_fills_the_shadows(variant):
     mesh = prepare_mesh(skirt_mesh(Skirt(around=41, down=25)))
     spread = {}
     for lighting in ("paper", "studio"):
-        img = render_scene(mesh_scene(white_table(), mesh, lighting=lighting, size=(48, 48), spp=8, max_depth=2),
-                           alpha=True)
+        spec = RenderSpec(surface=mesh, light=Light(lighting=lighting), size=(48, 48), spp=8, max_depth=2)
+        img = render_scene(mesh_scene(white_table(), spec), alpha=True)
         y = img[..., :3].mean(axis=-1)[img[..., 3] > 0.99]
         spread[lighting] = (np.percentile(y, 5), np.percentile(y, 95))
         if lighting == "studio":  # the built-in sky is not seen: the background is empty
@@ -210,8 +219,9 @@ def test_a_dark_fabric_shows_at_its_own_reflectance(variant):
     square = Mesh(v, f, None, np.c_[x.ravel(), y.ravel()] / 100 + 0.5, {}, metadata={"up": "z"})
     shown = {}
     for rule in ("card", "auto"):
-        pic = render_table(table, square, size=(24, 24), spp=4, lighting="paper", light=(0.0, 0.0),
-                           camera=Camera(view=(60.0, -90.0)), exposure=rule)
+        pic = render_table(table, RenderSpec(surface=square, size=(24, 24), spp=4,
+                                             light=Light(lighting="paper", direction=(0.0, 0.0)),
+                                             camera=Camera(view=(60.0, -90.0)), exposure=rule))
         img = pic.images["cdbrdf"]
         shown[rule] = img[10:14, 10:14, :3].reshape(-1, 3).mean(axis=0) * 2.0 ** pic.exposure_ev
         assert pic.exposure_source == {"card": "grey card", "auto": "auto"}[rule]

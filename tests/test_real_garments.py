@@ -119,20 +119,23 @@ def test_seams_carry_less_than_a_tenth_of_the_noticeable_differences(path):
     """Plain BRDF against CDBRDF (denim, small renders): of the pixels that differ noticeably (Delta E*ab > 2.3)
     fewer than 10 % show a seam (a pixel nearer a seam vertex than its triangle's other vertices), and the
     seams are seen (the test can see a stripe)."""
+    from cdbrdf.mesh import MeshSurface
     from cdbrdf.mesh.curvature import LOCATIONS
     from cdbrdf.plot import displayed_delta_e
-    from cdbrdf.render import curvature_image, mesh_scene, render_table, variant
+    from cdbrdf.render import RenderSpec, curvature_image, mesh_scene, render_table, variant
 
     table = _denim()
     mesh = read_mesh(shared_file(f"garments/{path}"))
     prepared = prepare_mesh(mesh, table=table)
     up = detect_up(prepared)[0]
-    pic = render_table(table, prepared, modes=("brdf", "cdbrdf"), size=(120, 150), spp=8, up=up)
+    pic = render_table(table, RenderSpec(surface=MeshSurface(prepared, up=up), modes=("brdf", "cdbrdf"),
+                                         size=(120, 150), spp=8))
     marked = prepared.copy()
     marked.attributes = {**prepared.attributes,
                          "seam": (prepared.metadata["location"] == LOCATIONS.index("seam")).astype(np.float64)}
     with variant("llvm_ad_rgb"):
-        seam = curvature_image(mesh_scene(table, marked, size=(120, 150), spp=1, up=up), attribute="vertex_seam")
+        spec = RenderSpec(surface=MeshSurface(marked, up=up), size=(120, 150), spp=1)
+        seam = curvature_image(mesh_scene(table, spec), attribute="vertex_seam")
     seen = np.isfinite(seam)
     on_seam = seen & (seam > 0.5)
     d = displayed_delta_e(pic.display("brdf"), pic.display("cdbrdf"), exposure_ev=pic.exposure_ev, metric="ab")

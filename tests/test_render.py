@@ -14,7 +14,8 @@ import pytest
 
 import cdbrdf
 from cdbrdf.frames import angles_from_direction
-from cdbrdf.render import Camera, _llvm
+from cdbrdf.mesh import MeshSurface
+from cdbrdf.render import Camera, Light, RenderSpec, _llvm
 from cdbrdf.render._llvm import LLVMError, LLVMInfo, check_llvm, find_llvm
 
 _INFO = find_llvm()
@@ -119,7 +120,7 @@ def test_eval_at_random_hit_points_uses_vertex_curvature(variant):
     from cdbrdf.render.scenes import sine_scene
 
     table = analytic_table()
-    scene = sine_scene(table, size=(8, 8), spp=1)
+    scene = sine_scene(table, RenderSpec(size=(8, 8), spp=1))
     rng = np.random.default_rng(1)
     n = 3000
     o = np.c_[rng.uniform(-20, 20, n), rng.uniform(-20, 20, n), np.full(n, 30.0)]
@@ -280,11 +281,11 @@ def test_constant_table_equals_diffuse(variant):
     albedo = np.array([0.2, 0.5, 0.8])
     g = cdbrdf.Grid.paper()
     table = cdbrdf.CDBRDF(np.broadcast_to(albedo / np.pi, g.shape + (3,)), **g.axes())
-    kw = dict(size=(24, 16), spp=8, max_depth=4)
+    spec = RenderSpec(size=(24, 16), spp=8, max_depth=4)
     bsdf = {"type": "cdbrdf", "table": table, "sampling": "cosine"}
-    ours = render_scene(sine_scene(table, bsdf=bsdf, **kw), seed=3)
+    ours = render_scene(sine_scene(table, spec, bsdf=bsdf), seed=3)
     diffuse = {"type": "diffuse", "reflectance": {"type": "rgb", "value": albedo.tolist()}}
-    ref = render_scene(sine_scene(table, bsdf=diffuse, **kw), seed=3)
+    ref = render_scene(sine_scene(table, spec, bsdf=diffuse), seed=3)
     assert ours.mean() > 0.05
     assert np.allclose(ours, ref, rtol=1e-4, atol=1e-5)
 
@@ -318,8 +319,9 @@ def test_convex_and_concave_patches_pick_the_right_kappa(variant, tmp_path, conv
     radius = 1 / 0.13
     path = tmp_path / "cyl.ply"
     write_ply(path, cylinder_mesh(radius, convex))
-    scene = mesh_scene(kappa_table(), path, size=(33, 33), spp=4, max_depth=2, lighting="paper",
-                       light=(0.0, 0.0, np.pi), camera=Camera(view=(89.0, -90.0), fov_deg=10.0))
+    scene = mesh_scene(kappa_table(), RenderSpec(surface=path, size=(33, 33), spp=4, max_depth=2,
+                                                 light=Light(lighting="paper", direction=(0.0, 0.0)),
+                                                 camera=Camera(view=(89.0, -90.0), fov_deg=10.0)))
     img = render_scene(scene)
     centre = img[14:19, 14:19].mean(axis=(0, 1))
     expected = np.pi * (0.5 + (0.13 if convex else -0.13))  # E = pi, normal light, f = 0.5 + kappa
@@ -471,12 +473,14 @@ def test_mesh_scene_with_environment_map(variant, tmp_path):
     g = cdbrdf.Grid.paper()
     albedo = 0.6
     table = cdbrdf.CDBRDF(np.full(g.shape + (3,), albedo / np.pi), **g.axes())
-    img = render_scene(mesh_scene(table, path, lighting="paper", light=None, envmap=env, size=(17, 17), spp=64,
-                                  max_depth=2, camera=Camera(view=(89.0, -65.0), fov_deg=10.0)))
+    img = render_scene(mesh_scene(table, RenderSpec(surface=path, light=Light(lighting="paper", direction=None,
+                                                                           envmap=env),
+                                                    size=(17, 17), spp=64, max_depth=2,
+                                                    camera=Camera(view=(89.0, -65.0), fov_deg=10.0))))
     # Lambertian under a uniform unit sky, direct light only, at the apex: radiance = albedo.
     assert img[7:10, 7:10].mean() == pytest.approx(albedo, rel=0.1)
     with pytest.raises(ValueError, match="needs a light"):
-        mesh_scene(table, path, lighting="paper", light=None, envmap=None)
+        RenderSpec(surface=path, light=Light(lighting="paper", direction=None, envmap=None))
 
 
 def test_render_command_reports_missing_llvm_before_rendering(tmp_path):
@@ -618,7 +622,7 @@ def test_values_beyond_float32_range_are_refused(variant, channels, peak):
     ((-1.0,), "light theta: elevation must lie in"),
     (("45",), "light theta: expected a finite number, got '45'"),
     ((45.0, float("inf")), "light phi: expected a finite number"),
-    ((45.0, 0.0, 0.0), "irradiance: must be positive, got 0"),
+    ((45.0, 0.0, 0.0), r"irradiance: expected a number in \(0, 1e\+09\] W/m\^2, got 0"),
     ((45.0, 0.0, float("nan")), "irradiance: expected a finite number"),
     ((45.0, None), "light phi: expected a finite number, got None"),
 ])
@@ -659,7 +663,7 @@ def test_render_table_compares_modes_at_one_exposure_and_restores_the_variant():
     from cdbrdf.render import render_table, set_variant
 
     set_variant("scalar_rgb")
-    pic = render_table(analytic_table(), "sine", modes=("brdf", "cdbrdf"), size=(24, 16), spp=2)
+    pic = render_table(analytic_table(), RenderSpec(surface="sine", modes=("brdf", "cdbrdf"), size=(24, 16), spp=2))
     assert mi.variant() == "scalar_rgb"  # render_table ran in llvm_ad_rgb and gave the variant back
     assert set(pic.images) == {"brdf", "cdbrdf"} and pic.images["brdf"].shape == (16, 24, 4)
     assert pic.surface == "sine sheet" and pic.lighting == "paper" and pic.light == (45.0, 0.0, np.pi)
@@ -667,7 +671,7 @@ def test_render_table_compares_modes_at_one_exposure_and_restores_the_variant():
     # the curvature changes the crests, not the whole picture: the images differ, but not everywhere
     a, b = pic.display("brdf"), pic.display("cdbrdf")
     assert a.shape == (16, 24, 3) and np.abs(a - b).max() > 0 and np.isclose(a, b, rtol=1e-3).any()
-    given = render_table(analytic_table(), "sine", size=(24, 16), spp=1, exposure=-1.5)
+    given = render_table(analytic_table(), RenderSpec(size=(24, 16), spp=1, exposure=-1.5))
     assert given.exposure_ev == -1.5 and given.exposure_source == "given"
 
 
@@ -688,7 +692,7 @@ def test_render_table_of_a_mesh_reports_what_it_prepared(tmp_path, monkeypatch):
     scratch.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(scratch))
     monkeypatch.chdir(scratch)
-    pic = render_table(analytic_table(), path, size=(24, 16), spp=1, units="mm")
+    pic = render_table(analytic_table(), RenderSpec(surface=MeshSurface(path, units="mm"), size=(24, 16), spp=1))
     assert list(scratch.iterdir()) == []  # no temporary mesh or environment map
     assert pic.surface == str(path) and pic.lighting == "studio" and pic.backdrop
     assert pic.mesh is not None and "curvature" in pic.mesh.attributes and pic.up in ("y", "z")
@@ -696,18 +700,73 @@ def test_render_table_of_a_mesh_reports_what_it_prepared(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    ({"envmap": "sky.exr"}, "envmap: only for meshes"),
-    ({"lighting": "studio"}, "lighting 'studio': only for meshes"),
-    ({"light": None}, "the sine sheet needs a light"),
+    ({"light": Light(envmap="sky.exr")}, "envmap: only for meshes"),
+    ({"light": Light(lighting="studio")}, "lighting 'studio': only for meshes"),
+    ({"light": Light(direction=None)}, "the sine sheet needs a light"),
     ({"modes": ("brdf", "brdf")}, "modes: .* must be distinct values of cdbrdf, brdf"),
     ({"modes": ("plain",)}, "modes:"),
-    ({"lighting": "sunny"}, "lighting: 'sunny' is not one of studio, paper"),
-    ({"light": "noon"}, "light: expected"),
+    ({"light": {"lighting": "sunny"}}, "lighting: 'sunny' is not one of studio, paper"),
+    ({"light": {"direction": "noon"}}, "light: expected"),
+    ({"light": {"direction": (95.0, 0.0)}}, r"light theta: elevation must lie in \[0, 90\)"),
+    ({"light": {"irradiance": 0.0}}, r"irradiance: expected a number in \(0, 1e\+09\] W/m\^2"),
+    ({"light": (45.0, 0.0)}, "light: expected a cdbrdf.render.Light, got tuple"),
     ({"exposure": "bright"}, "exposure: expected a finite number"),
+    ({"exposure": 65.0}, r"exposure: expected a finite number of stops \(-64 to 64 EV\)"),
+    ({"spp": 0}, r"spp: expected an integer in \[1, 65536\], got 0"),
+    ({"size": (0, 8)}, r"size: expected \(width, height\), each an integer in \[1, 65536\] pixels"),
+    ({"seed": -1}, "seed: expected an integer in"),
+    ({"max_depth": 1}, r"max_depth: expected an integer in \[2, 64\]"),
+    ({"curvature_mode": "min"}, "curvature mode: 'min' is not one of max, directional"),
+    ({"texel_filter": "cubic"}, "texel_filter: 'cubic' is not one of"),
+    ({"variant": "scalar_rgb_polarized"}, "variant: 'scalar_rgb_polarized' is not one of"),
+    ({"surface": 3}, "surface: expected a scene name"),
 ])
-def test_render_table_refuses_bad_options_before_rendering(kwargs, match):
+def test_render_spec_refuses_bad_options_when_made(kwargs, match):
+    """Every field is checked once, when the record is made (a Light given as fields is made here)."""
     from cdbrdf.errors import OptionError
-    from cdbrdf.render import render_table
 
     with pytest.raises(OptionError, match=match):
-        render_table(analytic_table(), "sine", size=(8, 8), spp=1, **kwargs)
+        if isinstance(kwargs.get("light"), dict):
+            kwargs = {**kwargs, "light": Light(**kwargs["light"])}
+        RenderSpec(**{"size": (8, 8), "spp": 1, **kwargs})
+
+
+def test_render_spec_resolves_its_surface_light_and_camera():
+    """A name is its record, a mesh a MeshSurface; the surface decides the lighting, camera and light."""
+    from dataclasses import replace
+
+    from cdbrdf.mesh import SineSheet, Swatch
+    from cdbrdf.render.camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW, DEFAULT_SWATCH_VIEW
+    from cdbrdf.render.lighting import STUDIO_KEY
+
+    sine = RenderSpec()
+    assert sine.surface == SineSheet() and sine.kind == "sine" and sine.lighting == "paper" and not sine.backdrop
+    assert sine.sun() == (45.0, 0.0, np.pi) and sine.resolved_camera().view == DEFAULT_SINE_VIEW
+    swatch = RenderSpec(surface="swatch", camera=Camera(view=(30.0, 10.0)))
+    assert swatch.surface == Swatch() and swatch.lighting == "studio" and swatch.backdrop
+    assert swatch.sun() == (STUDIO_KEY[0], 10.0 + STUDIO_KEY[1], np.pi)  # the key relative to the camera
+    assert RenderSpec(surface="swatch").resolved_camera().view == DEFAULT_SWATCH_VIEW
+    mesh = RenderSpec(surface="dress.obj", light=Light(direction=None, envmap="sky.exr"))
+    assert mesh.surface == MeshSurface("dress.obj") and mesh.name == "dress.obj" and not mesh.backdrop
+    assert mesh.sun() is None and mesh.resolved_camera().view == DEFAULT_MESH_VIEW
+    assert replace(sine, spp=16).spp == 16 and replace(sine, spp=16).surface == sine.surface
+    with pytest.raises(ValueError, match="spp: expected an integer"):
+        replace(sine, spp=1.5)  # a changed copy is checked again
+    assert RenderSpec(exposure=-1).exposure == -1.0 and RenderSpec(modes="brdf").modes == ("brdf",)
+
+
+@needs_llvm
+def test_render_table_takes_its_former_keywords_with_a_warning():
+    """The migration path: render_table(table, surface, **options) still renders, the same spec, and warns."""
+    from cdbrdf.render import render_table
+
+    old = RenderSpec.from_options("sine", size=(12, 8), spp=1, lighting="paper", light=(30.0, 0.0), irradiance=2.0,
+                                  curvature=True)
+    assert old == RenderSpec(size=(12, 8), spp=1, light=Light(lighting="paper", direction=(30.0, 0.0), irradiance=2.0),
+                             curvature_image=True)
+    assert RenderSpec.from_options("a.ply", units="cm", up="y").surface == MeshSurface("a.ply", units="cm", up="y")
+    with pytest.warns(DeprecationWarning, match="pass a cdbrdf.render.RenderSpec"):
+        pic = render_table(analytic_table(), "sine", size=(12, 8), spp=1, exposure=0.0)
+    assert pic.images["cdbrdf"].shape == (8, 12, 4) and pic.exposure_source == "given"
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="unknown option 'colour'"):
+        render_table(analytic_table(), "sine", colour="red")

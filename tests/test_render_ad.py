@@ -35,13 +35,13 @@ def small_table(seed=0, **kw):
 
 def sheet_scene(cr, table, *, sampling="cosine", size=(16, 12), spp=4, view=(40.0, -90.0), light=(30.0, 20.0)):
     from cdbrdf.mesh import SineSheet
-    from cdbrdf.render import Camera
+    from cdbrdf.render import Camera, Light, RenderSpec
     from cdbrdf.render.scenes import sine_scene
 
     sheet = SineSheet(width_mm=20, depth_mm=20, vertices_per_wavelength=16)
-    return sine_scene(table, sheet=sheet, size=size, spp=spp, max_depth=2, camera=Camera(view=view),
-                      light=(light[0], light[1], np.pi),
-                      bsdf={"type": "cdbrdf", "table": table, "sampling": sampling})
+    spec = RenderSpec(surface=sheet, size=size, spp=spp, max_depth=2, camera=Camera(view=view),
+                      light=Light(direction=light))
+    return sine_scene(table, spec, bsdf={"type": "cdbrdf", "table": table, "sampling": sampling})
 
 
 def test_traverse_exposes_values_and_scale(cr):

@@ -8,7 +8,8 @@ import pytest
 from cdbrdf import CDBTF, Grid
 from cdbrdf.colour import LUMINANCE_WEIGHTS
 from cdbrdf.errors import OptionError
-from cdbrdf.render import Camera, _btf_jit
+from cdbrdf.mesh import MeshSurface
+from cdbrdf.render import Camera, Light, RenderSpec, _btf_jit
 
 from .render_helpers import dr, local_si, mi, needs_llvm, unit, vec
 
@@ -139,12 +140,12 @@ def test_render_table_with_a_cdbtf(cr, btf):
     from cdbrdf.render import render_table
 
     sheet = SineSheet(width_mm=20.0, depth_mm=20.0, vertices_per_wavelength=16)
-    kw = {"size": (32, 24), "spp": 64, "exposure": 0.0}
-    ref = render_table(btf.mean(), sheet, **kw).images["cdbrdf"][..., :3]
+    spec = RenderSpec(surface=sheet, size=(32, 24), spp=64, exposure=0.0)
+    ref = render_table(btf.mean(), spec).images["cdbrdf"][..., :3]
     flat = CDBTF(btf.mean(), np.zeros((6, 8, 0)), np.zeros(btf.mean().shape[:-1] + (0, 3)), repeat_mm=REPEAT)
-    same = render_table(flat, sheet, **kw).images["cdbrdf"][..., :3]
+    same = render_table(flat, spec).images["cdbrdf"][..., :3]
     np.testing.assert_allclose(same, ref, rtol=1e-4, atol=1e-5 * ref.max())
-    woven = render_table(btf, sheet, **kw).images["cdbrdf"][..., :3]
+    woven = render_table(btf, spec).images["cdbrdf"][..., :3]
     assert np.abs(woven - ref).max() > 0.05 * ref.max()  # the texels show
     assert woven.mean() == pytest.approx(ref.mean(), rel=0.02)
 
@@ -264,7 +265,8 @@ def test_stochastic_render_converges_to_the_bilinear_one(cr, btf):
     sheet = SineSheet(width_mm=6.0, depth_mm=6.0, vertices_per_wavelength=16)
     imgs = {}
     for f in ("bilinear", "stochastic"):
-        imgs[f] = render_table(btf, sheet, size=(24, 24), spp=256, exposure=0.0, texel_filter=f).images["cdbrdf"][..., :3].astype(np.float64)
+        spec = RenderSpec(surface=sheet, size=(24, 24), spp=256, exposure=0.0, texel_filter=f)
+        imgs[f] = render_table(btf, spec).images["cdbrdf"][..., :3].astype(np.float64)
     a, b = imgs["bilinear"], imgs["stochastic"]
     assert abs(b.mean() / a.mean() - 1) < 0.01
     assert np.abs(b - a).mean() < 0.05 * a.mean()
@@ -352,10 +354,10 @@ def test_spectral_render_of_uniform_texels_is_the_cdbrdfs(cr, btf):
     from cdbrdf.render import render_table
 
     sheet = SineSheet(width_mm=20.0, depth_mm=20.0, vertices_per_wavelength=16)
-    kw = {"size": (24, 16), "spp": 32, "exposure": 0.0, "variant": "llvm_ad_spectral"}
+    spec = RenderSpec(surface=sheet, size=(24, 16), spp=32, exposure=0.0, variant="llvm_ad_spectral")
     flat = CDBTF(btf.mean(), np.zeros((6, 8, 0)), np.zeros(btf.mean().shape[:-1] + (0, 3)), repeat_mm=REPEAT)
-    ref = render_table(btf.mean(), sheet, **kw).images["cdbrdf"][..., :3]
-    same = render_table(flat, sheet, **kw).images["cdbrdf"][..., :3]
+    ref = render_table(btf.mean(), spec).images["cdbrdf"][..., :3]
+    same = render_table(flat, spec).images["cdbrdf"][..., :3]
     assert ref.max() > 0
     np.testing.assert_allclose(same, ref, rtol=1e-4, atol=1e-5 * ref.max())
 
@@ -366,14 +368,15 @@ def test_a_mesh_without_its_own_uvs_renders_the_tile_mean_and_says_so(cr, btf):
 
     from .test_viewer_btf_mesh import flat_grid
 
-    kw = {"size": (32, 24), "spp": 16, "exposure": 0.0, "units": "mm", "light": (50.0, 0.0),
+    kw = {"size": (32, 24), "spp": 16, "exposure": 0.0, "light": Light(direction=(50.0, 0.0)),
           "camera": Camera(view=(60.0, -90.0))}
-    bare = render_table(btf, flat_grid(20.0, 20.0, uv=False), **kw)
-    mean = render_table(btf.mean(), flat_grid(20.0, 20.0, uv=False), **kw)
+    bare_spec = RenderSpec(surface=MeshSurface(flat_grid(20.0, 20.0, uv=False), units="mm"), **kw)
+    bare = render_table(btf, bare_spec)
+    mean = render_table(btf.mean(), bare_spec)
     # the same scene and table: equal up to the order of float32 sums in the render (1e-7 seen)
     np.testing.assert_allclose(bare.images["cdbrdf"], mean.images["cdbrdf"], rtol=1e-5, atol=1e-6)
     assert "no UVs of its own: the CD-BTF's tile mean is rendered on it" in bare.mesh.metadata["notes"]
-    woven = render_table(btf, flat_grid(20.0, 20.0), **kw)  # UVs of its own: the texels show
+    woven = render_table(btf, RenderSpec(surface=MeshSurface(flat_grid(20.0, 20.0), units="mm"), **kw))  # own UVs
     assert np.abs(woven.images["cdbrdf"] - mean.images["cdbrdf"]).max() > 0.02 * mean.images["cdbrdf"].max()
     assert not any("tile mean" in n for n in woven.mesh.metadata.get("notes", []))
 

@@ -62,7 +62,7 @@ def test_crest_contrast_errors():
         crest_contrast(pic, modes=("brdf", "spectral"))
     bare = Picture(images=pic.images, exposure_ev=0.0, exposure_source="given", surface="t", lighting="paper",
                    light=None, backdrop=False)
-    with pytest.raises(ValueError, match="curvature=True"):
+    with pytest.raises(ValueError, match="curvature_image=True"):
         crest_contrast(bare)
 
 
@@ -70,11 +70,11 @@ def test_crest_contrast_errors():
 def test_curvature_image_of_the_sine_sheet():
     """Pixels see the sheet's analytic curvature: up to the crest value, both signs, sky NaN."""
     import cdbrdf.materials
-    from cdbrdf.render import render_table
+    from cdbrdf.render import RenderSpec, render_table
 
     sheet = SineSheet()
-    pic = render_table(cdbrdf.materials.load("denim"), sheet, modes=("brdf",), size=(96, 72), spp=1,
-                       curvature=True)
+    pic = render_table(cdbrdf.materials.load("denim"), RenderSpec(surface=sheet, modes=("brdf",), size=(96, 72),
+                                                                  spp=1, curvature_image=True))
     k = pic.curvature
     assert k.shape == (72, 96)
     seen = np.isfinite(k)

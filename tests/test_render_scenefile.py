@@ -224,7 +224,7 @@ def test_curvature_mode_selects_the_attribute(cr, tmp_path):
     path = write_scene(tmp_path / "m", bsdf_extra='<string name="curvature_mode" value="directional"/>')
     with pytest.raises(SceneError, match="'vertex_curvature_dir', which the shape does not have"):
         cr.load_file(path)
-    with pytest.raises(ValueError, match="curvature_mode 'min' is not one of max, directional"):
+    with pytest.raises(ValueError, match="curvature_mode: 'min' is not one of max, directional"):
         cr.make_bsdf(kappa_table(), curvature_mode="min")
     with pytest.raises(ValueError, match="not both"):
         cr.make_bsdf(kappa_table(), curvature_mode="max", curvature=0.1)
@@ -278,6 +278,16 @@ def test_render_command_with_a_scene_file(cr, tmp_path):
     grey = tmp_path / "grey.png"  # mono: one channel, written as grey
     assert main(["-q", "render", str(path), "-o", str(grey), "--spp", "2", "--variant", "llvm_ad_mono"]) == 0
     assert grey.stat().st_size > 0
+
+
+def test_a_scene_files_summary_says_the_samples_that_ran(cr, tmp_path, capsys):
+    """Without --spp the sensor's count renders (in passes of 16) and the summary says that count, not a pass's."""
+    from cdbrdf.cli import main
+
+    path = write_scene(tmp_path)
+    capsys.readouterr()
+    assert main(["render", str(path), "-o", str(tmp_path / "a.exr"), "-D", "spp=40"]) == 0
+    assert "(9x9, 40 spp, llvm_ad_rgb)" in capsys.readouterr().err
     def status(argv):
         try:
             return main(argv)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from cdbrdf.colour import LUMINANCE_WEIGHTS
+from cdbrdf.render import RenderSpec
 
 from .render_helpers import constant_table, dr, glossy_table, mi, needs_llvm, vec
 
@@ -82,10 +83,10 @@ def test_constant_table_equals_diffuse(cr, name, kind):
     if kind == "cdbtf":  # 3 x 2 texels equal to the table, sampled stochastically
         entry["table"] = CDBTF(table, np.zeros((2, 3, 0)), np.zeros(table.shape[:-1] + (0, 3)), repeat_mm=(1.0, 1.0))
         entry["uv_scale"] = 60.0
-    kw = dict(size=(24, 16), spp=8, max_depth=3)
-    ours = render_scene(sine_scene(table, bsdf=entry, **kw), seed=3)
+    spec = RenderSpec(size=(24, 16), spp=8, max_depth=3)
+    ours = render_scene(sine_scene(table, spec, bsdf=entry), seed=3)
     diffuse = {"type": "diffuse", "reflectance": {"type": "rgb", "value": albedo.tolist()}}
-    ref = render_scene(sine_scene(table, bsdf=diffuse, **kw), seed=3)
+    ref = render_scene(sine_scene(table, spec, bsdf=diffuse), seed=3)
     assert ours.mean() > 0.05
     np.testing.assert_allclose(ours, ref, rtol=2e-4, atol=2e-5)
 
@@ -147,7 +148,7 @@ def test_table_sampling_in_every_variant(cr, name):
 
     cr.set_variant(name)
     t = glossy_table(theta_step=15.0, phi_step=30.0, ks=0.3)
-    img = render_scene(sine_scene(t, size=(12, 8), spp=4), seed=0)
+    img = render_scene(sine_scene(t, RenderSpec(size=(12, 8), spp=4)), seed=0)
     assert np.isfinite(img).all() and img.max() > 0
 
 

@@ -33,6 +33,7 @@ require_llvm_module()
 
 from cdbrdf.rig import (  # noqa: E402
     NoiseModel,
+    RigOptions,
     expected_patch_value,
     simulate_capture,
     stand_meshes,
@@ -61,8 +62,8 @@ def material() -> CDBRDF:
 def captured(tmp_path_factory):
     folder = tmp_path_factory.mktemp("rig") / "cap"
     mat = material()
-    rep = simulate_capture(mat, folder, grid=CAPTURE_GRID, size=32, field_mm=2.0,
-                           noise=NOISE, gain=GAIN, white_albedo=ALBEDO, seed=7)
+    rep = simulate_capture(mat, folder, RigOptions(size=32, field_mm=2.0, noise=NOISE, gain=GAIN,
+                                                   white_albedo=ALBEDO, seed=7), grid=CAPTURE_GRID)
     return mat, folder, rep
 
 
@@ -198,8 +199,8 @@ def test_brackets_rescue_saturation(tmp_path):
     mat = material()
     g = Grid(kappa=[0.0, 0.22], theta_l=[0.0, 45.0], phi_l=[0.0, 180.0], theta_v=[0.0, 45.0],
              phi_v=[0.0, 180.0])
-    rep = simulate_capture(mat, tmp_path / "cap", grid=g, size=16, field_mm=1.0, gain=8.0,
-                           exposures=(1.0, 0.1), noise=NOISE, image_kind="png16")
+    rep = simulate_capture(mat, tmp_path / "cap", RigOptions(size=16, field_mm=1.0, gain=8.0, exposures=(1.0, 0.1),
+                                                             noise=NOISE, image_kind="png16"), grid=g)
     assert rep.n_saturated_pixels > 0
     table, mrep = measure(tmp_path / "cap")
     assert mrep.n_saturated == 0 and table.measured.all()
@@ -214,8 +215,8 @@ def test_brackets_rescue_saturation(tmp_path):
 def test_other_image_kinds(tmp_path, kind):
     mat = material()
     g = Grid(kappa=[0.0], theta_l=[0.0, 45.0], phi_l=[0.0], theta_v=[0.0, 45.0], phi_v=[0.0, 180.0])
-    simulate_capture(mat, tmp_path / "cap", grid=g, size=16, field_mm=1.0, noise=NoiseModel(0, 0),
-                     image_kind=kind)
+    simulate_capture(mat, tmp_path / "cap", RigOptions(size=16, field_mm=1.0, noise=NoiseModel(0, 0),
+                                                       image_kind=kind), grid=g)
     table, _ = measure(tmp_path / "cap")
     tol = 0.02 if kind == "png8" else 1e-3
     np.testing.assert_allclose(table.values, _expected(mat, g, size=16, field_mm=1.0), rtol=tol)
@@ -235,7 +236,7 @@ def test_capture_lists_its_folder_a_bounded_number_of_times(tmp_path, monkeypatc
     mat = material()
     g = Grid(kappa=[0.0, 0.22], theta_l=[0.0, 30.0, 60.0], phi_l=[0.0, 180.0], theta_v=[0.0, 30.0, 60.0],
              phi_v=[0.0, 90.0, 180.0, 270.0])
-    simulate_capture(mat, tmp_path / "cap", grid=g, size=8, field_mm=1.0, noise=NoiseModel(0, 0))
+    simulate_capture(mat, tmp_path / "cap", RigOptions(size=8, field_mm=1.0, noise=NoiseModel(0, 0)), grid=g)
     n_photos = sum(1 for p in (tmp_path / "cap").rglob("*.png"))
     assert n_photos >= 2 * 6 * 12
     assert len(calls) <= 10, f"{len(calls)} sweeps for {n_photos} photographs"
@@ -249,11 +250,11 @@ def test_plan_png_names_rendered_as_tiff_get_tif_names(tmp_path):
 
     mat = material()
     g = Grid(kappa=[0.0], theta_l=[0.0], phi_l=[0.0], theta_v=[0.0, 45.0], phi_v=[0.0, 180.0])
-    simulate_capture(mat, tmp_path / "plan", grid=g, size=16, field_mm=1.0, noise=NoiseModel(0, 0))
+    simulate_capture(mat, tmp_path / "plan", RigOptions(size=16, field_mm=1.0, noise=NoiseModel(0, 0)), grid=g)
     for kind, ext in (("tif16", ".tif"), ("exr", ".exr")):
         cap = tmp_path / kind
-        simulate_capture(mat, cap, plan=tmp_path / "plan" / "capture.csv", size=16, field_mm=1.0,
-                         noise=NoiseModel(0, 0), image_kind=kind)
+        simulate_capture(mat, cap, RigOptions(size=16, field_mm=1.0, noise=NoiseModel(0, 0), image_kind=kind),
+                         plan=tmp_path / "plan" / "capture.csv")
         with open(cap / "capture.csv", newline="") as fh:
             names = [r["file"] for r in csv.DictReader(fh)]
         assert names and all(n.endswith(ext) for n in names)
@@ -326,8 +327,8 @@ def test_preset_denim_end_to_end(tmp_path):
     """The issue's 'done when' on a reduced grid: the denim preset, simulated and measured back."""
     from cdbrdf import materials
     mat = materials.load("denim")
-    simulate_capture(mat, tmp_path / "cap", grid=CAPTURE_GRID, size=32, field_mm=2.0,
-                     noise=NOISE, gain=GAIN, white_albedo=ALBEDO)
+    simulate_capture(mat, tmp_path / "cap", RigOptions(size=32, field_mm=2.0, noise=NOISE, gain=GAIN,
+                                                       white_albedo=ALBEDO), grid=CAPTURE_GRID)
     table, rep = measure(tmp_path / "cap", fill="kappa-fit")
     assert rep.n_saturated == 0
     truth = _truth(mat, CAPTURE_GRID)
@@ -355,9 +356,9 @@ def test_expected_patch_value_limits():
 TINY_GRID = Grid(kappa=[0.0], theta_l=[0.0], phi_l=[0.0], theta_v=[0.0, 30.0], phi_v=[0.0])
 
 
-def _tiny(folder, **kw):
-    return simulate_capture(material(), folder, grid=TINY_GRID, size=8, spp=1, field_mm=1.0,
-                            noise=NoiseModel(0, 0), **kw)
+def _tiny(folder, *, plan=None, progress=None, **options):
+    opts = RigOptions(**{"size": 8, "spp": 1, "field_mm": 1.0, "noise": NoiseModel(0, 0), **options})
+    return simulate_capture(material(), folder, opts, grid=TINY_GRID, plan=plan, progress=progress)
 
 
 def test_simulate_capture_refuses_a_foreign_folder(tmp_path):
@@ -513,14 +514,41 @@ def test_plan_grid_of_stands_json_is_kept_for_the_measurement(tmp_path):
 
 @pytest.mark.parametrize("kw, match", [
     ({"image_kind": "jpeg"}, "image_kind: 'jpeg' is not one of png16"),
-    ({"size": 4}, "size: expected a whole number >= 8"),
-    ({"size": 16.0}, "size: expected a whole number"),
-    ({"spp": 0}, "spp: expected a whole number >= 1"),
-    ({"field_mm": float("nan")}, "field_mm: expected a finite positive number"),
-    ({"gain": -1}, "gain: expected a finite positive number"),
-    ({"white_albedo": 0}, "white_albedo: expected a finite positive number"),
+    ({"size": 4}, r"size: expected an integer in \[8, 8192\], got 4"),
+    ({"size": 16.0}, "size: expected an integer"),
+    ({"spp": 0}, r"spp: expected an integer in \[1, 65536\], got 0"),
+    ({"field_mm": float("nan")}, r"field_mm: expected a number in \(0, 10000\] mm, got nan"),
+    ({"gain": -1}, r"gain: expected a number in \(0, 1e\+12\]"),
+    ({"white_albedo": 0}, r"white_albedo: expected a number in \(0, 1.5\], got 0"),
+    ({"white_albedo": 1.6}, r"white_albedo: expected a number in \(0, 1.5\]"),
+    ({"exposures": ()}, "exposures: expected 1 to 16 numbers, got 0"),
+    ({"exposures": (1.0, -1.0)}, "exposures: expected a number in"),
+    ({"px_per_texel": 100}, r"px_per_texel: expected a number in \[0.5, 64\]"),
+    ({"seed": 2**32}, "seed: expected an integer in"),
+    ({"noise": "20000,3"}, "noise: expected a cdbrdf.rig.NoiseModel"),
 ])
-def test_simulate_capture_bad_option_is_an_option_error(tmp_path, kw, match):
+def test_rig_options_refuse_a_bad_option_when_made(tmp_path, kw, match):
+    """Checked once, when the record is made: before a folder is touched."""
     with pytest.raises(cdbrdf.errors.OptionError, match=match):
-        simulate_capture(material(), tmp_path / "cap", **kw)
+        simulate_capture(material(), tmp_path / "cap", RigOptions(**kw))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_capture_takes_its_former_keywords_with_a_warning(tmp_path):
+    """The migration path: the options as keywords still work, with a DeprecationWarning."""
+    with pytest.warns(DeprecationWarning, match="pass a cdbrdf.rig.RigOptions"):
+        rep = simulate_capture(material(), tmp_path / "cap", grid=TINY_GRID, size=8, spp=1, field_mm=1.0,
+                               noise=NoiseModel(0, 0))
+    assert rep.n_images > 0
+    with pytest.warns(DeprecationWarning), pytest.raises(cdbrdf.errors.OptionError, match="unknown option 'colour'"):
+        simulate_capture(material(), tmp_path / "cap2", colour="red")
+
+
+def test_simulate_capture_command_takes_the_records_ranges(tmp_path, capsys):
+    """The command line and the library accept the same white reference (the capture format's range)."""
+    mat = tmp_path / "mat.h5"
+    material().save(mat)
+    with pytest.raises(SystemExit):
+        main(["-q", "simulate-capture", str(mat), "-o", str(tmp_path / "c1"), "--white-albedo", "1.6"])
+    assert "(0, 1.5]" in capsys.readouterr().err
+    assert RigOptions(white_albedo=1.2).white_albedo == 1.2  # what stands.json accepts, the library takes

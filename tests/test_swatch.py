@@ -111,7 +111,7 @@ def test_swatch_refuses_bad_geometry(kwargs, message):
 
 
 def test_scene_registry():
-    from cdbrdf.render.scenes import SCENES, check_scene_name
+    from cdbrdf.render.spec import SCENES, check_scene_name
 
     assert list(SCENES) == ["sine", "swatch"]
     assert check_scene_name("swatch") == "swatch"
@@ -122,13 +122,14 @@ def test_scene_registry():
 @needs_llvm
 def test_swatch_renders_with_the_curvature_of_its_folds():
     """What Mitsuba's intersections see on the swatch: the folds' +-1/R, and a studio picture."""
-    from cdbrdf.render import render_table
+    from cdbrdf.render import RenderSpec, render_table
 
     g = cdbrdf.Grid(kappa=[-0.3, 0.0, 0.3], theta_l=[0, 45, 75], phi_l=[0, 180], theta_v=[0, 45, 75],
                     phi_v=[0, 180])
     table = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.5 / np.pi), **g.axes(), attrs={"quantity": "brdf"})
     sw = Swatch(radii_mm=(20.0, 5.0))
-    pic = render_table(table, sw, size=(64, 40), spp=1, curvature=True, modes=("brdf", "cdbrdf"))
+    pic = render_table(table, RenderSpec(surface=sw, size=(64, 40), spp=1, curvature_image=True,
+                                         modes=("brdf", "cdbrdf")))
     assert pic.surface == "swatch" and pic.lighting == "studio" and pic.backdrop and pic.mesh is None
     seen = pic.curvature[np.isfinite(pic.curvature)]
     assert seen.size > 0.3 * pic.curvature.size  # the swatch fills the picture
@@ -138,7 +139,7 @@ def test_swatch_renders_with_the_curvature_of_its_folds():
     assert np.all(np.abs(seen) <= 1 / 5.0 + 1e-3)
     assert np.mean(seen == 0.0) > 0.2  # the flat cloth between the folds
     with pytest.raises(ValueError, match="maps: only for meshes"):
-        render_table(table, "swatch", size=(8, 8), spp=1, maps=SurfaceMaps(normal_map="x.png"))
+        RenderSpec(surface="swatch", size=(8, 8), spp=1, maps=SurfaceMaps(normal_map="x.png"))
 
 
 @needs_llvm

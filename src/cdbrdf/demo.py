@@ -363,16 +363,17 @@ def _render_pair(table: CDBRDF, surface: Any, *, config: DemoConfig, progress: P
                  label: str, curvature: bool = False, light: tuple[float, float] = (45.0, 0.0),
                  view: tuple[float, float] | None = None) -> tuple[Any, float]:
     """The surface rendered with the plain BRDF and the CDBRDF under one directional light; and the seconds."""
-    from .render import Camera, render_table
+    from .render import Camera, Light, RenderSpec, render_table
 
     def stage(what: str, done: int, total: int) -> None:
         if progress is not None:
             progress(f"{label} ({what.removeprefix('rendering ')})", done, total)
 
     t0 = time.perf_counter()
-    pic = render_table(table, surface, modes=("brdf", "cdbrdf"), size=config.render_size, spp=config.render_spp,
-                       lighting="paper", light=light, camera=Camera(view=view), exposure="auto", curvature=curvature,
-                       progress=stage)
+    spec = RenderSpec(surface=surface, modes=("brdf", "cdbrdf"), size=config.render_size, spp=config.render_spp,
+                      light=Light(lighting="paper", direction=light), camera=Camera(view=view), exposure="auto",
+                      curvature_image=curvature)
+    pic = render_table(table, spec, progress=stage)
     return pic, time.perf_counter() - t0
 
 
@@ -393,7 +394,7 @@ def _material(
     from .mesh import draped_cloth_mesh, prepare_mesh
     from .plot import plot_mosaic, plot_render_comparison
     from .render import crest_contrast
-    from .rig import simulate_capture
+    from .rig import RigOptions, simulate_capture
     from .synth.metrics import bend_summary
 
     truth = materials.load(name)
@@ -404,8 +405,9 @@ def _material(
 
     t0 = time.perf_counter()
     write_plan(plan, config.grid, stands)
-    simulate_capture(truth, capture, plan=plan / "capture.csv", size=config.image_px, field_mm=config.field_mm,
-                     spp=config.capture_spp, seed=1, progress=_stage(progress, f"{name}: photographs"))
+    simulate_capture(truth, capture, RigOptions(size=config.image_px, field_mm=config.field_mm,
+                                                spp=config.capture_spp, seed=1),
+                     plan=plan / "capture.csv", progress=_stage(progress, f"{name}: photographs"))
     res.seconds["photographs"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

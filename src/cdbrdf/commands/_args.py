@@ -37,6 +37,7 @@ __all__ = [
     "SEED_MAX",
     "finite_float",
     "int_range",
+    "in_range",
     "float_list",
     "size_wxh",
     "square_size",
@@ -61,21 +62,11 @@ SEED_MAX = 2**32 - 1
 _Type = Callable[[str], Any]
 
 
-def _fmt(x: float) -> str:
-    """A bound for messages: ``1e+06`` -> ``1e+06``, ``90.0`` -> ``90``."""
-    return f"{x:g}"
-
-
 def _interval(lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) -> str:
-    if lo is None and hi is None:
-        return "a finite number"
-    if hi is None and lo == 0 and lo_open:
-        return "a positive number"
-    if hi is None:
-        return f"a number {'>' if lo_open else '>='} {_fmt(lo)}"  # type: ignore[arg-type]
-    if lo is None:
-        return f"a number {'<' if hi_open else '<='} {_fmt(hi)}"
-    return f"a number in {'(' if lo_open else '['}{_fmt(lo)}, {_fmt(hi)}{')' if hi_open else ']'}"
+    """What a number must be, in words (the wording of :meth:`cdbrdf.ranges.Range.expect`)."""
+    from ..ranges import Range
+
+    return Range(lo, hi, lo_open, hi_open).expect()
 
 
 #: Roles of path types (see :func:`guarded`).
@@ -169,6 +160,19 @@ def int_range(lo: int, hi: int) -> _Type:
         return _parse_int(text, lo, hi)
 
     return _named(parse, "integer")
+
+
+def in_range(rng: Any) -> _Type:
+    """The option type of a library record's :class:`cdbrdf.ranges.Range`: the one owner of its range.
+
+    Returns
+    -------
+    callable
+        :func:`int_range` for whole numbers, else :func:`finite_float`.
+    """
+    if rng.integer:
+        return int_range(int(rng.lo), int(rng.hi))
+    return finite_float(rng.lo, rng.hi, lo_open=rng.lo_open, hi_open=rng.hi_open, unit=rng.unit)
 
 
 def seed(hi: int = SEED_MAX) -> _Type:

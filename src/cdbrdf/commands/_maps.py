@@ -21,11 +21,12 @@ _IMAGES = (".png", ".tif", ".tiff", ".exr")
 
 
 def add_uv_scale(group: Any, *, help: str) -> None:  # noqa: A002 - argparse's own keyword
-    """``--uv-scale SU[,SV]``: one or two positive numbers of mm per UV unit."""
+    """``--uv-scale SU[,SV]``: one or two numbers of mm per UV unit (:data:`cdbrdf.mesh.maps.UV_SCALE_RANGE_MM`)."""
+    from ..mesh.maps import UV_SCALE_RANGE_MM as R
     from ._args import float_list
 
-    group.add_argument("--uv-scale", type=float_list(0, 1e9, lo_open=True, min_len=1, max_len=2, example="10,6",
-                                                     unit="mm per UV unit"),
+    group.add_argument("--uv-scale", type=float_list(R.lo, R.hi, lo_open=R.lo_open, min_len=1, max_len=2,
+                                                     example="10,6", unit=R.unit),
                        default=None, metavar="SU[,SV]", help=help)
 
 
@@ -40,7 +41,8 @@ def uv_scale_pair(args: argparse.Namespace) -> tuple[float, float] | None:
 def add_map_options(group: Any) -> None:
     """The map options of a command that renders a mesh (see the module's description)."""
     from ..mesh import BAKES, NORMAL_MAP_CONVENTIONS
-    from ._args import existing_file, finite_float, float_list, mesh_file
+    from ..mesh.maps import HEIGHT_SCALE_RANGE_MM, MAP_SIZE_RANGE_MM
+    from ._args import existing_file, float_list, in_range, mesh_file
 
     add_uv_scale(group, help="mm per UV unit of --mesh, for its maps and a CD-BTF's texels (default: detected: "
                  "the unit of UVs that are lengths, as a CAD tool's panels, else the median 3-D length per UV "
@@ -56,11 +58,12 @@ def add_map_options(group: Any) -> None:
                       "onto --mesh's UVs, signed, in 1/mm")
     group.add_argument("--normal-map-convention", choices=NORMAL_MAP_CONVENTIONS, default=None,
                        help="green channel of the normal map: opengl (up: Blender, glTF; default) or directx")
-    group.add_argument("--height-scale", type=finite_float(0, 1e6, lo_open=True, unit="mm"), default=None,
+    group.add_argument("--height-scale", type=in_range(HEIGHT_SCALE_RANGE_MM), default=None,
                        metavar="MM", help="mm per unit of the height map's values (8/16-bit: full code = 1; "
                        "default: the MTL's -bm in the mesh's unit)")
-    group.add_argument("--map-size", type=float_list(0, 1e9, lo_open=True, min_len=1, max_len=2, example="100",
-                                                     unit="mm"),
+    group.add_argument("--map-size", type=float_list(MAP_SIZE_RANGE_MM.lo, MAP_SIZE_RANGE_MM.hi,
+                                                     lo_open=MAP_SIZE_RANGE_MM.lo_open, min_len=1, max_len=2,
+                                                     example="100", unit=MAP_SIZE_RANGE_MM.unit),
                        default=None, metavar="MM[,MM]",
                        help="the size one repeat of the normal or height map covers on the cloth, mm (default: "
                        "the file's texture transform, else one repeat per UV unit)")

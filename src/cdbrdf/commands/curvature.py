@@ -7,7 +7,8 @@ the mesh as binary PLY with the signed principal curvature of larger
 magnitude (``curvature_x``, Mitsuba attribute ``vertex_curvature``) and the
 directional curvature along the material's x axis (``curvature_dir_x``,
 ``vertex_curvature_dir``), both in mm^-1, with the unit, neighbourhood and
-frame recorded in the header (``cdbrdf render`` reuses them).
+frame recorded in the header (``cdbrdf render`` reuses them); ``--up y|z``
+records the up axis there too.
 """
 
 from __future__ import annotations
@@ -19,33 +20,55 @@ import numpy as np
 
 from ._text import say
 
-__all__ = ["register", "run", "LARGE_MESH_FACES", "mesh_options", "print_mesh_report"]
+__all__ = ["register", "run", "LARGE_MESH_FACES", "MESH_OPTIONS", "mesh_options", "print_mesh_report"]
 
 #: Meshes from this many faces get a progress bar while the curvature is fitted.
 LARGE_MESH_FACES = 100_000
 
 
-def mesh_options(p: Any, *, units: bool = True) -> None:
-    """The options shared with ``cdbrdf render --mesh`` and ``cdbrdf view --mesh``: unit, neighbourhood, frame.
+#: The options :func:`mesh_options` can add (the fields of :class:`cdbrdf.mesh.MeshSurface`).
+MESH_OPTIONS: tuple[str, ...] = ("units", "neighbourhood", "frame", "up")
 
-    ``p`` is a parser or an argument group; ``units=False`` leaves ``--units`` to the caller.
+
+def mesh_options(p: Any, *, only: str | tuple[str, ...] = MESH_OPTIONS, what: str | None = None,
+                 up_default: str | None = None) -> None:
+    """The options of a mesh shared by ``cdbrdf curvature``, ``render --mesh`` and ``view --mesh``: unit,
+    neighbourhood, frame, up axis (:class:`cdbrdf.mesh.MeshSurface`'s fields, their ranges from :mod:`cdbrdf.mesh`).
+
+    Parameters
+    ----------
+    p
+        A parser or an argument group.
+    only
+        The options to add, of :data:`MESH_OPTIONS`.
+    what
+        ``--units``' help after "length unit" (default: the mesh's).
+    up_default
+        ``--up``'s default (None: not given; the library's default is ``auto``).
     """
-    from ..mesh import FRAMES, NEIGHBOURHOOD_RANGE_MM, UNITS_MM
+    from ..mesh import FRAMES, NEIGHBOURHOOD_RANGE_MM, UNITS_MM, UP_AXES
     from ._args import finite_float, keyword
 
+    only = (only,) if isinstance(only, str) else only
     lo, hi = NEIGHBOURHOOD_RANGE_MM
-    if units:
+    if "units" in only:
         p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
                        default=None, metavar="UNIT",
-                       help="length unit of the mesh: mm, cm, dm, m, in or a number of mm per model unit "
-                       "(default: the unit the file records or states (glTF's metre, a header comment, "
-                       "MakeHuman's dm), else the one a garment's or a sheet's size makes plausible, else mm)")
-    p.add_argument("--neighbourhood", type=finite_float(lo, hi, unit="mm"), default=None, metavar="MM",
-                   help="diameter of the surface patch the curvature is fitted over, mm (default: the "
-                   "table's measured patch if its provenance records it, else 5)")
-    p.add_argument("--frame", choices=FRAMES, default=None,
-                   help="the material's x axis: from the UVs, a tangent attribute, or the principal "
-                   "curvature directions (default auto: UVs if any, else tangents, else principal)")
+                       help="length unit " + (what or "of the mesh: mm, cm, dm, m, in or a number of mm per model "
+                       "unit (default: the unit the file records or states (glTF's metre, a header comment, "
+                       "MakeHuman's dm), else the one a garment's or a sheet's size makes plausible, else mm)"))
+    if "neighbourhood" in only:
+        p.add_argument("--neighbourhood", type=finite_float(lo, hi, unit="mm"), default=None, metavar="MM",
+                       help=f"diameter of the surface patch the curvature is fitted over, {lo:g} to {hi:g} mm "
+                       "(default: the table's measured patch if its provenance records it, else 5)")
+    if "frame" in only:
+        p.add_argument("--frame", choices=FRAMES, default=None,
+                       help="the material's x axis: from the UVs, a tangent attribute, or the principal "
+                       "curvature directions (default auto: UVs if any, else tangents, else principal)")
+    if "up" in only:
+        p.add_argument("--up", choices=UP_AXES, default=up_default,
+                       help="up axis of the mesh (default auto: what the file states, else from the geometry, else "
+                       "the format's usual one)")
 
 
 def print_mesh_report(label: str, mesh: object) -> None:
@@ -79,7 +102,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"input mesh ({', '.join(MESH_FORMATS)})")
     p.add_argument("-o", "--output", required=True, metavar="OUT.ply", type=output_file(".ply"),
                    help="output PLY file")
-    mesh_options(p)
+    mesh_options(p, up_default="auto")
     p.add_argument("--table", metavar="FILE", type=existing_file(".h5"), default=None,
                    help="a CDBRDF file: its measured patch sets the default neighbourhood and its kappa "
                    "range is checked (default: the paper's range)")
@@ -105,6 +128,9 @@ def run(args: argparse.Namespace) -> int:
                            maps=SurfaceMaps(from_file=False),
                            table=table, kappa_range=(float(PAPER_KAPPA.min()), float(PAPER_KAPPA.max())),
                            progress=bars.callback("curvature"))
+    if args.up != "auto":  # recorded in the file, for cdbrdf render and view
+        out.metadata["up"] = args.up
+        out.metadata.pop("up_source", None)
     write_ply(args.output, out)
     named = mesh.metadata.get("normal_map", mesh.metadata.get("height_map"))
     if named is not None and not args.quiet:

@@ -20,8 +20,8 @@ __all__ = ["register", "run"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..mesh import CURVATURE_MODES, MESH_FORMATS, UP_AXES
-    from ..render.scenes import SCENES
+    from ..mesh import CURVATURE_MODES, MESH_FORMATS
+    from ..render.spec import SCENES
     from ._args import existing_file, mesh_file, output_file
     from ._maps import add_map_options
     from .curvature import mesh_options
@@ -47,9 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                       help="a built-in surface: " + "; ".join(f"{k}: {v}" for k, v in SCENES.items()))
     what.add_argument("--mesh", metavar="MESH", type=mesh_file(),
                       help=f"a mesh ({', '.join(MESH_FORMATS)}), lengths in --units")
-    mesh_options(p)
-    p.add_argument("--up", choices=UP_AXES, default=None,
-                   help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
+    mesh_options(p)  # --units, --neighbourhood, --frame, --up (default None: not given)
     add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\"): baked per "
                                          "texel into the asset's curvature map, or with --bake vertex into "
                                          "_CURVATURE"))
@@ -64,6 +62,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..export.gltf import build_gltf, export_mesh, write_gltf
+    from ..mesh import MeshSurface
     from ..table import load
     from ._maps import MAP_OPTIONS, surface_maps
     from .curvature import print_mesh_report
@@ -78,8 +77,9 @@ def run(args: argparse.Namespace) -> int:
     if args.materialx is not None and Path(args.materialx).resolve() == Path(args.output).resolve():
         raise OptionError("--materialx: must differ from -o")
     table = load(args.file)
-    mesh = export_mesh(args.scene or args.mesh, table=table, units=args.units, up=args.up or "auto",
-                       neighbourhood_mm=args.neighbourhood, frame=args.frame, maps=surface_maps(args))
+    surface = args.scene or MeshSurface(args.mesh, units=args.units, neighbourhood_mm=args.neighbourhood,
+                                        frame=args.frame, up=args.up or "auto")
+    mesh = export_mesh(surface, table=table, maps=surface_maps(args))
     asset = build_gltf(table, mesh, curvature_mode=args.curvature)
     if args.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), mesh)

@@ -49,39 +49,19 @@ import argparse
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 from ..errors import OptionError
-from ..limits import MAX_SPP
 from ._maps import MAP_OPTIONS
 from ._text import say
 
 __all__ = ["register", "run"]
 
-#: The passes of a render use seeds ``seed .. seed + spp // 16``.
-_SEED_MAX = 2**32 - 1 - MAX_SPP
-
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..colour import DELTA_E_METRICS
-    from ..mesh import CURVATURE_MODES, MESH_FORMATS, UNITS_MM, UP_AXES
     from ..render import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS, VARIANTS
-    from ..render.camera import FOV_RANGE_DEG, LOOK_AT_ANCHORS, ZOOM_RANGE
-    from ..render.lighting import LIGHTINGS
-    from ..render.picture import DEFAULT_SIZE, DEFAULT_SPP
-    from ..render.scenes import SCENES
-    from ._args import (
-        existing_file,
-        finite_float,
-        float_list,
-        input_path,
-        int_range,
-        key_value,
-        keyword,
-        mesh_file,
-        output_file,
-        seed,
-        size_wxh,
-    )
+    from ..render.spec import DEFAULT_SPP, EXPOSURE_RANGE_EV, EXPOSURES, SEED_RANGE, SPP_RANGE
+    from ._args import in_range, input_path, key_value, keyword, output_file, seed
     from ._maps import add_map_options
     from .curvature import mesh_options
 
@@ -91,35 +71,53 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Render a CDBRDF file with Mitsuba 3 (llvm_ad_rgb) on the paper's sine sheet, a swatch "
         "in folds of known radii or a mesh (PLY, OBJ, glTF/GLB, STL, OFF; repaired, its curvature computed in "
         "1/mm from --units unless the file has it), or render a Mitsuba XML scene that uses <bsdf type=\"cdbrdf\">. "
-        "PNG is sRGB-encoded after the exposure (radiance x 2^EV, clipped; default: an 18 %% grey card "
+        "PNG is sRGB-encoded after the exposure (radiance x 2^EV, clipped; default: an 18 % grey card "
         "facing the key light shows as mid-grey); EXR is linear.",
     )
     p.add_argument("file", type=input_path(),
                    help="a CDBRDF file (.h5), or a Mitsuba scene (.xml) using <bsdf type=\"cdbrdf\">")
     p.add_argument("-o", "--output", required=True, metavar="OUT", type=output_file(),
                    help="output .png or .exr (--compare: .png, .pdf or .svg)")
-    p.add_argument("--spp", type=int_range(1, MAX_SPP), default=None,
-                   help=f"samples per pixel, 1 to {MAX_SPP} (default: {DEFAULT_SPP}; a scene file: its sensor's)")
-    p.add_argument("--exposure", type=keyword(("card", "auto"), finite_float(-64, 64, unit="EV")), default=None,
-                   help="PNG exposure in EV, -64 to 64; card: an 18%% grey card facing the key light shows as "
-                   "mid-grey (default); auto: from the render (the default for a scene file)")
-    p.add_argument("--seed", type=seed(_SEED_MAX), default=0,
-                   help=f"random seed, 0 to {_SEED_MAX} (default: 0)")
+    p.add_argument("--spp", type=in_range(SPP_RANGE), default=None,
+                   help=f"samples per pixel, {SPP_RANGE.text()} (default: {DEFAULT_SPP}; a scene file: its sensor's)")
+    p.add_argument("--exposure", type=keyword(tuple(EXPOSURES), in_range(EXPOSURE_RANGE_EV)), default=None,
+                   help=f"PNG exposure in EV, {EXPOSURE_RANGE_EV.text()}; "
+                   + "; ".join(f"{k}: {v.split(': ', 1)[-1]}" for k, v in EXPOSURES.items()).replace("%", "%%")
+                   + " (default: card; a scene file: auto)")
+    p.add_argument("--seed", type=seed(int(SEED_RANGE.hi)), default=0,  # type: ignore[arg-type]
+                   help=f"random seed, {SEED_RANGE.text()} (default: 0)")
     p.add_argument("--variant", choices=VARIANTS, default="llvm_ad_rgb",
                    help="Mitsuba variant (default: llvm_ad_rgb; spectral and mono variants too; "
                    "scalar_*: one Python call per ray, debugging only)")
-    p.add_argument("--units", type=keyword(tuple(UNITS_MM), finite_float(1e-9, 1e9, unit="mm per unit")),
-                   default=None, metavar="UNIT",
-                   help="length unit: of --mesh (mm, cm, dm, m, in or mm per model unit; default: the one the "
-                   "file records or states, else the one a garment's or a sheet's size makes plausible, else mm), "
-                   "or of a scene file (mm per scene unit; default: the cdbrdf BSDF's 'unit', else mm)")
+    mesh_options(p, what="of --mesh (mm, cm, dm, m, in or mm per model unit; default: the one the file records or "
+                 "states, else the one a garment's or a sheet's size makes plausible, else mm), or of a scene file "
+                 "(mm per scene unit; default: the cdbrdf BSDF's 'unit', else mm)", only="units")
 
     scene_file = p.add_argument_group("a Mitsuba scene file (SCENE.xml)")
     scene_file.add_argument("-D", dest="define", action="append", default=None, type=key_value(),
                             metavar="NAME=VALUE", help="a scene parameter $NAME (as Mitsuba's -D; repeatable)")
 
-    table = p.add_argument_group("a CDBRDF file: the surface, its camera and light (every default below is "
-                                 "the table form's; none of these apply to a scene file)")
+    _table_options(p.add_argument_group("a CDBRDF file: the surface, its camera and light (every default below is "
+                                         "the table form's; none of these apply to a scene file)"))
+    add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\")"))
+    btf = p.add_argument_group("a CD-BTF file (docs/btf.md)")
+    btf.add_argument("--texel-filter", choices=TEXEL_FILTERS, default=None,
+                     help=f"between texels: {', '.join(TEXEL_FILTERS)} (default {DEFAULT_TEXEL_FILTER})")
+    p.set_defaults(func=run)
+
+
+def _table_options(table: Any) -> None:
+    """The options of the table form: the surface, its modes, light, camera and film (ranges from the records)."""
+    from ..colour import DELTA_E_METRICS
+    from ..mesh import CURVATURE_MODES, MESH_FORMATS, SineSheet
+    from ..mesh.surfaces import SHEET_RANGES_MM, SWATCH_MAX_FOLDS, SWATCH_MAX_RADIUS_MM
+    from ..render.camera import FOV_RANGE_DEG, LOOK_AT_ANCHORS, ZOOM_RANGE
+    from ..render.lighting import IRRADIANCE_RANGE, LIGHTINGS
+    from ..render.spec import DEFAULT_MAX_DEPTH, DEFAULT_SIZE, MAX_DEPTH_RANGE, SCENES, SIZE_RANGE
+    from ._args import existing_file, finite_float, float_list, in_range, keyword, mesh_file, size_wxh
+    from .curvature import mesh_options
+
+    sheet = SineSheet()
     what = table.add_mutually_exclusive_group()
     what.add_argument("--scene", choices=tuple(SCENES), default=None,
                       help="built-in scene: " + "; ".join(f"{k}: {v}" for k, v in SCENES.items()))
@@ -133,45 +131,47 @@ def register(sub: argparse._SubParsersAction) -> None:
                        help="the colour difference of --compare's heat map, between the pictures as shown "
                        "(sRGB -> CIELAB D65): 2000: CIEDE2000 (default); 2000-textiles: CIEDE2000 with kL = 2; "
                        "ab: CIE 1976 Delta E*ab")
-    table.add_argument("--size", type=size_wxh(), default=None, metavar="WxH",
+    table.add_argument("--size", type=size_wxh(lo=int(SIZE_RANGE.lo), hi=int(SIZE_RANGE.hi)),  # type: ignore[arg-type]
+                       default=None, metavar="WxH",
                        help=f"image size (default: {DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}; at most "
                        "CDBRDF_MAX_RENDER_PIXELS pixels)")
     table.add_argument("--lighting", choices=LIGHTINGS, default=None,
                        help="studio: an environment and a key light; paper: one directional light "
-                       "(default: studio for --mesh, paper for --scene)")
-    table.add_argument("--light", type=float_list(-360, 360, min_len=2, max_len=2, example="45,0", unit="deg"),
+                       "(default: studio for --mesh and --scene swatch, paper for --scene sine)")
+    table.add_argument("--light", type=float_list(min_len=2, max_len=2, example="45,0", unit="deg"),
                        default=None, metavar="THETA,PHI",
                        help="direction towards the directional (key) light, degrees: elevation from the up "
-                       "axis, azimuth from +x (the sheet's bending direction) (default: 45,0; studio: 45 "
-                       "degrees above and to the camera's left)")
-    table.add_argument("--irradiance", type=finite_float(0, 1e9, lo_open=True, unit="W/m^2"), default=None,
-                       help="irradiance of the light, W/m^2 (default: pi)")
+                       "axis, 0 to 90 (exclusive), azimuth from +x (the sheet's bending direction) (default: 45,0; "
+                       "studio: 45 degrees above and to the camera's left)")
+    table.add_argument("--irradiance", type=in_range(IRRADIANCE_RANGE), default=None,
+                       help=f"irradiance of the light, {IRRADIANCE_RANGE.text()} (default: pi)")
     table.add_argument("--no-light", action="store_true", default=None,
                        help="no directional light (use with --envmap)")
     table.add_argument("--envmap", metavar="FILE", type=existing_file(".exr", ".hdr"),
                        help="environment map (.exr/.hdr) for --mesh (with studio lighting: instead of its sky)")
-    mesh_options(table, units=False)
-    table.add_argument("--curvature", choices=CURVATURE_MODES, default=None,
-                       help="the curvature looked up: max (the paper's: principal curvature of larger "
-                       "magnitude) or directional (normal curvature along the material's x axis) "
-                       "(default: max)")
-    table.add_argument("--up", choices=UP_AXES, default=None,
-                       help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
-    table.add_argument("--amplitude", type=finite_float(0, 1000, lo_open=True, unit="mm"), default=None,
-                       help="sine sheet amplitude, mm (default: 2)")
-    table.add_argument("--wavelength", type=finite_float(0.01, 1e5, unit="mm"), default=None,
-                       help="sine sheet wavelength, mm (default: 20)")
-    table.add_argument("--sheet-size", type=float_list(0, 1e5, lo_open=True, min_len=2, max_len=2, sep="x",
-                                                      example="60x60", unit="mm"),
-                       default=None, metavar="WxD", help="sine sheet size, mm (default: 60x60)")
-    table.add_argument("--fold-radii", type=float_list(-1000, 1000, min_len=1, max_len=32, example="20,10,5,3",
-                                                      unit="mm"),
+    mesh_options(table, only=("neighbourhood", "frame", "up"))
+    table.add_argument("--curvature", choices=tuple(CURVATURE_MODES), default=None,
+                       help="the curvature looked up: " + "; ".join(f"{m.name}: {m.description}"
+                                                                    for m in CURVATURE_MODES.values())
+                       + " (default: max)")
+    amp, wave, width = SHEET_RANGES_MM["amplitude_mm"], SHEET_RANGES_MM["wavelength_mm"], SHEET_RANGES_MM["width_mm"]
+    table.add_argument("--amplitude", type=in_range(amp), default=None,
+                       help=f"sine sheet amplitude, {amp.text()} (default: {sheet.amplitude_mm:g})")
+    table.add_argument("--wavelength", type=in_range(wave), default=None,
+                       help=f"sine sheet wavelength, {wave.text()} (default: {sheet.wavelength_mm:g})")
+    table.add_argument("--sheet-size", type=float_list(width.lo, width.hi, lo_open=True, min_len=2, max_len=2,
+                                                      sep="x", example="60x60", unit="mm"),
+                       default=None, metavar="WxD",
+                       help=f"sine sheet size, mm (default: {sheet.width_mm:g}x{sheet.depth_mm:g})")
+    table.add_argument("--fold-radii", type=float_list(-SWATCH_MAX_RADIUS_MM, SWATCH_MAX_RADIUS_MM, min_len=1,
+                                                      max_len=SWATCH_MAX_FOLDS, example="20,10,5,3", unit="mm"),
                        default=None, metavar="R1,R2,...",
                        help="the swatch's folds, left to right: radius in mm, > 0 a ridge, < 0 a groove "
                        "(default: 20,10,5,3)")
-    table.add_argument("--max-depth", type=int_range(2, 64), default=None,
-                       help="Mitsuba path length, 2 to 64: 2 = direct light only (default: 3)")
-    table.add_argument("--view", type=float_list(-360, 360, min_len=2, max_len=2, example="40,-90", unit="deg"),
+    table.add_argument("--max-depth", type=in_range(MAX_DEPTH_RANGE), default=None,
+                       help=f"Mitsuba path length, {MAX_DEPTH_RANGE.text()}: 2 = direct light only "
+                       f"(default: {DEFAULT_MAX_DEPTH})")
+    table.add_argument("--view", type=float_list(min_len=2, max_len=2, example="40,-90", unit="deg"),
                        default=None, metavar="ELEV,AZIM",
                        help="camera elevation above the ground plane (-90 to 90) and azimuth, degrees "
                        "(default: 40,-90 for the sheet, 45,-75 for the swatch, 20,-65 for a mesh)")
@@ -189,11 +189,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "in its file; the sheet and the swatch: mm, centred on the origin; a negative first "
                        "number as --look-at=-5,0,2), or " + "; ".join(f"{k}: {v}" for k, v in LOOK_AT_ANCHORS.items())
                        + " (default: the framed object's centre)")
-    add_map_options(p.add_argument_group("maps laid on --mesh by its UVs (docs/rendering.md, \"Maps\")"))
-    btf = p.add_argument_group("a CD-BTF file (docs/btf.md)")
-    btf.add_argument("--texel-filter", choices=TEXEL_FILTERS, default=None,
-                     help=f"between texels: {', '.join(TEXEL_FILTERS)} (default {DEFAULT_TEXEL_FILTER})")
-    p.set_defaults(func=run)
 
 
 #: Options of the table form (default None: not given), each refused with a scene file.
@@ -218,17 +213,11 @@ def run(args: argparse.Namespace) -> int:
     return _run_table(args)
 
 
-def _run_table(args: argparse.Namespace) -> int:
-    """``cdbrdf render TABLE (--scene sine|swatch | --mesh MESH)``."""
-    from ..mesh import SineSheet, Swatch
-    from ..plot import FIGURE_FORMATS, plot_render_comparison, save_figure
-    from ..render import Camera, render_table
-    from ..render.lighting import DEFAULT_IRRADIANCE
-    from ..render.output import IMAGE_FORMATS, write_render
-    from ..render.picture import DEFAULT_SIZE, DEFAULT_SPP
-    from ._maps import surface_maps
-    from ._progress import ProgressBars
-    from .curvature import LARGE_MESH_FACES, print_mesh_report
+def _check_table_options(args: argparse.Namespace) -> None:
+    """Refuse the options the table form's surface or file does not take (before anything is read)."""
+    from ..btf import is_btf
+    from ..plot import FIGURE_FORMATS
+    from ..render.output import IMAGE_FORMATS
 
     if args.scene is None and args.mesh is None:
         raise OptionError("give --scene sine, --scene swatch or --mesh MESH for a CDBRDF file (or render a scene "
@@ -238,8 +227,6 @@ def _run_table(args: argparse.Namespace) -> int:
             raise OptionError(f"--{opt.replace('_', '-')}: only for --scene {scene}")
     if args.delta_e is not None and not args.compare:
         raise OptionError("--delta-e: only with --compare (the metric of its heat map)")
-    from ..btf import is_btf
-
     if args.texel_filter is not None and not is_btf(args.file):
         raise OptionError(f"--texel-filter: only for a CD-BTF file ({args.file} has no texels)")
     if args.uv_scale is not None and args.mesh is None and not is_btf(args.file):
@@ -255,45 +242,72 @@ def _run_table(args: argparse.Namespace) -> int:
             raise OptionError(f"{out}: --compare writes a figure; use {', '.join(FIGURE_FORMATS)}")
     elif ext not in IMAGE_FORMATS:
         raise OptionError(f"{out}: unknown image type {ext!r}; use {' or '.join(IMAGE_FORMATS)}")
-    spp = DEFAULT_SPP if args.spp is None else args.spp
-    size = args.size or DEFAULT_SIZE
+
+
+def _surface(args: argparse.Namespace) -> Any:
+    """The surface record of ``--scene``/``--mesh`` and their options."""
+    from ..mesh import MeshSurface, SineSheet, Swatch
+
     if args.scene == "swatch":
         with _as_option("fold-radii", "radii_mm"):
-            surface: object = Swatch() if args.fold_radii is None else Swatch(radii_mm=tuple(args.fold_radii))
-    elif args.mesh is None:
+            return Swatch() if args.fold_radii is None else Swatch(radii_mm=tuple(args.fold_radii))
+    if args.mesh is None:
         defaults = SineSheet()
         width, depth = args.sheet_size or (defaults.width_mm, defaults.depth_mm)
-        surface = SineSheet(amplitude_mm=args.amplitude or defaults.amplitude_mm,
-                                    wavelength_mm=args.wavelength or defaults.wavelength_mm,
-                                    width_mm=width, depth_mm=depth)
-    else:
-        surface = args.mesh
-    modes = ("brdf", "cdbrdf") if args.compare else (("brdf",) if args.brdf else ("cdbrdf",))
+        return SineSheet(amplitude_mm=args.amplitude or defaults.amplitude_mm,
+                         wavelength_mm=args.wavelength or defaults.wavelength_mm, width_mm=width, depth_mm=depth)
+    return MeshSurface(args.mesh, units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame,
+                       up=args.up or "auto")
+
+
+def _spec(args: argparse.Namespace) -> object:
+    """The :class:`cdbrdf.render.RenderSpec` of the table form's options."""
+    from ..render import Camera, Light, RenderSpec
+    from ..render.spec import DEFAULT_MAX_DEPTH, DEFAULT_SIZE, DEFAULT_SPP
+    from ._maps import surface_maps
+
     with _as_option("view", "view"), _as_option("zoom", "zoom"), _as_option("fov", "fov_deg"), \
             _as_option("look-at", "look_at"):
         camera = Camera(view=None if args.view is None else tuple(args.view), zoom=args.zoom or 1.0,
                         fov_deg=args.fov, look_at=args.look_at if args.look_at is None or isinstance(args.look_at, str)
                         else tuple(args.look_at))
+    light = Light(lighting=args.lighting,
+                  direction=None if args.no_light else (tuple(args.light) if args.light is not None else "auto"),
+                  irradiance=args.irradiance or Light().irradiance, envmap=args.envmap)
+    modes = ("brdf", "cdbrdf") if args.compare else (("brdf",) if args.brdf else ("cdbrdf",))
+    return RenderSpec(surface=_surface(args), modes=modes, camera=camera, light=light, maps=surface_maps(args),
+                      exposure=args.exposure or "card", size=args.size or DEFAULT_SIZE,
+                      spp=DEFAULT_SPP if args.spp is None else args.spp, seed=args.seed,
+                      max_depth=args.max_depth or DEFAULT_MAX_DEPTH, curvature_mode=args.curvature or "max",
+                      texel_filter=args.texel_filter, variant=args.variant)
+
+
+def _run_table(args: argparse.Namespace) -> int:
+    """``cdbrdf render TABLE (--scene sine|swatch | --mesh MESH)``."""
+    from ..mesh import Swatch
+    from ..plot import plot_render_comparison, save_figure
+    from ..render import RenderSpec, render_table
+    from ..render.output import write_render
+    from ._progress import ProgressBars
+    from .curvature import LARGE_MESH_FACES, print_mesh_report
+
+    _check_table_options(args)
+    spec = _spec(args)
+    assert isinstance(spec, RenderSpec)
+    out = Path(args.output)
+    ext = out.suffix.lower()
     with ProgressBars(quiet=args.quiet, unit="spp", leave=True) as bars:
         def progress(stage: str, done: int, total: int) -> None:
             if stage != "curvature" or 2 * total >= LARGE_MESH_FACES:  # a bar for the fit of large meshes
                 bars.update(stage, done, total)
 
-        pic = render_table(
-            args.file, surface, modes=modes, size=size, spp=spp, seed=args.seed,
-            max_depth=args.max_depth or 3, lighting=args.lighting,
-            light=None if args.no_light else (args.light if args.light is not None else "auto"),
-            irradiance=args.irradiance or DEFAULT_IRRADIANCE, envmap=args.envmap, camera=camera,
-            units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame, up=args.up or "auto",
-            maps=surface_maps(args),
-            curvature_mode=args.curvature or "max", exposure=args.exposure or "card", variant=args.variant,
-            texel_filter=args.texel_filter, progress=progress)
+        pic = render_table(args.file, spec, progress=progress)
     if pic.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), pic.mesh)
         say(f"{args.mesh}: up axis: {pic.up} ({pic.up_reason}); lighting: {pic.lighting}", err=True)
-    if isinstance(surface, Swatch) and not args.quiet:
+    if isinstance(spec.surface, Swatch) and not args.quiet:
         folds = ", ".join(f"{'ridge' if r > 0 else 'groove'} {abs(r):g} mm (kappa +-{1 / abs(r):.3g} / mm)"
-                          for r in surface.radii_mm)
+                          for r in spec.surface.radii_mm)
         say(f"swatch: {folds}; lighting: {pic.lighting}", err=True)
     if args.compare:
         from ..table import load
@@ -305,12 +319,12 @@ def _run_table(args: argparse.Namespace) -> int:
                                      title=f"{name}: {pic.lighting} lighting, {lit}", delta_e=args.delta_e or "2000")
         save_figure(fig, out, dpi=150)
     elif ext == ".png":
-        write_render(out, pic.display(modes[0]), exposure_ev=pic.exposure_ev)
+        write_render(out, pic.display(spec.modes[0]), exposure_ev=pic.exposure_ev)
     else:
-        write_render(out, pic.images[modes[0]][..., :3])
+        write_render(out, pic.images[spec.modes[0]][..., :3])
     if not args.quiet:
         expo = f", exposure {pic.exposure_ev:+.2f} EV ({pic.exposure_source})" if ext != ".exr" or args.compare else ""
-        say(f"{out}: written ({size[0]}x{size[1]}, {spp} spp{expo})", err=True)
+        say(f"{out}: written ({spec.size[0]}x{spec.size[1]}, {spec.spp} spp{expo})", err=True)
     return 0
 
 
@@ -356,8 +370,9 @@ def _run_scene_file(args: argparse.Namespace) -> int:
         raise SceneError(f"{args.file}: the scene has no sensor to render from")
     if scene.integrator() is None:
         raise SceneError(f"{args.file}: the scene has no integrator (add one, e.g. <integrator type=\"path\"/>)")
+    spp = args.spp or int(scene.sensors()[0].sampler().sample_count())  # before the passes change the sampler's
     with ProgressBars(quiet=args.quiet, unit="spp", leave=True) as bars:
-        image = render_scene(scene, spp=args.spp, seed=args.seed, progress=bars.callback("rendering"))
+        image = render_scene(scene, spp=spp, seed=args.seed, progress=bars.callback("rendering"))
     if out.suffix.lower() == ".exr":
         write_render(out, image)  # grey (one channel) in mono variants
         expo = ""
@@ -369,6 +384,5 @@ def _run_scene_file(args: argparse.Namespace) -> int:
         expo = f", exposure {ev:+.2f} EV ({'auto' if auto else 'given'})"
     if not args.quiet:
         h, w = image.shape[:2]
-        say(f"{out}: written ({w}x{h}, {args.spp or scene.sensors()[0].sampler().sample_count()} spp, "
-              f"{args.variant}{expo})", err=True)
+        say(f"{out}: written ({w}x{h}, {spp} spp, {args.variant}{expo})", err=True)
     return 0

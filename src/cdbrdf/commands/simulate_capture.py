@@ -38,9 +38,19 @@ def _material(text: str) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ..rig import options as o
     from ..rig.sensor import IMAGE_KINDS
-    from ._args import existing_file, finite_float, float_list, int_range, output_folder, seed, square_size, with_role
+    from ._args import (
+        existing_file,
+        float_list,
+        in_range,
+        output_folder,
+        seed,
+        square_size,
+        with_role,
+    )
 
+    d = o.RigOptions()
     p = sub.add_parser(
         "simulate-capture",
         help="render a capture folder of a material with the simulated rig (Mitsuba 3)",
@@ -58,42 +68,48 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "whole unless files were added to it since)")
     p.add_argument("--plan", type=existing_file(".csv"), default=None,
                    help="capture.csv to render (default: the material's grid, the paper's stands, white references)")
-    p.add_argument("--size", type=square_size(lo=8, hi=8192), default=None,
-                   help="image size in pixels, 8 to 8192 (64; a CD-BTF: from --px-per-texel)")
-    p.add_argument("--field", type=finite_float(0, 1e4, lo_open=True, unit="mm"), default=None,
-                   help="camera field width at the stand, mm (2; a CD-BTF: 1.5 repeat diagonals)")
-    p.add_argument("--px-per-texel", type=finite_float(0.5, 64), default=3.0,
-                   help="a CD-BTF without --size: pixels per texel, 0.5 to 64 (3)")
-    p.add_argument("--shifts", type=int_range(1, 64), default=1,
+    p.add_argument("--size", type=square_size(lo=int(o.SIZE_RANGE_PX.lo), hi=int(o.SIZE_RANGE_PX.hi)),  # type: ignore[arg-type]
+                   default=None, help=f"image size, {o.SIZE_RANGE_PX.text()} ({o.DEFAULT_SIZE_PX}; "
+                   "a CD-BTF: from --px-per-texel)")
+    p.add_argument("--field", type=in_range(o.FIELD_RANGE_MM), default=None,
+                   help=f"camera field width at the stand, {o.FIELD_RANGE_MM.text()} ({o.DEFAULT_FIELD_MM:g}; "
+                   "a CD-BTF: 1.5 repeat diagonals)")
+    p.add_argument("--px-per-texel", type=in_range(o.PX_PER_TEXEL_RANGE), default=d.px_per_texel,
+                   help=f"a CD-BTF without --size: pixels per texel, {o.PX_PER_TEXEL_RANGE.text()} "
+                   f"({d.px_per_texel:g})")
+    p.add_argument("--shifts", type=in_range(o.SHIFTS_RANGE), default=d.shifts,
                    help="a CD-BTF without --plan: photograph every sample with the fabric at S positions along u, "
-                   "a repeat / S apart (a scan; 1 to 64, default 1)")
-    p.add_argument("--spp", type=int_range(1, 65536), default=4, help="samples per pixel (4)")
+                   f"a repeat / S apart (a scan; {o.SHIFTS_RANGE.text()}, default {d.shifts})")
+    p.add_argument("--spp", type=in_range(o.SPP_RANGE), default=d.spp,
+                   help=f"samples per pixel, {o.SPP_RANGE.text()} ({d.spp})")
     p.add_argument("--noise", type=_noise, default="20000,3",
                    help="'none' or FULL_WELL[,READ] electrons (default 20000,3)")
-    p.add_argument("--gain", type=finite_float(0, 1e12, lo_open=True), default=2.0,
-                   help="pixel value per unit radiance (2)")
-    p.add_argument("--exposures", type=float_list(0, 1e6, lo_open=True, max_len=16), default=[1.0],
-                   help="exposure brackets of each sample photograph, e.g. 1,0.25 (default 1)")
-    p.add_argument("--image", choices=tuple(IMAGE_KINDS), default="png16",
-                   help="image kind: " + "; ".join(f"{k} {v}" for k, v in IMAGE_KINDS.items()) + " (png16)")
-    p.add_argument("--white-albedo", type=finite_float(0, 1, lo_open=True), default=0.99,
-                   help="white reference albedo, in (0, 1] (0.99)")
-    p.add_argument("--seed", type=seed(), default=0, help="noise seed, 0 to 2**32-1 (0)")
+    p.add_argument("--gain", type=in_range(o.GAIN_RANGE), default=d.gain,
+                   help=f"pixel value per unit radiance, {o.GAIN_RANGE.text()} ({d.gain:g})")
+    p.add_argument("--exposures", type=float_list(o.EXPOSURE_RANGE.lo, o.EXPOSURE_RANGE.hi, lo_open=True,
+                                                  max_len=o.MAX_EXPOSURES), default=list(d.exposures),
+                   help=f"exposure brackets of each sample photograph, e.g. 1,0.25 (1 to {o.MAX_EXPOSURES} values; "
+                   "default 1)")
+    p.add_argument("--image", choices=tuple(IMAGE_KINDS), default=d.image_kind,
+                   help="image kind: " + "; ".join(f"{k} {v}" for k, v in IMAGE_KINDS.items())
+                   + f" ({d.image_kind})")
+    p.add_argument("--white-albedo", type=in_range(o.WHITE_ALBEDO_RANGE), default=d.white_albedo,
+                   help=f"white reference albedo, {o.WHITE_ALBEDO_RANGE.text()} ({d.white_albedo:g})")
+    p.add_argument("--seed", type=seed(int(o.SEED_RANGE.hi)), default=d.seed,  # type: ignore[arg-type]
+                   help=f"noise seed, {o.SEED_RANGE.text()} ({d.seed})")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..rig import simulate_capture
+    from ..rig import RigOptions, simulate_capture
     from ._progress import ProgressBars
 
+    options = RigOptions(size=args.size, field_mm=args.field, px_per_texel=args.px_per_texel, shifts=args.shifts,
+                         spp=args.spp, noise=args.noise, gain=args.gain, exposures=tuple(args.exposures),
+                         image_kind=args.image, white_albedo=args.white_albedo, seed=args.seed)
     with ProgressBars(quiet=args.quiet, unit="img") as bars:
-        rep = simulate_capture(
-            args.material, args.output, plan=args.plan, size=args.size, field_mm=args.field,
-            px_per_texel=args.px_per_texel, shifts=args.shifts,
-            spp=args.spp, noise=args.noise, gain=args.gain,
-            exposures=args.exposures, image_kind=args.image, white_albedo=args.white_albedo,
-            seed=args.seed, progress=bars.callback("render"),
-        )
+        rep = simulate_capture(args.material, args.output, options, plan=args.plan,
+                               progress=bars.callback("render"))
     if not args.quiet:
         say(rep.summary())
     return 0

@@ -33,7 +33,7 @@ def _grid(text: str) -> tuple[float, float, int | None]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..mesh import MESH_FORMATS, UP_AXES
+    from ..mesh import MESH_FORMATS
     from ..view.export import EXPORT_MAKER, EXPORT_SIGNATURE
     from ._args import existing_file, int_range, keyword, mesh_file, output_folder
     from ._maps import add_map_options
@@ -65,9 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mesh", type=mesh_file(), metavar="MESH",
                    help=f"your own mesh ({', '.join(MESH_FORMATS)}; repaired, its curvature computed in "
                    "1/mm from --units unless the file has it, e.g. one written by cdbrdf curvature)")
-    mesh_options(p)
-    p.add_argument("--up", choices=UP_AXES, default="auto",
-                   help="up axis of --mesh (default auto: from the geometry, else the format's usual one)")
+    mesh_options(p, up_default="auto")
     p.add_argument("--grid", type=_grid, metavar="THETA_STEP,PHI_STEP[,N_KAPPA]",
                    help="resample the tables onto a regular grid first (degrees; e.g. 15,30), for a table "
                    "too large for the GPU's textures")
@@ -99,17 +97,18 @@ def _user_mesh(args: argparse.Namespace, table: object, btf: bool) -> tuple[Mesh
 
     Returns the mesh and the UV scale of a CD-BTF on it (the maps' one, as the renderer's).
     """
-    from ..mesh import has_own_uv, mesh_uv_scale, prepare_mesh, read_mesh, z_up_mesh
+    from ..mesh import MeshSurface, has_own_uv, mesh_uv_scale, read_mesh, z_up_mesh
     from ._maps import surface_maps
     from ._progress import ProgressBars
     from .curvature import LARGE_MESH_FACES, print_mesh_report
 
     source = read_mesh(args.mesh)
+    surface = MeshSurface(source, units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame,
+                          up=args.up)
     big = source.faces.shape[0] >= LARGE_MESH_FACES
     with ProgressBars(quiet=args.quiet or not big, unit="vtx") as bars:
-        mesh = prepare_mesh(source, units=args.units, neighbourhood_mm=args.neighbourhood, frame=args.frame,
-                            table=table, maps=surface_maps(args), progress=bars.callback("curvature"))
-    world, up, why = z_up_mesh(mesh, args.up)
+        mesh = surface.prepare(table=table, maps=surface_maps(args), progress=bars.callback("curvature"))
+    world, up, why = z_up_mesh(mesh, surface.up)
     scale = (1.0, 1.0)
     if btf and has_own_uv(world):
         uvs = mesh_uv_scale(world)

@@ -41,7 +41,8 @@ from numpy.typing import NDArray
 
 from ..errors import OptionError
 from ..gltf_table import EXTENSION, encode_curvature_map, encode_table
-from ..mesh.curvature_map import SHAPE_ATTRIBUTES, neighbourhood_level
+from ..mesh.attributes import SHAPE_ATTRIBUTES
+from ..mesh.curvature_map import neighbourhood_level
 from .fallback import FallbackFit, fit_fallback
 from .tangents import any_tangent, mikktspace_tangents
 
@@ -144,16 +145,7 @@ def _builtin(surface: Any) -> Any:
     return None
 
 
-def export_mesh(
-    surface: Any,
-    *,
-    table: Any = None,
-    units: str | float | None = None,
-    up: str = "auto",
-    neighbourhood_mm: float | None = None,
-    frame: str | None = None,
-    maps: Any = None,
-) -> ExportedMesh:
+def export_mesh(surface: Any, *, table: Any = None, maps: Any = None) -> ExportedMesh:
     """A surface made ready for the asset (see the module's description).
 
     The maps laid on the mesh (:class:`cdbrdf.mesh.SurfaceMaps`: given, or
@@ -165,14 +157,14 @@ def export_mesh(
     Parameters
     ----------
     surface
-        ``"sine"`` or ``"swatch"`` (the built-in scenes, :data:`cdbrdf.render.scenes.SCENES`),
+        ``"sine"`` or ``"swatch"`` (the built-in scenes, :data:`cdbrdf.render.spec.SCENES`),
         a :class:`~cdbrdf.mesh.SineSheet` or :class:`~cdbrdf.mesh.Swatch`, a
-        :class:`~cdbrdf.mesh.Mesh` or a mesh file.
+        :class:`~cdbrdf.mesh.MeshSurface` (a mesh with its unit, neighbourhood,
+        frame and up axis, as :func:`cdbrdf.render.render_table` takes it), or
+        a :class:`~cdbrdf.mesh.Mesh` or mesh file (``MeshSurface(mesh)``).
     table
         The table: its kappa range checks the curvature, its provenance gives
         the default neighbourhood (:func:`cdbrdf.mesh.prepare_mesh`).
-    units, up, neighbourhood_mm, frame
-        For a mesh, as :func:`cdbrdf.render.render_table` takes them.
     maps
         A :class:`cdbrdf.mesh.SurfaceMaps` of the mesh.
 
@@ -184,31 +176,26 @@ def export_mesh(
     Raises
     ------
     OptionError
-        For mesh options given with a built-in surface.
+        For maps given with a built-in surface.
     MeshError
         For a mesh that cannot be used.
     """
-    from ..mesh import has_own_uv, prepare_mesh, read_mesh, z_up_mesh
+    from ..mesh import MeshSurface, has_own_uv, z_up_mesh
     from ..mesh.frames import face_uv_tangents, vertex_tangents
     from ..mesh.units import parse_units
 
     built = _builtin(surface)
     if built is not None:
-        given = [n for n, v in (("units", units), ("neighbourhood", neighbourhood_mm), ("frame", frame),
-                                ("maps", maps)) if v is not None] + (["up"] if up != "auto" else [])
-        if given:
-            raise OptionError(f"{given[0]}: only for a mesh (the {built.metadata.get('source', surface)} "
+        if maps is not None:
+            raise OptionError(f"maps: only for a mesh (the {built.metadata.get('source', surface)} "
                               "is in mm, z up, with its analytic curvature)")
         world, name = built, str(built.metadata.get("source", surface))
         info: dict[str, Any] = {"units": "mm", "up": "z", "curvature": "analytic"}
     else:
-        if isinstance(surface, str | PathLike):
-            source, name = read_mesh(surface), Path(surface).name
-        else:
-            source, name = surface, str(surface.metadata.get("source", "mesh"))
-        mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=table,
-                            maps=maps)
-        world, axis, why = z_up_mesh(mesh, up)
+        s = surface if isinstance(surface, MeshSurface) else MeshSurface(surface)
+        name = Path(s.mesh).name if isinstance(s.mesh, str | PathLike) else s.name
+        mesh = s.prepare(table=table, maps=maps)
+        world, axis, why = z_up_mesh(mesh, s.up)
         info = {"units": mesh.metadata.get("units"), "up": axis, "up_reason": why,
                 "neighbourhood_mm": mesh.metadata.get("neighbourhood_mm"), "frame": mesh.metadata.get("frame"),
                 "repairs": list(mesh.metadata.get("repairs", []))}
@@ -392,10 +379,9 @@ def build_gltf(table: Any, mesh: ExportedMesh, *, curvature_mode: str = "max",
         For a table the lookup texture cannot hold (:func:`cdbrdf.gltf_table.encode_table`).
     """
     from .._version import __version__
-    from ..mesh import CURVATURE_MODES, MESH_ATTRIBUTES
+    from ..mesh import curvature_mode as _mode
 
-    if curvature_mode not in CURVATURE_MODES:
-        raise OptionError(f"curvature mode: {curvature_mode!r:.40} is not one of {', '.join(CURVATURE_MODES)}")
+    mode = _mode(curvature_mode)
     lut = encode_table(table)
     fit = fit_fallback(table) if fallback is None else fallback
     buf = _Buffer()
@@ -408,10 +394,10 @@ def build_gltf(table: Any, mesh: ExportedMesh, *, curvature_mode: str = "max",
     }
     if mesh.uv is not None:
         attrs["TEXCOORD_0"] = buf.accessor(np.stack([mesh.uv[:, 0], 1.0 - mesh.uv[:, 1]], axis=1), "VEC2")
-    kappa = np.asarray(mesh.attributes[MESH_ATTRIBUTES[curvature_mode]], dtype=np.float64)
+    kappa = np.asarray(mesh.attributes[mode.attribute], dtype=np.float64)
     attrs[CURVATURE_ATTRIBUTE] = buf.accessor(np.nan_to_num(kappa), "SCALAR", bounds=True)
-    curv: dict[str, Any] = {"attribute": CURVATURE_ATTRIBUTE, "mode": curvature_mode, "units": "1/mm"}
-    if curvature_mode == "directional":
+    curv: dict[str, Any] = {"attribute": CURVATURE_ATTRIBUTE, "mode": mode.name, "units": "1/mm"}
+    if mode.name == "directional":
         attrs[DIRECTION_ATTRIBUTE] = buf.accessor(_unit_rows(mesh.direction @ _TO_GLTF.T), "VEC3")
         curv["directionAttribute"] = DIRECTION_ATTRIBUTE
     if isinstance(mesh.info.get("neighbourhood_mm"), (int, float)):
@@ -501,10 +487,6 @@ def export_gltf(
     surface: Any,
     path: str | PathLike[str],
     *,
-    units: str | float | None = None,
-    up: str = "auto",
-    neighbourhood_mm: float | None = None,
-    frame: str | None = None,
     maps: Any = None,
     curvature_mode: str = "max",
 ) -> GltfAsset:
@@ -515,10 +497,10 @@ def export_gltf(
     table
         A :class:`~cdbrdf.CDBRDF` or a CDBRDF file.
     surface
-        As :func:`export_mesh` takes it.
+        As :func:`export_mesh` takes it (a mesh's options in a :class:`~cdbrdf.mesh.MeshSurface`).
     path
         ``OUT.glb`` or ``OUT.gltf``.
-    units, up, neighbourhood_mm, frame, maps
+    maps
         For a mesh (:func:`export_mesh`).
     curvature_mode
         ``"max"`` or ``"directional"``.
@@ -533,8 +515,7 @@ def export_gltf(
     if Path(path).suffix.lower() not in GLTF_SUFFIXES:
         raise OptionError(f"{path}: the output must end in {' or '.join(GLTF_SUFFIXES)}")
     tbl = table if isinstance(table, CDBRDF) else load(table)
-    mesh = export_mesh(surface, table=tbl, units=units, up=up, neighbourhood_mm=neighbourhood_mm, frame=frame,
-                       maps=maps)
+    mesh = export_mesh(surface, table=tbl, maps=maps)
     asset = build_gltf(tbl, mesh, curvature_mode=curvature_mode)
     write_gltf(asset, path)
     return asset

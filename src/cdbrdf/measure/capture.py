@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 from .. import limits
 from ..errors import CaptureError, TableError
 from ..images import FORMATS
+from ..ranges import Range
 from ..table import Grid
 from .registration import ROW_COLUMNS, parse_registration, row_origin
 from .stands import (
@@ -62,6 +63,7 @@ __all__ = [
     "HIDDEN_NAMES",
     "ENCODINGS",
     "STAND_FILE_KEYS",
+    "WHITE_ALBEDO_RANGE",
     "CaptureRow",
     "Capture",
     "read_capture",
@@ -98,6 +100,10 @@ _ANGLE_DECIMALS = 6
 _STRAY_FRACTION = 0.1
 #: Largest ``pixel_mm`` accepted in ``stands.json`` (a 10 mm pixel covers a whole stand).
 _MAX_PIXEL_MM = 10.0
+
+#: Accepted albedos of the white reference (``stands.json``'s ``white_albedo``): a white standard's
+#: reflectance factor, which a fluorescent or retro-reflective standard may lift above 1.
+WHITE_ALBEDO_RANGE = Range(0.0, 1.5, lo_open=True)
 #: Largest ``cx``/``cy`` accepted (far beyond any camera; keeps the arithmetic in int64).
 _MAX_PIXEL_INDEX = 10_000_000
 
@@ -310,8 +316,8 @@ def _settings(doc: dict[str, Any], stand_path: Path) -> dict[str, Any]:
         raise CaptureError(f"{stand_path}: simulated: expected true or false, got {out['simulated']!r:.40}")
     if "white_albedo" in out:
         a = out["white_albedo"]
-        if isinstance(a, bool) or not isinstance(a, (int, float)) or not 0 < a <= 1.5:
-            raise CaptureError(f"{stand_path}: white_albedo: expected a number in (0, 1.5], got {a!r:.40}")
+        if a not in WHITE_ALBEDO_RANGE:
+            raise CaptureError(f"{stand_path}: white_albedo: expected {WHITE_ALBEDO_RANGE.expect()}, got {a!r:.40}")
         out["white_albedo"] = float(a)
     if "pixel_mm" in out:
         v = out["pixel_mm"]

@@ -16,7 +16,8 @@ renderer and the viewer, which use it:
   :mod:`~cdbrdf.mesh.estimate`): as in the paper, the principal curvature of
   larger magnitude with its sign (> 0 convex, bending away from the normal;
   ``docs/conventions.md``), and the directional mode, the normal curvature
-  along the material's x axis;
+  along the material's x axis (:data:`CURVATURE_MODES`; every attribute's
+  name in a mesh, a PLY file and Mitsuba: :mod:`~cdbrdf.mesh.attributes`);
 - :func:`prepare_mesh` (:mod:`~cdbrdf.mesh.prepare`): a user's mesh made
   ready to render, and its up axis (:func:`detect_up`, :func:`z_up_mesh`);
 - the analytic surfaces with their sizes (:mod:`~cdbrdf.mesh.surfaces`): the
@@ -33,13 +34,18 @@ renderer and the viewer, which use it:
 
 from __future__ import annotations
 
+from .attributes import (
+    CURVATURE_MODES,
+    SHAPE_ATTRIBUTES,
+    CurvatureMode,
+    attribute_of_ply,
+    curvature_mode,
+    mitsuba_attribute,
+    ply_property,
+)
 from .bake import HeightMap, bake_height_map, bake_mesh, bake_normal_map, height_map_from_values, read_height_map
 from .core import Mesh
 from .curvature import (
-    ATTRIBUTES,
-    CURVATURE_MODES,
-    MESH_ATTRIBUTES,
-    PLY_PROPERTIES,
     SurfaceCurvature,
     check_neighbourhood,
     dihedral_curvature,
@@ -48,16 +54,16 @@ from .curvature import (
     principal_curvatures,
     surface_curvature,
 )
-from .curvature_map import SHAPE_ATTRIBUTES, CurvatureMap
+from .curvature_map import CurvatureMap
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, PrincipalCurvatures
 from .frames import FRAMES
 from .garments import Garment, bust_mesh, garment_mesh, head_mesh
-from .io import CURVATURE_PLY_PROPERTY, MESH_FORMATS, read_mesh, read_obj, read_ply, write_ply
+from .io import MESH_FORMATS, ply_metadata, read_mesh, read_obj, read_ply, write_ply
 from .maps import BAKES, SurfaceMaps, UVScale, apply_maps, as_uv_scale, detect_uv_scale, mesh_uv_scale
 from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, normal_map_from_normals, read_normal_map
-from .prepare import UP_AXES, check_up, detect_up, has_own_uv, prepare_mesh, to_z_up, z_up_mesh
+from .prepare import UP_AXES, MeshSurface, check_up, detect_up, has_own_uv, prepare_mesh, to_z_up, z_up_mesh
 from .references import Reference, check_references, referenced_files
-from .repair import SEAM_TOLERANCE, WELD_TOLERANCE, RepairedMesh, repair, weld, weld_seams
+from .repair import RepairedMesh, repair
 from .surfaces import (
     DrapedCloth,
     SineSheet,
@@ -83,22 +89,25 @@ from .units import (
     infer_units,
     parse_units,
 )
+from .weld import SEAM_TOLERANCE, WELD_TOLERANCE, weld, weld_seams
 
 __all__ = [
     "Mesh",
     "MESH_FORMATS",
-    "CURVATURE_PLY_PROPERTY",
     "read_mesh",
     "read_ply",
+    "ply_metadata",
     "read_obj",
     "write_ply",
     "Reference",
     "referenced_files",
     "check_references",
-    "ATTRIBUTES",
-    "PLY_PROPERTIES",
-    "MESH_ATTRIBUTES",
     "CURVATURE_MODES",
+    "CurvatureMode",
+    "curvature_mode",
+    "ply_property",
+    "mitsuba_attribute",
+    "attribute_of_ply",
     "FRAMES",
     "UNITS_MM",
     "UP_AXES",
@@ -127,6 +136,7 @@ __all__ = [
     "check_neighbourhood",
     "neighbourhood_from_table",
     "prepare_mesh",
+    "MeshSurface",
     "has_own_uv",
     "detect_up",
     "to_z_up",

@@ -159,12 +159,9 @@ def _median(a, n):
     return a[k]
 
 
-@njit(cache=True, error_model="numpy")
-def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, radius, k_min, cos_max,  # noqa: C901
-             k1, k2, d1, d2, nrm, status, sel, x, y, h, g, wg, w, res, tmp, m, b, coef, row):
-    """The fit of :func:`fit_vertices` at query ``i``, in the caller's scratch arrays."""
-    kk = nbr.shape[1]
-    ns = s_pos.shape[0]
+@njit(inline="always", error_model="numpy")
+def _start(i, q_nrm, k1, k2, d1, d2):
+    """Zero query ``i``'s curvatures and directions; whether it has a normal, and the unit normal."""
     n0 = q_nrm[i, 0]
     n1 = q_nrm[i, 1]
     n2 = q_nrm[i, 2]
@@ -174,14 +171,39 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
     for c in range(3):
         d1[i, c] = 0.0
         d2[i, c] = 0.0
-        nrm[i, c] = 0.0
     if not ln > 0.0:
-        status[i] = 2
-        return
-    n0, n1, n2 = n0 / ln, n1 / ln, n2 / ln
-    nrm[i, 0], nrm[i, 1], nrm[i, 2] = n0, n1, n2
-    # candidates: normal within the cone, within the radius (or the k_min nearest);
-    # where too few normals agree (a mesh coarser than its folds), any normal
+        return False, n0, n1, n2
+    return True, n0 / ln, n1 / ln, n2 / ln
+
+
+@njit(inline="always", error_model="numpy")
+def _principal(i, ka, kb, kc, t10, t11, t12, t20, t21, t22, k1, k2, d1, d2):
+    """The principal curvatures and directions of the tensor ``[[ka, kb], [kb, kc]]`` in the frame (t1, t2)."""
+    mean = 0.5 * (ka + kc)
+    half = math.sqrt(0.25 * (ka - kc) * (ka - kc) + kb * kb)
+    k1[i] = mean + half
+    k2[i] = mean - half
+    # eigenvector of k1: angle th with tan(2 th) = 2 kb / (ka - kc)
+    th = 0.5 * math.atan2(2.0 * kb, ka - kc)
+    ct = math.cos(th)
+    st = math.sin(th)
+    d1[i, 0] = ct * t10 + st * t20
+    d1[i, 1] = ct * t11 + st * t21
+    d1[i, 2] = ct * t12 + st * t22
+    d2[i, 0] = -st * t10 + ct * t20
+    d2[i, 1] = -st * t11 + ct * t21
+    d2[i, 2] = -st * t12 + ct * t22
+
+
+@njit(inline="always", error_model="numpy")
+def _candidates(i, n0, n1, n2, q_comp, s_nrm, s_comp, nbr, nbr_d, radius, k_min, cos_max, sel):
+    """The samples of query ``i``'s fit into ``sel``: how many, and the radius used.
+
+    Normal within the cone, within the radius (or the ``k_min`` nearest);
+    where too few normals agree (a mesh coarser than its folds), any normal.
+    """
+    kk = nbr.shape[1]
+    ns = s_nrm.shape[0]
     cnt = 0
     r_use = radius
     for cone in (cos_max, -2.0):
@@ -206,17 +228,70 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
                 break
         if cnt >= 6:
             break
-    if cnt < 6:
-        status[i] = 1
+    return cnt, r_use
+
+
+@njit(inline="always", error_model="numpy")
+def _weights(it, cnt, wg, w, res, tmp):
+    """The fit's weights at iteration ``it``: Tukey's biweight of the previous fit's residuals after the first."""
+    if it == 0:
         return
-    sigma = 0.5 * r_use
+    for j in range(cnt):
+        tmp[j] = abs(res[j])
+    med = _median(tmp, cnt)
+    scale = 1.4826 * med
+    if scale > 1e-9:
+        cut = TUKEY_C * scale
+        for j in range(cnt):
+            u = abs(res[j]) / cut
+            w[j] = wg[j] * (1.0 - u * u) ** 2 if u < 1.0 else 0.0
+    else:
+        for j in range(cnt):
+            w[j] = wg[j]
+
+
+@njit(inline="always", error_model="numpy")
+def _solve_fit(cnt, x, y, h, g, w, m, b, coef, row):
+    """The weighted least squares of the height model in ``coef``; False when it has no solution."""
+    m[:, :] = 0.0
+    b[:] = 0.0
+    wsum = 0.0
+    for j in range(cnt):
+        if w[j] <= 0.0:
+            continue
+        wsum += w[j]
+        row[0] = 1.0
+        row[1] = x[j]
+        row[2] = y[j]
+        row[3] = 0.5 * x[j] * x[j] * g[j]
+        row[4] = x[j] * y[j] * g[j]
+        row[5] = 0.5 * y[j] * y[j] * g[j]
+        for p in range(6):
+            wp = w[j] * row[p]
+            b[p] += wp * h[j]
+            for q in range(p, 6):
+                m[p, q] += wp * row[q]
+    for p in range(6):
+        for q in range(p):
+            m[p, q] = m[q, p]
+    tr = 0.0
+    for p in range(6):
+        tr += m[p, p]
+    for p in range(6):
+        m[p, p] += 1e-10 * tr + 1e-300
+    return wsum > 0.0 and _solve6(m, b, coef)
+
+
+@njit(inline="always", error_model="numpy")
+def _fit_surface(i, cnt, sigma, q_pos, n0, n1, n2, s_pos, s_w, sel, x, y, h, g, wg, w, res, tmp, m, b, coef, row):
+    """The iterated fit of :func:`fit_vertices` (see its description): whether it succeeded, the normal and the
+    tangent frame it ends in (the curvature tensor is in ``coef[3:]``, the samples in ``x``, ``y``, weights ``w``)."""
     inv_s = 1.0 / sigma
     ox = q_pos[i, 0]
     oy = q_pos[i, 1]
     oz = q_pos[i, 2]
     t10, t11, t12, t20, t21, t22 = _frame(n0, n1, n2)
     coef[:] = 0.0
-    ok = True
     for it in range(FIT_ITERATIONS):
         for j in range(cnt):
             s = sel[j]
@@ -232,49 +307,9 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
             if it == 0:
                 wg[j] = s_w[s] * math.exp(-0.5 * dd)
                 w[j] = wg[j]
-        if it > 0:
-            # Tukey's biweight of the previous fit's residuals
-            for j in range(cnt):
-                tmp[j] = abs(res[j])
-            med = _median(tmp, cnt)
-            scale = 1.4826 * med
-            if scale > 1e-9:
-                cut = TUKEY_C * scale
-                for j in range(cnt):
-                    u = abs(res[j]) / cut
-                    w[j] = wg[j] * (1.0 - u * u) ** 2 if u < 1.0 else 0.0
-            else:
-                for j in range(cnt):
-                    w[j] = wg[j]
-        m[:, :] = 0.0
-        b[:] = 0.0
-        wsum = 0.0
-        for j in range(cnt):
-            if w[j] <= 0.0:
-                continue
-            wsum += w[j]
-            row[0] = 1.0
-            row[1] = x[j]
-            row[2] = y[j]
-            row[3] = 0.5 * x[j] * x[j] * g[j]
-            row[4] = x[j] * y[j] * g[j]
-            row[5] = 0.5 * y[j] * y[j] * g[j]
-            for p in range(6):
-                wp = w[j] * row[p]
-                b[p] += wp * h[j]
-                for q in range(p, 6):
-                    m[p, q] += wp * row[q]
-        for p in range(6):
-            for q in range(p):
-                m[p, q] = m[q, p]
-        tr = 0.0
-        for p in range(6):
-            tr += m[p, p]
-        for p in range(6):
-            m[p, p] += 1e-10 * tr + 1e-300
-        if not (wsum > 0.0) or not _solve6(m, b, coef):
-            ok = False
-            break
+        _weights(it, cnt, wg, w, res, tmp)
+        if not _solve_fit(cnt, x, y, h, g, w, m, b, coef, row):
+            return False, n0, n1, n2, t10, t11, t12, t20, t21, t22
         for j in range(cnt):
             res[j] = h[j] - (coef[0] + coef[1] * x[j] + coef[2] * y[j] + 0.5 * coef[3] * x[j] * x[j] * g[j]
                              + coef[4] * x[j] * y[j] * g[j] + 0.5 * coef[5] * y[j] * y[j] * g[j])
@@ -297,20 +332,19 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
             else:
                 t10, t11, t12 = u0 / lu, u1 / lu, u2 / lu
                 t20, t21, t22 = n1 * t12 - n2 * t11, n2 * t10 - n0 * t12, n0 * t11 - n1 * t10
-    if not ok:
-        status[i] = 1
-        return
-    # curvature tensor in the last frame: kappa > 0 where the surface bends away from the normal
-    ka = -coef[3] * inv_s
-    kb = -coef[4] * inv_s
-    kc = -coef[5] * inv_s
-    mean = 0.5 * (ka + kc)
-    half = math.sqrt(0.25 * (ka - kc) * (ka - kc) + kb * kb)
-    k1[i] = mean + half
-    k2[i] = mean - half
-    # resolved: the fitted surface turns its normal, between the vertex and its samples, by at most
-    # BEND_MAX radians (rms): their normals are within the cone of the vertex's, so a fit that turns by
-    # more shows what they do not (a spike, along a rim or a ledge where they are nearly collinear)
+    return True, n0, n1, n2, t10, t11, t12, t20, t21, t22
+
+
+@njit(inline="always", error_model="numpy")
+def _resolved(cnt, ka, kb, kc, sigma, x, y, w):
+    """Whether a fit is resolved (:data:`BEND_MAX`, :data:`SPREAD_MIN`).
+
+    The fitted surface turns its normal, between the vertex and its samples,
+    by at most BEND_MAX radians (rms): their normals are within the cone of
+    the vertex's, so a fit that turns by more shows what they do not (a
+    spike, along a rim or a ledge where they are nearly collinear); and the
+    samples span the neighbourhood across as well as along (not a line of vertices).
+    """
     turn = 0.0
     ws = 0.0
     sxx = 0.0
@@ -325,20 +359,39 @@ def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, rad
             sxx += w[j] * x[j] * x[j]
             sxy += w[j] * x[j] * y[j]
             syy += w[j] * y[j] * y[j]
-    # and the samples span the neighbourhood across as well as along (not a line of vertices)
     disc = math.sqrt(0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy)
     spread = 0.5 * (sxx + syy) - disc >= SPREAD_MIN * (0.5 * (sxx + syy) + disc)
-    resolved = ws > 0.0 and turn <= BEND_MAX * BEND_MAX * ws and spread
-    # eigenvector of k1: angle th with tan(2 th) = 2 kb / (ka - kc)
-    th = 0.5 * math.atan2(2.0 * kb, ka - kc)
-    ct = math.cos(th)
-    st = math.sin(th)
-    d1[i, 0] = ct * t10 + st * t20
-    d1[i, 1] = ct * t11 + st * t21
-    d1[i, 2] = ct * t12 + st * t22
-    d2[i, 0] = -st * t10 + ct * t20
-    d2[i, 1] = -st * t11 + ct * t21
-    d2[i, 2] = -st * t12 + ct * t22
+    return ws > 0.0 and turn <= BEND_MAX * BEND_MAX * ws and spread
+
+
+@njit(cache=True, error_model="numpy")
+def _fit_one(i, q_pos, q_nrm, q_comp, s_pos, s_nrm, s_w, s_comp, nbr, nbr_d, radius, k_min, cos_max,
+             k1, k2, d1, d2, nrm, status, sel, x, y, h, g, wg, w, res, tmp, m, b, coef, row):
+    """The fit of :func:`fit_vertices` at query ``i``, in the caller's scratch arrays."""
+    has_normal, n0, n1, n2 = _start(i, q_nrm, k1, k2, d1, d2)
+    for c in range(3):
+        nrm[i, c] = 0.0
+    if not has_normal:
+        status[i] = 2
+        return
+    nrm[i, 0], nrm[i, 1], nrm[i, 2] = n0, n1, n2
+    cnt, r_use = _candidates(i, n0, n1, n2, q_comp, s_nrm, s_comp, nbr, nbr_d, radius, k_min, cos_max, sel)
+    if cnt < 6:
+        status[i] = 1
+        return
+    sigma = 0.5 * r_use
+    inv_s = 1.0 / sigma
+    ok, n0, n1, n2, t10, t11, t12, t20, t21, t22 = _fit_surface(i, cnt, sigma, q_pos, n0, n1, n2, s_pos, s_w, sel,
+                                                                 x, y, h, g, wg, w, res, tmp, m, b, coef, row)
+    if not ok:
+        status[i] = 1
+        return
+    # curvature tensor in the last frame: kappa > 0 where the surface bends away from the normal
+    ka = -coef[3] * inv_s
+    kb = -coef[4] * inv_s
+    kc = -coef[5] * inv_s
+    resolved = _resolved(cnt, ka, kb, kc, sigma, x, y, w)
+    _principal(i, ka, kb, kc, t10, t11, t12, t20, t21, t22, k1, k2, d1, d2)
     nrm[i, 0], nrm[i, 1], nrm[i, 2] = n0, n1, n2
     status[i] = 0 if resolved else 3
 
@@ -414,19 +467,10 @@ def transfer_tensors(q_nrm, q_comp, s_nrm, s_comp, s_ok, s_fn, s_k1, s_k2, s_d1,
     ns = s_nrm.shape[0]
     inv2 = 0.5 / (sigma * sigma)
     for i in range(start, stop):
-        n0 = q_nrm[i, 0]
-        n1 = q_nrm[i, 1]
-        n2 = q_nrm[i, 2]
-        ln = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
-        k1[i] = 0.0
-        k2[i] = 0.0
-        for c in range(3):
-            d1[i, c] = 0.0
-            d2[i, c] = 0.0
-        if not ln > 0.0:
+        has_normal, n0, n1, n2 = _start(i, q_nrm, k1, k2, d1, d2)
+        if not has_normal:
             status[i] = 1
             continue
-        n0, n1, n2 = n0 / ln, n1 / ln, n2 / ln
         s00 = s01 = s02 = s11 = s12 = s22 = 0.0
         m0 = m1 = m2 = 0.0
         wsum = 0.0
@@ -468,18 +512,6 @@ def transfer_tensors(q_nrm, q_comp, s_nrm, s_comp, s_ok, s_fn, s_k1, s_k2, s_d1,
         su1 = s01 * t20 + s11 * t21 + s12 * t22
         su2 = s02 * t20 + s12 * t21 + s22 * t22
         kc = (su0 * t20 + su1 * t21 + su2 * t22) / wsum
-        mean = 0.5 * (ka + kc)
-        half = math.sqrt(0.25 * (ka - kc) * (ka - kc) + kb * kb)
-        k1[i] = mean + half
-        k2[i] = mean - half
-        th = 0.5 * math.atan2(2.0 * kb, ka - kc)
-        ct = math.cos(th)
-        st = math.sin(th)
-        d1[i, 0] = ct * t10 + st * t20
-        d1[i, 1] = ct * t11 + st * t21
-        d1[i, 2] = ct * t12 + st * t22
-        d2[i, 0] = -st * t10 + ct * t20
-        d2[i, 1] = -st * t11 + ct * t21
-        d2[i, 2] = -st * t12 + ct * t22
+        _principal(i, ka, kb, kc, t10, t11, t12, t20, t21, t22, k1, k2, d1, d2)
         status[i] = 0
 

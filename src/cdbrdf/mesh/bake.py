@@ -38,7 +38,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import MeshError
-from .curvature_map import NEIGHBOURHOOD_WIDTH_SHARE, SHAPE_ATTRIBUTES, CurvatureMap, pyramid
+from .attributes import SHAPE_ATTRIBUTES
+from .curvature_map import NEIGHBOURHOOD_WIDTH_SHARE, CurvatureMap, pyramid
 from .normalmap import NormalMap
 
 __all__ = ["HeightMap", "read_height_map", "height_map_from_values", "bake_normal_map", "bake_height_map",
@@ -320,7 +321,7 @@ def bake_mesh(high: Any, low: Any, *, uv_scale: tuple[float, float], neighbourho
         unit and place.
     low
         The low-resolution mesh as :func:`cdbrdf.mesh.prepare_mesh` made it
-        (its own UVs, normals and the :data:`~cdbrdf.mesh.curvature_map.SHAPE_ATTRIBUTES`).
+        (its own UVs, normals and the :data:`~cdbrdf.mesh.attributes.SHAPE_ATTRIBUTES`).
     uv_scale
         Mm per UV unit of the low mesh.
     neighbourhood_mm

@@ -9,23 +9,21 @@ curvature along the material's x axis (the stands bend the fabric along x).
 :func:`surface_curvature` runs the whole path: :func:`~cdbrdf.mesh.repair.repair`,
 the scale-aware fit (:func:`~cdbrdf.mesh.estimate.fit_curvatures`) in mm^-1
 for the given unit and neighbourhood, the material's x axis
-(:mod:`cdbrdf.mesh.frames`) and both curvatures (:data:`CURVATURE_MODES`).
+(:mod:`cdbrdf.mesh.frames`) and both curvatures (:data:`cdbrdf.mesh.CURVATURE_MODES`).
 :func:`principal_curvatures` and :func:`max_curvature` give the same on
 arrays, one value per input vertex; :func:`neighbourhood_from_table` the
 default neighbourhood, the size of a table's measured patch.
 
-The per-vertex attributes the ``cdbrdf`` BSDF reads (:data:`ATTRIBUTES`) are
-written as PLY vertex properties (:data:`PLY_PROPERTIES`) that Mitsuba's PLY
-loader turns into exactly those mesh attributes (it keeps an unknown vertex
-property only when its name ends in a channel suffix, and strips it:
-``curvature_x`` -> ``vertex_curvature``); in memory the renderer sets them
-directly.
+Each curvature's name in a mesh, a PLY file and Mitsuba is given by
+:mod:`cdbrdf.mesh.attributes` (``curvature`` -> ``curvature_x`` ->
+``vertex_curvature``).
 """
 
 from __future__ import annotations
 
 import logging
 import math
+from collections import namedtuple
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -34,19 +32,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import MeshError
+from .attributes import curvature_mode
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM, NEIGHBOURHOOD_RANGE_MM, PrincipalCurvatures, fit_curvatures
 from .frames import FRAMES, face_frame_uv, face_uv_tangents, project_tangents, seam_jumps, vertex_tangents
 from .repair import RepairedMesh, repair
 from .units import Units, parse_units
 
 __all__ = [
-    "CURVATURE_MODES",
     "LOCATIONS",
     "outside_by_location",
     "dihedral_curvature",
-    "ATTRIBUTES",
-    "PLY_PROPERTIES",
-    "MESH_ATTRIBUTES",
     "SurfaceCurvature",
     "surface_curvature",
     "principal_curvatures",
@@ -56,9 +51,6 @@ __all__ = [
 ]
 
 _LOG = logging.getLogger(__name__)
-
-#: The curvatures the BSDF can be given: the paper's, and the normal curvature along x.
-CURVATURE_MODES: tuple[str, ...] = ("max", "directional")
 
 #: Smallest neighbourhood (diameter) in median edge lengths of the mesh: on a mesh coarser than the
 #: neighbourhood asked for, the fit is made over this many edges (a CAD garment's 9-14 mm edges).
@@ -164,11 +156,7 @@ class SurfaceCurvature:
         numpy.ndarray
             ``(n,)`` per output vertex.
         """
-        if mode == "max":
-            return self.kappa
-        if mode == "directional":
-            return self.directional
-        raise MeshError(f"curvature mode: {mode!r} is not one of {', '.join(CURVATURE_MODES)}")
+        return self.kappa if curvature_mode(mode).name == "max" else self.directional
 
 
 def check_neighbourhood(neighbourhood_mm: float) -> float:
@@ -247,7 +235,7 @@ def _chart_sizes(faces: NDArray[np.int64], n: int) -> NDArray[np.int64]:
 def _uv_scraps(v: NDArray[np.float64], faces: NDArray[np.int64], chart: NDArray[np.int64]) -> bool:
     """Whether most faces lie in pieces of fewer than :data:`PANEL_FACES` faces cut out of a larger surface
     (a UV map cut at nearly every edge; a quad of two faces is one piece, and whole)."""
-    from .repair import weld
+    from .weld import weld
 
     small = chart < PANEL_FACES
     if not float(np.mean(small)) > 0.5:
@@ -285,7 +273,7 @@ def _vertex_areas(positions: NDArray[np.float64], faces: NDArray[np.int64], n: i
     return np.bincount(faces.reshape(-1), weights=np.repeat(a / 3.0, 3), minlength=n).astype(np.float64)
 
 
-def surface_curvature(  # noqa: C901 - the steps in order
+def surface_curvature(
     vertices: ArrayLike,
     faces: ArrayLike,
     *,
@@ -338,6 +326,40 @@ def surface_curvature(  # noqa: C901 - the steps in order
     u = parse_units(units)
     nb = check_neighbourhood(neighbourhood_mm)
     v = np.asarray(vertices, dtype=np.float64) if not isinstance(vertices, np.ndarray) else vertices
+    uv_in, tan_in = _frame_inputs(v, uv, tangents, frame, name)
+    notes: list[str] = []
+    rep = repair(v, faces, normals=normals, uv=uv_in, name=name)
+    f_in = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    chart = _chart_sizes(f_in, v.shape[0])
+    if frame == "auto":
+        frame = _auto_frame(v, f_in, chart, uv_in, tan_in, notes)
+    radius = _fit_radius(rep, nb, u, notes)
+    boundary_a = _boundary_vertices(rep.faces, rep.vertices.shape[0])
+    pc_a, _, n_bad = fit_curvatures(rep.vertices, rep.normals, components=rep.components, radius=radius,
+                                    edge_length=rep.mean_edge_length, one_sided=boundary_a, progress=progress)
+    if n_bad:
+        notes.append(f"{n_bad} vertices have too few neighbours with a similar normal to fit; their curvature is 0")
+    o = _framed(frame, v, rep, _per_output(rep, pc_a, u.mm_per_unit), uv_in, tan_in, notes)
+    undefined = ~np.isfinite(o.directional)
+    if frame is not None and undefined.any():
+        notes.append(f"{int(undefined.sum())} vertices have no material x axis; their directional curvature "
+                     "is the maximum one")
+        o = o._replace(directional=np.where(undefined, o.pc.kappa, o.directional))
+    areas = _vertex_areas(v[o.src], o.faces, o.src.size)
+    # a seam: a panel's (or UV chart's) boundary in the file that the analysis surface closes
+    location = np.where(boundary_a[rep.out_vertex[o.src_first]], 1,
+                        np.where(_seam_vertices(f_in, chart, v.shape[0])[o.src], 2, 0))
+    for note in notes:
+        _LOG.info("%s: %s", name, note)
+    pc = o.pc
+    return SurfaceCurvature(o.src, o.faces, o.normals, o.uv, pc.kappa, o.directional, pc.k1, pc.k2, pc.d1, pc.d2,
+                            o.side, o.tangent, frame or "none", u, nb, areas, rep.representative, rep.repairs,
+                            tuple(notes), location.astype(np.int8))
+
+
+def _frame_inputs(v: NDArray[np.float64], uv: ArrayLike | None, tangents: ArrayLike | None, frame: str | None,
+                  name: str) -> tuple[NDArray[np.float64] | None, NDArray[np.float64] | None]:
+    """The UVs and tangents given, checked, and refused when the frame asked for needs them and they are missing."""
     uv_in = None
     if uv is not None:
         uv_in = np.asarray(uv, dtype=np.float64)
@@ -356,21 +378,27 @@ def surface_curvature(  # noqa: C901 - the steps in order
                         "use frame 'principal' (or 'auto')")
     if frame == "tangent" and tan_in is None:
         raise MeshError(f"{name}: the mesh has no tangent attribute for frame 'tangent'")
-    notes: list[str] = []
-    rep = repair(v, faces, normals=normals, uv=uv_in, name=name)
-    f_in = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    chart = _chart_sizes(f_in, v.shape[0])
-    if frame == "auto":
-        scraps = uv_in is not None and _uv_scraps(v, f_in, chart)
-        frame = "uv" if uv_in is not None and not scraps else "tangent" if tan_in is not None else "principal"
-        why = (f"the UV map is cut at nearly every edge ({int(np.count_nonzero(chart < PANEL_FACES))} of "
-               f"{chart.size} faces in pieces of fewer than {PANEL_FACES}), so it follows no fabric"
-               if scraps else "no UV coordinates")
-        if frame == "tangent":
-            notes.append(f"{why}: the material's x axis is the file's tangent attribute")
-        elif frame == "principal":
-            notes.append(f"{why}: the material's x axis is the bending direction "
-                         "(of the principal curvature of larger magnitude)")
+    return uv_in, tan_in
+
+
+def _auto_frame(v: NDArray[np.float64], f_in: NDArray[np.int64], chart: NDArray[np.int64],
+                uv_in: NDArray[np.float64] | None, tan_in: NDArray[np.float64] | None, notes: list[str]) -> str:
+    """Frame ``"auto"``: the UVs unless they are scraps, else the tangents, else the principal directions."""
+    scraps = uv_in is not None and _uv_scraps(v, f_in, chart)
+    frame = "uv" if uv_in is not None and not scraps else "tangent" if tan_in is not None else "principal"
+    why = (f"the UV map is cut at nearly every edge ({int(np.count_nonzero(chart < PANEL_FACES))} of "
+           f"{chart.size} faces in pieces of fewer than {PANEL_FACES}), so it follows no fabric"
+           if scraps else "no UV coordinates")
+    if frame == "tangent":
+        notes.append(f"{why}: the material's x axis is the file's tangent attribute")
+    elif frame == "principal":
+        notes.append(f"{why}: the material's x axis is the bending direction "
+                     "(of the principal curvature of larger magnitude)")
+    return frame
+
+
+def _fit_radius(rep: RepairedMesh, nb: float, u: Units, notes: list[str]) -> float:
+    """The radius of the fit (model units): the neighbourhood's, reduced on a small mesh, widened on a coarse one."""
     pos_in = np.asarray(rep.vertices)
     diag = float(np.linalg.norm(pos_in.max(0) - pos_in.min(0)))
     radius = 0.5 * nb / u.mm_per_unit
@@ -387,24 +415,26 @@ def surface_curvature(  # noqa: C901 - the steps in order
                      f"{wide * u.mm_per_unit:.3g} mm ({ADAPT_EDGES:g} edge lengths) instead of "
                      f"{2 * radius * u.mm_per_unit:.3g} mm")
         radius = 0.5 * wide
-    boundary_a = _boundary_vertices(rep.faces, rep.vertices.shape[0])
-    pc_a, _, n_bad = fit_curvatures(rep.vertices, rep.normals, components=rep.components, radius=radius,
-                                    edge_length=rep.mean_edge_length, one_sided=boundary_a, progress=progress)
-    if n_bad:
-        notes.append(f"{n_bad} vertices have too few neighbours with a similar normal to fit; their curvature is 0")
-    pc = _per_output(rep, pc_a, u.mm_per_unit)
+    return radius
+
+
+#: The output mesh with its material frame: each vertex's input vertex and the repair's output vertex, faces,
+#: normals, UVs, principal curvatures, directional curvature, side and material x axis.
+_Framed = namedtuple("_Framed", "src src_first faces normals uv pc directional side tangent")
+
+
+def _framed(frame: str | None, v: NDArray[np.float64], rep: RepairedMesh, pc: PrincipalCurvatures,
+            uv_in: NDArray[np.float64] | None, tan_in: NDArray[np.float64] | None, notes: list[str]) -> _Framed:
+    """The material's x axis and the directional curvature along it, by ``frame``; without UVs of the frame's, one
+    output vertex per face corner with UVs whose dP/du is the face's mean x axis."""
     src = rep.out_source
     src_first = np.arange(src.size)  # the repair's output vertex of each output vertex
-    side = rep.out_side
-    out_faces = rep.out_faces
-    normals_o = rep.out_normals
+    out_faces, normals_o = rep.out_faces, rep.out_normals
     positions_o = v[src]
-    n_o = src.size
-    uv_o: NDArray[np.float64] | None = None
     if frame is None:
-        tangent = np.full((n_o, 3), np.nan)
-        directional = np.full(n_o, np.nan)
-    elif frame == "uv":
+        return _Framed(src, src_first, out_faces, normals_o, None, pc, np.full(src.size, np.nan), rep.out_side,
+                       np.full((src.size, 3), np.nan))
+    if frame == "uv":
         assert uv_in is not None
         uv_o = uv_in[src]
         ft, ok = face_uv_tangents(positions_o, out_faces, uv_o)
@@ -418,43 +448,22 @@ def surface_curvature(  # noqa: C901 - the steps in order
                          "not cloth, take the frame from the principal directions)")
         if (~ok).any():
             notes.append(f"{int((~ok).sum())} faces have degenerate UVs (no dP/du there)")
+        return _Framed(src, src_first, out_faces, normals_o, uv_o, pc, pc.normal_curvature(np.nan_to_num(tangent)),
+                       rep.out_side, tangent)
+    if frame == "tangent":
+        assert tan_in is not None
+        tangent = project_tangents(tan_in[src], normals_o)
         directional = pc.normal_curvature(np.nan_to_num(tangent))
     else:
-        if frame == "tangent":
-            assert tan_in is not None
-            tangent = project_tangents(tan_in[src], normals_o)
-            directional = pc.normal_curvature(np.nan_to_num(tangent))
-        else:
-            tangent = pc.kappa_direction.copy()
-            directional = pc.kappa.copy()
-        # per-face UVs whose dP/du is the face's mean tangent: one output vertex per corner
-        corner_uv, _ = face_frame_uv(positions_o, out_faces, tangent[out_faces], align=frame == "principal")
-        corners = out_faces.reshape(-1)
-        src = src[corners]
-        src_first = src_first[corners]
-        side = side[corners]
-        normals_o = normals_o[corners]
-        tangent = tangent[corners]
-        directional = directional[corners]
-        pc = PrincipalCurvatures(pc.k1[corners], pc.k2[corners], pc.d1[corners], pc.d2[corners])
-        uv_o = corner_uv.reshape(-1, 2)
-        out_faces = np.arange(corners.size, dtype=np.int64).reshape(-1, 3)
-        positions_o = v[src]
-        n_o = src.size
-    undefined = ~np.isfinite(directional)
-    if frame is not None and undefined.any():
-        notes.append(f"{int(undefined.sum())} vertices have no material x axis; their directional curvature "
-                     "is the maximum one")
-        directional = np.where(undefined, pc.kappa, directional)
-    areas = _vertex_areas(positions_o, out_faces, n_o)
-    # a seam: a panel's (or UV chart's) boundary in the file that the analysis surface closes
-    location = np.where(boundary_a[rep.out_vertex[src_first]], 1,
-                        np.where(_seam_vertices(f_in, chart, v.shape[0])[src], 2, 0))
-    for note in notes:
-        _LOG.info("%s: %s", name, note)
-    return SurfaceCurvature(src, out_faces, normals_o, uv_o, pc.kappa, directional, pc.k1, pc.k2, pc.d1, pc.d2,
-                            side, tangent, frame or "none", u, nb, areas, rep.representative, rep.repairs,
-                            tuple(notes), location.astype(np.int8))
+        tangent = pc.kappa_direction.copy()
+        directional = pc.kappa.copy()
+    # per-face UVs whose dP/du is the face's mean tangent: one output vertex per corner
+    corner_uv, _ = face_frame_uv(positions_o, out_faces, tangent[out_faces], align=frame == "principal")
+    corners = out_faces.reshape(-1)
+    return _Framed(src[corners], src_first[corners], np.arange(corners.size, dtype=np.int64).reshape(-1, 3),
+                   normals_o[corners], corner_uv.reshape(-1, 2),
+                   PrincipalCurvatures(pc.k1[corners], pc.k2[corners], pc.d1[corners], pc.d2[corners]),
+                   directional[corners], rep.out_side[corners], tangent[corners])
 
 
 def outside_by_location(kappa: NDArray[np.float64], location: NDArray[np.int8],
@@ -471,7 +480,7 @@ def dihedral_curvature(vertices: ArrayLike, faces: ArrayLike, *, units: str | fl
                        name: str = "mesh") -> NDArray[np.float64]:
     """The sharpest bend the tessellation itself shows at each vertex, mm^-1, unsigned: a check of the fit.
 
-    For every edge of the surface (seams closed, :func:`cdbrdf.mesh.repair.weld_seams`)
+    For every edge of the surface (seams closed, :func:`cdbrdf.mesh.weld.weld_seams`)
     the angle between its two faces' planes over the mean height of the
     two triangles on it: the normal curvature across that edge a circle
     through the faces would have (a cylinder of radius R tessellated along
@@ -494,7 +503,8 @@ def dihedral_curvature(vertices: ArrayLike, faces: ArrayLike, *, units: str | fl
     numpy.ndarray
         ``(n,)`` per input vertex, mm^-1 (0 on a vertex of no two-face edge).
     """
-    from .repair import check_arrays, weld_seams
+    from .repair import check_arrays
+    from .weld import weld_seams
 
     v, f = check_arrays(vertices, faces, name=name)
     u = parse_units(units)
@@ -529,16 +539,6 @@ def dihedral_curvature(vertices: ArrayLike, faces: ArrayLike, *, units: str | fl
     np.maximum.at(per, ea, bend)
     np.maximum.at(per, eb, bend)
     return per[wid]
-
-
-#: Mitsuba mesh attribute of each curvature mode (what the ``cdbrdf`` BSDF reads), mm^-1.
-ATTRIBUTES: Mapping[str, str] = {"max": "vertex_curvature", "directional": "vertex_curvature_dir"}
-
-#: PLY vertex property that Mitsuba loads as each attribute of :data:`ATTRIBUTES`.
-PLY_PROPERTIES: Mapping[str, str] = {"max": "curvature_x", "directional": "curvature_dir_x"}
-
-#: Name of each mode's per-vertex array in :attr:`cdbrdf.mesh.Mesh.attributes`.
-MESH_ATTRIBUTES: Mapping[str, str] = {"max": "curvature", "directional": "curvature_dir"}
 
 
 def neighbourhood_from_table(attrs: Mapping[str, Any] | None) -> tuple[float, str]:

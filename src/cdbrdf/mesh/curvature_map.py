@@ -58,9 +58,6 @@ from ..errors import MeshError
 
 __all__ = [
     "CHANNELS",
-    "SHAPE_ATTRIBUTES",
-    "SHAPE_PLY_PROPERTIES",
-    "SHAPE_MESH_ATTRIBUTE",
     "NEIGHBOURHOOD_WIDTH_SHARE",
     "MIN_COS_VIEW",
     "MAP_FILTERS",
@@ -78,17 +75,6 @@ __all__ = [
 
 #: The channels of a curvature map's texel, in order.
 CHANNELS: tuple[str, ...] = ("p", "q", "dp_du", "dp_dv", "dq_du", "dq_dv")
-
-#: Per-vertex attributes of a prepared mesh holding its own shape operator (1/mm) in the frame
-#: x = dP/du, y = n x x: what the plug-in adds a map's to.
-SHAPE_ATTRIBUTES: tuple[str, str, str] = ("shape_xx", "shape_xy", "shape_yy")
-
-#: The PLY vertex properties of :data:`SHAPE_ATTRIBUTES`: consecutive, so that Mitsuba's PLY loader groups
-#: them into the one three-channel mesh attribute :data:`SHAPE_MESH_ATTRIBUTE` (one read per shading point).
-SHAPE_PLY_PROPERTIES: tuple[str, str, str] = ("shape_x", "shape_y", "shape_z")
-
-#: The three-channel Mitsuba mesh attribute ``(sxx, sxy, syy)`` the plug-in reads.
-SHAPE_MESH_ATTRIBUTE = "vertex_shape"
 
 #: The footprint (mm) below which a map is not resolved, as a share of the curvature's neighbourhood
 #: (its diameter): a mip level of footprint w filters like a Gaussian of sigma ~ w / 2 (box and

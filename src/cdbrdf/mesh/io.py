@@ -6,7 +6,7 @@ Reading (:func:`read_mesh`, chosen by the file's suffix):
   any scalar types, polygons of any size, triangle strips, per-corner
   ``texcoord`` lists, and the header's ``comment cdbrdf ...`` lines in which
   :func:`write_ply` records the mesh's unit, up axis and how its curvature
-  was computed;
+  was computed (:func:`ply_metadata` reads them from the header alone);
 - **OBJ, glTF/GLB, STL, OFF** through trimesh (``process=False``: nothing
   merged or reordered): every object, group and glTF node (its transform
   applied), polygons triangulated, OBJ's separate ``vt``/``vn`` indices
@@ -22,10 +22,10 @@ is allocated.
 
 Writing (:func:`write_ply`): binary little-endian PLY, float32 positions,
 normals ``nx ny nz``, UVs ``u v``, tangents ``tangent_x ...`` and each
-attribute ``NAME`` as the property ``NAME_x``, which Mitsuba's PLY loader
-turns into the mesh attribute ``vertex_NAME`` (the curvature ``curvature``
--> ``curvature_x`` -> ``vertex_curvature``; ``curvature_dir`` ->
-``vertex_curvature_dir``).
+attribute by the names of :mod:`cdbrdf.mesh.attributes` (``NAME`` as the
+property ``NAME_x``, which Mitsuba's PLY loader turns into the mesh
+attribute ``vertex_NAME``: the curvature ``curvature`` -> ``curvature_x`` ->
+``vertex_curvature``).
 """
 
 from __future__ import annotations
@@ -44,16 +44,16 @@ from numpy.typing import NDArray
 
 from ..errors import CDBRDFError, MeshError
 from ..limits import check
+from .attributes import SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES, attribute_of_ply, ply_property
 from .core import Mesh
-from .curvature_map import SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES
 from .statements import file_statements, header_comments
 
 __all__ = [
     "MESH_FORMATS",
-    "CURVATURE_PLY_PROPERTY",
     "Mesh",
     "read_mesh",
     "read_ply",
+    "ply_metadata",
     "read_obj",
     "write_ply",
 ]
@@ -64,9 +64,6 @@ _LOG = logging.getLogger(__name__)
 MESH_FORMATS: dict[str, str] = {
     ".ply": "ply", ".obj": "obj", ".gltf": "gltf", ".glb": "glb", ".stl": "stl", ".off": "off",
 }
-
-#: PLY vertex property written for the curvature (Mitsuba: attribute ``vertex_curvature``).
-CURVATURE_PLY_PROPERTY = "curvature_x"
 
 _UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
 _TANGENT_NAMES = (("tangent_x", "tangent_y", "tangent_z"), ("tx", "ty", "tz"))
@@ -119,12 +116,44 @@ def _read_bytes(p: Path) -> bytes:
 
 
 def _metadata(comments: list[str]) -> dict[str, Any]:
+    """What the header's ``cdbrdf KEY VALUE`` comments record (the one reader of them)."""
     meta: dict[str, Any] = {}
     for c in comments:
         w = c.split(None, 2)
         if len(w) == 3 and w[0] == "cdbrdf":
             meta[w[1]] = w[2].strip()
     return meta
+
+
+def ply_metadata(path: str | PathLike[str]) -> dict[str, str]:
+    """What a PLY file's header records in its ``comment cdbrdf KEY VALUE`` lines, reading the header only.
+
+    The same header parser and rule as :func:`read_ply` (``units``, ``up``,
+    ``curvature_units``, ``neighbourhood_mm``, ``frame``: what
+    :func:`write_ply` writes).
+
+    Parameters
+    ----------
+    path
+        The file (never a FIFO or a device: refused before it is opened).
+
+    Returns
+    -------
+    dict
+        The recorded values, as text, by key.
+
+    Raises
+    ------
+    MeshError
+        For a file that is not PLY or whose header is damaged.
+    OSError
+        For a file that cannot be read (missing, not a regular file).
+    """
+    from ..fsutil import read_regular
+    from ._ply_format import HEADER_MAX_BYTES, ply_header
+
+    head = read_regular(path, max_bytes=HEADER_MAX_BYTES)
+    return _metadata(ply_header(head, str(path))[2])
 
 
 def read_ply(path: str | PathLike[str]) -> Mesh:
@@ -155,15 +184,11 @@ def read_ply(path: str | PathLike[str]) -> Mesh:
     tangents = next((np.stack([vert[a] for a in tri], axis=1) for tri in _TANGENT_NAMES
                      if all(a in vert for a in tri)), None)
     attrs = {}
-    shape = all(k in vert for k in SHAPE_PLY_PROPERTIES)
-    for k, a in vert.items():
-        if k in _KNOWN or (shape and k in SHAPE_PLY_PROPERTIES):
-            continue
-        m = re.fullmatch(r"(.+)_x", k)
-        if m:
-            attrs[m.group(1)] = a
-    if shape:  # the shape operator's three properties (Mitsuba: one three-channel attribute)
-        attrs.update({a: vert[k] for a, k in zip(SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES, strict=True)})
+    shape = all(k in vert for k in SHAPE_PLY_PROPERTIES)  # the shape operator's three (Mitsuba: one attribute)
+    for k, a in sorted(vert.items(), key=lambda kv: shape and kv[0] in SHAPE_PLY_PROPERTIES):  # the three last
+        name = None if k in _KNOWN else attribute_of_ply(k, shape=shape)
+        if name is not None:
+            attrs[name] = a
     faces = ply.faces
     if faces.size and int(faces.max()) >= n:
         raise MeshError(f"{p}: faces refer to vertex {int(faces.max())} but there are {n}")
@@ -540,15 +565,14 @@ def write_ply(path: str | PathLike[str], mesh: Mesh) -> None:
         cols += [("u", mesh.uv[:, 0]), ("v", mesh.uv[:, 1])]
     if mesh.tangents is not None:
         cols += [(c, mesh.tangents[:, i]) for i, c in enumerate(_TANGENT_NAMES[0])]
-    ply_name = dict(zip(SHAPE_ATTRIBUTES, SHAPE_PLY_PROPERTIES, strict=True)) if all(
-        k in mesh.attributes for k in SHAPE_ATTRIBUTES) else {}
-    for name, a in sorted(mesh.attributes.items(), key=lambda kv: kv[0] in ply_name):  # the shape's three last
+    shape = all(k in mesh.attributes for k in SHAPE_ATTRIBUTES)  # then the three as one (last, consecutive)
+    for name, a in sorted(mesh.attributes.items(), key=lambda kv: shape and kv[0] in SHAPE_ATTRIBUTES):
         a = np.asarray(a, dtype=np.float64)
         if a.shape != (n,):
             raise MeshError(f"mesh: attribute {name!r}: expected shape ({n},), got {a.shape}")
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
             raise MeshError(f"mesh: attribute {name!r}: not a valid PLY property name")
-        cols.append((ply_name.get(name, f"{name}_x"), a))
+        cols.append((ply_property(name, shape=shape), a))
     comments = [f"written by cdbrdf {__version__}"]
     for key in ("units", "up", "curvature_units", "neighbourhood_mm", "frame"):
         val = mesh.metadata.get(key)

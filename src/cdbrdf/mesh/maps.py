@@ -41,10 +41,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MeshError
+from ..ranges import Range
+from .attributes import CURVATURE_MODES, SHAPE_ATTRIBUTES
 from .bake import HeightMap, bake_height_map, bake_mesh, bake_normal_map, read_height_map
 from .core import Mesh
 from .curvature_map import (
-    SHAPE_ATTRIBUTES,
     CurvatureMap,
     averaged_share,
     lookup,
@@ -55,7 +56,8 @@ from .curvature_map import (
 from .normalmap import NORMAL_MAP_CONVENTIONS, NormalMap, normal_map_from_normals, read_normal_map
 from .units import UNITS_MM, parse_units
 
-__all__ = ["BAKES", "SurfaceMaps", "UVScale", "detect_uv_scale", "mesh_uv_scale", "as_uv_scale", "apply_maps",
+__all__ = ["BAKES", "UV_SCALE_RANGE_MM", "MAP_SIZE_RANGE_MM", "HEIGHT_SCALE_RANGE_MM", "MESH_TEXELS_RANGE",
+           "SurfaceMaps", "UVScale", "detect_uv_scale", "mesh_uv_scale", "as_uv_scale", "apply_maps",
            "NOTHING_LEFT_SHARE", "SAMPLES_PER_FOLD", "UV_UNIT_TOLERANCE"]
 
 _LOG = logging.getLogger(__name__)
@@ -74,9 +76,21 @@ SAMPLES_PER_FOLD = 4.0
 #: UV and 3-D lengths "agree" in a unit within this relative difference (median over the edges).
 UV_UNIT_TOLERANCE = 0.03
 
+#: Accepted UV scales (each of u and v), mm per UV unit.
+UV_SCALE_RANGE_MM = Range(0.0, 1e9, lo_open=True, unit="mm per UV unit")
 
-def _pair(name: str, value: Any) -> tuple[float, float] | None:
-    """One or two positive finite numbers as ``(u, v)``, or None."""
+#: Accepted sizes of one repeat of a map (each of u and v), mm.
+MAP_SIZE_RANGE_MM = Range(0.0, 1e9, lo_open=True, unit="mm")
+
+#: Accepted height scales of a height map, mm per unit of its values.
+HEIGHT_SCALE_RANGE_MM = Range(0.0, 1e6, lo_open=True, unit="mm")
+
+#: Accepted texels along the longer side of a mesh bake.
+MESH_TEXELS_RANGE = Range(2, 8192, integer=True)
+
+
+def _pair(name: str, value: Any, rng: Range = MAP_SIZE_RANGE_MM) -> tuple[float, float] | None:
+    """One or two numbers of ``rng`` as ``(u, v)``, or None."""
     if value is None:
         return None
     try:
@@ -85,8 +99,8 @@ def _pair(name: str, value: Any) -> tuple[float, float] | None:
         parts = []
     if len(parts) == 1:
         parts *= 2
-    if len(parts) != 2 or not all(math.isfinite(x) and x > 0 for x in parts):
-        raise MeshError(f"{name}: expected one or two positive numbers of mm, got {value!r:.60}")
+    if len(parts) != 2 or not all(x in rng for x in parts):
+        raise MeshError(f"{name}: expected one or two numbers {rng.text()}, got {value!r:.60}")
     return parts[0], parts[1]
 
 
@@ -110,7 +124,7 @@ def as_uv_scale(value: Any, *, name: str = "uv_scale") -> tuple[float, float]:
     MeshError
         For anything but one or two positive finite numbers.
     """
-    pair = _pair(name, value)
+    pair = _pair(name, value, UV_SCALE_RANGE_MM)
     if pair is None:
         raise MeshError(f"{name}: expected one or two positive numbers of mm per UV unit, got None")
     return pair
@@ -166,13 +180,12 @@ class SurfaceMaps:
         if self.normal_map_convention not in NORMAL_MAP_CONVENTIONS:
             raise MeshError(f"normal map convention: {self.normal_map_convention!r:.40} is not one of "
                             f"{', '.join(NORMAL_MAP_CONVENTIONS)}")
-        _pair("uv_scale", self.uv_scale)
-        _pair("map_size_mm", self.map_size_mm)
-        if self.height_scale_mm is not None and not (math.isfinite(self.height_scale_mm)
-                                                      and self.height_scale_mm > 0):
-            raise MeshError(f"height scale: expected a positive number of mm, got {self.height_scale_mm!r}")
-        if self.mesh_texels is not None and not 2 <= int(self.mesh_texels) <= 8192:
-            raise MeshError(f"mesh_texels: expected 2 to 8192, got {self.mesh_texels!r}")
+        _pair("uv_scale", self.uv_scale, UV_SCALE_RANGE_MM)
+        _pair("map_size_mm", self.map_size_mm, MAP_SIZE_RANGE_MM)
+        if self.height_scale_mm is not None and self.height_scale_mm not in HEIGHT_SCALE_RANGE_MM:
+            raise MeshError(f"height scale: expected {HEIGHT_SCALE_RANGE_MM.expect()}, got {self.height_scale_mm!r}")
+        if self.mesh_texels is not None and self.mesh_texels not in MESH_TEXELS_RANGE:
+            raise MeshError(f"mesh_texels: expected {MESH_TEXELS_RANGE.expect()}, got {self.mesh_texels!r}")
         if self.normal_map is not None and self.height_map is not None:
             raise MeshError("maps: give a normal map or a height map, not both (they draw the same detail)")
         if self.hires_mesh is not None and (self.normal_map is not None or self.height_map is not None):
@@ -441,8 +454,8 @@ def _vertex_bake(cmap: CurvatureMap, mesh: Mesh, uvs: UVScale, level: float, not
         notes.append(f"the mesh (median edge {edge:.3g} mm) is coarse for {cmap.name}'s folds (about {fold:.3g} mm "
                      f"long): baked per vertex, they are sampled sparsely; bake per texel (the default) or "
                      f"subdivide the mesh to {fold / SAMPLES_PER_FOLD:.2g} mm edges")
-    return {"curvature": principal(sxx, sxy, syy), "curvature_dir": sxx, SHAPE_ATTRIBUTES[0]: sxx,
-            SHAPE_ATTRIBUTES[1]: sxy, SHAPE_ATTRIBUTES[2]: syy}
+    return {CURVATURE_MODES["max"].attribute: principal(sxx, sxy, syy), CURVATURE_MODES["directional"].attribute: sxx,
+            **dict(zip(SHAPE_ATTRIBUTES, (sxx, sxy, syy), strict=True))}
 
 
 def apply_maps(mesh: Mesh, maps: SurfaceMaps | None, *, name: str = "mesh",

@@ -42,6 +42,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from os import PathLike
 from typing import Any
 
@@ -49,16 +50,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import MeshError, OptionError
+from .attributes import CURVATURE_MODES, SHAPE_ATTRIBUTES
 from .core import Mesh
 from .curvature import check_neighbourhood, neighbourhood_from_table, outside_by_location, surface_curvature
-from .curvature_map import SHAPE_ATTRIBUTES, mesh_shape_operator
+from .curvature_map import mesh_shape_operator
 from .estimate import DEFAULT_NEIGHBOURHOOD_MM
+from .frames import FRAMES
 from .io import read_mesh
 from .maps import SurfaceMaps, apply_maps
 from .shape import Shape
 from .units import Units, check_garment_size, check_kappa_range, check_size, infer_units, parse_units
 
-__all__ = ["UP_AXES", "prepare_mesh", "has_own_uv", "detect_up", "to_z_up", "z_up_mesh", "check_up"]
+__all__ = ["UP_AXES", "MeshSurface", "prepare_mesh", "has_own_uv", "detect_up", "to_z_up", "z_up_mesh", "check_up"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -170,7 +173,7 @@ def prepare_mesh(
         The renderable mesh: repaired faces, normals, UVs carrying the frame,
         attributes ``"curvature"`` (maximum) and ``"curvature_dir"``
         (directional) in mm^-1 and its shape operator
-        (:data:`~cdbrdf.mesh.curvature_map.SHAPE_ATTRIBUTES`, mm^-1, frame
+        (:data:`~cdbrdf.mesh.attributes.SHAPE_ATTRIBUTES`, mm^-1, frame
         x = dP/du, y = n x x); with maps ``"uv_scale"``, ``"uv_scale_rule"``
         and ``"curvature_map"`` (:func:`cdbrdf.mesh.apply_maps`); its metadata says what was done
         (``"repairs"``, ``"notes"``, ``"units"``, ``"neighbourhood_mm"``,
@@ -208,7 +211,8 @@ def prepare_mesh(
         nb, nb_note = neighbourhood_from_table(getattr(table, "attrs", None))
     else:
         nb, nb_note = DEFAULT_NEIGHBOURHOOD_MM, "the default"
-    reuse = (not recompute and "curvature" in mesh.attributes and "curvature_dir" in mesh.attributes
+    k_max, k_dir = CURVATURE_MODES["max"].attribute, CURVATURE_MODES["directional"].attribute
+    reuse = (not recompute and k_max in mesh.attributes and k_dir in mesh.attributes
              and meta.get("curvature_units") == "1/mm" and recorded_units is not None
              and all(k in mesh.attributes for k in SHAPE_ATTRIBUTES)
              and mesh.uv is not None
@@ -222,7 +226,7 @@ def prepare_mesh(
             nb, nb_note = float(meta["neighbourhood_mm"]), "recorded in the file"
         out = mesh
     else:
-        if "curvature" in mesh.attributes and not recompute:
+        if k_max in mesh.attributes and not recompute:
             notes.append("curvature: computed again (the file's has no recorded unit, or other settings)")
         given = maps is not None and any(m is not None for m in (maps.normal_map, maps.height_map, maps.hires_mesh))
         from_file = (maps is None or maps.from_file) and (meta.get("normal_map") is not None
@@ -233,10 +237,10 @@ def prepare_mesh(
                               progress=progress)
         repairs = list(s.repairs)
         notes.extend(s.notes)
-        own = ("curvature", "curvature_dir", *SHAPE_ATTRIBUTES)
+        own = (k_max, k_dir, *SHAPE_ATTRIBUTES)
         attrs = {k: a[s.source] for k, a in mesh.attributes.items() if k not in own}
-        attrs["curvature"] = s.kappa
-        attrs["curvature_dir"] = s.directional
+        attrs[k_max] = s.kappa
+        attrs[k_dir] = s.directional
         attrs.update(zip(SHAPE_ATTRIBUTES, mesh_shape_operator(s.k1, s.k2, s.d1, s.d2, s.tangent, s.normals),
                          strict=True))
         out = Mesh(mesh.vertices[s.source], s.faces, s.normals, s.uv, attrs,
@@ -256,13 +260,13 @@ def prepare_mesh(
     if kappa_range is not None:
         areas = _vertex_areas(out.vertices, out.faces)
         diag = float(np.linalg.norm(out.vertices.max(0) - out.vertices.min(0)))
-        chk = check_kappa_range(out.attributes["curvature"], areas, kappa_range, units=u, size_units=diag)
+        chk = check_kappa_range(out.attributes[k_max], areas, kappa_range, units=u, size_units=diag)
         out.metadata["outside_share"] = chk.outside_share
         if chk.message:
             _LOG.warning("%s: %s", name, chk.message)
         loc = out.metadata.get("location")
         if isinstance(loc, np.ndarray) and loc.shape == (out.n_vertices,):
-            by = outside_by_location(out.attributes["curvature"], loc, kappa_range)
+            by = outside_by_location(out.attributes[k_max], loc, kappa_range)
             out.metadata["outside_by_location"] = by
             n_out = sum(o for o, _ in by.values())
             notes.append(f"curvature outside the table's range [{min(kappa_range):g}, {max(kappa_range):g}] 1/mm: "
@@ -270,6 +274,76 @@ def prepare_mesh(
                          + ", ".join(f"{k} {o} of {t}" for k, (o, t) in by.items()) + ")")
     out.metadata["notes"] = notes
     return out
+
+
+@dataclass(frozen=True)
+class MeshSurface:
+    """A user's mesh as a surface to render, with how it is prepared (:func:`prepare_mesh`) and turned upright.
+
+    Parameters
+    ----------
+    mesh
+        A mesh file (:data:`cdbrdf.mesh.MESH_FORMATS`) or a :class:`~cdbrdf.mesh.Mesh`.
+    units
+        Its length unit (:func:`~cdbrdf.mesh.parse_units`: a name of
+        :data:`~cdbrdf.mesh.UNITS_MM` or mm per unit); None: the one the file
+        records or states, else the one its size makes plausible, else mm.
+    neighbourhood_mm
+        Diameter of the curvature's neighbourhood, mm, in
+        :data:`~cdbrdf.mesh.NEIGHBOURHOOD_RANGE_MM`; None: the table's
+        measured patch, else :data:`~cdbrdf.mesh.DEFAULT_NEIGHBOURHOOD_MM`.
+    frame
+        Source of the material's x axis (:data:`~cdbrdf.mesh.FRAMES`); None: ``"auto"``.
+    up
+        ``"auto"`` (:func:`detect_up`), ``"y"`` or ``"z"`` (:data:`UP_AXES`).
+
+    Raises
+    ------
+    OptionError, MeshError
+        For a value of the wrong kind or out of its range (one line, naming it).
+    """
+
+    mesh: str | PathLike[str] | Mesh
+    units: str | float | None = None
+    neighbourhood_mm: float | None = None
+    frame: str | None = None
+    up: str = "auto"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.mesh, (str, PathLike, Mesh)):
+            raise OptionError(f"mesh: expected a mesh file or a cdbrdf.mesh.Mesh, got {type(self.mesh).__name__}")
+        if self.units is not None:
+            parse_units(self.units)
+        if self.neighbourhood_mm is not None:
+            object.__setattr__(self, "neighbourhood_mm", check_neighbourhood(self.neighbourhood_mm))
+        if self.frame is not None and self.frame not in FRAMES:
+            raise OptionError(f"frame: {self.frame!r:.40} is not one of {', '.join(FRAMES)}")
+        check_up(self.up)
+
+    @property
+    def name(self) -> str:
+        """The file's name, or a :class:`~cdbrdf.mesh.Mesh`'s source (``"mesh"`` without one)."""
+        if isinstance(self.mesh, Mesh):
+            return str(self.mesh.metadata.get("source", "mesh"))
+        return str(self.mesh)
+
+    def prepare(self, *, table: Any = None, maps: SurfaceMaps | None = None,
+                progress: Callable[[int, int], None] | None = None) -> Mesh:
+        """The mesh read (a file) and prepared to render (:func:`prepare_mesh`) with these settings.
+
+        Parameters
+        ----------
+        table, maps, progress
+            As for :func:`prepare_mesh`.
+
+        Returns
+        -------
+        Mesh
+            The prepared mesh (the given :class:`~cdbrdf.mesh.Mesh` is not modified).
+        """
+        source = self.mesh if isinstance(self.mesh, Mesh) else read_mesh(self.mesh)
+        return prepare_mesh(source, units=self.units, neighbourhood_mm=self.neighbourhood_mm, frame=self.frame,
+                            table=table, maps=maps, progress=progress)
 
 
 def _mesh_units(mesh: Mesh, units: str | float | None, name: str) -> tuple[Units, str]:

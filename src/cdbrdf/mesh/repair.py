@@ -7,11 +7,11 @@ models have duplicate and degenerate faces; STL files are triangle soups.
 repair (``"welded 312 duplicate vertices"``, ``"re-oriented 1 of 3
 components"``):
 
-1. **weld**: vertices closer than :data:`WELD_TOLERANCE` x the bounding-box
+1. **weld** (:mod:`cdbrdf.mesh.weld`): vertices closer than :data:`~cdbrdf.mesh.weld.WELD_TOLERANCE` x the bounding-box
    diagonal become one for the curvature (UV and normal seams stay in the
    output; only vertices identical in position, UV and normal are merged
    there, and only those count as "welded"); so do the *seams*
-   (:func:`weld_seams`): a boundary vertex within :data:`SEAM_TOLERANCE` x
+   (:func:`cdbrdf.mesh.weld.weld_seams`): a boundary vertex within :data:`~cdbrdf.mesh.weld.SEAM_TOLERANCE` x
    the median edge length of another boundary vertex it shares no edge with
    (sewn panels whose seam vertices a simulation or an export left a hair
    apart) is one vertex of the analysis surface, so the seam is fitted as
@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections import namedtuple
 from dataclasses import dataclass
 from typing import Any
 
@@ -52,28 +53,17 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import MeshError
+from .weld import SEAM_TOLERANCE, _close_seams, _distinct, _unique_rows, weld
 
 __all__ = [
-    "WELD_TOLERANCE",
-    "SEAM_TOLERANCE",
     "CREASE_DEG",
     "MAX_COORDINATE",
     "RepairedMesh",
     "check_arrays",
     "repair",
-    "weld",
-    "weld_seams",
 ]
 
 _LOG = logging.getLogger(__name__)
-
-#: Relative tolerance (of the bounding-box diagonal) under which vertices are welded.
-WELD_TOLERANCE = 1e-7
-
-#: Boundary vertices closer than this many median edge lengths (and sharing no edge) are one seam vertex
-#: for the curvature. The seams of a draped, simulated dress meet within 1 % of an edge (a few are
-#: 1-5 % apart); the layers of a pleat or a collar lie a cloth's thickness apart, 10 % of an edge and more.
-SEAM_TOLERANCE = 0.05
 
 #: Faces meeting at a larger angle are shaded separately when the file has no normals, degrees.
 CREASE_DEG = 45.0
@@ -184,153 +174,6 @@ def check_arrays(
         raise MeshError(f"{name}: faces refer to vertices {int(f.min())}..{int(f.max())} "
                         f"but there are {v.shape[0]}")
     return v, f
-
-
-def _unique_rows(a: NDArray[Any]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """For the rows of ``a``: the index of each distinct row's first occurrence, and each row's group.
-
-    Groups are numbered in the rows' lexicographic order (like
-    ``np.unique(a, axis=0)``, which is several times slower).
-    """
-    n = a.shape[0]
-    if n == 0:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    order = np.lexsort(a.T[::-1])
-    s = a[order]
-    new = np.r_[True, np.any(s[1:] != s[:-1], axis=1)]
-    gid = np.cumsum(new) - 1
-    inv = np.empty(n, np.int64)
-    inv[order] = gid
-    return order[new].astype(np.int64), inv
-
-
-def _distinct(a: NDArray[np.int64], n: int) -> NDArray[np.int64]:
-    """The distinct values of ``a`` (integers in ``[0, n)``), sorted: a mask, linear in ``n`` (numpy 2's
-    hashed ``unique`` takes seconds on a million face indices)."""
-    mask = np.zeros(n, np.bool_)
-    mask[a.reshape(-1)] = True
-    return np.flatnonzero(mask)
-
-
-def weld(vertices: NDArray[np.float64], *, tolerance: float = WELD_TOLERANCE) -> NDArray[np.int64]:
-    """For every vertex the index of its welded vertex (vertices closer than ``tolerance`` x diagonal).
-
-    Welded indices are numbered in order of first appearance; the welded
-    position is that of the group's first vertex.
-
-    Parameters
-    ----------
-    vertices
-        ``(n, 3)`` positions.
-    tolerance
-        Weld distance as a fraction of the bounding-box diagonal.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(n,)`` welded index of every vertex.
-    """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    n = vertices.shape[0]
-    if n == 0:
-        return np.zeros(0, np.int64)
-    diag = float(np.linalg.norm(vertices.max(0) - vertices.min(0)))
-    # exact duplicates first (seams, triangle soups), then near ones among the distinct positions
-    first, inv = _unique_rows(vertices)
-    uniq = vertices[first]
-    label = np.arange(uniq.shape[0])
-    if diag > 0 and uniq.shape[0] > 1:
-        tree = cKDTree(uniq, balanced_tree=False, compact_nodes=False)
-        pairs = tree.query_pairs(tolerance * diag, output_type="ndarray")
-        if pairs.size:
-            m = uniq.shape[0]
-            g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
-            _, label = connected_components(g, directed=False)
-    group = label[inv]
-    # renumber in order of first appearance
-    _, first_g, inv_g = np.unique(group, return_index=True, return_inverse=True)
-    order = np.argsort(first_g, kind="stable")
-    rank = np.empty_like(order)
-    rank[order] = np.arange(order.size)
-    return rank[inv_g.reshape(-1)].astype(np.int64)
-
-
-def weld_seams(vertices: NDArray[np.float64], faces: NDArray[np.int64], *,
-               tolerance: float = SEAM_TOLERANCE) -> NDArray[np.int64]:
-    """For every vertex its welded index, the seams closed: :func:`weld`, then boundary vertices close together.
-
-    A boundary vertex (on an edge of one face, after :func:`weld`) within
-    ``tolerance`` x the median edge length of another boundary vertex is
-    welded to it, unless the two share an edge or the weld would collapse a
-    face (a short edge of one panel is not a seam).
-
-    Parameters
-    ----------
-    vertices
-        ``(n, 3)`` positions.
-    faces
-        ``(m, 3)`` vertex indices (checked).
-    tolerance
-        Weld distance of boundary vertices, in median edge lengths.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(n,)`` welded index of every vertex, numbered in order of first appearance.
-    """
-    return _close_seams(vertices, faces, weld(vertices), tolerance)
-
-
-def _close_seams(vertices: NDArray[np.float64], faces: NDArray[np.int64], wid: NDArray[np.int64],
-                 tolerance: float) -> NDArray[np.int64]:
-    """:func:`weld_seams` on the result ``wid`` of :func:`weld`."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    if faces.size == 0 or not tolerance > 0:
-        return wid
-    n = int(wid.max()) + 1
-    fw = wid[faces]
-    pos = np.zeros((n, 3))
-    pos[wid] = vertices
-    e = np.sort(np.concatenate([fw[:, [0, 1]], fw[:, [1, 2]], fw[:, [2, 0]]]), axis=1)
-    e = e[e[:, 0] != e[:, 1]]
-    key = e[:, 0] * np.int64(n) + e[:, 1]
-    ukey, count = np.unique(key, return_counts=True)
-    length = np.linalg.norm(pos[ukey // n] - pos[ukey % n], axis=1)
-    edge = float(np.median(length[length > 0])) if (length > 0).any() else 0.0
-    b = _distinct(np.r_[ukey[count == 1] // n, ukey[count == 1] % n], n)
-    if b.size < 2 or not edge > 0:
-        return wid
-    pairs = cKDTree(pos[b]).query_pairs(tolerance * edge, output_type="ndarray")
-    if pairs.size == 0:
-        return wid
-    p = np.sort(b[pairs], axis=1)
-    pk = p[:, 0] * np.int64(n) + p[:, 1]
-    at = np.minimum(np.searchsorted(ukey, pk), ukey.size - 1)
-    p = p[ukey[at] != pk]  # two ends of one edge stay apart (ukey is sorted)
-    if p.size == 0:
-        return wid
-    _, label = connected_components(coo_matrix((np.ones(len(p)), (p[:, 0], p[:, 1])), shape=(n, n)),
-                                    directed=False)
-    lf = label[fw]
-    collapsed = ((lf[:, 0] == lf[:, 1]) | (lf[:, 1] == lf[:, 2]) | (lf[:, 0] == lf[:, 2])) & \
-        (fw[:, 0] != fw[:, 1]) & (fw[:, 1] != fw[:, 2]) & (fw[:, 0] != fw[:, 2])
-    if collapsed.any():  # undo the welds that would collapse a face
-        bad = np.zeros(n, np.bool_)
-        bad[lf[collapsed].reshape(-1)] = True
-        undo = bad[label]
-        label = np.where(undo, n + np.arange(n), label)
-    group = label[wid]
-    _, first_g, inv_g = np.unique(group, return_index=True, return_inverse=True)
-    order = np.argsort(first_g, kind="stable")
-    rank = np.empty_like(order)
-    rank[order] = np.arange(order.size)
-    return rank[inv_g.reshape(-1)].astype(np.int64)
 
 
 def _face_normals(v: NDArray[np.float64], f: NDArray[np.int64]) -> NDArray[np.float64]:
@@ -471,7 +314,7 @@ def _normals_ok(normals: ArrayLike | None, n: int, name: str) -> tuple[NDArray[n
     return nn / ln[:, None], None
 
 
-def repair(  # noqa: C901 - one pass, step by step
+def repair(
     vertices: ArrayLike,
     faces: ArrayLike,
     *,
@@ -513,22 +356,42 @@ def repair(  # noqa: C901 - one pass, step by step
         repairs.append(note)
     if f_in.shape[0] == 0:
         raise MeshError(f"{name}: the mesh has no faces")
+    wid, vw, ident = _welded(v_in, f_in, uv, n_file)
+    f_in, fw = _non_degenerate(f_in, wid[f_in], vw, name, repairs)
+    lay = _layers(f_in, fw, ident, n_in, int(wid.max()) + 1, repairs)
+    edges, comp = _orient_layers(vw, lay, n_file, repairs)
+    a = _analysis_surface(vw, lay, edges, repairs)
+    out_source, out_vertex, out_side, out_faces = _output_vertices(lay, a, edges, ident, n_in, n_file)
+    out_normals = _output_normals(lay, a, out_source, out_vertex, out_side, out_faces, n_file, repairs)
+    pairs = np.c_[edges.f1[a.ok], edges.f2[a.ok]].astype(np.int64)
+    for r in repairs:
+        _LOG.info("%s: %s", name, r)
+    return RepairedMesh(a.va, a.fa.astype(np.int64), a.na, a.areas, out_source.astype(np.int64),
+                        out_vertex.astype(np.int64), out_side, out_faces.astype(np.int64), out_normals,
+                        pairs, _vertex_components(a.fa, comp, a.n_cls), ident, tuple(repairs))
+
+
+def _welded(v_in: NDArray[np.float64], f_in: NDArray[np.int64], uv: ArrayLike | None,
+            n_file: NDArray[np.float64] | None) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64]]:
+    """The welded vertex of every input vertex (seams closed), the welded positions, and every input vertex's
+    stand-in: the first input vertex of the same position (a seam's two sides stay apart), UV and normal."""
     exact = weld(v_in)
     wid = _close_seams(v_in, f_in, exact, SEAM_TOLERANCE)
-    n_w = int(wid.max()) + 1
     _, first_w = np.unique(wid, return_index=True)
     vw = v_in[first_w]  # the first vertex of each group
-    # output identity of input vertices: same position (a seam's two sides stay apart), UV and normal
     cols = [exact[:, None].astype(np.float64)]
     if uv is not None:
         cols.append(np.asarray(uv, dtype=np.float64))
     if n_file is not None:
         cols.append(np.round(n_file, 6))
     first_id, ident = _unique_rows(np.hstack(cols))
-    ident = first_id[ident]  # an input vertex standing for its twins
-    fw = wid[f_in]
-    # degenerate faces
-    diag = float(np.linalg.norm(vw.max(0) - vw.min(0))) if n_w else 0.0
+    return wid, vw, first_id[ident]
+
+
+def _non_degenerate(f_in: NDArray[np.int64], fw: NDArray[np.int64], vw: NDArray[np.float64], name: str,
+                    repairs: list[str]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The faces (input and welded indices) without repeated vertices or area."""
+    diag = float(np.linalg.norm(vw.max(0) - vw.min(0))) if vw.shape[0] else 0.0
     fn = _face_normals(vw, fw)
     area2 = np.linalg.norm(fn, axis=1)
     good = (fw[:, 0] != fw[:, 1]) & (fw[:, 1] != fw[:, 2]) & (fw[:, 0] != fw[:, 2])
@@ -537,7 +400,17 @@ def repair(  # noqa: C901 - one pass, step by step
         raise MeshError(f"{name}: every face is degenerate (repeated vertices or no area); nothing to render")
     if not good.all():
         repairs.append(f"dropped {int((~good).sum())} degenerate faces")
-    f_in, fw = f_in[good], fw[good]
+    return f_in[good], fw[good]
+
+
+#: The front layer's faces (input and welded indices), the back layer's, each back face's front partner, and
+#: the number of welded vertices.
+_Layers = namedtuple("_Layers", "ff_in ffw fb_in fbw partner n_w")
+
+
+def _layers(f_in: NDArray[np.int64], fw: NDArray[np.int64], ident: NDArray[np.int64], n_in: int, n_w: int,
+            repairs: list[str]) -> _Layers:
+    """Duplicate faces dropped; a double-sided panel's second faces as a back layer, each with its front partner."""
     keep, back, front_of_back = _duplicates(fw)
     n_dup = int(fw.shape[0] - keep.sum() - back.size)
     if n_dup:
@@ -551,36 +424,47 @@ def repair(  # noqa: C901 - one pass, step by step
     n_twins = int(used_front.size) - int(_distinct(ident[used_front], n_in).size)
     if n_twins:
         repairs.insert(0, f"welded {n_twins} duplicate vertices")
-    fb_in, fbw = f_in[back].copy(), fw[back].copy()
-    partner = pos_in_front[front_of_back]
-    # orientation
-    edges = _edges(ffw, n_w)
-    ref = None
-    if n_file is not None:
-        ref = n_file[ff_in].sum(axis=1)
-    flip, comp, n_comp, conflicts = _orient(vw, ffw, edges, ref)
+    return _Layers(ff_in, ffw, f_in[back].copy(), fw[back].copy(), pos_in_front[front_of_back], n_w)
+
+
+def _orient_layers(vw: NDArray[np.float64], lay: _Layers, n_file: NDArray[np.float64] | None,
+                   repairs: list[str]) -> tuple[_Edges, NDArray[np.int64]]:
+    """Orient the front layer's components (the file's normals decide, else the winding) and the back layer
+    opposite to it; the front layer's edges and the component of each of its faces."""
+    edges = _edges(lay.ffw, lay.n_w)
+    ref = None if n_file is None else n_file[lay.ff_in].sum(axis=1)
+    flip, comp, n_comp, _ = _orient(vw, lay.ffw, edges, ref)
     if flip.any():
         n_flipped_comp = int(_distinct(comp[flip], n_comp).size)
         repairs.append(f"re-oriented {n_flipped_comp} of {n_comp} component{'s' if n_comp > 1 else ''}")
-        ff_in[flip] = ff_in[flip][:, ::-1]
-        ffw[flip] = ffw[flip][:, ::-1]
-        edges = _edges(ffw, n_w)
-    if back.size:
+        lay.ff_in[flip] = lay.ff_in[flip][:, ::-1]
+        lay.ffw[flip] = lay.ffw[flip][:, ::-1]
+        edges = _edges(lay.ffw, lay.n_w)
+    if lay.partner.size:
         # the back face winds opposite to its (oriented) front partner
-        fb_flip = flip[partner]
-        fb_in[fb_flip] = fb_in[fb_flip][:, ::-1]
-        fbw[fb_flip] = fbw[fb_flip][:, ::-1]
-        repairs.append(f"kept {back.size} double-sided faces as a back layer with its own curvature sign")
-    m_a = ffw.shape[0]
-    # corners joined across consistently oriented two-face edges are one analysis vertex
+        fb_flip = flip[lay.partner]
+        lay.fb_in[fb_flip] = lay.fb_in[fb_flip][:, ::-1]
+        lay.fbw[fb_flip] = lay.fbw[fb_flip][:, ::-1]
+        repairs.append(f"kept {lay.partner.size} double-sided faces as a back layer with its own curvature sign")
+    return edges, comp
+
+
+#: The analysis surface: positions, faces, face and vertex normals, vertex areas; the class (analysis vertex)
+#: of every front corner, how many, and which front edges join consistently oriented faces.
+_Analysis = namedtuple("_Analysis", "va fa fna na areas cls n_cls ok")
+
+
+def _analysis_surface(vw: NDArray[np.float64], lay: _Layers, edges: _Edges, repairs: list[str]) -> _Analysis:
+    """The front layer's corners joined across consistently oriented two-face edges: one analysis vertex each."""
+    m_a = lay.ffw.shape[0]
     ok = ~edges.same
     c_a1 = 3 * edges.f1[ok] + edges.k1[ok]
     c_b1 = 3 * edges.f1[ok] + (edges.k1[ok] + 1) % 3
     c_a2 = 3 * edges.f2[ok] + (edges.k2[ok] + 1) % 3
     c_b2 = 3 * edges.f2[ok] + edges.k2[ok]
     n_cls, cls = _components(3 * m_a, np.r_[c_a1, c_b1], np.r_[c_a2, c_b2])
-    corner_w = ffw.reshape(-1)
-    n_used_w = int(_distinct(corner_w, n_w).size)
+    corner_w = lay.ffw.reshape(-1)
+    n_used_w = int(_distinct(corner_w, lay.n_w).size)
     if n_cls > n_used_w:
         n_cut = int(edges.same.sum()) + edges.n_nonmanifold
         repairs.append(f"split {n_cls - n_used_w} vertices along {n_cut} non-manifold or non-orientable "
@@ -592,59 +476,62 @@ def repair(  # noqa: C901 - one pass, step by step
     na = _unit(_scatter(fa, fna, n_cls))
     areas = np.bincount(fa.reshape(-1), weights=np.repeat(0.5 * np.linalg.norm(fna, axis=1) / 3.0, 3),
                         minlength=n_cls).astype(np.float64)
+    return _Analysis(va, fa, fna, na, areas, cls, n_cls, ok)
+
+
+def _output_vertices(lay: _Layers, a: _Analysis, edges: _Edges, ident: NDArray[np.int64], n_in: int,
+                     n_file: NDArray[np.float64] | None) -> tuple[NDArray[np.int64], NDArray[np.int64],
+                                                                  NDArray[np.float64], NDArray[np.int64]]:
+    """The output mesh: one vertex per (input vertex standing for its twins, smoothing group), front then back;
+    its source, analysis vertex, side and faces."""
+    m_a, m_b = lay.ffw.shape[0], lay.fbw.shape[0]
     # back layer corners: the analysis vertex of the front partner's corner on the same welded vertex
-    m_b = fbw.shape[0]
     back_cls = np.zeros((m_b, 3), np.int64)
     if m_b:
-        pw = ffw[partner]
-        pc = fa[partner]
+        pw = lay.ffw[lay.partner]
+        pc = a.fa[lay.partner]
         for k in range(3):
-            match = pw == fbw[:, k : k + 1]
+            match = pw == lay.fbw[:, k : k + 1]
             back_cls[:, k] = pc[np.arange(m_b), np.argmax(match, axis=1)]
     # smoothing groups for computed shading normals: also cut where faces meet at a crease
     if n_file is None:
-        un = _unit(fna)
+        un = _unit(a.fna)
         dots = np.einsum("ij,ij->i", un[edges.f1], un[edges.f2])
-        smooth = ok & (dots >= math.cos(math.radians(CREASE_DEG)))
+        smooth = a.ok & (dots >= math.cos(math.radians(CREASE_DEG)))
         c1 = np.r_[3 * edges.f1[smooth] + edges.k1[smooth], 3 * edges.f1[smooth] + (edges.k1[smooth] + 1) % 3]
         c2 = np.r_[3 * edges.f2[smooth] + (edges.k2[smooth] + 1) % 3, 3 * edges.f2[smooth] + edges.k2[smooth]]
         n_grp, grp = _components(3 * m_a, c1, c2)
     else:
-        n_grp, grp = n_cls, cls
-    # output vertices: (input vertex standing for its twins, group), front then back
-    corner_src = np.r_[ident[ff_in.reshape(-1)], ident[fb_in.reshape(-1)]]
+        n_grp, grp = a.n_cls, a.cls
+    corner_src = np.r_[ident[lay.ff_in.reshape(-1)], ident[lay.fb_in.reshape(-1)]]
     if m_b:
-        back_grp = n_grp + grp.reshape(m_a, 3)[partner][np.arange(m_b)[:, None],
-                                                       np.argmax(ffw[partner][:, None, :] == fbw[:, :, None],
-                                                                 axis=2)]
+        back_grp = n_grp + grp.reshape(m_a, 3)[lay.partner][np.arange(m_b)[:, None],
+                                                             np.argmax(lay.ffw[lay.partner][:, None, :]
+                                                                       == lay.fbw[:, :, None], axis=2)]
     else:
         back_grp = np.zeros((0, 3), np.int64)
     corner_grp = np.r_[grp, back_grp.reshape(-1)]
-    corner_cls = np.r_[cls, back_cls.reshape(-1)]
+    corner_cls = np.r_[a.cls, back_cls.reshape(-1)]
     corner_side = np.r_[np.ones(3 * m_a), -np.ones(3 * m_b)]
     key = corner_grp * np.int64(n_in) + corner_src
     _, first_c, out_of_corner = np.unique(key, return_index=True, return_inverse=True)
     out_of_corner = out_of_corner.reshape(-1)
-    out_source = corner_src[first_c]
-    out_vertex = corner_cls[first_c]
-    out_side = corner_side[first_c]
-    out_faces = out_of_corner.reshape(-1, 3)
-    n_out = out_source.size
+    return corner_src[first_c], corner_cls[first_c], corner_side[first_c], out_of_corner.reshape(-1, 3)
+
+
+def _output_normals(lay: _Layers, a: _Analysis, out_source: NDArray[np.int64], out_vertex: NDArray[np.int64],
+                    out_side: NDArray[Any], out_faces: NDArray[np.int64], n_file: NDArray[np.float64] | None,
+                    repairs: list[str]) -> NDArray[np.float64]:
+    """The output vertices' shading normals: the file's, flipped where they disagree with the faces, or computed."""
     if n_file is not None:
         out_normals = n_file[out_source].copy()
-        wrong = np.einsum("ij,ij->i", out_normals, na[out_vertex] * out_side[:, None]) < 0
+        wrong = np.einsum("ij,ij->i", out_normals, a.na[out_vertex] * out_side[:, None]) < 0
         if wrong.any():
             out_normals[wrong] *= -1.0
             repairs.append(f"flipped {int(wrong.sum())} vertex normals to match the faces")
-    else:
-        fn_all = np.r_[fna, -fna[partner]] if m_b else fna
-        out_normals = _unit(_scatter(out_faces, fn_all, n_out))
-    pairs = np.c_[edges.f1[ok], edges.f2[ok]].astype(np.int64)
-    for r in repairs:
-        _LOG.info("%s: %s", name, r)
-    return RepairedMesh(va, fa.astype(np.int64), na, areas, out_source.astype(np.int64),
-                        out_vertex.astype(np.int64), out_side, out_faces.astype(np.int64), out_normals,
-                        pairs, _vertex_components(fa, comp, n_cls), ident, tuple(repairs))
+        return out_normals
+    fn_all = np.r_[a.fna, -a.fna[lay.partner]] if lay.partner.size else a.fna
+    return _unit(_scatter(out_faces, fn_all, out_source.size))
 
 
 def _vertex_components(fa: NDArray[np.int64], face_comp: NDArray[np.int64], n: int) -> NDArray[np.int64]:

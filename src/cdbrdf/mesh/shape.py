@@ -5,7 +5,7 @@ its shape. :func:`describe` reads them once, for the up axis
 (:func:`cdbrdf.mesh.detect_up`) and the unit (:func:`cdbrdf.mesh.units.infer_units`):
 
 - **openings**: the boundary loops of the surface with its seams closed
-  (:func:`cdbrdf.mesh.repair.weld_seams`). Each loop points where the cloth
+  (:func:`cdbrdf.mesh.weld.weld_seams`). Each loop points where the cloth
   is not: the sum over its edges of the edge's length times the direction
   from the cloth towards the edge (in the plane of the edge's face). A
   tube's end (a neck, a hem, a cuff, the cut under a scanned head) points
@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .core import Mesh
-from .repair import _distinct
+from .weld import _distinct
 
 __all__ = ["Loop", "Component", "Shape", "describe", "COMPONENT_KINDS", "BAG_DEPTH", "PANEL_FLATNESS"]
 
@@ -181,7 +181,8 @@ class Shape:
 
 def _faces_welded(mesh: Mesh) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """Positions and non-degenerate faces of the mesh with its seams closed."""
-    from .repair import SEAM_TOLERANCE, _close_seams, _unique_rows, check_arrays
+    from .repair import check_arrays
+    from .weld import SEAM_TOLERANCE, _close_seams, _unique_rows
 
     v, f = check_arrays(mesh.vertices, mesh.faces, name=str(mesh.metadata.get("source", "mesh")))
     # identical positions, then the seams (the repair's near-weld of 1e-7 x the diagonal matters to no loop)

@@ -36,10 +36,27 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import OptionError
+from ..ranges import Range
+from .attributes import CURVATURE_MODES
 from .core import Mesh
 
-__all__ = ["DrapedCloth", "draped_cloth_height", "draped_cloth_mesh", "Skirt", "skirt_mesh", "Swatch", "swatch_mesh",
+__all__ = ["SineSheet", "SHEET_RANGES_MM", "sine_sheet_mesh", "sine_sheet_height", "sine_sheet_curvature",
+           "DrapedCloth", "draped_cloth_height", "draped_cloth_mesh", "Skirt", "skirt_mesh", "Swatch", "swatch_mesh",
            "swatch_curvature", "SWATCH_MIN_RADIUS_MM", "SWATCH_MAX_RADIUS_MM", "SWATCH_MAX_FOLDS"]
+
+
+#: Accepted lengths of a :class:`SineSheet`, mm.
+SHEET_RANGES_MM: dict[str, Range] = {
+    "amplitude_mm": Range(0.0, 1000.0, lo_open=True, unit="mm"),
+    "wavelength_mm": Range(0.01, 1e5, unit="mm"),
+    "width_mm": Range(0.0, 1e5, lo_open=True, unit="mm"),
+    "depth_mm": Range(0.0, 1e5, lo_open=True, unit="mm"),
+}
+
+
+def _both_modes(kappa: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
+    """The attributes of a surface whose x is a principal direction: both curvature modes are ``kappa``."""
+    return {m.attribute: kappa.copy() if i else kappa for i, m in enumerate(CURVATURE_MODES.values())}
 
 
 def sine_sheet_height(x_mm: ArrayLike, *, amplitude_mm: float, wavelength_mm: float) -> NDArray[np.float64]:
@@ -112,10 +129,8 @@ class SineSheet:
     vertices_per_wavelength: int = 64
 
     def __post_init__(self) -> None:
-        for name in ("amplitude_mm", "wavelength_mm", "width_mm", "depth_mm"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise OptionError(f"{name}: must be a positive length in mm, got {v}")
+        for name, rng in SHEET_RANGES_MM.items():
+            object.__setattr__(self, name, rng.check(name, getattr(self, name)))
         if self.vertices_per_wavelength < 8:
             raise OptionError("vertices_per_wavelength: at least 8 are needed")
 
@@ -177,7 +192,7 @@ def sine_sheet_mesh(sheet: SineSheet = SineSheet()) -> Mesh:
     F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
     k = sine_sheet_curvature(X.ravel(), amplitude_mm=A, wavelength_mm=L)
     # x (= dP/du) is the bending direction, a principal direction: the directional curvature is kappa
-    return Mesh(V, F.astype(np.int64), N, U, {"curvature": k, "curvature_dir": k.copy()},
+    return Mesh(V, F.astype(np.int64), N, U, _both_modes(k),
                 metadata={"units": "mm", "up": "z", "curvature_units": "1/mm", "frame": "uv"})
 
 
@@ -609,5 +624,5 @@ def swatch_mesh(swatch: Swatch = Swatch()) -> Mesh:
     d = a + 1   # +y
     F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]).astype(np.int64)
     kk = np.repeat(k, ny)
-    return Mesh(V, F, N, U, {"curvature": kk, "curvature_dir": kk.copy()},
+    return Mesh(V, F, N, U, _both_modes(kk),
                 metadata={"units": "mm", "up": "z", "curvature_units": "1/mm", "frame": "uv", "source": "swatch"})

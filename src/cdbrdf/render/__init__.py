@@ -3,16 +3,21 @@
 Importing this package does nothing heavy: it neither imports Mitsuba nor sets
 a variant. One function makes a picture of a table, on a built-in scene (the
 paper's sine sheet, a swatch laid in folds of known radii) or on any mesh,
-seen by a :class:`Camera` (:func:`render_table`); the pieces it is made of
-are public too:
+seen by a :class:`Camera` and lit by a :class:`Light`, all in one
+:class:`RenderSpec` (:func:`render_table`); the pieces it is made of are
+public too:
 
 - :mod:`~cdbrdf.render.plugin`: the ``cdbrdf`` BSDF plug-in (its parameter
   table and examples), variants (:func:`set_variant` for an application,
-  :func:`variant` for a ``with`` block), :func:`load_dict`, :func:`check_scene`;
+  :func:`variant` for a ``with`` block), :func:`load_dict`;
+  :mod:`~cdbrdf.render.checks`: :func:`check_scene`;
 - :mod:`~cdbrdf.render.scenefile`: Mitsuba XML scenes using the plug-in
   (:func:`load_file`: curvature units, the scene checks);
-- :mod:`~cdbrdf.render.scenes`: the built-in scenes (:data:`SCENES`) and mesh
-  scenes, meshes given to Mitsuba in memory
+- :mod:`~cdbrdf.render.spec`: the :class:`RenderSpec` record (surface,
+  camera, light, maps, exposure, film, modes), the built-in scenes'
+  names (:data:`SCENES`) and every range of a picture's options;
+- :mod:`~cdbrdf.render.scenes`: the scenes of a spec (built-in and mesh
+  scenes), meshes given to Mitsuba in memory
   (:func:`~cdbrdf.render.scenes.mitsuba_mesh`);
 - :mod:`~cdbrdf.render.camera`, :mod:`~cdbrdf.render.lighting`: the camera
   (framing, zoom, field of view, look-at) and lights; :mod:`~cdbrdf.render.picture`: renders in passes, exposure,
@@ -24,19 +29,21 @@ are public too:
 .. code-block:: python
 
     import cdbrdf, cdbrdf.render as cr
-    pic = cr.render_table(cdbrdf.materials.load("denim"), "sine", modes=("brdf", "cdbrdf"), spp=16)
+    pic = cr.render_table(cdbrdf.materials.load("denim"), cr.RenderSpec(modes=("brdf", "cdbrdf"), spp=16))
     pic.display("cdbrdf")                 # linear RGB, shown at pic.exposure_ev
 """
 
 from __future__ import annotations
 
-from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
+from ..mesh import CURVATURE_MODES
+from ._bsdf import MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._btf_jit import DEFAULT_TEXEL_FILTER, TEXEL_FILTERS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
 from .camera import LOOK_AT_ANCHORS, Camera
+from .checks import cdbrdf_shapes, check_scene
 from .contrast import CrestContrast, crest_contrast, curvature_image
+from .lighting import Light
 from .picture import (
-    RENDER_MODES,
     Picture,
     composite,
     exposure_from_render,
@@ -48,8 +55,6 @@ from .plugin import (
     DEFAULT_VARIANT,
     VARIANTS,
     available_variants,
-    cdbrdf_shapes,
-    check_scene,
     load_dict,
     make_bsdf,
     register,
@@ -57,7 +62,8 @@ from .plugin import (
     variant,
 )
 from .scenefile import load_file
-from .scenes import SCENES, mesh_scene, mitsuba_mesh, sine_scene, swatch_scene
+from .scenes import mesh_scene, mitsuba_mesh, sine_scene, swatch_scene, table_scene
+from .spec import RENDER_MODES, SCENES, RenderSpec
 
 __all__ = [
     "CURVATURE_MODES",
@@ -89,10 +95,13 @@ __all__ = [
     "render",
     "render_scene",
     "render_table",
+    "RenderSpec",
     "Picture",
     "Camera",
+    "Light",
     "LOOK_AT_ANCHORS",
     "SCENES",
+    "table_scene",
     "sine_scene",
     "swatch_scene",
     "mesh_scene",

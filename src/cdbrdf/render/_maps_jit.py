@@ -40,6 +40,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..mesh.curvature_map import CHANNELS, MIN_COS_VIEW, CurvatureMap
+from ._params import MAP_PARAMETERS
 
 __all__ = ["MapUpload", "SurfaceMap", "upload", "level", "level_choice", "sample", "detail", "frame", "Frame",
            "handedness", "principal", "scalar_values"]
@@ -281,12 +282,6 @@ class SurfaceMap:
         return sample(mi, self.up, si.uv, lv, active)
 
 
-#: The plug-in's parameters of maps (``docs/rendering.md``, the plug-in's table).
-MAP_PARAMETERS: tuple[str, ...] = ("curvature_map", "normal_map", "normal_map_convention", "height_map",
-                                   "height_scale", "map_size", "neighbourhood", "pixel_angle", "map_filter",
-                                   "shading_normals")
-
-
 def surface_from_props(get: Any, extras: dict[str, Any], resolve: Any, *, neighbourhood_mm: float,
                        uv_scale: tuple[float, float] | None) -> SurfaceMap | None:
     """The plug-in's :class:`SurfaceMap` from its parameters (``get(key, default)``), or None without a map.
@@ -304,7 +299,8 @@ def surface_from_props(get: Any, extras: dict[str, Any], resolve: Any, *, neighb
     given = [k for k, x in (("curvature_map", cmap), ("normal_map", nfile), ("height_map", hfile)) if x is not None]
     if not given:
         # pixel_angle serves a CD-BTF's footprint too; the others only a map
-        stray = [k for k in MAP_PARAMETERS[1:] if k not in ("pixel_angle", "neighbourhood") and get(k) is not None]
+        stray = [k for k in MAP_PARAMETERS if k not in ("curvature_map", "normal_map", "neighbourhood", "pixel_angle")
+                 and get(k) is not None]
         if stray:
             raise OptionError(f"cdbrdf BSDF: {stray[0]} is for a map; give normal_map, height_map or curvature_map")
         return None

@@ -23,26 +23,18 @@ with the likely unit).
 from __future__ import annotations
 
 import math
-import re
 from os import PathLike
 from typing import Any
 
 import numpy as np
 
 from ..errors import SceneError
-from ..fsutil import read_regular
-from ..mesh import UNITS_MM, Units, check_kappa_range, parse_units
+from ..mesh import UNITS_MM, Units, check_kappa_range, parse_units, ply_metadata
 
 __all__ = ["uniform_scale", "ply_unit_mm", "scene_factor", "scene_units", "curvature_warning"]
 
-#: The PLY header comment that records a mesh file's unit (``comment cdbrdf units cm``, ``... units 2.5``).
-_UNIT_COMMENT = re.compile(r"^comment\s+cdbrdf\s+units\s+(.+)$")
-
 #: Relative tolerance on the singular values of a "uniform" scale.
 _UNIFORM_RTOL = 1e-5
-
-#: Bytes of a PLY header read for its unit comment at most.
-_HEADER_BYTES = 65536
 
 
 def uniform_scale(matrix: Any, *, what: str = "to_world") -> float:
@@ -66,26 +58,18 @@ def uniform_scale(matrix: Any, *, what: str = "to_world") -> float:
 def ply_unit_mm(path: str | PathLike[str]) -> float | None:
     """The unit (mm per file unit) a PLY header records (``comment cdbrdf units ...``), or None.
 
-    Reads the header only; a unit :func:`cdbrdf.mesh.parse_units` does
-    not accept counts as none recorded.
+    Reads the header only (:func:`cdbrdf.mesh.ply_metadata`, the reader of
+    :func:`cdbrdf.mesh.read_ply`); a file that cannot be read, a damaged
+    header or a unit :func:`cdbrdf.mesh.parse_units` does not accept counts
+    as none recorded (Mitsuba's loader then says what is wrong with the file).
     """
     from ..errors import MeshError
 
     try:
-        head = read_regular(path, max_bytes=_HEADER_BYTES)  # never a FIFO or /dev/zero; the header only
-    except OSError:
+        unit = ply_metadata(path).get("units")  # never a FIFO or /dev/zero; the header only
+        return None if unit is None else float(parse_units(unit).mm_per_unit)
+    except (OSError, MeshError):
         return None
-    for line in head[:_HEADER_BYTES].split(b"\n")[:256]:
-        text = line.decode("ascii", "replace").strip()
-        if text == "end_header":
-            break
-        m = _UNIT_COMMENT.match(text)
-        if m:
-            try:
-                return float(parse_units(m.group(1).strip()).mm_per_unit)
-            except MeshError:
-                return None
-    return None
 
 
 def scene_units(value: Any, *, what: str = "unit") -> Units:

@@ -41,7 +41,7 @@ def curvature_image(scene: Any, *, attribute: str = "vertex_curvature") -> NDArr
         :func:`cdbrdf.render.scenes.mitsuba_mesh` writes the curvatures);
         shapes without it read as NaN.
     attribute
-        The attribute's name (:data:`cdbrdf.mesh.ATTRIBUTES`).
+        The Mitsuba attribute's name (a :class:`cdbrdf.mesh.CurvatureMode`'s ``mitsuba_attribute``).
 
     Returns
     -------
@@ -146,7 +146,7 @@ def crest_contrast(
                           f"{flat_fraction!r}")
     kappa = getattr(picture, "curvature", None)
     if kappa is None:
-        raise OptionError("picture: has no curvature image; render it with render_table(..., curvature=True)")
+        raise OptionError("picture: has no curvature image; render it with RenderSpec(curvature_image=True)")
     missing = [m for m in modes if m not in picture.images]
     if missing:
         raise OptionError(f"picture: has no {' or '.join(missing)} render (it has {', '.join(picture.images)})")

@@ -1,6 +1,9 @@
 """Pictures of a table: renders in passes, their exposure, the backdrop, and :func:`render_table`.
 
-**Exposure** (:data:`EXPOSURES`): ``"card"`` (the default of
+:func:`render_table` makes a :class:`Picture` of a table from one
+:class:`~cdbrdf.render.spec.RenderSpec`.
+
+**Exposure** (:data:`~cdbrdf.render.spec.EXPOSURES`): ``"card"`` (the default of
 :func:`render_table`) is the exposure at which an 18 % grey card facing the
 key light, lit by it and the environment, shows as mid-grey
 (:func:`cdbrdf.colour.card_exposure_ev`, :func:`cdbrdf.render.lighting.card_irradiance`):
@@ -17,7 +20,7 @@ of unknown light.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from os import PathLike
 from typing import Any
@@ -27,16 +30,14 @@ from numpy.typing import NDArray
 
 from ..errors import OptionError, SceneError
 from ..limits import MAX_SPP
-from .camera import Camera
+from ..limits import check as check_limit
+from ..mesh import MeshSurface, SineSheet, Swatch
 from .lighting import DEFAULT_IRRADIANCE
+from .spec import RenderSpec
 
 __all__ = [
     "BACKDROP",
     "MAX_AUTO_EV",
-    "EXPOSURES",
-    "DEFAULT_SIZE",
-    "DEFAULT_SPP",
-    "RENDER_MODES",
     "Picture",
     "render_table",
     "render_scene",
@@ -51,11 +52,6 @@ BACKDROP = 0.5
 #: Largest automatic exposure, in stops above the physical one (see the module's description).
 MAX_AUTO_EV = 2.0
 
-#: Named exposure rules of :func:`render_table` (see the module's description), beside a number of EV.
-EXPOSURES: Mapping[str, str] = {
-    "card": "grey card: an 18 % grey card facing the key light shows as mid-grey",
-    "auto": "auto: the object's 99th luminance percentile at 0.85 of white",
-}
 
 
 def render_scene(
@@ -212,23 +208,13 @@ def render(scene: Any, *, spp: int | None = None, seed: int = 0,
     numpy.ndarray
         Float32 ``(H, W, C)`` image, linear.
     """
-    from .plugin import check_scene
+    from .checks import check_scene
 
     check_scene(scene)
     return render_scene(scene, spp=spp, seed=seed, progress=progress)
 
 
 # -- one picture of a table ----------------------------------------------------------------------
-#: Default film size of :func:`render_table`, pixels.
-DEFAULT_SIZE: tuple[int, int] = (512, 384)
-
-#: Default samples per pixel of :func:`render_table`.
-DEFAULT_SPP = 64
-
-#: Render modes: the CDBRDF (curvature looked up) and the plain BRDF (the kappa = 0 slice).
-RENDER_MODES: tuple[str, ...] = ("cdbrdf", "brdf")
-
-
 @dataclass(frozen=True)
 class Picture:
     """What :func:`render_table` made.
@@ -258,7 +244,7 @@ class Picture:
     up, up_reason
         The mesh's up axis and why (None for a built-in scene).
     curvature
-        With ``render_table(..., curvature=True)``: the curvature (mm^-1)
+        With ``RenderSpec(curvature_image=True)``: the curvature (mm^-1)
         seen at each pixel centre, ``(H, W)`` float32, NaN where no surface
         is seen (:func:`cdbrdf.render.contrast.curvature_image`); else None.
     """
@@ -292,51 +278,8 @@ class Picture:
         return composite(img, exposure_ev=self.exposure_ev) if self.backdrop else img[..., :3]
 
 
-def _light_of(light: Any, irradiance: float, lighting: str, azimuth_deg: float) -> tuple[float, float, float] | None:
-    """The directional light ``(theta, phi, irradiance)`` of :func:`render_table`'s ``light`` argument."""
-    from .lighting import STUDIO_KEY
-
-    if light is None:
-        return None
-    if isinstance(light, str):
-        if light != "auto":
-            raise OptionError(f"light: expected (theta, phi), 'auto' or None, got {light!r:.40}")
-        if lighting == "paper":
-            return (45.0, 0.0, float(irradiance))
-        return (STUDIO_KEY[0], azimuth_deg + STUDIO_KEY[1], float(irradiance))
-    try:
-        theta, phi = (float(x) for x in light)
-    except (TypeError, ValueError):
-        raise OptionError(f"light: expected (theta, phi) in degrees, 'auto' or None, got {light!r:.40}") from None
-    return (theta, phi, float(irradiance))
-
-
-def render_table(
-    table: Any,
-    surface: str | PathLike[str] | Any = "sine",
-    *,
-    modes: Sequence[str] = ("cdbrdf",),
-    size: tuple[int, int] = DEFAULT_SIZE,
-    spp: int = DEFAULT_SPP,
-    seed: int = 0,
-    max_depth: int = 3,
-    lighting: str | None = None,
-    light: Any = "auto",
-    irradiance: float = DEFAULT_IRRADIANCE,
-    envmap: str | PathLike[str] | None = None,
-    camera: Camera | None = None,
-    units: str | float | None = None,
-    neighbourhood_mm: float | None = None,
-    frame: str | None = None,
-    up: str = "auto",
-    maps: Any = None,
-    curvature_mode: str = "max",
-    exposure: float | str = "card",
-    variant: str | None = None,
-    curvature: bool = False,
-    texel_filter: str | None = None,
-    progress: Callable[[str, int, int], None] | None = None,
-) -> Picture:
+def render_table(table: Any, spec: RenderSpec | str | PathLike[str] | Any = None, *,
+                 progress: Callable[[str, int, int], None] | None = None, **legacy: Any) -> Picture:
     """Render a table on a built-in scene or on a mesh, with the CDBRDF and/or the plain BRDF.
 
     The one entry point for a picture of a table: ``cdbrdf render``, the demo
@@ -352,70 +295,18 @@ def render_table(
     table
         A :class:`~cdbrdf.CDBRDF` or a CDBRDF file, or a :class:`~cdbrdf.CDBTF`
         or its file (each texel at the surface's UVs, ``docs/btf.md``).
-    surface
-        A built-in scene of :data:`cdbrdf.render.scenes.SCENES`: ``"sine"``
-        (the paper's sine sheet, :class:`cdbrdf.mesh.SineSheet` defaults) or
-        ``"swatch"`` (a swatch laid in folds of known radii,
-        :class:`cdbrdf.mesh.Swatch` defaults); a
-        :class:`~cdbrdf.mesh.SineSheet` or :class:`~cdbrdf.mesh.Swatch`; a
-        :class:`~cdbrdf.mesh.Mesh` or a mesh file.
-    modes
-        Any of :data:`RENDER_MODES`: ``("brdf", "cdbrdf")`` for the paper's
-        comparison (Figs. 9-10).
-    size, spp, seed, max_depth
-        Film ``(width, height)``, samples per pixel, seed of the first pass,
-        Mitsuba path length (2 = direct light only).
-    lighting
-        ``"paper"`` (one directional light) or ``"studio"`` (a key light and
-        a soft sky; the swatch and meshes); default: paper for the sheet,
-        studio for the swatch and a mesh (:mod:`cdbrdf.render.lighting`).
-    light
-        ``(theta_deg, phi_deg)``: direction towards the directional (key)
-        light (elevation from the up axis, azimuth from +x); ``"auto"``: the
-        lighting's default; None: no directional light (a mesh with an
-        environment).
-    irradiance
-        Of the directional light, W m^-2 (pi: a white Lambertian surface
-        facing it is just white at 0 EV).
-    envmap
-        An environment map file (.exr, .hdr), the swatch and meshes only.
-    camera
-        A :class:`cdbrdf.render.camera.Camera`: the view ``(elevation_deg,
-        azimuth_deg)`` above the ground plane, the zoom, the lens's field of
-        view and the point looked at (in the surface's own coordinates and
-        unit, or an anchor such as ``"fold"``); None or a field left None:
-        the surface's defaults (:data:`~cdbrdf.render.camera.DEFAULT_SINE_VIEW`,
-        ``DEFAULT_SWATCH_VIEW``, ``DEFAULT_MESH_VIEW``).
-    units, neighbourhood_mm, frame, up
-        For a mesh: its length unit, the curvature's neighbourhood (mm), the
-        source of the material's x axis, its up axis
-        (:func:`cdbrdf.mesh.prepare_mesh`, :func:`cdbrdf.mesh.detect_up`).
-    maps
-        A :class:`cdbrdf.mesh.SurfaceMaps`: the maps laid on the mesh by its
-        UVs (a normal or height map, a high-resolution mesh baked onto it;
-        default: the ones the mesh file names), looked up per shading point,
-        their curvature added to the mesh's and their normals tilting the
-        shading; and the UV scale (mm per UV unit) of the maps and a CD-BTF
-        (default: the sheet's size on the sine sheet, the swatch's (its
-        profile's length and its depth) on the swatch; detected on a mesh,
-        :func:`cdbrdf.mesh.detect_uv_scale`).
-    curvature_mode
-        ``"max"`` (the paper's) or ``"directional"``.
-    exposure
-        EV, or a rule of :data:`EXPOSURES`: ``"card"`` (the default: an 18 %
-        grey card facing the key light shows as mid-grey) or ``"auto"``
-        (:func:`exposure_from_render` of the CDBRDF image, else the first
-        mode's). :attr:`Picture.exposure_source` says which, in words.
-    variant
-        Mitsuba variant (default :data:`cdbrdf.render.DEFAULT_VARIANT`).
-    curvature
-        Also record the curvature seen at each pixel (:attr:`Picture.curvature`,
-        for :func:`cdbrdf.render.contrast.crest_contrast`).
-    texel_filter
-        For a CD-BTF: the plug-in's ``texel_filter`` (default: the plug-in's default).
+    spec
+        What to render: a :class:`~cdbrdf.render.spec.RenderSpec` (surface,
+        camera, light, maps, exposure, film, modes; checked when it was
+        made), or a surface alone (``"sine"``, ``"swatch"``, a mesh file, ...)
+        for ``RenderSpec(surface=...)``; default ``RenderSpec()``, the sine sheet.
     progress
         ``progress(stage, done, total)``: ``"curvature"`` (vertices) while a
         mesh is prepared, ``"rendering MODE"`` (samples per pixel).
+    **legacy
+        The former keywords (``modes=``, ``size=``, ``light=``, ...): turned
+        into the record by :meth:`RenderSpec.from_options`, with a
+        :class:`DeprecationWarning` (``docs/rendering.md``, "Migrating to RenderSpec").
 
     Returns
     -------
@@ -425,127 +316,120 @@ def render_table(
     Raises
     ------
     OptionError
-        For an invalid option or combination (no light at all; the studio
-        lighting or an environment map on the sine sheet).
+        For an invalid option or combination (:class:`~cdbrdf.render.spec.RenderSpec`).
     MeshError, LimitError, SceneError
         For a mesh that cannot be used, a render too large, a damaged
         environment map.
     """
-    from ..limits import check as check_limit
-    from ..mesh import ATTRIBUTES, Mesh, SineSheet, SurfaceMaps, Swatch, detect_up, has_own_uv, prepare_mesh, read_mesh
-    from ..table import CDBRDF
-    from ..table import load as load_table
-    from .camera import DEFAULT_MESH_VIEW, DEFAULT_SINE_VIEW, DEFAULT_SWATCH_VIEW
-    from .contrast import curvature_image
-    from .lighting import LIGHTINGS
     from .plugin import DEFAULT_VARIANT
     from .plugin import variant as variant_context
-    from .scenes import mesh_scene, sine_scene, swatch_scene
 
-    modes = tuple(modes)
-    if not modes or any(m not in RENDER_MODES for m in modes) or len(set(modes)) != len(modes):
-        raise OptionError(f"modes: {modes!r:.60} must be distinct values of {', '.join(RENDER_MODES)}")
-    if lighting is not None and lighting not in LIGHTINGS:
-        raise OptionError(f"lighting: {lighting!r:.40} is not one of {', '.join(LIGHTINGS)}")
-    if not (isinstance(exposure, str) and exposure in EXPOSURES):
-        if isinstance(exposure, str) or not math.isfinite(float(exposure)):
-            raise OptionError(f"exposure: expected a finite number of stops or one of {', '.join(EXPOSURES)}, "
-                              f"got {exposure!r:.40}")
-    w, h = (int(x) for x in size)
+    spec = _spec_of(spec, legacy)
+    w, h = spec.size
     check_limit("render_pixels", w * h, what=f"a {w} x {h} render")
-    if maps is not None and not isinstance(maps, SurfaceMaps):
-        raise OptionError(f"maps: expected a cdbrdf.mesh.SurfaceMaps, got {type(maps).__name__}")
     btf = _as_btf(table)
-    tbl = btf.mean() if btf is not None else table if isinstance(table, CDBRDF) else load_table(table)
-    camera = Camera() if camera is None else camera
-    if not isinstance(camera, Camera):
-        raise OptionError(f"camera: expected a cdbrdf.render.Camera, got {type(camera).__name__:.40}")
-    is_sheet = isinstance(surface, SineSheet) or (isinstance(surface, str) and surface == "sine")
-    is_swatch = isinstance(surface, Swatch) or (isinstance(surface, str) and surface == "swatch")
-    lighting = lighting or ("paper" if is_sheet else "studio")
-    view = DEFAULT_SINE_VIEW if is_sheet else DEFAULT_SWATCH_VIEW if is_swatch else DEFAULT_MESH_VIEW
-    sun = _light_of(light, irradiance, lighting, (camera.view or view)[1])
-    common: dict[str, Any] = {"size": (w, h), "spp": int(spp), "max_depth": int(max_depth), "camera": camera,
-                              "curvature_mode": curvature_mode}
-    mesh: Any = None
-    up_axis = why = None
-    if is_sheet:
-        sheet = surface if isinstance(surface, SineSheet) else SineSheet()
-        if envmap is not None:
-            raise OptionError("envmap: only for meshes (the sine sheet is the paper's set-up)")
-        if maps is not None and any(x is not None for x in (maps.normal_map, maps.height_map, maps.hires_mesh)):
-            raise OptionError("maps: only for meshes (the sine sheet's folds are its geometry)")
-        if lighting == "studio":
-            raise OptionError("lighting 'studio': only for meshes (the sine sheet is the paper's set-up)")
-        if sun is None:
-            raise OptionError("light: the sine sheet needs a light (the paper's directional light)")
-        check_limit("mesh_faces", sheet.face_count, what=f"a sine sheet of wavelength {sheet.wavelength_mm:g} mm "
-                    f"over {sheet.width_mm:g} x {sheet.depth_mm:g} mm")
-        name = "sine sheet"
-    elif is_swatch:
-        swatch = surface if isinstance(surface, Swatch) else Swatch()
-        if maps is not None and any(x is not None for x in (maps.normal_map, maps.height_map, maps.hires_mesh)):
-            raise OptionError("maps: only for meshes (the swatch's folds are its geometry)")
-        if sun is None and envmap is None and lighting == "paper":
-            raise OptionError("light: the scene needs a light; give an environment map or use the studio lighting")
-        check_limit("mesh_faces", swatch.face_count, what=f"a swatch of {len(swatch.radii_mm)} folds over "
-                    f"{swatch.width_mm:.0f} x {swatch.depth_mm:g} mm")
-        name = "swatch"
-    else:
-        if sun is None and envmap is None and lighting == "paper":
-            raise OptionError("light: the scene needs a light; give an environment map or use the studio lighting")
-        if isinstance(surface, Mesh):
-            source, name = surface, str(surface.metadata.get("source", "mesh"))
-        else:
-            source, name = read_mesh(surface), str(surface)
-        cb = None if progress is None else (lambda done, total: progress("curvature", done, total))
-        mesh = prepare_mesh(source, units=units, neighbourhood_mm=neighbourhood_mm, frame=frame, table=tbl,
-                            maps=maps, progress=cb)
-        up_axis, why = (up, "given") if up != "auto" else detect_up(mesh)
-        if btf is not None and not has_own_uv(mesh):  # the per-face UVs prepare_mesh makes follow no fabric
-            mesh = mesh.copy()  # the note is this picture's, not the caller's mesh's
-            mesh.metadata["notes"] = [*mesh.metadata.get("notes", []),
-                                      "no UVs of its own: the CD-BTF's tile mean is rendered on it"]
-            btf = None
+    tbl = btf.mean() if btf is not None else _as_table(table)
+    name = spec.name
+    spec, mesh, btf, (up, why) = _surface(spec, tbl, btf, progress)
     images: dict[str, NDArray[np.float32]] = {}
     kappa_image = None
-    span = (sheet.width_mm, sheet.depth_mm) if is_sheet else (swatch.length_mm, swatch.depth_mm) if is_swatch \
-        else None  # a built-in surface's UVs span it
-    uv_scale = _btf_uv_scale(btf, maps, span, mesh)
-    with variant_context(variant or DEFAULT_VARIANT):
-        for mode in modes:
-            bsdf = None
-            if btf is not None and uv_scale is not None:  # with the pixel's angle: the lookup filters its footprint
-                bsdf = {**_btf_entry(btf, mode, curvature_mode, uv_scale, texel_filter),
-                        "pixel_angle": _pixel_angle(camera, is_sheet or is_swatch, (w, h))}
-            if is_sheet:
-                scene = sine_scene(tbl, mode=mode, sheet=sheet, light=sun, bsdf=bsdf, **common)
-            elif is_swatch:
-                scene = swatch_scene(tbl, mode=mode, swatch=swatch, lighting=lighting, light=sun, envmap=envmap,
-                                     bsdf=bsdf, **common)
-            else:
-                scene = mesh_scene(tbl, mesh, mode=mode, lighting=lighting, light=sun, envmap=envmap,
-                                   up=str(up_axis), bsdf=bsdf, **common)
-            cb = None if progress is None else (lambda done, total, m=mode: progress(f"rendering {m}", done, total))
-            images[mode] = render_scene(scene, spp=int(spp), seed=seed, alpha=True, progress=cb)
-            if curvature and kappa_image is None:
-                kappa_image = curvature_image(scene, attribute=ATTRIBUTES[curvature_mode])
-            del scene
-    shown = images["cdbrdf" if "cdbrdf" in images else modes[0]]
-    if exposure == "auto":
-        ev, how = exposure_from_render(shown, irradiance=irradiance), "auto"
-    elif exposure == "card":
+    uv_scale = _btf_uv_scale(btf, spec, mesh)
+    with variant_context(spec.variant or DEFAULT_VARIANT):
+        for mode in spec.modes:
+            images[mode], k = _render_mode(tbl, btf, uv_scale, spec, mode, progress,
+                                           curvature=spec.curvature_image and kappa_image is None)
+            kappa_image = k if kappa_image is None else kappa_image
+    ev, how = _exposure(spec, images)
+    return Picture(images=images, exposure_ev=ev, exposure_source=how, surface=name,
+                   lighting=spec.lighting, light=spec.sun(), backdrop=spec.backdrop, mesh=mesh,
+                   up=up, up_reason=why, curvature=kappa_image)
+
+
+def _spec_of(spec: Any, legacy: dict[str, Any]) -> RenderSpec:
+    """The spec of :func:`render_table`'s arguments: the record, a surface alone, or the former keywords."""
+    if legacy:
+        import warnings
+
+        warnings.warn("render_table(table, surface, **options) is deprecated: pass a cdbrdf.render.RenderSpec "
+                      f"(RenderSpec.from_options turns {', '.join(sorted(legacy))} into one)",
+                      DeprecationWarning, stacklevel=3)
+        if isinstance(spec, RenderSpec):
+            raise OptionError(f"render_table: give the options in the RenderSpec, not beside it ({next(iter(legacy))})")
+        return RenderSpec.from_options("sine" if spec is None else spec, **legacy)
+    if isinstance(spec, RenderSpec):
+        return spec
+    return RenderSpec() if spec is None else RenderSpec(surface=spec)
+
+
+def _as_table(table: Any) -> Any:
+    """A :class:`~cdbrdf.CDBRDF` given, or read from its file."""
+    from ..table import CDBRDF
+    from ..table import load as load_table
+
+    return table if isinstance(table, CDBRDF) else load_table(table)
+
+
+def _surface(spec: RenderSpec, tbl: Any, btf: Any,
+             progress: Any) -> tuple[RenderSpec, Any, Any, tuple[str | None, str | None]]:
+    """The spec on its prepared surface, the prepared mesh (None for a built-in one), the CD-BTF, the up axis and why.
+
+    A built-in surface's size is checked against the ``mesh_faces`` limit; a
+    CD-BTF on a mesh without UVs of its own renders its tile mean (said in
+    the mesh's notes).
+    """
+    from ..mesh import detect_up, has_own_uv
+
+    s = spec.surface
+    if isinstance(s, SineSheet):
+        check_limit("mesh_faces", s.face_count, what=f"a sine sheet of wavelength {s.wavelength_mm:g} mm "
+                    f"over {s.width_mm:g} x {s.depth_mm:g} mm")
+        return spec, None, btf, (None, None)
+    if isinstance(s, Swatch):
+        check_limit("mesh_faces", s.face_count, what=f"a swatch of {len(s.radii_mm)} folds over "
+                    f"{s.width_mm:.0f} x {s.depth_mm:g} mm")
+        return spec, None, btf, (None, None)
+    assert isinstance(s, MeshSurface)
+    cb = None if progress is None else (lambda done, total: progress("curvature", done, total))
+    mesh = s.prepare(table=tbl, maps=spec.maps, progress=cb)
+    up, why = (s.up, "given") if s.up != "auto" else detect_up(mesh)
+    if btf is not None and not has_own_uv(mesh):  # the per-face UVs prepare_mesh makes follow no fabric
+        mesh = mesh.copy()  # the note is this picture's, not the caller's mesh's
+        mesh.metadata["notes"] = [*mesh.metadata.get("notes", []),
+                                  "no UVs of its own: the CD-BTF's tile mean is rendered on it"]
+        btf = None
+    return spec.with_mesh(mesh, up), mesh, btf, (up, why)
+
+
+def _render_mode(tbl: Any, btf: Any, uv_scale: tuple[float, float] | None, spec: RenderSpec, mode: str,
+                 progress: Any, *, curvature: bool) -> tuple[NDArray[np.float32], Any]:
+    """One mode's RGBA render, and with ``curvature`` the curvature seen at each pixel."""
+    from .contrast import curvature_image
+    from .scenes import table_scene
+
+    bsdf = None
+    if btf is not None and uv_scale is not None:  # with the pixel's angle: the lookup filters its footprint
+        bsdf = {**_btf_entry(btf, mode, spec.curvature_mode, uv_scale, spec.texel_filter),
+                "pixel_angle": _pixel_angle(spec)}
+    scene = table_scene(tbl, spec, mode=mode, bsdf=bsdf)
+    cb = None if progress is None else (lambda done, total: progress(f"rendering {mode}", done, total))
+    image = render_scene(scene, spp=spec.spp, seed=spec.seed, alpha=True, progress=cb)
+    kappa = curvature_image(scene, attribute=spec.curvature.mitsuba_attribute) if curvature else None
+    return image, kappa
+
+
+def _exposure(spec: RenderSpec, images: Mapping[str, NDArray[np.float32]]) -> tuple[float, str]:
+    """The exposure of the picture and its rule: given, the grey card, or auto (the CDBRDF image's, else the first)."""
+    shown = images["cdbrdf" if "cdbrdf" in images else spec.modes[0]]
+    if spec.exposure == "auto":
+        return exposure_from_render(shown, irradiance=spec.light.irradiance), "auto"
+    if spec.exposure == "card":
         from ..colour import card_exposure_ev
         from .lighting import card_irradiance, environment_map, studio_environment
 
-        env = environment_map(envmap) if envmap is not None else \
-            studio_environment() if (not is_sheet and lighting == "studio") else None
-        ev, how = card_exposure_ev(card_irradiance(sun, env)), "grey card"
-    else:
-        ev, how = float(exposure), "given"
-    return Picture(images=images, exposure_ev=ev, exposure_source=how, surface=name, lighting=lighting,
-                   light=sun, backdrop=not is_sheet and lighting == "studio" and envmap is None, mesh=mesh,
-                   up=up_axis, up_reason=why, curvature=kappa_image)
+        envmap = spec.light.envmap
+        env = environment_map(envmap) if envmap is not None else studio_environment() if spec.backdrop else None
+        return card_exposure_ev(card_irradiance(spec.sun(), env)), "grey card"
+    return float(spec.exposure), "given"
 
 
 def _as_btf(table: Any) -> Any:
@@ -560,16 +444,18 @@ def _as_btf(table: Any) -> Any:
     return None
 
 
-def _btf_uv_scale(btf: Any, maps: Any, span: tuple[float, float] | None, mesh: Any) -> tuple[float, float] | None:
-    """The UV scale of a CD-BTF: given, a built-in surface's ``span``, or the mesh's (its maps', else detected)."""
+def _btf_uv_scale(btf: Any, spec: RenderSpec, mesh: Any) -> tuple[float, float] | None:
+    """The UV scale of a CD-BTF: given, a built-in surface's span (:meth:`RenderSpec.uv_span`), or the mesh's
+    (its maps', else detected)."""
     from ..mesh import as_uv_scale, detect_uv_scale
 
     if btf is None:
         return None
-    if maps is not None and maps.uv_scale is not None:
-        return as_uv_scale(maps.uv_scale)
+    if spec.maps is not None and spec.maps.uv_scale is not None:
+        return as_uv_scale(spec.maps.uv_scale)
+    span = spec.uv_span()
     if span is not None:
-        return float(span[0]), float(span[1])
+        return span
     if mesh.metadata.get("uv_scale") is not None:
         return as_uv_scale(mesh.metadata["uv_scale"])
     uvs = detect_uv_scale(mesh.vertices, mesh.faces, mesh.uv, units=mesh.metadata.get("units", "mm"))
@@ -577,20 +463,18 @@ def _btf_uv_scale(btf: Any, maps: Any, span: tuple[float, float] | None, mesh: A
     return uvs.pair
 
 
-def _pixel_angle(camera: Camera, sheet: bool, size: tuple[int, int]) -> float:
-    """Radians per pixel of the picture's lens (its smaller side), as :func:`cdbrdf.render.plugin.pixel_angle`."""
-    from .camera import DEFAULT_MESH_FOV_DEG, DEFAULT_SHEET_FOV_DEG
-
-    lens = camera.resolved(view=(0.0, 0.0), fov_deg=DEFAULT_SHEET_FOV_DEG if sheet else DEFAULT_MESH_FOV_DEG)
-    return 2.0 * math.tan(math.radians(lens.lens_fov_deg) / 2.0) / max(min(size), 1)
+def _pixel_angle(spec: RenderSpec) -> float:
+    """Radians per pixel of the picture's lens (its smaller side), as :func:`cdbrdf.render.checks.pixel_angle`."""
+    lens = spec.resolved_camera().lens_fov_deg
+    return 2.0 * math.tan(math.radians(lens) / 2.0) / max(min(spec.size), 1)
 
 
 def _btf_entry(btf: Any, mode: str, curvature_mode: str, uv_scale: tuple[float, float],
                texel_filter: str | None) -> dict[str, Any]:
     """The plug-in's dict for a CD-BTF at ``uv_scale`` mm per UV unit (two numbers, as they are)."""
-    from ..mesh import ATTRIBUTES
+    from ..mesh import curvature_mode as mode_of
 
-    entry = {"type": "cdbrdf", "table": btf, "mode": mode, "curvature": ATTRIBUTES[curvature_mode],
+    entry = {"type": "cdbrdf", "table": btf, "mode": mode, "curvature": mode_of(curvature_mode).mitsuba_attribute,
              "uv_scale": (float(uv_scale[0]), float(uv_scale[1]))}
     if texel_filter is not None:
         entry["texel_filter"] = texel_filter

@@ -23,55 +23,144 @@ itself.
 Plug-in ``cdbrdf`` parameters
 -----------------------------
 
-=========================  ================  ================================================
-Parameter                  Type              Description
-=========================  ================  ================================================
-``filename``               string            A CDBRDF file (HDF5), found through Mitsuba's
-                                             file resolver (relative to the scene file).
-                                             Instead, a table object: ``"table": table`` in a
-                                             dict passed to :func:`load_dict`, or
-                                             :func:`make_bsdf`.
-``mode``                   string            ``"cdbrdf"`` (default): 5-D lookup with the
-                                             curvature; ``"brdf"``: the plain BRDF (kappa = 0).
-``curvature``              string or float   Mesh attribute holding the curvature (mm^-1), or a
-                                             constant in mm^-1.
-``curvature_mode``         string            ``"max"`` (default, attribute ``vertex_curvature``)
-                                             or ``"directional"`` (``vertex_curvature_dir``).
-``curvature_scale``        float             Factor on the attribute (to_world scale and scene
-                                             unit; set by :func:`load_file`).
-``scale``                  float or texture  Factor on the reflectance (default 1); any Mitsuba
-                                             texture multiplies it per channel.
-``sampling``               string            ``"table"`` (default): importance sampling from
-                                             the table; ``"cosine"``: cosine-weighted.
-``cosine_weight``          float             Share of cosine sampling in the table sampler
-                                             (default 0.1).
-``storage``                string            ``"auto"`` (default), ``"packed"`` (21-bit RGB) or
-                                             ``"float"`` (float32 packets, differentiable).
-``uv_scale``               float or string   Mm per UV unit (``"su, sv"`` in XML; two numbers
-                                             from Python): a map's and a CD-BTF's scale.
-                                             Default: a map's detected from its shape
-                                             (:func:`check_scene`); a CD-BTF's 1.
-``texel_filter``           string            A CD-BTF's: ``"stochastic"`` (default),
-                                             ``"bilinear"`` or ``"nearest"``.
-``normal_map``             string            A tangent-space normal map (next to the scene):
-                                             looked up per shading point, its curvature
-                                             added to the mesh's shape operator
-                                             (``vertex_shape``), its normals tilting the
-                                             shading frame.
-``normal_map_convention``  string            ``"opengl"`` (default, green up) or ``"directx"``.
-``height_map``             string            A height map instead, with ``height_scale``.
-``height_scale``           float             Mm per unit of the height map's values.
-``map_size``               float or string   Mm one repeat of the map covers (default: one
-                                             repeat per UV unit).
-``curvature_map``          object            From Python: a :class:`cdbrdf.mesh.CurvatureMap`.
-``neighbourhood``          float             Mm: the map's finest scale (default: the
-                                             table's measured patch, else 5).
-``pixel_angle``            float             The camera's radians per pixel, for the map's
-                                             level (set by :func:`check_scene`).
-``map_filter``             string            ``"trilinear"`` (default) or ``"none"``.
-``shading_normals``        boolean           Whether the map tilts the shading frame
-                                             (default true).
-=========================  ================  ================================================
+.. list-table::
+   :header-rows: 1
+   :widths: 18 12 14 56
+
+   * - Parameter
+     - Type
+     - Default
+     - Description
+   * - ``filename``
+     - string
+     - (required)
+     - A CDBRDF or CD-BTF file (``docs/format.md``), found through Mitsuba's file resolver: relative to the
+       scene file's folder, as for meshes. From Python a table object can be given instead: ``"table": table``
+       in a dict passed to ``cdbrdf.render.load_dict``, or ``cdbrdf.render.make_bsdf(table, ...)``.
+   * - ``table``
+     - object
+     - none
+     - From Python, instead of ``filename``: a ``cdbrdf.CDBRDF`` or ``cdbrdf.CDBTF`` (or a file name).
+   * - ``mode``
+     - string
+     - ``cdbrdf``
+     - ``cdbrdf``: 5-D lookup with the curvature. ``brdf``: the plain BRDF (the table's kappa = 0 slice); the
+       curvature is not read.
+   * - ``curvature``
+     - string or float
+     - by ``curvature_mode``
+     - Name of the mesh attribute holding the curvature in mm^-1, or a constant curvature in mm^-1 (e.g. a
+       measurement stand; ``"0.13"`` as a string is a constant too).
+   * - ``curvature_mode``
+     - string
+     - ``max``
+     - ``max``: attribute ``vertex_curvature``, the principal curvature of larger magnitude with its sign (PLY
+       property ``curvature_x``, written by ``cdbrdf curvature``). ``directional``: attribute
+       ``vertex_curvature_dir``, the signed normal curvature along the material's x axis
+       (``cdbrdf.mesh.CURVATURE_MODES``). Give either this or ``curvature``.
+   * - ``curvature_scale``
+     - float
+     - ``1``
+     - Factor on the attribute's values: a shape's ``to_world`` scale and the scene's unit.
+       ``cdbrdf.render.load_file`` and ``load_dict`` set it (see "Curvature units"); a constant curvature is
+       not scaled.
+   * - ``unit``
+     - string or float
+     - ``mm``
+     - The scene's length unit: ``mm``, ``cm``, ``m``, ``in`` or millimetres per scene unit.
+       ``cdbrdf.render.load_file``, ``load_dict`` and ``cdbrdf render SCENE.xml`` apply it with each shape's
+       ``to_world`` scale (see "Curvature units"); Mitsuba's own loaders give a plug-in no shape, so there it
+       is reported as not applied and the attribute is used as it is.
+   * - ``scene_scale_applied``
+     - boolean
+     - ``false``
+     - Set by cdbrdf's loaders (``load_file``, ``load_dict``): whether they applied the scene's unit and the
+       shape's ``to_world`` scale to ``curvature_scale``. A plug-in made without it (by Mitsuba's own loader)
+       warns that the shape checks were not applied.
+   * - ``scale``
+     - float or texture
+     - ``1``
+     - Factor on the reflectance, e.g. for ``quantity = "relative"`` tables; any Mitsuba texture (``bitmap``,
+       ``checkerboard``, an ``rgb`` colour, ...) multiplies the reflectance per channel, e.g. a printed
+       pattern.
+   * - ``sampling``
+     - string
+     - ``table``
+     - ``table``: importance sampling of the light direction from the table (see "Sampling"). ``cosine``:
+       cosine-weighted hemisphere sampling (a constant table then renders sample for sample as ``diffuse``).
+   * - ``cosine_weight``
+     - float
+     - ``0.1``
+     - Share of cosine sampling in the table sampler's mixture, in (0, 1]; it keeps every direction of the
+       hemisphere sampled.
+   * - ``storage``
+     - string
+     - ``auto``
+     - How the table is held: ``packed`` (RGB as three 21-bit fixed-point channels per 64-bit word; fastest),
+       ``float`` (float32 packets of four samples, differentiable). ``auto`` is ``packed``, and ``float`` when
+       a gradient with respect to the table is requested, in spectral variants, or when the fixed-point step
+       (the table's range / 2,097,151) exceeds 1e-3 of its median absolute value.
+   * - ``uv_scale``
+     - float or string
+     - detected; a CD-BTF's ``1``
+     - Mm per UV unit of the shapes (one number; ``"su, sv"`` in a scene file; two numbers from Python, passed
+       as numbers): the scale of a map's curvature and of a CD-BTF's texels. A map's default is detected from
+       its shape by ``load_file`` / ``check_scene`` (see "Maps").
+   * - ``texel_filter``
+     - string
+     - ``stochastic``
+     - A CD-BTF's filter between texels: ``stochastic`` (one of the four nearest texels, chosen with
+       probability equal to its bilinear weight), ``bilinear`` (the four blended, exactly ``CDBTF.evaluate``)
+       or ``nearest`` (the texel containing the point).
+   * - ``normal_map``
+     - string
+     - none
+     - A tangent-space normal map (PNG/TIFF 8/16 bit, float TIFF, OpenEXR), found next to the scene: looked up
+       per shading point, its curvature added to the mesh's shape operator (attribute ``vertex_shape``), its
+       normals tilting the shading frame (see "Maps").
+   * - ``normal_map_convention``
+     - string
+     - ``opengl``
+     - ``opengl`` (green up: Blender, glTF) or ``directx``.
+   * - ``height_map``
+     - string
+     - none
+     - A height (bump, displacement) map instead, with ``height_scale``.
+   * - ``height_scale``
+     - float
+     - (required with ``height_map``)
+     - Mm per unit of the height map's values (an 8/16-bit image's full code is 1).
+   * - ``map_size``
+     - float or string
+     - one repeat per UV unit
+     - Mm one repeat of the map covers on the cloth (one number, or ``"su, sv"``).
+   * - ``curvature_map``
+     - object
+     - none
+     - From Python: a ``cdbrdf.mesh.CurvatureMap`` (``prepare_mesh(..., maps=...).metadata["curvature_map"]``,
+       any source: normal or height map, a high-resolution mesh).
+   * - ``neighbourhood``
+     - float
+     - the table's measured patch, else ``5``
+     - Mm: the map is never resolved finer than a quarter of it.
+   * - ``pixel_angle``
+     - float
+     - ``0``
+     - The camera's angle per pixel in radians: the footprint a map's level and a neural CD-BTF's texels are
+       filtered over (see "Maps" and "CD-BTF"). ``render_table`` sets it from the camera; for a map,
+       ``load_file`` and ``check_scene`` set it from the scene's first perspective sensor. 0: a map's
+       neighbourhood level alone, a CD-BTF's texels themselves.
+   * - ``map_filter``
+     - string
+     - ``stochastic``
+     - Between the two levels around the footprint's: ``stochastic`` (one of them, chosen with the trilinear
+       weights by a hash of the UV, so a render converges to the trilinear one; half the texel reads),
+       ``trilinear`` (both blended) or ``none`` (the finest level kept, the neighbourhood's, whatever the
+       pixel's footprint: aliases where the map is finer than a pixel; for comparisons).
+   * - ``shading_normals``
+     - boolean
+     - ``true``
+     - Whether the map tilts the shading frame; false: only its curvature is used.
 
 The BSDF is diffuse-like (non-delta) and two-sided: seen from the back, the
 local frame is turned 180 degrees about x (normal and y flip) and the curvature
@@ -108,16 +197,17 @@ from typing import Any
 import numpy as np
 
 from ..errors import OptionError, SceneError
-from ..mesh.curvature_map import SHAPE_MESH_ATTRIBUTE
-from ._bsdf import CURVATURE_MODES, MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
+from ._bsdf import MODES, PLUGIN_NAME, SAMPLINGS, STORAGES, SUPPORTED_VARIANTS
 from ._llvm import INSTALL_HINT, REQUIRED_LLVM_MAJOR, LLVMError, LLVMInfo, check_llvm, find_llvm
-from ._maps_jit import MAP_PARAMETERS
-from ._units import curvature_warning, ply_unit_mm, scene_factor, scene_units, uniform_scale
+from ._params import MAP_PARAMETERS, PARAMETERS, PYTHON_VALUES, Parameter, parameter_table
+from ._units import ply_unit_mm, scene_factor, scene_units, uniform_scale
 
 __all__ = [
-    "CURVATURE_MODES",
     "DEFAULT_VARIANT",
     "MODES",
+    "PARAMETERS",
+    "Parameter",
+    "parameter_table",
     "PLUGIN_NAME",
     "SAMPLINGS",
     "STORAGES",
@@ -136,9 +226,6 @@ __all__ = [
     "make_bsdf",
     "load_dict",
     "mitsuba_message",
-    "check_scene",
-    "cdbrdf_shapes",
-    "pixel_angle",
 ]
 
 _LOG = logging.getLogger(__name__)
@@ -151,16 +238,11 @@ DEFAULT_VARIANT = "llvm_ad_rgb"
 VARIANTS: tuple[str, ...] = ("llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono", "cuda_ad_rgb",
                              "cuda_ad_spectral", "cuda_ad_mono", "scalar_rgb", "scalar_spectral", "scalar_mono")
 
-#: Keys of a ``{"type": "cdbrdf", "table": ...}`` dict entry.
 #: The property cdbrdf's loaders set on a BSDF whose curvature factor they applied.
 _APPLIED = "scene_scale_applied"
 
-_DICT_KEYS = frozenset({"type", "table", "id", "mode", "curvature", "curvature_mode", "curvature_scale", "scale",
-                        "sampling", "cosine_weight", "storage", "uv_scale", "texel_filter", "unit", _APPLIED,
-                        *MAP_PARAMETERS})
-
-#: Parameters given to the plug-in as Python values (numbers in pairs, objects), not through Mitsuba's properties.
-_PYTHON_VALUES = ("uv_scale", "map_size", "curvature_map")
+#: Keys of a ``{"type": "cdbrdf", "table": ...}`` dict entry: the parameters (:data:`PARAMETERS`), the type and id.
+_DICT_KEYS = frozenset({"type", "id", *PARAMETERS} - {"filename"})
 
 
 def available_variants() -> tuple[str, ...]:
@@ -409,7 +491,7 @@ def _make_bsdf(table: Any, *, mode: str = "cdbrdf", curvature: str | float | Non
     for key, value in maps.items():
         if value is None:
             continue
-        if key in _PYTHON_VALUES or not isinstance(value, (str, bool, int, float)):
+        if key in PYTHON_VALUES or not isinstance(value, (str, bool, int, float)):
             extras[key] = value
         else:
             props[key] = value if isinstance(value, (str, bool)) else float(value)
@@ -508,6 +590,8 @@ def load_dict(scene: dict, *, check: bool = True, unit_mm: float | None = None) 
     except RuntimeError as exc:  # a plug-in's error, Mitsuba's: one line, without Mitsuba's traceback
         raise SceneError(mitsuba_message(exc)) from None
     if check and isinstance(obj, mi.Scene):
+        from .checks import check_scene
+
         check_scene(obj)
     return obj
 
@@ -522,163 +606,3 @@ def mitsuba_message(exc: BaseException) -> str:
         text = head.rstrip(" :\n") + ": " + " ".join(last)
     lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
     return " ".join(lines) if lines else type(exc).__name__
-
-
-def _children(obj: Any) -> list[tuple[str, Any]]:
-    """The objects ``obj`` exposes to Mitsuba's traversal (e.g. the BSDFs inside ``twosided``)."""
-    import mitsuba as mi
-
-    found: list[tuple[str, Any]] = []
-
-    class _Collect(mi.TraversalCallback):
-        def put(self, name: str, value: Any, flags: Any) -> None:
-            if isinstance(value, mi.Object):
-                found.append((name, value))
-
-    obj.traverse(_Collect())
-    return found
-
-
-def cdbrdf_shapes(scene: Any) -> Iterator[tuple[Any, Any, Any]]:
-    """``(shape, bsdf, wrapper)`` for every shape whose BSDF is, or wraps, a ``cdbrdf`` BSDF.
-
-    ``wrapper`` is the shape's own BSDF when the plug-in sits inside another
-    BSDF (e.g. ``twosided``), else None.
-
-    Parameters
-    ----------
-    scene : mitsuba.Scene
-        A loaded scene.
-
-    Yields
-    ------
-    tuple
-        ``(shape, bsdf, wrapper)`` per shape.
-    """
-    from ._bsdf import bsdf_class
-
-    cls = bsdf_class()
-    for shape in scene.shapes():
-        bsdf = shape.bsdf()
-        if isinstance(bsdf, cls):
-            yield shape, bsdf, None
-        elif bsdf is not None:
-            for _, child in _children(bsdf):
-                if isinstance(child, cls):
-                    yield shape, child, bsdf
-                    break
-
-
-def check_scene(scene: Any, *, curvature: bool = True) -> None:
-    """Refuse shapes with a ``cdbrdf`` BSDF that cannot define its frame or curvature; warn of an implausible one.
-
-    With ``curvature``, the curvature the renderer will see on those meshes
-    is checked against the tables' kappa range and a warning is logged once
-    when it is implausible, with the likely scene unit
-    (:func:`cdbrdf.render._units.curvature_warning`).
-
-    Parameters
-    ----------
-    scene : mitsuba.Scene
-        A loaded scene.
-    curvature
-        Also check the curvature those meshes carry (the warning above).
-
-    Raises
-    ------
-    SceneError
-        (a ValueError) when such a shape is a mesh without UVs (no anisotropy
-        frame), when the BSDF reads a curvature attribute the shape does not
-        have (it would read as kappa = 0), or when the plug-in is wrapped in
-        Mitsuba's ``twosided`` (its back side would mirror z without the
-        curvature's change of sign; the plug-in is two-sided by itself).
-    """
-    import mitsuba as mi
-
-    for shape, bsdf, wrapper in cdbrdf_shapes(scene):
-        name = shape.id() or type(shape).__name__
-        if wrapper is not None:
-            raise SceneError(
-                f"shape {name!r}: the cdbrdf BSDF is wrapped in {wrapper.class_name()}; the plug-in is "
-                "two-sided by itself (seen from the back, kappa changes sign), while Mitsuba's twosided "
-                "mirrors z and keeps kappa: remove the wrapper (cdbrdf.render.load_file does so itself)"
-            )
-        # Analytic shapes (sphere, disk, ...) have a UV parametrisation; meshes need UVs.
-        if isinstance(shape, mi.Mesh) and not shape.has_vertex_texcoords():
-            raise SceneError(
-                f"shape {name!r}: the cdbrdf BSDF needs a mesh with UV coordinates, whose dP/du "
-                "is the material's reference direction x; this shape has none, so it has no "
-                "anisotropy frame (add UVs, e.g. along the bending direction)"
-            )
-        attr = bsdf.curvature_attribute
-        if attr is not None and not shape.has_attribute(attr):
-            hint = ("write it with `cdbrdf curvature`" if attr in (v for v in CURVATURE_MODES.values())
-                    else "check the attribute name")
-            raise SceneError(
-                f"shape {name!r}: the cdbrdf BSDF reads the curvature from mesh attribute "
-                f"{attr!r}, which the shape does not have ({hint}, or give the BSDF a constant "
-                "curvature); without it the curvature would read as 0"
-            )
-        if getattr(bsdf, "surface", None) is not None and isinstance(shape, mi.Mesh) and attr is not None:
-            if not shape.has_attribute(SHAPE_MESH_ATTRIBUTE):
-                raise SceneError(
-                    f"shape {name!r}: the cdbrdf BSDF's map adds to the mesh's shape operator, and the shape has no "
-                    f"{SHAPE_MESH_ATTRIBUTE} (write the mesh with `cdbrdf curvature`, which stores it as shape_x, "
-                    "shape_y, shape_z, or give the BSDF a constant curvature)")
-    _attach_maps(scene)
-    if not curvature:
-        return
-    shapes = [(shape, bsdf) for shape, bsdf, _ in cdbrdf_shapes(scene) if isinstance(shape, mi.Mesh)]
-    msg = curvature_warning(shapes)
-    if msg:
-        _LOG.warning("%s", msg)
-
-
-def pixel_angle(scene: Any) -> float:
-    """The angle (radians) one pixel of the scene's first sensor spans at its centre; 0 for a sensor without a fov.
-
-    Parameters
-    ----------
-    scene : mitsuba.Scene
-        A loaded scene.
-
-    Returns
-    -------
-    float
-        ``2 tan(x_fov / 2) / width``.
-    """
-    import mitsuba as mi
-
-    if not scene.sensors():
-        return 0.0
-    sensor = scene.sensors()[0]
-    params = mi.traverse(sensor)
-    if "x_fov" not in params:
-        return 0.0
-    fov = float(np.asarray(params["x_fov"], dtype=np.float64).reshape(-1)[0])
-    width = int(sensor.film().crop_size()[0])
-    return 2.0 * math.tan(math.radians(fov) / 2.0) / max(width, 1)
-
-
-def _attach_maps(scene: Any) -> None:
-    """Give every ``cdbrdf`` BSDF with a map the camera's angle per pixel and, unless given, its shape's UV scale."""
-    import mitsuba as mi
-
-    from ..mesh import detect_uv_scale
-
-    angle = None
-    for shape, bsdf, _ in cdbrdf_shapes(scene):
-        m = getattr(bsdf, "surface", None)
-        if m is None:
-            continue
-        if not m.pixel_angle_given:
-            angle = pixel_angle(scene) if angle is None else angle
-            m.pixel_angle = angle
-        if m.uv_scale is None and isinstance(shape, mi.Mesh) and shape.has_vertex_texcoords():
-            p = mi.traverse(shape)
-            v = np.asarray(p["vertex_positions"], dtype=np.float64).reshape(-1, 3)
-            f = np.asarray(p["faces"], dtype=np.int64).reshape(-1, 3)
-            uv = np.asarray(p["vertex_texcoords"], dtype=np.float64).reshape(-1, 2)
-            uvs = detect_uv_scale(v, f, uv, units=bsdf.units.mm_per_unit)
-            m.set_uv_scale(uvs.pair)
-            _LOG.info("shape %r: UV scale of %s: %s", shape.id(), m.name, uvs)

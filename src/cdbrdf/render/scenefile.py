@@ -54,7 +54,8 @@ from ..errors import SceneError
 from ..fsutil import check_regular, read_regular
 from ._bsdf import PLUGIN_NAME
 from ._units import ply_unit_mm, scene_factor, scene_units, uniform_scale
-from .plugin import _APPLIED, check_scene, mitsuba_message, register
+from .checks import check_scene
+from .plugin import _APPLIED, mitsuba_message, register
 
 __all__ = ["LoadReport", "load_file", "ply_unit_mm", "uniform_scale"]
 

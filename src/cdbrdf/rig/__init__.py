@@ -37,6 +37,9 @@ Modules, one per job:
 - :mod:`~cdbrdf.rig.scenes`: the Mitsuba scenes (one per stand, loaded once;
   the camera and light are moved between renders);
 - :mod:`~cdbrdf.rig.sensor`: noise, quantisation, the image files;
+- :mod:`~cdbrdf.rig.options`: :class:`RigOptions`, how the rig photographs
+  (image size, field, samples, noise, gain, exposures, image kind, white
+  reference, seed), checked once, with the ranges the command line reads;
 - :mod:`~cdbrdf.rig.simulate`: :func:`simulate_capture`, the whole folder.
 
 Importing the package loads neither Mitsuba nor the renderer.
@@ -45,6 +48,7 @@ Importing the package loads neither Mitsuba nor the renderer.
 from __future__ import annotations
 
 from .camera import expected_patch_value
+from .options import RigOptions
 from .scenes import STAND_REFLECTANCE
 from .sensor import IMAGE_KINDS, NoiseModel
 from .simulate import SimulationReport, load_material, simulate_capture
@@ -52,6 +56,7 @@ from .stands import stand_meshes
 
 __all__ = [
     "simulate_capture",
+    "RigOptions",
     "SimulationReport",
     "NoiseModel",
     "load_material",

@@ -1,5 +1,7 @@
 """Simulated captures: :func:`simulate_capture` renders a capture folder of a known material.
 
+How the rig photographs is one :class:`~cdbrdf.rig.RigOptions` record (:mod:`cdbrdf.rig.options`).
+
 For every row of a capture plan (``docs/capture.md``) the rig renders one
 photograph with the row's camera and light (:mod:`cdbrdf.rig.scenes`,
 :mod:`cdbrdf.rig.camera`), adds sensor noise and writes it
@@ -32,10 +34,11 @@ from ..measure.plan import write_plan, write_rows
 from ..measure.stands import KAPPA_TOL_PER_MM, Stand, default_stand, stand_for, write_stands
 from ..table import CDBRDF, Grid
 from .camera import light_to_world
+from .options import DEFAULT_FIELD_MM, DEFAULT_SIZE_PX, PX_PER_TEXEL, RigOptions
 from .scenes import stand_scene, white_scene
-from .sensor import IMAGE_KINDS, NoiseModel, encode, extension, write_photograph
+from .sensor import encode, extension, write_photograph
 
-__all__ = ["SimulationReport", "simulate_capture", "load_material", "btf_camera", "PX_PER_TEXEL"]
+__all__ = ["SimulationReport", "simulate_capture", "load_material", "btf_camera"]
 
 
 @dataclass
@@ -109,10 +112,6 @@ def load_material(material: CDBRDF | CDBTF | str | PathLike[str]) -> CDBRDF | CD
     return materials.load(str(material))
 
 
-#: Pixels per texel (along the texel's shorter side) the rig's camera gives a CD-BTF by default.
-PX_PER_TEXEL = 3.0
-
-
 def btf_camera(btf: CDBTF, *, px_per_texel: float = PX_PER_TEXEL, size: int | None = None,
                field_mm: float | None = None) -> tuple[int, float]:
     """The image size and field (mm) that photograph a CD-BTF's repeat at ``px_per_texel``.
@@ -150,24 +149,13 @@ def _registration(table: CDBRDF | CDBTF, stands: Sequence[Stand], seed: int) -> 
 def simulate_capture(
     material: CDBRDF | CDBTF | str | PathLike[str],
     folder: str | PathLike[str],
+    options: RigOptions | None = None,
     *,
     plan: str | PathLike[str] | None = None,
     grid: Grid | None = None,
     stands: Sequence[Stand] | None = None,
-    size: int | None = None,
-    field_mm: float | None = None,
-    px_per_texel: float = PX_PER_TEXEL,
-    shifts: int = 1,
-    spp: int = 4,
-    noise: NoiseModel = NoiseModel(),
-    gain: float = 2.0,
-    exposures: Sequence[float] = (1.0,),
-    image_kind: str = "png16",
-    white_albedo: float = 0.99,
-    white: bool = True,
-    patch_px: int = 7,
-    seed: int = 0,
     progress: Callable[[int, int], None] | None = None,
+    **legacy: Any,
 ) -> SimulationReport:
     """Render a capture folder of a material with the simulated rig.
 
@@ -177,7 +165,7 @@ def simulate_capture(
         A :class:`CDBRDF`, a :class:`~cdbrdf.CDBTF`, a CDBRDF or CD-BTF file,
         or a preset name. A CD-BTF is laid on the stands with its ``(u, v)``
         in mm (arc length along x, length along y) from an origin per stand
-        drawn from ``seed``, recorded as the ``registration`` of
+        drawn from the seed, recorded as the ``registration`` of
         ``stands.json`` (:mod:`cdbrdf.measure.registration`), so that
         ``measure(..., btf=...)`` can rectify the photographs.
     folder
@@ -187,6 +175,10 @@ def simulate_capture(
         added to it since (a measured table, notes: refused, naming them); a
         non-empty folder cdbrdf did not make is refused, and an error or
         interrupt leaves no half-written folder.
+    options
+        How the rig photographs (:class:`~cdbrdf.rig.RigOptions`: image size,
+        field, samples, noise, gain, exposures, image kind, white reference,
+        seed); default ``RigOptions()``.
     plan
         A ``capture.csv`` to render (its ``stands.json``, if beside it, gives
         the stand geometry). It is checked before anything is rendered with
@@ -198,108 +190,58 @@ def simulate_capture(
         grid, default geometry), written like ``cdbrdf plan``.
     grid, stands
         Without ``plan``: the samples and the stands of the plan.
-    size
-        Image width and height in pixels (default 64; for a CD-BTF, from
-        ``px_per_texel``: :func:`btf_camera`).
-    field_mm
-        Width of the camera's field at the stand, mm (default 2; for a
-        CD-BTF, 1.5 repeat diagonals: :func:`btf_camera`); ``field_mm / size``
-        (the pixel size) is written to ``stands.json`` as ``pixel_mm``, so
-        that the measurement discards photographs in which any pixel of the
-        patch sees a wall or lies in its shadow.
-    px_per_texel
-        For a CD-BTF without ``size``: pixels per texel (its shorter side).
-    shifts
-        For a CD-BTF without ``plan``: photograph every sample with the fabric
-        at ``shifts`` positions along u, ``size_u / shifts`` apart (a scan:
-        the rows' ``u_mm``, ``v_mm`` columns), so that each texel is taken
-        within ``size_u / (2 shifts)`` of a curved stand's crest.
-    spp
-        Stratified samples per pixel (integrate each pixel's footprint; box filter).
-    noise
-        Sensor noise; ``NoiseModel(0, 0)`` for none.
-    gain
-        Linear pixel value per unit radiance at exposure 1.
-    exposures
-        Without ``plan``: the exposures of each sample and white photograph
-        (several make brackets, each rendered once and given its own noise).
-    image_kind
-        One of :data:`~cdbrdf.rig.sensor.IMAGE_KINDS`.
-    white_albedo
-        Albedo of the white reference plate (written to ``stands.json``).
-    white
-        Without ``plan``: add white-reference rows.
-    patch_px
-        Without ``plan``: the patch size the plan's ``hidden`` marks assume.
-    seed
-        Noise seed (the photographs of one rendering draw from ``(seed, its first row)``).
     progress
         ``progress(done, total)`` (photographs) after each rendering's photographs are written.
+    **legacy
+        The former keywords (``size=``, ``spp=``, ``noise=``, ...): the fields
+        of :class:`~cdbrdf.rig.RigOptions`, with a :class:`DeprecationWarning`.
 
     Returns
     -------
     SimulationReport
         What was written.
     """
-    if not isinstance(image_kind, str) or image_kind not in IMAGE_KINDS:
-        raise OptionError(f"image_kind: {image_kind!r:.40} is not one of {', '.join(IMAGE_KINDS)}")
-    if isinstance(px_per_texel, bool) or not isinstance(px_per_texel, (int, float)) \
-            or not 0.5 <= px_per_texel <= 64:
-        raise OptionError(f"px_per_texel: expected a number in [0.5, 64], got {px_per_texel!r:.40}")
-    for name, v, lo in (("size", 64 if size is None else size, 8), ("spp", spp, 1), ("shifts", shifts, 1)):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
-            raise OptionError(f"{name}: expected a whole number >= {lo}, got {v!r:.40}")
-    for name, x in (("field_mm", 2.0 if field_mm is None else field_mm), ("gain", gain),
-                    ("white_albedo", white_albedo)):
-        if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)) \
-                or not (math.isfinite(x) and x > 0):
-            raise OptionError(f"{name}: expected a finite positive number, got {x!r:.40}")
+    opts = _options_of(options, legacy)
     from ..outputs import check_output_folder, output_folder
 
     final = check_output_folder(folder)  # refuse a foreign folder before any work
     # the plan is checked by the capture format's own parser before anything is rendered
     the_plan = read_plan(plan) if plan is not None else None
     table = load_material(material)
+    size, field_mm = opts.size, opts.field_mm
     if isinstance(table, CDBTF):
-        size, field_mm = btf_camera(table, px_per_texel=px_per_texel, size=size, field_mm=field_mm)
-    size = 64 if size is None else int(size)
-    field_mm = 2.0 if field_mm is None else float(field_mm)
+        size, field_mm = btf_camera(table, px_per_texel=opts.px_per_texel, size=size, field_mm=field_mm)
+    opts = replace(opts, size=DEFAULT_SIZE_PX if size is None else int(size),
+                   field_mm=DEFAULT_FIELD_MM if field_mm is None else float(field_mm))
     from ..render import variant
 
     with output_folder(final) as partial, variant():
-        rep = _fill_capture(
-            partial, table, plan=the_plan, grid=grid, stands=stands, size=size, field_mm=field_mm,
-            spp=spp, noise=noise, gain=gain, exposures=exposures, image_kind=image_kind,
-            white_albedo=white_albedo, white=white, patch_px=patch_px, seed=seed,
-            progress=progress, shifts=int(shifts),
-        )
+        rep = _fill_capture(partial, table, opts, plan=the_plan, grid=grid, stands=stands, progress=progress)
     rep.folder = final
     return rep
 
 
-def _fill_capture(
-    out: Path,
-    table: CDBRDF | CDBTF,
-    *,
-    plan: Plan | None,
-    grid: Grid | None,
-    stands: Sequence[Stand] | None,
-    size: int,
-    field_mm: float,
-    spp: int,
-    noise: NoiseModel,
-    gain: float,
-    exposures: Sequence[float],
-    image_kind: str,
-    white_albedo: float,
-    white: bool,
-    patch_px: int,
-    seed: int,
-    progress: Callable[[int, int], None] | None,
-    shifts: int = 1,
-) -> SimulationReport:
-    """Write the capture into the (empty, partial) folder ``out``; see :func:`simulate_capture`."""
-    ext = extension(image_kind)
+def _options_of(options: RigOptions | None, legacy: dict[str, Any]) -> RigOptions:
+    """The options of :func:`simulate_capture`'s arguments: the record, or the former keywords (deprecated)."""
+    if not legacy:
+        return RigOptions() if options is None else options
+    import warnings
+
+    warnings.warn("simulate_capture(material, folder, size=..., ...) is deprecated: pass a cdbrdf.rig.RigOptions "
+                  f"({', '.join(sorted(legacy))})", DeprecationWarning, stacklevel=3)
+    if options is not None:
+        raise OptionError(f"simulate_capture: give the options in the RigOptions, not beside it ({next(iter(legacy))})")
+    unknown = sorted(set(legacy) - set(RigOptions.__dataclass_fields__))
+    if unknown:
+        raise OptionError(f"simulate_capture: unknown option {unknown[0]!r}")
+    return RigOptions(**legacy)
+
+
+def _write_plan(out: Path, table: CDBRDF | CDBTF, opts: RigOptions, *, plan: Plan | None, grid: Grid | None,
+                stands: Sequence[Stand] | None) -> tuple[list[CaptureRow], list[Stand], dict[str, Any] | None]:
+    """The capture table and ``stands.json`` in ``out``: the rows to photograph, the stands, a CD-BTF's registration."""
+    size, field_mm = int(opts.size or DEFAULT_SIZE_PX), float(opts.field_mm or DEFAULT_FIELD_MM)
+    ext = extension(opts.image_kind)
     extra: dict[str, Any] = {}
     if plan is not None:
         rows, stand_list = _copy_plan(plan, out, ext)
@@ -308,18 +250,27 @@ def _fill_capture(
     else:
         g = grid if grid is not None else table.grid
         stand_list = list(stands) if stands is not None else [default_stand(k) for k in g.kappa]
-        write_plan(out, g, stand_list, extension=ext, white=white,
-                   pixel_mm=field_mm / size, patch_px=patch_px, exposures=exposures)
-    reg = _registration(table, stand_list, seed)
+        write_plan(out, g, stand_list, extension=ext, white=opts.white,
+                   pixel_mm=field_mm / size, patch_px=opts.patch_px, exposures=opts.exposures)
+    reg = _registration(table, stand_list, opts.seed)
     if plan is None:
-        if reg is not None and shifts > 1:
-            _scan(out / CAPTURE_FILE, reg, shifts)
+        if reg is not None and opts.shifts > 1:
+            _scan(out / CAPTURE_FILE, reg, opts.shifts)
         rows = read_plan(out / CAPTURE_FILE).rows
     if reg is not None:
         extra["registration"] = reg
-    write_stands(out / STAND_FILE, stand_list, white_albedo=float(white_albedo),
+    write_stands(out / STAND_FILE, stand_list, white_albedo=float(opts.white_albedo),
                  material=str(table.attrs.get("material", "unknown")), simulated=True,
                  pixel_mm=field_mm / size, **extra)
+    return list(rows), stand_list, reg
+
+
+def _fill_capture(out: Path, table: CDBRDF | CDBTF, opts: RigOptions, *, plan: Plan | None, grid: Grid | None,
+                  stands: Sequence[Stand] | None, progress: Callable[[int, int], None] | None) -> SimulationReport:
+    """Write the capture into the (empty, partial) folder ``out``; see :func:`simulate_capture`."""
+    rows, stand_list, reg = _write_plan(out, table, opts, plan=plan, grid=grid, stands=stands)
+    size, field_mm = int(opts.size or DEFAULT_SIZE_PX), float(opts.field_mm or DEFAULT_FIELD_MM)
+    seed, noise, gain, image_kind = opts.seed, opts.noise, opts.gain, opts.image_kind
 
     import mitsuba as mi
 
@@ -364,9 +315,9 @@ def _fill_capture(
                 emit([(i, 0) for i in batch.rows[c:c + MAX_BATCH_VIEWS]], None)
             continue
         kw = {"views": [direction_from_angles(tv, pv) for tv, pv in batch.views], "size": size,
-              "field_mm": field_mm, "spp": spp}
+              "field_mm": field_mm, "spp": opts.spp}
         if batch.key == "white":
-            scene = white_scene(mi, cr, white_albedo, **kw)
+            scene = white_scene(mi, cr, opts.white_albedo, **kw)
         else:
             if isinstance(batch.key, str):  # pragma: no cover - dark and white are handled above
                 continue
