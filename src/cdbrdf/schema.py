@@ -421,6 +421,9 @@ class TableParts:
         The per-sample fill provenance (since 1.2; :data:`FILL_METHOD`,
         :data:`FILL_SOURCES`, :data:`FILL_WEIGHTS`, :data:`FILL_STD`), or
         None when not recorded.
+    file_attrs
+        The names of the file's global attributes, when a reader saw them
+        (another variable's attributes, a CD-BTF's: :mod:`cdbrdf.sources`); None otherwise.
     """
 
     values: np.ndarray
@@ -433,6 +436,7 @@ class TableParts:
     fill_sources: np.ndarray | None = None
     fill_weights: np.ndarray | None = None
     fill_std: np.ndarray | None = None
+    file_attrs: frozenset[str] | None = None
 
     @classmethod
     def of(cls, table: Any) -> TableParts:

@@ -59,6 +59,7 @@ __all__ = [
     "Grid",
     "CDBRDF",
     "load",
+    "load_parts",
     "MAX_ABS_VALUE",
     "AXES",
     "QUANTITIES",
@@ -693,7 +694,28 @@ def load(path: str | PathLike[str]) -> CDBRDF:
     LimitError
         When the file declares more samples than the ``table_samples`` limit.
     """
-    parts = read_gltf(path) if is_gltf(path) else _io.read(path)
+    return _from_parts(read_gltf(path) if is_gltf(path) else _io.read(path), path)
+
+
+def load_parts(path: str | PathLike[str]) -> tuple[CDBRDF, frozenset[str] | None]:
+    """A CDBRDF file read as :func:`load` reads it, with the names of the file's global attributes.
+
+    Parameters
+    ----------
+    path
+        A CDBRDF (or CD-BTF) file.
+
+    Returns
+    -------
+    tuple
+        The table, and the names of the file's global attributes (None when
+        it was read in a child process, :func:`cdbrdf.io.read`).
+    """
+    parts = _io.read(path)
+    return _from_parts(parts, path), parts.file_attrs
+
+
+def _from_parts(parts: Any, path: str | PathLike[str]) -> CDBRDF:
     try:
         return CDBRDF(parts.values, **parts.table_kwargs())
     except TableError as exc:

@@ -39,9 +39,9 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from .. import limits
 from .._fileattrs import data_digest, get_attr, get_attr_str
 from .._hdf5 import check_storage, fail, one_line
+from ..limits import check as check_limit
 from ..schema import SAMPLE_AXES
 
 if TYPE_CHECKING:
@@ -244,7 +244,7 @@ def _read_neural(path: Path, f: Any, nu: int, nv: int, n_channels: int) -> Neura
     return Neural(tuple(latents), tuple(ws), tuple(bs), (float(const[0]), float(const[1]), float(const[2])))
 
 
-def read(path: str | PathLike[str]) -> BTFParts:
+def read(path: str | PathLike[str], *, mean: CDBRDF | None = None) -> BTFParts:
     """Read a CD-BTF file written by :meth:`cdbrdf.btf.CDBTF.save` (:func:`cdbrdf.btf.load` builds the object).
 
     The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
@@ -264,7 +264,7 @@ def read(path: str | PathLike[str]) -> BTFParts:
     from ..table import load as load_table
 
     p = Path(path)
-    mean = load_table(p)
+    mean = load_table(p) if mean is None else mean  # given: read already, by cdbrdf.sources.open_source
     try:
         f = h5py.File(p, "r")
     except OSError as exc:
@@ -285,7 +285,7 @@ def read(path: str | PathLike[str]) -> BTFParts:
         nu, nv = (int(f[n].shape[0]) if n in f else -1 for n in (TEXEL_U, TEXEL_V))
         if nu < 1 or nv < 1 or not 0 <= rank <= 4096:
             raise fail(p, f"texel axes or rank missing or invalid (texels {nu} x {nv}, rank {rank})")
-        limits.check("table_samples", float(math.prod(mean.shape)) * (rank + 1) + nu * nv * rank,
+        check_limit("table_samples", float(math.prod(mean.shape)) * (rank + 1) + nu * nv * rank,
                      what=f"{p}: CD-BTF of rank {rank}")
         if rank:
             weights = _array(p, f, WEIGHTS, (nv, nu, rank))

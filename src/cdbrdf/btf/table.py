@@ -564,12 +564,19 @@ class CDBTF:
                 f"{self.grid!r})")
 
 
-def load(path: str | PathLike[str]) -> CDBTF:
+def load(path: str | PathLike[str], *, mean: CDBRDF | None = None) -> CDBTF:
     """Read a CD-BTF file written by :meth:`CDBTF.save`.
 
     The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
     the CDBRDF file), then the CD-BTF variables: their shapes against the
     mean and each other, finite values, the digest ``btf_sha256``.
+
+    Parameters
+    ----------
+    path
+        The file.
+    mean
+        The file's tile mean, when it was read already (:func:`cdbrdf.sources.open_source`).
 
     Raises
     ------
@@ -583,7 +590,7 @@ def load(path: str | PathLike[str]) -> CDBTF:
 
     from .file import read
 
-    p = read(path)
+    p = read(path, mean=mean)
     try:
         return CDBTF(p.mean, p.weights, p.basis, repeat_mm=p.repeat_mm, compression=p.compression, neural=p.neural)
     except TableError as exc:
