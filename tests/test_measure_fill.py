@@ -322,11 +322,12 @@ def test_auto_chooses_the_method_whose_check_errs_least():
 
 def test_btf_takes_the_data_fills_only(tmp_path):
     from cdbrdf.errors import OptionError
+    from cdbrdf.measure import MeasureOptions
     from cdbrdf.measure.btf import measure_btf
 
     for method in ("model", "auto"):
         with pytest.raises(OptionError, match=rf"fill: '{method}' fills a CDBRDF, not a CD-BTF's texels"):
-            measure_btf(tmp_path, None, texels=4, fill=method)
+            measure_btf(tmp_path, None, texels=4, options=MeasureOptions(fill=method))
 
 
 def _quick_fill_errors(truth, name, methods, seed=3):
