@@ -144,14 +144,17 @@ def test_a_fit_probes_its_variants_and_fits_the_best():
     assert r.evaluations <= 60
 
 
+@pytest.mark.slow
 def test_a_pile_fit_recovers_its_colours():
+    """Fitted to its own values the pile model comes back: 160 evaluations (the default budget of 80 ends at
+    Delta E*ab 2.2 on this case since the multiple scattering of model 2.0: measured; about 6 CPU-minutes)."""
     fm = F.fit_model("pile")
     truth = {"fibre_rgb": (0.6, 0.2, 0.1), "ground_rgb": (0.1, 0.3, 0.5), "strands_per_mm2": 120.0,
              "spread_deg": 15.0, "fibre_gloss_deg": 10.0, "fibre_specular": 0.6, "correlation_mm": 0.1}
     tv, pv, tl, pl = F.directions(64, seed=0)
     f = fm.build(truth).evaluate(tv, pv, tl, pl, 0.0)
     data = F.FitData(tv, pv, tl, pl, f, isotropic=False)
-    r = F.fit(data, fm, max_evaluations=60)
+    r = F.fit(data, fm, max_evaluations=160)
     assert r.errors["test"]["delta_e_median"] < 1.0
     np.testing.assert_allclose(r.values["fibre_rgb"], truth["fibre_rgb"], atol=0.05)
     assert r.fixed["pile_height_mm"] == 1.5 and "scaled together" in r.fixed["reason"]
@@ -170,7 +173,7 @@ def test_a_model_that_claims_independent_channels_has_them(name):
     assert np.abs(b[:, 0] - a[:, 0]).max() > 1e-3
     if fm.channels_independent:
         np.testing.assert_array_equal(a[:, 1:], b[:, 1:])
-    else:  # the pile's fibres are normalised by their brightest channel: it says so, and the Jacobian steps each
+    else:  # a model whose channels mix says so, and the Jacobian steps each channel
         assert not np.array_equal(a[:, 1:], b[:, 1:])
 
 

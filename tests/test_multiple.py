@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from cdbrdf.colour import lab_chroma_hue, linear_to_lab, reflectance_to_linear, reflectance_to_xyz
+from cdbrdf.colour import lab_chroma_hue, linear_to_lab
+from cdbrdf.spectral import reflectance_to_linear, reflectance_to_xyz
 from cdbrdf.synth import colorants, multiple, presets
 from cdbrdf.synth.metrics import luminance
 from cdbrdf.synth.pile import PileModel, PileParams

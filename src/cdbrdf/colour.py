@@ -17,9 +17,6 @@ exactly the same numbers:
   named (:data:`EXPOSURE_MODES`, resolved by :func:`resolve_exposure`) or in
   stops (:func:`ev_to_factor`, :func:`factor_to_ev`);
 - 8-bit display encoding of linear radiance (:func:`tonemap_srgb8`);
-- reflectance spectra to colour: CIE 1931 2-degree XYZ under D65 and linear
-  Rec. 709 RGB (:func:`reflectance_to_xyz`, :func:`reflectance_to_linear`;
-  the CIE tables are Mitsuba 3's, read without changing its variant);
 - colour differences: linear RGB to CIE XYZ (:data:`RGB_TO_XYZ`, D65) and
   CIE 1976 L*a*b* (:func:`linear_to_lab`, :func:`xyz_to_lab`), display
   sRGB (8-bit codes or encoded values) to L*a*b* (:func:`srgb_to_lab`),
@@ -29,9 +26,9 @@ exactly the same numbers:
   tolerance metric, and Delta E*ab.
 
 The L*a*b* formula and CIEDE2000 are those of the ``colour-science``
-package (imported as ``colour_science`` inside the functions that use it);
-Mitsuba is imported inside the spectral functions: importing this module
-imports only numpy and does nothing.
+package (imported as ``colour_science`` inside the functions that use it,
+so that importing this module imports only numpy and does nothing).
+Reflectance spectra to colour: :mod:`cdbrdf.spectral`.
 
 References
 ----------
@@ -50,7 +47,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -80,8 +76,6 @@ __all__ = [
     "RGB_TO_XYZ",
     "D65_WHITE_XYZ",
     "linear_to_xyz",
-    "reflectance_to_xyz",
-    "reflectance_to_linear",
     "xyz_to_lab",
     "linear_to_lab",
     "lab_chroma_hue",
@@ -461,70 +455,6 @@ def linear_to_xyz(rgb: ArrayLike) -> NDArray[np.float64]:
     if v.ndim == 0 or v.shape[-1] != 3:
         raise OptionError(f"rgb: expected linear RGB values (..., 3), got shape {v.shape}")
     return v @ RGB_TO_XYZ.T
-
-
-_CIE_NM = np.arange(360.0, 831.0, 1.0)  # nm the spectral functions sum over: the CIE tables', 1 nm steps
-
-
-def _cie_d65_tables() -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """CIE 1931 2-degree colour-matching functions ``(n, 3)`` and D65 ``(n,)`` at :data:`_CIE_NM` (Mitsuba's)."""
-    import mitsuba
-
-    m: Any = mitsuba.scalar_rgb  # the variant's functions, without switching the process's variant
-    cmf = np.array([list(m.cie1931_xyz(float(w))) for w in _CIE_NM], dtype=np.float64)
-    d65 = np.array([float(m.cie_d65(float(w))) for w in _CIE_NM], dtype=np.float64)
-    return cmf, d65
-
-
-def reflectance_to_xyz(wavelengths_nm: ArrayLike, reflectance: ArrayLike) -> NDArray[np.float64]:
-    """CIE XYZ of a reflectance spectrum under D65, CIE 1931 2-degree observer (CIE 15:2004, 7.1).
-
-    ``X = sum R S x / sum S y`` over 360-830 nm in 1 nm steps (the spectrum linear between its
-    samples, constant beyond them); the perfect reflecting diffuser has ``Y = 1``.
-
-    Parameters
-    ----------
-    wavelengths_nm
-        Increasing wavelengths of the samples, nm.
-    reflectance
-        ``(..., n)`` reflectance factors at them.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(..., 3)`` X, Y, Z.
-    """
-    wl = np.asarray(wavelengths_nm, dtype=np.float64)
-    r = np.asarray(reflectance, dtype=np.float64)
-    if wl.ndim != 1 or wl.size < 2 or not np.all(np.diff(wl) > 0) or r.shape[-1:] != wl.shape:
-        raise OptionError(f"reflectance: expected (..., {wl.size}) samples at increasing wavelengths, "
-                          f"got {r.shape} at {wl.shape}")
-    cmf, d65 = _cie_d65_tables()
-    flat = r.reshape(-1, wl.size)
-    dense = np.stack([np.interp(_CIE_NM, wl, row) for row in flat])
-    xyz = (dense * d65) @ cmf / float(d65 @ cmf[:, 1])
-    return xyz.reshape(r.shape[:-1] + (3,))
-
-
-def reflectance_to_linear(wavelengths_nm: ArrayLike, reflectance: ArrayLike) -> NDArray[np.float64]:
-    """Linear Rec. 709 RGB of a reflectance spectrum under D65 (:func:`reflectance_to_xyz`).
-
-    Scaled per channel so that the perfect reflecting diffuser is exactly (1, 1, 1) (the tabulated D65
-    and Rec. 709's white differ by about 0.1 %): the result is the albedo a model takes.
-
-    Parameters
-    ----------
-    wavelengths_nm, reflectance
-        As :func:`reflectance_to_xyz`.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(..., 3)`` linear RGB (may leave [0, 1] for colours outside the gamut).
-    """
-    to_rgb, wl = np.linalg.inv(RGB_TO_XYZ), np.asarray(wavelengths_nm, dtype=np.float64)
-    white = reflectance_to_xyz(wl, np.ones(wl.size)) @ to_rgb.T
-    return (reflectance_to_xyz(wavelengths_nm, reflectance) @ to_rgb.T) / white
 
 
 def xyz_to_lab(xyz: ArrayLike, *, white: ArrayLike = D65_WHITE_XYZ) -> NDArray[np.float64]:

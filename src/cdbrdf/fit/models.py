@@ -387,12 +387,12 @@ class PileFit(FitModel):
     """The pile model (:class:`cdbrdf.synth.pile.PileModel`), cut fibres."""
 
     name = "pile"
-    # the fibres' energy normalisation depends on their brightest channel
-    channels_independent = False
+    # each channel is its own (model 2.0: the fibres' normalisation and multiple scattering per channel)
+    channels_independent = True
     # a model evaluation costs about 0.05 s
     max_evaluations = 80
     description = ("pile fabric (cdbrdf.synth.pile): fibres standing on a ground, a fibre medium with "
-                   "correlated shadowing (single scattering and one ground bounce in model 1.0)")
+                   "correlated shadowing, multiple scattering in the pile and with the ground (model 2.0)")
     parameters = (
         Parameter("fibre_rgb", 0.0, 1.0, "", 3, why=_ALBEDO),
         Parameter("ground_rgb", 0.0, 1.0, "", 3, why=_ALBEDO),

@@ -14,7 +14,7 @@ plateau and yellowness), each dye's absorption band ``k_d`` a Gaussian in
 wavenumber at the dye's absorption maximum, and ``c_d k_d(lambda_max)`` the
 depth of shade as ``K/S`` at the maximum. The spectrum's colour is its CIE
 1931 2-degree XYZ under D65, as linear Rec. 709 RGB with the perfect white
-at (1, 1, 1) (:func:`cdbrdf.colour.reflectance_to_linear`). Every
+at (1, 1, 1) (:func:`cdbrdf.spectral.reflectance_to_linear`). Every
 colorant's entry in :data:`COLORANTS` says where its numbers come from;
 :func:`linear_rgb` gives the colour a woven yarn takes (its surface reflects
 like the bulk material, ``R_inf``), and the pile presets' strand albedos
@@ -227,7 +227,7 @@ def reflectance(name: str, wavelengths_nm: NDArray[np.float64] | None = None) ->
 
 def linear_rgb(name: str) -> NDArray[np.float64]:
     """The colorant's reflectance as linear Rec. 709 RGB under D65 (CIE 1931 2-degree), ``(3,)``."""
-    from ..colour import reflectance_to_linear
+    from ..spectral import reflectance_to_linear
 
     return np.clip(reflectance_to_linear(WAVELENGTHS_NM, reflectance(name)), 0.0, 1.0)
 
