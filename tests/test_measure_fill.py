@@ -60,7 +60,7 @@ def test_fill_is_nearest_by_view_plus_light_angle(grid):
         assert j == np.flatnonzero(same & (d <= d[same].min() + 1e-9))[0]
         np.testing.assert_array_equal(out.reshape(-1, 3)[i], v.reshape(-1, 3)[j])
     # the result is a valid table
-    t = CDBRDF(out, **grid.axes(), measured=valid, fill_source=src)
+    t = CDBRDF(out, grid, measured=valid, fill_source=src)
     assert t.measured.sum() == valid.sum()
 
 
@@ -195,7 +195,7 @@ def test_provenance_reproduces_every_filled_value():
     valid = _hidden(KGRID)
     valid[2, 3, 1, 1, 1] = False  # a saturated sample on the flat stand: measured on every other stand
     truth[2, 1, 2, 0, 0, 0] = -1e-4  # a dark-subtracted source below zero: that channel is combined linearly
-    t = CDBRDF(np.where(valid[..., None], truth, 0.0), **KGRID.axes(), measured=valid)
+    t = CDBRDF(np.where(valid[..., None], truth, 0.0), KGRID, measured=valid)
     r = refill(t, method="kappa-fit")
     flat = r.values.reshape(-1, 3)
     src = r.fill_sources.reshape(-1, r.fill_sources.shape[-1])

@@ -477,11 +477,3 @@ class TableParts:
             FILL_STD: self.fill_std,
         }
         return {name: a for name, a in arrays.items() if a is not None}
-
-    def table_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :class:`cdbrdf.CDBRDF` besides ``values``."""
-        return dict(
-            **self.axes, measured=self.measured, fill_source=self.fill_source, std=self.std, attrs=self.attrs,
-            fill_method=self.fill_method, fill_sources=self.fill_sources, fill_weights=self.fill_weights,
-            fill_std=self.fill_std,
-        )

@@ -29,6 +29,7 @@ convex stand turns the normal by ``repeat / 2R`` at its edge).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import json
 import logging
@@ -50,6 +51,7 @@ from ..frames import direction_from_angles
 from ..fsutil import check_output_file
 from ..images import ImageError, ImageInfo, read_window
 from ..outputs import output_lock
+from ..provenance import Provenance
 from .btf_batches import run_conditions
 from .btf_geometry import GRAZING_COS, SUBPIXELS, ViewGeometry, btf_hidden, view_geometry
 from .calibrate import MeasureReport, _nearest_white, calibration
@@ -556,7 +558,7 @@ def _fill_and_compress(cap: Capture, reg: Registration, rep: BTFReport, values: 
     """The invalid samples of ``values`` (``grid.shape + (n_texels * C,)``) filled, the CD-BTF compressed."""
     grid = cap.grid
     summary: dict[str, Any] = {}
-    provenance_kwargs: dict[str, Any] = {}
+    sample_provenance: Provenance | None = None
     for c in range(0, values.shape[-1], _FILL_CHANNELS):  # fill is per channel: texels x channels in slices
         try:
             res = fill(values[..., c:c + _FILL_CHANNELS].astype(np.float64), valid, grid, method=fill_method)
@@ -564,8 +566,8 @@ def _fill_and_compress(cap: Capture, reg: Registration, rep: BTFReport, values: 
             raise CaptureError(f"{cap.folder}: {exc}") from None
         values[..., c:c + _FILL_CHANNELS] = res.values
         summary = summary or res.summary
-        if not provenance_kwargs:  # the same for every texel and channel (it depends on the mask and the grid)
-            provenance_kwargs = {k: v for k, v in res.table_kwargs().items() if k not in ("std", "fill_std")}
+        if sample_provenance is None:  # the same for every texel and channel (it depends on the mask and the grid)
+            sample_provenance = dataclasses.replace(res.provenance(), fill_std=None)
     rep.fill_method = fill_method
     rep.n_filled_by = {k: v for k, v in summary.get("samples", {}).items() if k != "measured"}
     dense = np.moveaxis(values.reshape(grid.shape + (texels[1], texels[0], nc)), (5, 6), (0, 1))
@@ -584,7 +586,7 @@ def _fill_and_compress(cap: Capture, reg: Registration, rep: BTFReport, values: 
     attrs = {"quantity": rep.quantity, "material": str(mat), "provenance": provenance,
              "channels": ["R", "G", "B"] if nc == 3 else ["Y"]}
     btf = CDBTF.from_values(dense, grid, repeat_mm=repeat, max_error=max_error, attrs=attrs,
-                            mean_kwargs=provenance_kwargs)
+                            provenance=sample_provenance)
     rep.compression = btf.compression
     return btf
 

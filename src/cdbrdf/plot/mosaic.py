@@ -268,7 +268,7 @@ def mosaic_arrays(table: CDBRDF, *, kappa: float | ArrayLike | None = None) -> M
     >>> import numpy as np, cdbrdf
     >>> from cdbrdf.plot import mosaic_arrays
     >>> g = cdbrdf.Grid.paper()
-    >>> t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), **g.axes())
+    >>> t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), g)
     >>> m = mosaic_arrays(t, kappa=[0.0, 0.13])
     >>> m.images.shape, m.difference.max()
     ((2, 72, 72, 3), np.float64(0.0))
