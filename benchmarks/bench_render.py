@@ -46,7 +46,7 @@ def _table() -> cdbrdf.CDBRDF:
     rng = np.random.default_rng(0)
     base = 0.05 + 0.3 * rng.random(g.shape + (3,))
     tilt = np.clip(m["kappa"] / 0.22, -1, 1)[..., None] * np.array([0.1, 0.1, -0.05])
-    return cdbrdf.CDBRDF((base + tilt).clip(0.01).astype(np.float32), **g.axes())
+    return cdbrdf.CDBRDF((base + tilt).clip(0.01).astype(np.float32), g)
 
 
 def timed(mi, dr, scene, spp: int, seed: int) -> tuple[float, float]:

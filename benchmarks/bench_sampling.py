@@ -68,7 +68,7 @@ def glossy_table(exponent=200.0, ks=0.5, kd=0.03) -> cdbrdf.CDBRDF:
     h /= np.linalg.norm(h, axis=-1, keepdims=True)
     f = kd + ks * (exponent + 2) / (2 * math.pi) * np.clip(h[..., 2], 0, 1) ** exponent
     rgb = f[..., None] * np.array([1.0, 0.85, 0.7])
-    return cdbrdf.CDBRDF(rgb.astype(np.float32), **g.axes(), attrs={"material": "glossy lobe"})
+    return cdbrdf.CDBRDF(rgb.astype(np.float32), g, attrs={"material": "glossy lobe"})
 
 
 def tabulate_measured(mi, dr, path: Path) -> cdbrdf.CDBRDF:
@@ -83,7 +83,7 @@ def tabulate_measured(mi, dr, path: Path) -> cdbrdf.CDBRDF:
     si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
     v = np.array(bsdf.eval(mi.BSDFContext(), si, mi.Vector3f(np.ascontiguousarray(wo.T, dtype=np.float32)))).T
     f = v / np.maximum(wo[:, 2:3], 1e-6)
-    return cdbrdf.CDBRDF(f.reshape(g.shape + (3,)).clip(0).astype(np.float32), **g.axes(),
+    return cdbrdf.CDBRDF(f.reshape(g.shape + (3,)).clip(0).astype(np.float32), g,
                          attrs={"material": path.stem})
 
 

@@ -33,7 +33,7 @@ def index_table(measured=None, kappa=KAPPA, **kw):
 def const_table(value, kappa=(-0.13, 0.0, 0.13), quantity="brdf", n_channels=3):
     g = cdbrdf.Grid.regular(theta_step_deg=25, phi_step_deg=90, kappa=kappa)
     v = np.broadcast_to(np.asarray(value, float), g.shape + (n_channels,))
-    return cdbrdf.CDBRDF(v, **g.axes(), attrs={"quantity": quantity, "material": "grey card"})
+    return cdbrdf.CDBRDF(v, g, attrs={"quantity": quantity, "material": "grey card"})
 
 
 def png_size(data: bytes) -> tuple[int, int]:

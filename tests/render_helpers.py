@@ -67,7 +67,7 @@ def glossy_table(*, theta_step=10.0, phi_step=20.0, kappa=(-0.2, 0.0, 0.2), expo
 
 def constant_table(rgb, grid=None):
     g = grid or cdbrdf.Grid.paper()
-    return cdbrdf.CDBRDF(np.broadcast_to(np.asarray(rgb, dtype=np.float64), g.shape + (3,)).copy(), **g.axes())
+    return cdbrdf.CDBRDF(np.broadcast_to(np.asarray(rgb, dtype=np.float64), g.shape + (3,)).copy(), g)
 
 
 def vec(a):

@@ -28,7 +28,7 @@ def _dense(rank=2, noise=0.0, nv=6, nu=8, seed=1):
 def _dense_lookup(vals, u, v, tv, pv, tl, pl, k):
     """Reference: each texel's own CDBRDF looked up, combined by periodic bilinear weights written out."""
     nv, nu = vals.shape[:2]
-    tables = [[CDBRDF(vals[j, i], **GRID.axes()) for i in range(nu)] for j in range(nv)]
+    tables = [[CDBRDF(vals[j, i], GRID) for i in range(nu)] for j in range(nv)]
     fu = np.mod(u, REPEAT[0]) / REPEAT[0] * nu - 0.5
     fv = np.mod(v, REPEAT[1]) / REPEAT[1] * nv - 0.5
     i0, j0 = int(np.floor(fu)), int(np.floor(fv))
@@ -169,7 +169,7 @@ def test_bad_options_are_one_line_errors(kwargs, match):
 def test_bad_shapes_are_refused():
     with pytest.raises(TableError, match="values"):
         CDBTF.from_values(np.zeros((2, 2) + GRID.shape), GRID, repeat_mm=REPEAT)
-    m = CDBRDF(np.ones(GRID.shape + (3,)), **GRID.axes())
+    m = CDBRDF(np.ones(GRID.shape + (3,)), GRID)
     with pytest.raises(TableError, match="basis"):
         CDBTF(m, np.zeros((2, 2, 1)), np.zeros(GRID.shape + (2, 3)), repeat_mm=REPEAT)
 
@@ -227,18 +227,19 @@ def test_truncation_to_a_bad_rank_is_refused(exact, rank):
         exact[1].truncated(rank)
 
 
-def test_mean_kwargs_reach_the_tile_mean_and_axes_are_refused():
-    """A measured CD-BTF's mask and fill provenance go to its tile mean; what from_values sets cannot be given."""
+def test_the_provenance_reaches_the_tile_mean():
+    """A measured CD-BTF's mask and fill provenance (one Provenance record) go to its tile mean."""
+    from cdbrdf.provenance import Provenance
+
     vals = _dense()
     measured = np.ones(GRID.shape, bool)
     measured[:, :, -1] = False  # the most grazing light elevation: filled
     src = np.where(measured, -1, 0)
-    btf = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, mean_kwargs={"measured": measured, "fill_source": src})
+    btf = CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, provenance=Provenance(measured=measured, fill_source=src))
     np.testing.assert_array_equal(btf.mean().measured, measured)
     np.testing.assert_array_equal(btf.mean().fill_source, src)
-    for key in ("kappa", "attrs", "values"):
-        with pytest.raises(TableError, match=f"mean_kwargs: {key} cannot be given here"):
-            CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, mean_kwargs={key: None})
+    with pytest.raises(TableError, match="^provenance: expected a cdbrdf.provenance.Provenance, got dict$"):
+        CDBTF.from_values(vals, GRID, repeat_mm=REPEAT, provenance={"measured": measured})  # type: ignore[arg-type]
 
 
 # -- the neural CD-BTF (schema 2) -----------------------------------------------------------------
@@ -363,7 +364,7 @@ def test_neural_residual_components_meet_the_target_and_their_errors_are_true():
 
     vals = _dense(rank=4, noise=0.01)
     m, net, res, comp = compress(vals, GRID, max_error=0.02, max_rank=64, options=_fit())
-    btf = CDBTF(CDBRDF(m, **GRID.axes()), res.weights.reshape(6, 8, -1),
+    btf = CDBTF(CDBRDF(m, GRID), res.weights.reshape(6, 8, -1),
                 np.moveaxis(res.basis.reshape((-1,) + GRID.shape + (3,)), 0, -2), repeat_mm=REPEAT,
                 compression=comp, neural=net)
     true, per_k = _true_errors(vals, btf)

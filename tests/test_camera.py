@@ -38,7 +38,7 @@ def variant():
 
 def white_table():
     g = cdbrdf.Grid(kappa=[0.0], theta_l=[0, 45, 75], phi_l=[0, 180], theta_v=[0, 45, 75], phi_v=[0, 180])
-    return cdbrdf.CDBRDF(np.full(g.shape + (3,), 1.0 / np.pi), **g.axes(), attrs={"quantity": "brdf"})
+    return cdbrdf.CDBRDF(np.full(g.shape + (3,), 1.0 / np.pi), g, attrs={"quantity": "brdf"})
 
 
 # -- the record ------------------------------------------------------------------------------

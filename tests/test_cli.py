@@ -155,6 +155,16 @@ def test_memory_error_names_the_limit(monkeypatch, capsys):
     assert "CDBRDF_MAX_CAPTURE_ROWS" in capsys.readouterr().err
 
 
+def test_memory_hints_name_limits_that_exist():
+    """The command line names the limits limits.py owns (their names, not copies of their variables)."""
+    from cdbrdf.cli import _MEMORY_HINTS, _memory_hint
+    from cdbrdf.limits import LIMITS
+
+    assert all(name in LIMITS for names in _MEMORY_HINTS.values() for name in names)
+    assert _memory_hint("render") == "CDBRDF_MAX_RENDER_PIXELS, CDBRDF_MAX_MESH_FACES"
+    assert _memory_hint("info") == ""
+
+
 def test_keyboard_interrupt_exits_130(monkeypatch, capsys):
     import cdbrdf.commands.info as info
 

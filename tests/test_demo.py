@@ -106,7 +106,7 @@ def test_quick_demo_measures_the_ground_truth(quick_demo):
         # (the same samples hidden and filled from the truth's values at the others: scripts/fill_study.py)
         g = t.grid.mesh()
         exact = cdbrdf.materials.load(m.name).evaluate(g["theta_v"], g["phi_v"], g["theta_l"], g["phi_l"], g["kappa"])
-        floor_table = cdbrdf.CDBRDF(exact, **t.grid.axes(), measured=t.measured,
+        floor_table = cdbrdf.CDBRDF(exact, t.grid, measured=t.measured,
                                     attrs={"quantity": "brdf", "material": m.name})
         floor, _ = compare_with_truth(refill(floor_table), cdbrdf.materials.load(m.name))
         # plus the measurement's noise, which a line extrapolated along kappa amplifies (weights up to about 3)
@@ -233,7 +233,7 @@ def _pole_consistent(grid):
     v = make_table(grid).values.copy()
     v[:, :, 0] = v[:, :, 0].mean(axis=1, keepdims=True)
     v[:, :, :, :, 0] = v[:, :, :, :, 0].mean(axis=3, keepdims=True)
-    return cdbrdf.CDBRDF(v, **grid.axes(), attrs={"quantity": "brdf"})
+    return cdbrdf.CDBRDF(v, grid, attrs={"quantity": "brdf"})
 
 
 def test_compare_with_truth_is_zero_for_the_truth(small_grid):
@@ -245,11 +245,11 @@ def test_compare_with_truth_is_zero_for_the_truth(small_grid):
 
 def test_compare_with_truth_sees_a_known_error(small_grid):
     t = _pole_consistent(small_grid)
-    m = cdbrdf.CDBRDF(t.values * 1.1, **small_grid.axes(), attrs={"quantity": "brdf"})
+    m = cdbrdf.CDBRDF(t.values * 1.1, small_grid, attrs={"quantity": "brdf"})
     stats, _ = compare_with_truth(m, t)
     assert stats["median_rel_error_measured"] == pytest.approx(0.1, rel=1e-9)
     # a relative table is compared after its best scale
-    r = cdbrdf.CDBRDF(t.values * 7.0, **small_grid.axes(), attrs={"quantity": "relative"})
+    r = cdbrdf.CDBRDF(t.values * 7.0, small_grid, attrs={"quantity": "relative"})
     stats, _ = compare_with_truth(r, t)
     assert stats["median_rel_error_measured"] < 1e-12
 
@@ -262,7 +262,7 @@ def test_compare_with_truth_of_filled_samples_and_their_uncertainty(small_grid):
     fstd = np.zeros(values.shape)
     fstd[0, :, 1:] = 0.04 * t.values[0, :, 1:]  # sigma 4 %: the 10 % errors lie beyond 2 sigma
     fstd[0, :2, 1:] = 0.2 * t.values[0, :2, 1:]  # sigma 20 % for half of them: within 1 sigma
-    m = cdbrdf.CDBRDF(values, **small_grid.axes(), measured=measured, fill_std=fstd, attrs={"quantity": "brdf"})
+    m = cdbrdf.CDBRDF(values, small_grid, measured=measured, fill_std=fstd, attrs={"quantity": "brdf"})
     stats, rows = compare_with_truth(m, t)
     assert stats["median_rel_error_filled"] == pytest.approx(0.1) and stats["p95_rel_error_filled"] == pytest.approx(0.1)
     assert stats["fill_within_1_sigma"] == pytest.approx(0.5) and stats["fill_within_2_sigma"] == pytest.approx(0.5)

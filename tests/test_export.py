@@ -241,7 +241,7 @@ def test_fallback_fit_recovers_a_gltf_material():
     dl = direction_from_angles(m["theta_l"].ravel(), m["phi_l"].ravel())
     dv = direction_from_angles(m["theta_v"].ravel(), m["phi_v"].ravel())
     f = gltf_brdf(truth, dl, dv).reshape(*g.shape, 3)
-    fit = fit_fallback(cdbrdf.CDBRDF(f, **g.axes(), attrs={"quantity": "brdf"}))
+    fit = fit_fallback(cdbrdf.CDBRDF(f, g, attrs={"quantity": "brdf"}))
     assert fit.relative_rms_error < 0.02, fit
     np.testing.assert_allclose(fit.base_color, truth["base_color"], atol=0.02)
     np.testing.assert_allclose(fit.sheen_color, truth["sheen_color"], atol=0.05)

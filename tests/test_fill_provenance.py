@@ -27,7 +27,7 @@ def _measured(method="kappa-fit"):
     valid = np.ones(KGRID.shape, bool)
     valid[0, :, :, :, 2] = False
     valid[0, 1, 1, 1, 1] = False
-    t = CDBRDF(np.where(valid[..., None], v, 0.0), **KGRID.axes(), measured=valid,
+    t = CDBRDF(np.where(valid[..., None], v, 0.0), KGRID, measured=valid,
                std=np.full(v.shape, 0.01), attrs={"quantity": "brdf", "provenance": {"capture": "x"}})
     return refill(t, method=method)
 
@@ -72,7 +72,7 @@ def test_older_files_load_identically(tmp_path, version):
     t = _measured(method="nearest")
     src = t.fill_source.copy()
     src[0, 1, 1, 1, 1] = -2  # one source not recorded
-    old = CDBRDF(t.values, **t.grid.axes(), measured=t.measured, fill_source=src, std=t.std, attrs=t.attrs)
+    old = CDBRDF(t.values, t.grid, measured=t.measured, fill_source=src, std=t.std, attrs=t.attrs)
     p = tmp_path / "old.h5"
     _write_old(old, p, version)
     back = cdbrdf.load(p)
@@ -125,15 +125,15 @@ def test_inconsistent_provenance_is_refused(change, message):
     for key, f in change.items():
         kw[key] = f(t)
     with pytest.raises(TableError, match=message):
-        CDBRDF(t.values, **t.grid.axes(), **kw)
+        CDBRDF(t.values, t.grid, **kw)
 
 
 def test_several_sources_need_weights():
     t = _measured()
     with pytest.raises(TableError, match="fill_weights: needed"):
-        CDBRDF(t.values, **t.grid.axes(), measured=t.measured, fill_sources=t.fill_sources)
+        CDBRDF(t.values, t.grid, measured=t.measured, fill_sources=t.fill_sources)
     # fill_source is derived from the first slot when not given
-    u = CDBRDF(t.values, **t.grid.axes(), measured=t.measured, fill_sources=t.fill_sources,
+    u = CDBRDF(t.values, t.grid, measured=t.measured, fill_sources=t.fill_sources,
                fill_weights=t.fill_weights, fill_method=t.fill_method)
     np.testing.assert_array_equal(u.fill_source, t.fill_source)
 
@@ -147,7 +147,7 @@ def test_mosaic_marks_direction_and_curvature_fills_apart():
     t = _measured()  # grazing views at -0.22 filled along the curvature
     valid = t.measured.copy()
     valid[:, 1, 0, 2, 0] = False  # a direction measured on no stand: the paper's rule fills it
-    t = refill(CDBRDF(t.values, **t.grid.axes(), measured=valid, attrs=t.attrs), method="kappa-fit")
+    t = refill(CDBRDF(t.values, t.grid, measured=valid, attrs=t.attrs), method="kappa-fit")
     m = mosaic_arrays(t)
     codes = set(np.unique(m.fill_method[0][m.filled[0]]).tolist())
     assert codes == {FILL_METHOD_CODES["kappa_fit"], FILL_METHOD_CODES["nearest"]}

@@ -77,7 +77,7 @@ def _scene(folder: Path, body: str, *, film: str = '<integer name="width" value=
     import cdbrdf
 
     g = cdbrdf.Grid(kappa=[0.0], theta_l=[0, 45], phi_l=[0, 180], theta_v=[0, 45], phi_v=[0, 180])
-    cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), **g.axes()).save(folder / "t.h5")
+    cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), g).save(folder / "t.h5")
     xml = f"""<scene version="3.0.0">{defaults}
   <integrator type="path"><integer name="max_depth" value="2"/></integrator>
   <sensor type="orthographic"><transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/>
@@ -209,7 +209,7 @@ def _inputs(folder: Path) -> dict[str, Path]:
     from cdbrdf.outputs import output_folder
 
     g = cdbrdf.Grid(kappa=[0.0], theta_l=[0, 45], phi_l=[0, 180], theta_v=[0, 45], phi_v=[0, 180])
-    t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), **g.axes())
+    t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), g)
     out = {"table": folder / "t.h5", "table2": folder / "k13.h5", "mesh": folder / "scan.ply",
            "envmap": folder / "env.exr", "pngtable": folder / "t.png"}
     t.save(out["table"])

@@ -61,7 +61,7 @@ def _table(path: Path) -> Path:
     import cdbrdf
 
     g = cdbrdf.Grid(kappa=[0.0], theta_l=[0, 45], phi_l=[0, 180], theta_v=[0, 45], phi_v=[0, 180])
-    cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), **g.axes()).save(path)
+    cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), g).save(path)
     return path
 
 

@@ -43,9 +43,9 @@ def seed_tables() -> tuple[cdbrdf.CDBRDF, ...]:
         attrs={"quantity": "brdf", "material": "fuzz cloth", "provenance": {"seed": 7, "p": [1, 2.5]}},
     )
     g1 = cdbrdf.Grid(kappa=[-0.1, 0.1], theta_l=[0, 40], phi_l=[0, 180], theta_v=[0, 40], phi_v=[0, 180])
-    mono = cdbrdf.CDBRDF(0.2 + rng.random(g1.shape + (1,)), **g1.axes(), attrs={"material": "grey"})
+    mono = cdbrdf.CDBRDF(0.2 + rng.random(g1.shape + (1,)), g1, attrs={"material": "grey"})
     g0 = cdbrdf.Grid(kappa=[0.0], theta_l=[0, 30], phi_l=[0, 90, 180, 270], theta_v=[0, 30], phi_v=[0, 180])
-    plain = cdbrdf.CDBRDF(0.3 + rng.random(g0.shape + (3,)), **g0.axes(), attrs={"provenance": "model"})
+    plain = cdbrdf.CDBRDF(0.3 + rng.random(g0.shape + (3,)), g0, attrs={"provenance": "model"})
     return rgb, mono, plain
 
 

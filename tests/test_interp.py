@@ -21,7 +21,7 @@ def test_hand_computed_value():
     g = Grid(kappa=[-0.2, 0.1, 0.3], theta_l=[0, 30, 60], phi_l=[0, 120, 240], theta_v=[0, 45, 80], phi_v=[0, 90, 180, 270])
     m = g.mesh()
     f = 0.5 + 2.0 * m["kappa"] + 0.01 * m["theta_v"] + 0.003 * m["theta_l"]
-    t = CDBRDF(np.stack([f, 2 * f, 3 * f], -1), **g.axes())
+    t = CDBRDF(np.stack([f, 2 * f, 3 * f], -1), g)
     got = t.evaluate(52.0, 33.0, 17.0, 201.0, 0.0)
     want = 0.5 + 2.0 * 0.0 + 0.01 * 52.0 + 0.003 * 17.0
     np.testing.assert_allclose(got, [want, 2 * want, 3 * want], rtol=1e-13)
@@ -32,7 +32,7 @@ def test_hand_computed_bilinear_in_azimuth():
     g = Grid(kappa=[0.0], theta_l=[10.0], phi_l=[0.0], theta_v=[20.0, 40.0], phi_v=[0, 90, 180, 270])
     v = np.zeros(g.shape + (1,))
     v[0, 0, 0, :, :, 0] = np.array([1.0, 3.0, 5.0, 7.0])[:, None]
-    t = CDBRDF(v, **g.axes())
+    t = CDBRDF(v, g)
     np.testing.assert_allclose(t.evaluate(30.0, [45.0, 22.5, 315.0, -45.0], 10.0, 0.0)[:, 0], [2, 1.5, 4, 4])
 
 
@@ -162,7 +162,7 @@ def test_read_only_install_without_writable_home_compiles_in_memory(tmp_path):
         "assert cdbrdf.__file__.startswith(sys.argv[1]), cdbrdf.__file__\n"
         "assert k.lookup_generic._cache.__class__.__name__ == 'NullCache'\n"
         "g = cdbrdf.Grid(kappa=[0.0], theta_l=[0.0, 40.0], phi_l=[0.0, 180.0], theta_v=[0.0, 40.0], phi_v=[0.0, 180.0])\n"
-        "t = cdbrdf.CDBRDF(np.full(g.shape + (1,), 0.25), **g.axes())\n"
+        "t = cdbrdf.CDBRDF(np.full(g.shape + (1,), 0.25), g)\n"
         "assert np.allclose(t.evaluate(30.0, 1e30, 20.0, 10.0), 0.25)\n"
         "print('ok')\n"
     )
@@ -188,7 +188,7 @@ def test_a_cache_write_that_fails_costs_only_the_cache(tmp_path):
     code = (
         "import numpy as np, cdbrdf\n"
         "g = cdbrdf.Grid(kappa=[0.0], theta_l=[0.0, 40.0], phi_l=[0.0, 180.0], theta_v=[0.0, 40.0], phi_v=[0.0, 180.0])\n"
-        "t = cdbrdf.CDBRDF(np.full(g.shape + (1,), 0.25), **g.axes())\n"
+        "t = cdbrdf.CDBRDF(np.full(g.shape + (1,), 0.25), g)\n"
         "assert np.allclose(t.evaluate(30.0, 10.0, 20.0, 10.0), 0.25)\n"
         "print('ok')\n"
     )

@@ -614,7 +614,7 @@ def test_cf_packing_units_and_missing_values_are_never_ignored(tmp_path, small_g
     values = make_table(small_grid).values.copy()
     values[0, 0, 0, 0, 0, 0] = 0.5
     p = tmp_path / "t.h5"
-    CDBRDF(values, **small_grid.axes(), attrs={"quantity": "brdf"}).save(p)
+    CDBRDF(values, small_grid, attrs={"quantity": "brdf"}).save(p)
     with h5py.File(p, "r+") as f:
         for k, v in attrs.items():
             f[variable].attrs[k] = v
@@ -678,7 +678,7 @@ def test_saving_onto_a_full_disk_is_one_line_and_keeps_the_old_file(tmp_path, sm
     p.write_bytes(b"old" * 100)
     code = ("import resource, sys, numpy as np, cdbrdf\n"
             "g = cdbrdf.Grid.paper()\n"
-            "t = cdbrdf.CDBRDF(np.random.default_rng(0).random(g.shape + (3,)), **g.axes())\n"
+            "t = cdbrdf.CDBRDF(np.random.default_rng(0).random(g.shape + (3,)), g)\n"
             "resource.setrlimit(resource.RLIMIT_FSIZE, (8192, 8192))\n"
             "try:\n    t.save(sys.argv[1])\nexcept OSError as e:\n    print(e)\n")
     r = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True, timeout=120)

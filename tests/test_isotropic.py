@@ -48,7 +48,7 @@ def test_unknown_symmetry_is_refused_with_the_choices():
         Grid.paper(symmetry="bilateral")
     g = _iso_grid()
     with pytest.raises(TableError, match=r"attrs\['symmetry'\]: 'iso' is not one of anisotropic, isotropic"):
-        CDBRDF(np.ones(g.shape + (3,)), **g.axes(), attrs={"symmetry": "iso"})
+        CDBRDF(np.ones(g.shape + (3,)), g, attrs={"symmetry": "iso"})
     with pytest.raises(TableError, match="symmetry: 'isotropic' disagrees with attrs"):
         CDBRDF(np.ones(g.shape + (3,)), **g.axes(), symmetry="isotropic", attrs={"symmetry": "anisotropic"})
 
@@ -59,7 +59,7 @@ def test_table_symmetry_lives_in_its_attributes():
     assert t.isotropic and t.symmetry == "isotropic" and t.attrs["symmetry"] == "isotropic"
     assert t.grid == g
     # from the attributes alone (as the file and xarray give it)
-    again = CDBRDF(t.values, **g.axes(), attrs=t.attrs)
+    again = CDBRDF(t.values, g, attrs=t.attrs)
     assert again == t and again.isotropic
     # operations keep it
     assert t.with_attrs(material="x").isotropic and t.brdf().isotropic

@@ -60,7 +60,7 @@ def test_fill_is_nearest_by_view_plus_light_angle(grid):
         assert j == np.flatnonzero(same & (d <= d[same].min() + 1e-9))[0]
         np.testing.assert_array_equal(out.reshape(-1, 3)[i], v.reshape(-1, 3)[j])
     # the result is a valid table
-    t = CDBRDF(out, **grid.axes(), measured=valid, fill_source=src)
+    t = CDBRDF(out, grid, measured=valid, fill_source=src)
     assert t.measured.sum() == valid.sum()
 
 
@@ -195,7 +195,7 @@ def test_provenance_reproduces_every_filled_value():
     valid = _hidden(KGRID)
     valid[2, 3, 1, 1, 1] = False  # a saturated sample on the flat stand: measured on every other stand
     truth[2, 1, 2, 0, 0, 0] = -1e-4  # a dark-subtracted source below zero: that channel is combined linearly
-    t = CDBRDF(np.where(valid[..., None], truth, 0.0), **KGRID.axes(), measured=valid)
+    t = CDBRDF(np.where(valid[..., None], truth, 0.0), KGRID, measured=valid)
     r = refill(t, method="kappa-fit")
     flat = r.values.reshape(-1, 3)
     src = r.fill_sources.reshape(-1, r.fill_sources.shape[-1])
@@ -322,11 +322,12 @@ def test_auto_chooses_the_method_whose_check_errs_least():
 
 def test_btf_takes_the_data_fills_only(tmp_path):
     from cdbrdf.errors import OptionError
+    from cdbrdf.measure import MeasureOptions
     from cdbrdf.measure.btf import measure_btf
 
     for method in ("model", "auto"):
         with pytest.raises(OptionError, match=rf"fill: '{method}' fills a CDBRDF, not a CD-BTF's texels"):
-            measure_btf(tmp_path, None, texels=4, fill=method)
+            measure_btf(tmp_path, None, texels=4, options=MeasureOptions(fill=method))
 
 
 def _quick_fill_errors(truth, name, methods, seed=3):

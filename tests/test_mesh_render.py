@@ -41,12 +41,12 @@ def kappa_table(gain=1.0, kappa=(-0.22, 0.0, 0.22)):
                     phi_v=[0, 120, 240])
     k = np.asarray(kappa, dtype=np.float64)
     v = 0.5 + gain * np.broadcast_to(k[:, None, None, None, None, None], g.shape + (3,))
-    return cdbrdf.CDBRDF(np.ascontiguousarray(v), **g.axes())
+    return cdbrdf.CDBRDF(np.ascontiguousarray(v), g)
 
 
 def white_table():
     g = cdbrdf.Grid(kappa=[0.0], theta_l=[0, 45, 75], phi_l=[0, 180], theta_v=[0, 45, 75], phi_v=[0, 180])
-    return cdbrdf.CDBRDF(np.full(g.shape + (3,), 1.0 / np.pi), **g.axes(), attrs={"quantity": "brdf"})
+    return cdbrdf.CDBRDF(np.full(g.shape + (3,), 1.0 / np.pi), g, attrs={"quantity": "brdf"})
 
 
 def silhouette(img):
@@ -210,7 +210,7 @@ def test_a_dark_fabric_shows_at_its_own_reflectance(variant):
 
     albedo = np.array([0.03, 0.05, 0.12])
     g = cdbrdf.Grid(kappa=[0.0], theta_l=[0, 45, 75], phi_l=[0, 180], theta_v=[0, 45, 75], phi_v=[0, 180])
-    table = cdbrdf.CDBRDF(np.broadcast_to(albedo / np.pi, g.shape + (3,)).copy(), **g.axes(),
+    table = cdbrdf.CDBRDF(np.broadcast_to(albedo / np.pi, g.shape + (3,)).copy(), g,
                           attrs={"quantity": "brdf"})
     x, y = np.meshgrid(np.linspace(-50, 50, 11), np.linspace(-50, 50, 11), indexing="ij")
     v = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]

@@ -33,6 +33,7 @@ def test_a_range_accepts_exactly_its_numbers(rng, inside, outside, expect):
 def _ranges():
     """Every range a record owns and the option of the command line that parses it."""
     from cdbrdf.measure.capture import WHITE_ALBEDO_RANGE
+    from cdbrdf.measure.options import PATCH_RANGE_PX
     from cdbrdf.mesh import maps
     from cdbrdf.render import lighting, spec
     from cdbrdf.rig import options as rig
@@ -45,7 +46,22 @@ def _ranges():
         ("simulate-capture", "--field", rig.FIELD_RANGE_MM), ("simulate-capture", "--shifts", rig.SHIFTS_RANGE),
         ("simulate-capture", "--px-per-texel", rig.PX_PER_TEXEL_RANGE),
         ("simulate-capture", "--white-albedo", WHITE_ALBEDO_RANGE), ("simulate-capture", "--seed", rig.SEED_RANGE),
+        ("measure", "--patch", PATCH_RANGE_PX), ("measure", "--white-albedo", WHITE_ALBEDO_RANGE),
     ]
+
+
+def test_the_measurement_options_are_checked_once_for_both_paths():
+    """measure() and measure_btf() share one record: the same ranges, the same one-line refusals."""
+    from cdbrdf.measure import MeasureOptions
+
+    assert MeasureOptions(patch=999, white_albedo=1.5).patch == 999
+    for bad, match in (({"patch": 1000}, r"^patch: expected an integer in \[1, 999\], got 1000$"),
+                       ({"patch": 0}, "^patch: expected a positive whole number"),
+                       ({"white_albedo": 1.6}, r"^white_albedo: expected a number in \(0, 1.5\], got 1.6$"),
+                       ({"material": ""}, "^material: expected a printable name"),
+                       ({"batch_size": True}, "^batch_size: expected a positive whole number")):
+        with pytest.raises(OptionError, match=match):
+            MeasureOptions(**bad)
 
 
 def _option_type(command, option):

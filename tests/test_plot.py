@@ -38,7 +38,7 @@ def test_figures_do_not_touch_pyplot(tmp_path):
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported by the CLI parser'\n"
         "from cdbrdf.plot import plot_mosaic\n"
         "g = cdbrdf.Grid.regular(theta_step_deg=25, phi_step_deg=90, kappa=[0.0, 0.1])\n"
-        "plot_mosaic(cdbrdf.CDBRDF(np.ones(g.shape + (3,)), **g.axes())).savefig(sys.argv[1])\n"
+        "plot_mosaic(cdbrdf.CDBRDF(np.ones(g.shape + (3,)), g)).savefig(sys.argv[1])\n"
         "assert 'matplotlib.pyplot' not in sys.modules\n"
     )
     out = tmp_path / "x.png"

@@ -75,7 +75,7 @@ def test_reference_interpolated_when_zero_not_sampled():
     meas = np.ones(g.shape, bool)
     meas[0, 1, 2, 0, 1] = False
     meas[1, 2, 1, 2, 2] = False
-    t = cdbrdf.CDBRDF(v, **g.axes(), measured=meas)
+    t = cdbrdf.CDBRDF(v, g, measured=meas)
     m = mosaic_arrays(t)
     assert m.reference_kappa == 0.0 and not m.reference_sampled
     np.testing.assert_allclose(m.reference, a.reshape(9, 9, 3), rtol=1e-12)
@@ -167,7 +167,7 @@ def test_plot_mosaic_shared_exposure_and_srgb():
     v = np.ones(g.shape + (3,))
     v[0] *= 0.1
     v[1] *= 0.4
-    fig = plot_mosaic(cdbrdf.CDBRDF(v, **g.axes()), diff=False)
+    fig = plot_mosaic(cdbrdf.CDBRDF(v, g), diff=False)
     a0, a1 = (ax.images[0].get_array() for ax in _image_axes(fig))
     np.testing.assert_allclose(a1, 1.0)
     np.testing.assert_allclose(a0, srgb_encode(0.25))
@@ -190,7 +190,7 @@ def test_plot_mosaic_difference_panel_values_and_colourbar():
     v = np.zeros(g.shape + (3,))
     v[0] = [0.1, 0.2, 0.3]
     v[1] = [0.3, 0.2, 0.1]
-    fig = plot_mosaic(cdbrdf.CDBRDF(v, **g.axes(), attrs={"quantity": "brdf"}))
+    fig = plot_mosaic(cdbrdf.CDBRDF(v, g, attrs={"quantity": "brdf"}))
     axes = _image_axes(fig)
     assert len(axes) == 3
     dy = 0.2126 * 0.2 + 0.7152 * 0.0 + 0.0722 * (-0.2)
@@ -241,10 +241,10 @@ def test_plot_mosaic_single_kappa_and_options():
 
 def test_plot_mosaic_one_and_four_channels():
     g = cdbrdf.Grid.regular(theta_step_deg=25, phi_step_deg=90, kappa=[0.0, 0.1])
-    grey = cdbrdf.CDBRDF(np.full(g.shape + (1,), 0.5), **g.axes())
+    grey = cdbrdf.CDBRDF(np.full(g.shape + (1,), 0.5), g)
     fig = plot_mosaic(grey, exposure=1.0)
     np.testing.assert_allclose(_image_axes(fig)[0].images[0].get_array(), srgb_encode(0.5))
-    four = cdbrdf.CDBRDF(np.full(g.shape + (4,), 0.5), **g.axes())
+    four = cdbrdf.CDBRDF(np.full(g.shape + (4,), 0.5), g)
     with pytest.raises(ValueError, match="4 channels"):
         plot_mosaic(four)
     plot_mosaic(four, channel=3)

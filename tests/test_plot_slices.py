@@ -16,7 +16,7 @@ from .plot_helpers import const_table, png_size
 def test_plot_slice_curves_and_samples():
     g = cdbrdf.Grid.regular(theta_step_deg=15, phi_step_deg=30, kappa=[-0.2, 0.0, 0.2])
     v = (0.3 + g.mesh()["kappa"])[..., None] * np.ones(3)
-    t = cdbrdf.CDBRDF(v, **g.axes(), attrs={"quantity": "brdf"})
+    t = cdbrdf.CDBRDF(v, g, attrs={"quantity": "brdf"})
     fig = plot_slice(t, theta_l_deg=30, phi_l_deg=60, kappa=[-0.2, 0.1, 0.2])
     ax = fig.axes[0]
     curves = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]

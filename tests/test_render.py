@@ -39,14 +39,14 @@ def analytic_table(kappa=None, dtype=np.float64):
     r = 0.10 + 0.05 * np.sin(tl) * np.cos(pl) + 0.3 * np.clip(m["kappa"], 0, None)
     gch = 0.15 + 0.04 * np.sin(tv) * np.sin(pv) - 0.2 * np.clip(m["kappa"], None, 0)
     b = 0.20 + 0.02 * np.cos(tl - tv) + 0.1 * m["kappa"] * np.cos(pv - pl)
-    return cdbrdf.CDBRDF(np.stack([r, gch, b], -1).astype(dtype), **g.axes())
+    return cdbrdf.CDBRDF(np.stack([r, gch, b], -1).astype(dtype), g)
 
 
 def kappa_table():
     """Value = 0.5 + kappa in every direction and channel (kappa readable from the image)."""
     g = cdbrdf.Grid.paper()
     v = 0.5 + np.broadcast_to(g.kappa[:, None, None, None, None, None], g.shape + (3,))
-    return cdbrdf.CDBRDF(v, **g.axes())
+    return cdbrdf.CDBRDF(v, g)
 
 
 def random_dirs(rng, n, lower=False):
@@ -164,7 +164,7 @@ def test_importance_transport_swaps_view_and_light(variant):
 @needs_llvm
 def test_eval_diffuse_reflectance_is_normal_incidence_albedo(variant):
     g = cdbrdf.Grid.paper()
-    table = cdbrdf.CDBRDF(np.broadcast_to(np.array([0.1, 0.2, 0.05]), g.shape + (3,)), **g.axes())
+    table = cdbrdf.CDBRDF(np.broadcast_to(np.array([0.1, 0.2, 0.05]), g.shape + (3,)), g)
     si = local_si(np.array([[0.0, 0.0, 1.0]]))
     got = np.array(variant.make_bsdf(table, curvature=0.0).eval_diffuse_reflectance(si)).ravel()
     assert np.allclose(got, np.pi * np.array([0.1, 0.2, 0.05]), rtol=1e-5)
@@ -280,7 +280,7 @@ def test_constant_table_equals_diffuse(variant):
 
     albedo = np.array([0.2, 0.5, 0.8])
     g = cdbrdf.Grid.paper()
-    table = cdbrdf.CDBRDF(np.broadcast_to(albedo / np.pi, g.shape + (3,)), **g.axes())
+    table = cdbrdf.CDBRDF(np.broadcast_to(albedo / np.pi, g.shape + (3,)), g)
     spec = RenderSpec(size=(24, 16), spp=8, max_depth=4)
     bsdf = {"type": "cdbrdf", "table": table, "sampling": "cosine"}
     ours = render_scene(sine_scene(table, spec, bsdf=bsdf), seed=3)
@@ -472,7 +472,7 @@ def test_mesh_scene_with_environment_map(variant, tmp_path):
     write_ply(path, cylinder_mesh(5.0, True, n=20))
     g = cdbrdf.Grid.paper()
     albedo = 0.6
-    table = cdbrdf.CDBRDF(np.full(g.shape + (3,), albedo / np.pi), **g.axes())
+    table = cdbrdf.CDBRDF(np.full(g.shape + (3,), albedo / np.pi), g)
     img = render_scene(mesh_scene(table, RenderSpec(surface=path, light=Light(lighting="paper", direction=None,
                                                                            envmap=env),
                                                     size=(17, 17), spp=64, max_depth=2,
@@ -579,7 +579,7 @@ def test_invalid_plugin_parameters_are_refused(variant):
         variant.make_bsdf(table, mode="x")
     g = cdbrdf.Grid.paper()
     with pytest.raises(ValueError, match="5 channels"):
-        variant.make_bsdf(cdbrdf.CDBRDF(np.ones(g.shape + (5,)), **g.axes()))
+        variant.make_bsdf(cdbrdf.CDBRDF(np.ones(g.shape + (5,)), g))
     with pytest.raises(ValueError, match="unknown parameter"):
         variant.load_dict({"type": "cdbrdf", "table": table, "filename": "x.h5"})
     # a constant given as a string (e.g. from XML) is a constant
@@ -607,9 +607,9 @@ def test_values_beyond_float32_range_are_refused(variant, channels, peak):
     v = np.full(g.shape + (channels,), 0.2)
     v[0, 0, 1, 0, 1, 0] = peak  # off the poles (their ring means are what the renderer holds)
     with pytest.raises(cdbrdf.TableError, match=r"1 value\(s\) beyond \+-1e\+30"):
-        cdbrdf.CDBRDF(v, **g.axes())
+        cdbrdf.CDBRDF(v, g)
     v[0, 0, 1, 0, 1, 0] = 1e29  # within range: accepted
-    bsdf = variant.make_bsdf(cdbrdf.CDBRDF(v, **g.axes()))
+    bsdf = variant.make_bsdf(cdbrdf.CDBRDF(v, g))
     params = mi.traverse(bsdf)  # values given to the plug-in directly are checked by it
     params["values"] = mi.TensorXf(np.where(v == 1e29, np.copysign(1e31, peak), v).astype(np.float32))
     with pytest.raises(cdbrdf.TableError, match=r"float32.*1e\+30"):

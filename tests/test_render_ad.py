@@ -142,7 +142,7 @@ def test_fit_a_table_to_renders_of_a_target(cr):
     table alone (no Monte Carlo noise floor) and can fall by orders of magnitude.
     """
     target = small_table()
-    start = cdbrdf.CDBRDF(np.full(target.values.shape, float(target.values.mean())), **target.grid.axes())
+    start = cdbrdf.CDBRDF(np.full(target.values.shape, float(target.values.mean())), target.grid)
     # (camera elevation, azimuth), (light elevation, azimuth): four photographs of the sheet
     views = [((40.0, -90.0), (30.0, 20.0)), ((60.0, 0.0), (45.0, 180.0)), ((30.0, 135.0), (20.0, -60.0)),
              ((70.0, -45.0), (60.0, 90.0))]

@@ -77,7 +77,7 @@ def test_conditioning_weights_are_the_lookup_rule():
                     theta_v=[0.0, 20.0, 50.0, 70.0], phi_v=np.arange(0.0, 360.0, 60.0) + 15.0)
     rng = np.random.default_rng(1)
     base = 0.1 + rng.random((3, 1, 1, 6, 4, 1))
-    t = cdbrdf.CDBRDF(np.broadcast_to(base, g.shape + (1,)).copy(), **g.axes())
+    t = cdbrdf.CDBRDF(np.broadcast_to(base, g.shape + (1,)).copy(), g)
     tables = _sampling.build_sampler(t.lookup_grid())
     n = 500
     tv = np.concatenate([rng.uniform(0, 90, n - 20), np.zeros(10), np.full(10, 85.0)])
@@ -121,7 +121,7 @@ def test_constant_table_samples_the_cosine():
 
 def test_black_slices_fall_back_to_cosine():
     g = cdbrdf.Grid.paper(kappa=[0.0])
-    t = cdbrdf.CDBRDF(np.zeros(g.shape + (3,)), **g.axes())
+    t = cdbrdf.CDBRDF(np.zeros(g.shape + (3,)), g)
     tables = _sampling.build_sampler(t.lookup_grid())
     assert np.all(tables.mass == 0)
     d, _ = hemisphere_quadrature(40)

@@ -33,7 +33,7 @@ def cr():
 
 def kappa_table():
     g = cdbrdf.Grid.paper()
-    return cdbrdf.CDBRDF(0.5 + np.broadcast_to(g.kappa[:, None, None, None, None, None], g.shape + (3,)), **g.axes())
+    return cdbrdf.CDBRDF(0.5 + np.broadcast_to(g.kappa[:, None, None, None, None, None], g.shape + (3,)), g)
 
 
 def cylinder(radius=1 / KAPPA, n=40, *, uv=True, directional=None):
@@ -199,7 +199,7 @@ def test_what_twosided_does_to_the_back(cr):
     g = cdbrdf.Grid.paper()
     m = g.mesh()
     v = 0.1 + 0.05 * np.sin(np.radians(m["phi_l"])) + 0.3 * np.clip(m["kappa"], 0, None)
-    t = cdbrdf.CDBRDF(np.repeat(v[..., None], 3, -1), **g.axes())
+    t = cdbrdf.CDBRDF(np.repeat(v[..., None], 3, -1), g)
     inner = cr.make_bsdf(t, curvature=0.13)
     wrapped = mi.load_dict({"type": "twosided", "bsdf": inner})
     rng = np.random.default_rng(0)

@@ -197,9 +197,9 @@ def test_auto_storage_keeps_precision_on_a_huge_dynamic_range(cr):
     cr.set_variant("llvm_ad_rgb")
     g = cdbrdf.Grid.paper(kappa=[0.0])
     v = 0.02 + 0.01 * np.random.default_rng(0).random(g.shape + (3,))
-    smooth = cdbrdf.CDBRDF(v.copy(), **g.axes())
+    smooth = cdbrdf.CDBRDF(v.copy(), g)
     v[:, :, -1, :, -1] = 2e4  # grazing light and view
-    peaked = cdbrdf.CDBRDF(v, **g.axes())
+    peaked = cdbrdf.CDBRDF(v, g)
     assert not lj.packing_is_fine(peaked.lookup_grid().values) and lj.packing_is_fine(smooth.lookup_grid().values)
     auto = cr.make_bsdf(peaked, curvature=0.0)
     packed = cr.make_bsdf(peaked, curvature=0.0, storage="packed")

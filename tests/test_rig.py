@@ -55,7 +55,7 @@ def material() -> CDBRDF:
     k = m["kappa"][..., None]
     base = np.array([0.06, 0.09, 0.20]) + k * np.array([0.25, 0.22, 0.05])  # lighter when convex
     lobe = (np.cos(tv) * np.cos(tl) * (1 + 0.4 * np.cos(pv - pl) * np.cos(pl) ** 2))[..., None]
-    return CDBRDF(base * (0.5 + 0.5 * lobe), **g.axes(), attrs={"material": "test-cloth", "quantity": "brdf"})
+    return CDBRDF(base * (0.5 + 0.5 * lobe), g, attrs={"material": "test-cloth", "quantity": "brdf"})
 
 
 @pytest.fixture(scope="module")

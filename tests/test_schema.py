@@ -11,6 +11,7 @@ import pytest
 import cdbrdf
 from cdbrdf import schema
 from cdbrdf.errors import TableError
+from cdbrdf.table import _of_parts as table_of_parts
 
 from .conftest import make_table
 
@@ -113,7 +114,7 @@ def test_parts_of_a_table_round_trip(small_grid):
     assert list(parts.variables()) == ["reflectance", "measured", "fill_source", "reflectance_std",
                                        "fill_method", "fill_sources", "fill_weights"]
     assert parts.values is t.values and parts.quantity == "brdf" and parts.channels == ["R", "G", "B"]
-    assert cdbrdf.CDBRDF(parts.values, **parts.table_kwargs()) == t
+    assert table_of_parts(parts) == t
     no_std = schema.TableParts.of(make_table(small_grid))
     assert "reflectance_std" not in no_std.variables()
 

@@ -126,7 +126,7 @@ def test_swatch_renders_with_the_curvature_of_its_folds():
 
     g = cdbrdf.Grid(kappa=[-0.3, 0.0, 0.3], theta_l=[0, 45, 75], phi_l=[0, 180], theta_v=[0, 45, 75],
                     phi_v=[0, 180])
-    table = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.5 / np.pi), **g.axes(), attrs={"quantity": "brdf"})
+    table = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.5 / np.pi), g, attrs={"quantity": "brdf"})
     sw = Swatch(radii_mm=(20.0, 5.0))
     pic = render_table(table, RenderSpec(surface=sw, size=(64, 40), spp=1, curvature_image=True,
                                          modes=("brdf", "cdbrdf")))
@@ -149,7 +149,7 @@ def test_render_command_swatch_close_up_and_compare(tmp_path, capsys):
     g = cdbrdf.Grid(kappa=[-0.2, 0.0, 0.2], theta_l=[0, 45, 75], phi_l=[0, 180], theta_v=[0, 45, 75],
                     phi_v=[0, 180])
     k = np.asarray(g.kappa)[:, None, None, None, None, None]
-    cdbrdf.CDBRDF(np.broadcast_to(0.2 + k, g.shape + (3,)).copy(), **g.axes(),
+    cdbrdf.CDBRDF(np.broadcast_to(0.2 + k, g.shape + (3,)).copy(), g,
                   attrs={"quantity": "brdf", "material": "ramp"}).save(tmp_path / "t.h5")
     common = ["render", str(tmp_path / "t.h5"), "--scene", "swatch", "--size", "32x24", "--spp", "1"]
     assert main([*common, "--fold-radii", "10,-4", "--look-at", "crest", "--zoom", "3", "--fov", "30",

@@ -47,7 +47,7 @@ def test_properties_and_defaults(paper_table):
 def test_values_are_copied():
     g = Grid.paper(kappa=[0.0])
     v = np.ones(g.shape + (3,))
-    t = CDBRDF(v, **g.axes())
+    t = CDBRDF(v, g)
     v[...] = 5
     assert t.values.max() == 1.0
 
@@ -348,7 +348,7 @@ def test_table_larger_than_the_limit_is_refused_before_allocating(monkeypatch):
     monkeypatch.setenv("CDBRDF_MAX_TABLE_SAMPLES", "30000")
     g = Grid.paper()
     with pytest.raises(LimitError, match=r"values: table of shape \(5, 12, 6, 12, 6, 3\): 77,760 values"):
-        CDBRDF(np.broadcast_to(np.float32(1), g.shape + (3,)), **g.axes())
+        CDBRDF(np.broadcast_to(np.float32(1), g.shape + (3,)), g)
     # a grid of 10^15 samples is refused without building anything
     monkeypatch.delenv("CDBRDF_MAX_TABLE_SAMPLES")
     with pytest.raises(LimitError, match="regular grid of 5 x 36000 x 75001 x 36000 x 75001 samples"):
@@ -402,7 +402,31 @@ def test_masked_queries_are_refused_unless_nothing_is_masked():
 def test_the_value_bound_is_the_same_in_either_precision(small_grid, dtype):
     """float32 values of 1e30 were refused with "0 value(s) beyond +-1e+30" (the count compared at float32)."""
     v = np.full(small_grid.shape + (3,), 1e30, dtype)
-    assert CDBRDF(v, **small_grid.axes()).values.max() == v.max()
+    assert CDBRDF(v, small_grid).values.max() == v.max()
     v[0, 0, 0, 0, 0, 1] = 3e30
     with pytest.raises(TableError, match=r"values: 1 value\(s\) beyond \+-1e\+30 \(up to 3e\+30\)"):
-        CDBRDF(v, **small_grid.axes())
+        CDBRDF(v, small_grid)
+
+
+def test_a_table_is_its_values_on_a_grid_with_a_provenance():
+    """CDBRDF(values, grid, *, std, provenance, attrs): the records whole; the former keywords build the same."""
+    from cdbrdf.provenance import Provenance
+
+    g = cdbrdf.Grid.regular(theta_step_deg=30, phi_step_deg=90, kappa=[-0.1, 0.0, 0.1])
+    v = np.random.default_rng(2).random(g.shape + (3,)) + 0.1
+    measured = np.ones(g.shape, bool)
+    measured[0, :, -1] = False
+    prov = Provenance(measured=measured, fill_source=np.where(measured, -1, -2))
+    t = CDBRDF(v, g, provenance=prov, attrs={"material": "m"})
+    assert t.grid == g and t.attrs["material"] == "m"
+    np.testing.assert_array_equal(t.provenance.measured, measured)
+    assert t == CDBRDF(v, g, measured=measured, fill_source=prov.fill_source, attrs={"material": "m"})
+    assert CDBRDF(t.values, t.grid, std=t.std, provenance=t.provenance, attrs=t.attrs) == t
+    with pytest.raises(TableError, match="^grid: give the axes and symmetry in the Grid, not beside it"):
+        CDBRDF(v, g, kappa=g.kappa)
+    with pytest.raises(TableError, match="^provenance: give measured in the Provenance, not beside it"):
+        CDBRDF(v, g, provenance=prov, measured=measured)
+    with pytest.raises(TableError, match="^grid: expected a cdbrdf.Grid, got dict"):
+        CDBRDF(v, g.axes())
+    with pytest.raises(TypeError, match="unexpected keyword argument 'kapa'"):
+        CDBRDF(v, g, kapa=1)

@@ -45,8 +45,7 @@ def _stands_text(stands: Sequence[Stand]) -> str:
 
 def write_report(folder: Path, config: Any, results: Sequence[Any], seconds: float,
                   stands: Sequence[Stand]) -> Path:
-    from .render.picture import MAX_AUTO_EV
-    from .report import Report, provenance_text
+    from .report import Report
 
     g = config.grid
     r = Report(
@@ -62,6 +61,15 @@ def write_report(folder: Path, config: Any, results: Sequence[Any], seconds: flo
             f"{seconds / 60:.1f} min."
         ),
     )
+    intro = _intro(r, results)
+    compared = _tables(intro, results)
+    for m in results:
+        _material_section(r, m, config, compared)
+    return r.write(folder)
+
+
+def _intro(r: Any, results: Sequence[Any]) -> Any:
+    """The report's first section: what the run shows, where the surfaces bend."""
     intro = r.section(
         "What this shows",
         "Each fabric is a micro-structure model whose reflectance depends on how it is bent "
@@ -91,6 +99,11 @@ def write_report(folder: Path, config: Any, results: Sequence[Any], seconds: flo
           "-" if not s["filled"] else f"{100 * s['median_rel_error_filled']:.1f} %"]
          for m in results for s in m.per_stand],
     )
+    return intro
+
+
+def _tables(intro: Any, results: Sequence[Any]) -> str:
+    """The first section's tables (samples, fills, what bending does, times); the compared fill's name."""
     fill_name = results[0].fill_method if results else ""
     compared = results[0].compared_fill.get("method", COMPARED_FILL) if results else COMPARED_FILL
     intro.table(
@@ -135,53 +148,59 @@ def write_report(folder: Path, config: Any, results: Sequence[Any], seconds: flo
                      ("photographs", "measuring", "figures", "render_sine", "render_drape")]
          for m in results],
     )
-    for m in results:
-        s = r.section(f"{m.name}: {m.truth_attrs.get('description', m.name)}" if m.truth_attrs.get("description")
-                      else m.name)
-        s.figure(m.figures["photos"], "The photographs",
-                 "What the camera saw, one stand per column (concave on the left, convex on the right), "
-                 "for the normal view and two grazing views. On the concave stands the grazing views "
-                 "see the white wall or lose the light at the patch: those samples are marked hidden "
-                 "and filled, never averaged.")
-        s.figure(m.figures["mosaic_measured"], "Measured CDBRDF (paper's Fig. 7)",
-                 "One image per stand curvature: rows are light directions, columns view directions, "
-                 "grouped by azimuth with the elevation increasing inside each group. Hatched, "
-                 "outlined cells were hidden by the stand and filled: orange from the same direction "
-                 "on the other stands (fitted along the curvature), magenta from the nearest measured "
-                 "direction at the same curvature (where no stand measured the direction); there are "
-                 "no white wall artefacts. The bottom row is the difference to the flat stand: red "
-                 "where bending brightens the fabric.")
-        s.figure(m.figures["mosaic_truth"], "Ground truth on the paper's grid",
-                 "The fabric model's own table (72 x 72 directions per curvature), which the rig "
-                 "rendered; the measured mosaic above should look like it at its coarser sampling.")
-        s.figure(m.figures["sine"], "The paper's sine sheet (Figs. 9-10)",
-                 "Rendered in Mitsuba 3 with (a) the plain BRDF and (b) the measured CDBRDF, the "
-                 "curvature taken at every point; (c) shows where they differ: along the crests "
-                 "(convex) and troughs (concave), not on the flanks where the sheet is nearly flat. "
-                 "Light and camera are near the normal (the light along the crests), where the paper "
-                 "compares its mosaics. "
-                 "The swatches below are the mean colour of each render at the convex crests and at the "
-                 "flat lines, as shown on screen, with their median Delta E*ab. "
-                 f"Exposure {m.render_exposure_ev:+.1f} EV (0 EV shows a white Lambertian surface facing "
-                 f"the light as white; at most +{MAX_AUTO_EV:g} EV, so dark fabrics stay dark); "
-                 f"{config.render_size[0]} x "
-                 f"{config.render_size[1]} pixels, {config.render_spp} spp.")
-        s.figure(m.figures["drape"], "A draped cloth",
-                 "A generated cloth over a dome with radial folds, its curvature computed from the mesh "
-                 "(cdbrdf.mesh): the dome and the fold ridges are convex, the fold valleys concave.")
-        s.table("Overall error of the measured table against the ground truth",
-                ["quantity", "value"],
-                [["median relative error, measured samples", f"{100 * m.error['median_rel_error_measured']:.2f} %"],
-                 ["95th percentile, measured samples", f"{100 * m.error['p95_rel_error_measured']:.2f} %"],
-                 [f"median relative error, filled samples ({m.fill_method})",
-                  f"{100 * m.error['median_rel_error_filled']:.2f} %"],
-                 [f"95th percentile, filled samples ({m.fill_method})",
-                  f"{100 * m.error['p95_rel_error_filled']:.1f} %"],
-                 [f"median relative error, filled samples ({compared}, the paper's rule)",
-                  f"{100 * m.compared_fill['error']['median_rel_error_filled']:.1f} %"]])
-        s.detail("Measurement summary", m.summary)
-        s.detail("Provenance of the ground-truth material", provenance_text(m.truth_attrs))
-    return r.write(folder)
+    return compared
+
+
+def _material_section(r: Any, m: Any, config: Any, compared: str) -> None:
+    """One fabric's section: photographs, mosaics, renders, errors, provenance."""
+    from .render.picture import MAX_AUTO_EV
+    from .report import provenance_text
+
+    s = r.section(f"{m.name}: {m.truth_attrs.get('description', m.name)}" if m.truth_attrs.get("description")
+                  else m.name)
+    s.figure(m.figures["photos"], "The photographs",
+             "What the camera saw, one stand per column (concave on the left, convex on the right), "
+             "for the normal view and two grazing views. On the concave stands the grazing views "
+             "see the white wall or lose the light at the patch: those samples are marked hidden "
+             "and filled, never averaged.")
+    s.figure(m.figures["mosaic_measured"], "Measured CDBRDF (paper's Fig. 7)",
+             "One image per stand curvature: rows are light directions, columns view directions, "
+             "grouped by azimuth with the elevation increasing inside each group. Hatched, "
+             "outlined cells were hidden by the stand and filled: orange from the same direction "
+             "on the other stands (fitted along the curvature), magenta from the nearest measured "
+             "direction at the same curvature (where no stand measured the direction); there are "
+             "no white wall artefacts. The bottom row is the difference to the flat stand: red "
+             "where bending brightens the fabric.")
+    s.figure(m.figures["mosaic_truth"], "Ground truth on the paper's grid",
+             "The fabric model's own table (72 x 72 directions per curvature), which the rig "
+             "rendered; the measured mosaic above should look like it at its coarser sampling.")
+    s.figure(m.figures["sine"], "The paper's sine sheet (Figs. 9-10)",
+             "Rendered in Mitsuba 3 with (a) the plain BRDF and (b) the measured CDBRDF, the "
+             "curvature taken at every point; (c) shows where they differ: along the crests "
+             "(convex) and troughs (concave), not on the flanks where the sheet is nearly flat. "
+             "Light and camera are near the normal (the light along the crests), where the paper "
+             "compares its mosaics. "
+             "The swatches below are the mean colour of each render at the convex crests and at the "
+             "flat lines, as shown on screen, with their median Delta E*ab. "
+             f"Exposure {m.render_exposure_ev:+.1f} EV (0 EV shows a white Lambertian surface facing "
+             f"the light as white; at most +{MAX_AUTO_EV:g} EV, so dark fabrics stay dark); "
+             f"{config.render_size[0]} x "
+             f"{config.render_size[1]} pixels, {config.render_spp} spp.")
+    s.figure(m.figures["drape"], "A draped cloth",
+             "A generated cloth over a dome with radial folds, its curvature computed from the mesh "
+             "(cdbrdf.mesh): the dome and the fold ridges are convex, the fold valleys concave.")
+    s.table("Overall error of the measured table against the ground truth",
+            ["quantity", "value"],
+            [["median relative error, measured samples", f"{100 * m.error['median_rel_error_measured']:.2f} %"],
+             ["95th percentile, measured samples", f"{100 * m.error['p95_rel_error_measured']:.2f} %"],
+             [f"median relative error, filled samples ({m.fill_method})",
+              f"{100 * m.error['median_rel_error_filled']:.2f} %"],
+             [f"95th percentile, filled samples ({m.fill_method})",
+              f"{100 * m.error['p95_rel_error_filled']:.1f} %"],
+             [f"median relative error, filled samples ({compared}, the paper's rule)",
+              f"{100 * m.compared_fill['error']['median_rel_error_filled']:.1f} %"]])
+    s.detail("Measurement summary", m.summary)
+    s.detail("Provenance of the ground-truth material", provenance_text(m.truth_attrs))
 
 
 def _pct(x: float) -> str:

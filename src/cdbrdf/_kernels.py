@@ -284,6 +284,26 @@ def _elevation_select(x, inv_step, n, tol):
     return i, _snap(u - i, tol)
 
 
+@njit(nogil=True, cache=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
+def _gather_block(qbuf, first, m, q_tv, q_pv, q_tl, q_pl, q_k, iso):
+    """Contiguous copies of ``m`` (possibly broadcast) queries from ``first``: lets the next loop vectorise."""
+    s_tv = 1 if q_tv.shape[0] > 1 else 0
+    s_pv = 1 if q_pv.shape[0] > 1 else 0
+    s_tl = 1 if q_tl.shape[0] > 1 else 0
+    s_pl = 1 if q_pl.shape[0] > 1 else 0
+    s_k = 1 if q_k.shape[0] > 1 else 0
+    for j in range(m):
+        q = first + j
+        qbuf[0, j] = q_tv[q * s_tv]
+        pv = _wrap_azimuth(q_pv[q * s_pv])
+        pl = _wrap_azimuth(q_pl[q * s_pl])
+        # isotropic: the view azimuth axis is the difference phi_v - phi_l (phi_l has one node)
+        qbuf[1, j] = _wrap_azimuth(pv - pl) if iso else pv
+        qbuf[2, j] = q_tl[q * s_tl]
+        qbuf[3, j] = pl
+        qbuf[4, j] = q_k[q * s_k]
+
+
 @njit(nogil=True, cache=True, error_model="numpy", fastmath=_FASTMATH)
 def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, start, stop, out, offset):
     """:func:`lookup_generic` for RGB tables with evenly spaced elevations.
@@ -314,11 +334,6 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, start, stop, out, offset):
     k_lo, kn1, kn2, kn3, kn4, kn5, kn6, k_hi = g.kappa_node
     _, ks1, ks2, ks3, ks4, ks5, ks6, _ = g.kappa_scan
     ki0, ki1, ki2, ki3, ki4, ki5, ki6, _ = g.kappa_slot_inv_d
-    s_tv = 1 if q_tv.shape[0] > 1 else 0
-    s_pv = 1 if q_pv.shape[0] > 1 else 0
-    s_tl = 1 if q_tl.shape[0] > 1 else 0
-    s_pl = 1 if q_pl.shape[0] > 1 else 0
-    s_k = 1 if q_k.shape[0] > 1 else 0
     s_view = n_tv * 4
     s_tlight = n_pv * s_view
     d_tl = s_tlight  # n_tl >= 3
@@ -332,17 +347,7 @@ def lookup_rgb(g, tol, q_tv, q_pv, q_tl, q_pl, q_k, start, stop, out, offset):
     fbuf = np.empty((12, _BLOCK), dtype=np.float64)
     for first in range(start, stop, _BLOCK):
         m = min(_BLOCK, stop - first)
-        # contiguous copies of the (possibly broadcast) queries: lets the next loop vectorise
-        for j in range(m):
-            q = first + j
-            qbuf[0, j] = q_tv[q * s_tv]
-            pv = _wrap_azimuth(q_pv[q * s_pv])
-            pl = _wrap_azimuth(q_pl[q * s_pl])
-            # isotropic: the view azimuth axis is the difference phi_v - phi_l (phi_l has one node)
-            qbuf[1, j] = _wrap_azimuth(pv - pl) if iso else pv
-            qbuf[2, j] = q_tl[q * s_tl]
-            qbuf[3, j] = pl
-            qbuf[4, j] = q_k[q * s_k]
+        _gather_block(qbuf, first, m, q_tv, q_pv, q_tl, q_pl, q_k, iso)
         for j in range(m):
             tv = qbuf[0, j]
             pv = qbuf[1, j]

@@ -37,7 +37,7 @@ def precompile() -> dict[str, float]:
     g = Grid(kappa=[0.0, 0.1], theta_l=[0.0, 30.0, 60.0], phi_l=[0.0, 180.0], theta_v=[0.0, 30.0, 60.0],
              phi_v=[0.0, 180.0])
     for dtype in (np.float32, np.float64):
-        table = CDBRDF(np.full(g.shape + (3,), 0.2, dtype=dtype), **g.axes())
+        table = CDBRDF(np.full(g.shape + (3,), 0.2, dtype=dtype), g)
         for kernel in ("rgb", "generic"):
             interp.evaluate(table, 10.0, 20.0, 30.0, 40.0, 0.05, kernel=kernel)
     seconds["lookup"] = time.perf_counter() - t

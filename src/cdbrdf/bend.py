@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import OptionError, TableError
 from .grid import PAPER_KAPPA, Grid
+from .provenance import Provenance
 
 __all__ = ["BEND_MODELS", "RATIO_LIMIT", "RATIO_EPSILON", "FIT_PAIRS", "TEST_PAIRS", "bend", "fit_flat", "bend_grid"]
 
@@ -317,7 +318,7 @@ def bend(
     values, ratio_info = _bent_values(np.asarray(flat_table.values[0], dtype=np.float64),
                                       np.asarray(mtab.values, dtype=np.float64), i0)
     arrays = _provenance_arrays(g, np.asarray(flat_table.measured[0]), i0)
-    table = CDBRDF(values.astype(np.float32), **g.axes(), **arrays)
+    table = CDBRDF(values.astype(np.float32), g, provenance=Provenance(**arrays))
     alb = _albedo_max(table)
     limit = max(1.0, float(alb[i0]))
     scale = np.where((alb > limit) & (np.arange(alb.size) != i0), limit / np.maximum(alb, 1e-30), 1.0)
@@ -343,4 +344,4 @@ def bend(
              "predicted": STATEMENT, "model": best.model, "provenance": prov}
     log.info("bent %s with the %s model (median Delta E*ab %.2f at flat) in %.1f s", source.path, best.model,
              best.errors["test"]["delta_e_median"], prov["seconds"])
-    return CDBRDF(values.astype(np.float32), **g.axes(), **arrays, attrs=attrs)
+    return CDBRDF(values.astype(np.float32), g, provenance=Provenance(**arrays), attrs=attrs)

@@ -147,16 +147,23 @@ def _join_negative_lists(argv: Sequence[str]) -> list[str]:
     return out
 
 
-#: Limits that bound the memory of each command, named when it runs out of memory.
-_MEMORY_HINTS: dict[str, str] = {
-    "render": "CDBRDF_MAX_RENDER_PIXELS, CDBRDF_MAX_MESH_FACES",
-    "curvature": "CDBRDF_MAX_MESH_FACES",
-    "plan": "CDBRDF_MAX_CAPTURE_ROWS",
-    "simulate-capture": "CDBRDF_MAX_CAPTURE_ROWS, CDBRDF_MAX_RENDER_PIXELS",
-    "synth": "CDBRDF_MAX_TABLE_SAMPLES",
-    "bend": "CDBRDF_MAX_TABLE_SAMPLES",
-    "measure": "CDBRDF_MAX_IMAGE_PIXELS, CDBRDF_MAX_TABLE_SAMPLES",
+#: The limits (:data:`cdbrdf.limits.LIMITS`' names) that bound the memory of each command, named when it runs out.
+_MEMORY_HINTS: dict[str, tuple[str, ...]] = {
+    "render": ("render_pixels", "mesh_faces"),
+    "curvature": ("mesh_faces",),
+    "plan": ("capture_rows",),
+    "simulate-capture": ("capture_rows", "render_pixels"),
+    "synth": ("table_samples",),
+    "bend": ("table_samples",),
+    "measure": ("image_pixels", "table_samples"),
 }
+
+
+def _memory_hint(command: str) -> str:
+    """The environment variables of the limits that bound ``command``'s memory (owned by :mod:`cdbrdf.limits`)."""
+    from .limits import LIMITS
+
+    return ", ".join(LIMITS[name].env for name in _MEMORY_HINTS.get(command, ()))
 
 
 def _version_only(argv: Sequence[str]) -> bool:
@@ -238,7 +245,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.debug:
             raise
         what = "out of memory" if isinstance(exc, MemoryError) else "input nested too deeply"
-        hint = _MEMORY_HINTS.get(args.command, "")
+        hint = _memory_hint(args.command)
         hint = f"; lower the sizes asked for{' or the limits ' + hint if hint else ''}"
         print(f"cdbrdf {args.command}: error: {what} while running {args.command}{hint}",
               file=sys.stderr)

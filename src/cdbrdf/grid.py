@@ -335,8 +335,8 @@ class Grid:
     def axes(self) -> dict[str, Any]:
         """The axes by name, in storage order.
 
-        Float64 arrays, typed Any so that ``CDBRDF(v, **g.axes())`` type-checks
-        beside the table's other keywords.
+        Float64 arrays, typed Any so that ``Grid(**g.axes())`` type-checks
+        beside other keywords (a table takes the grid whole: ``CDBRDF(v, g)``).
 
         Returns
         -------

@@ -162,24 +162,46 @@ def wrap_azimuth(phi_deg: float) -> float:
 
 
 class KernelGrid(NamedTuple):
-    """What the compiled kernels of :mod:`cdbrdf._kernels` read: one type per table dtype.
+    """A prepared table's lookup fields: what the compiled kernels of :mod:`cdbrdf._kernels` read.
 
-    The fields of :class:`LookupGrid` the kernels use, with the shape as
-    integers instead of the 6-D values: numba compiles each kernel once for
-    float32 tables and once for float64 tables (``flat`` keeps the table's
-    dtype: a float32 table read as float64 would double the memory the
-    gathers touch, 20 % slower; the kernels compute in float64 either way).
+    Numba compiles each kernel once for float32 tables and once for float64
+    tables: ``flat`` keeps the table's dtype (a float32 table read as float64
+    would double the memory the gathers touch, 20 % slower; the kernels
+    compute in float64 either way). :class:`LookupGrid` holds one and reads
+    its fields as its own.
 
     Attributes
     ----------
+    flat
+        The table raveled in C order with ``stride`` values per sample: RGB
+        tables are padded to 4 (the padding is 0) so that a sample is one
+        aligned 16-byte (float32) or 32-byte (float64) block.
+    stride
+        Values per sample in ``flat`` (4 for RGB, else the channel count).
     shape
         ``(n_kappa, n_phi_l, n_theta_l, n_phi_v, n_theta_v, channel)`` as integers.
-    flat, stride, kappa, kappa_inv_d, theta_l, theta_l_inv_d, theta_l_inv_step
-        As in :class:`LookupGrid`.
-    theta_v, theta_v_inv_d, theta_v_inv_step, phi_l0, phi_l_inv_step, phi_v0
-        As in :class:`LookupGrid`.
-    phi_v_inv_step, kappa_node, kappa_scan, kappa_slot_inv_d, isotropic
-        As in :class:`LookupGrid`.
+    kappa, kappa_inv_d
+        Curvature axis (mm^-1) and ``1 / (kappa[i + 1] - kappa[i])`` (mm);
+        a single-sample axis has ``kappa_inv_d == [0]``.
+    theta_l, theta_l_inv_d, theta_l_inv_step
+        Light elevation axis (degrees, ``theta_l[0] == 0``), its inverse
+        spacings (1/degree) and ``1 / step`` when it is evenly spaced with at
+        least 3 nodes, else 0.0.
+    theta_v, theta_v_inv_d, theta_v_inv_step
+        The same for the view elevation.
+    phi_l0, phi_l_inv_step
+        First light azimuth (degrees) and ``n_phi_l / 360``.
+    phi_v0, phi_v_inv_step
+        The same for the view azimuth.
+    kappa_node, kappa_scan, kappa_slot_inv_d
+        The curvature axis in :data:`RGB_MAX_KAPPA` slots for the RGB kernel:
+        the nodes padded with the last one; the interior nodes ``1 .. n - 2``
+        at their places, +inf elsewhere (a scan counts those at or below the
+        query); the inverse spacings padded with 0.
+    isotropic
+        True for an isotropic table: queries are rotated to light azimuth 0
+        (the view azimuth axis holds ``phi_v - phi_l``) and the light pole
+        node holds the mean over that axis (see the module docstring).
     """
 
     flat: NDArray[np.floating]
@@ -204,11 +226,12 @@ class KernelGrid(NamedTuple):
 
 
 class LookupGrid(NamedTuple):
-    """A table prepared for lookup: pole rule applied, every kernel's fields named.
+    """A table prepared for lookup: pole rule applied, its lookup fields one :class:`KernelGrid`.
 
     Built once per table by :func:`prepare` (and cached by the table,
-    :meth:`cdbrdf.table.CDBRDF.lookup_grid`); immutable, arrays read-only. A
-    named tuple so that the numba kernels take it as one argument.
+    :meth:`cdbrdf.table.CDBRDF.lookup_grid`); immutable, arrays read-only.
+    The kernel's fields read as the grid's own (``grid.kappa`` is
+    ``grid.kernel.kappa``): one record of them, not two.
 
     Attributes
     ----------
@@ -216,65 +239,26 @@ class LookupGrid(NamedTuple):
         ``(n_kappa, n_phi_l, n_theta_l, n_phi_v, n_theta_v, channel)``,
         C-contiguous, the table's dtype (float32 or float64); node 0 of both
         elevation axes is theta = 0 and holds the ring mean.
-    flat
-        ``values`` raveled in C order with ``stride`` values per sample: RGB
-        tables are padded to 4 (the padding is 0) so that a sample is one
-        aligned 16-byte (float32) or 32-byte (float64) block.
-    stride
-        Values per sample in ``flat`` (4 for RGB, else the channel count).
-    kappa, kappa_inv_d
-        Curvature axis (mm^-1) and ``1 / (kappa[i + 1] - kappa[i])`` (mm);
-        a single-sample axis has ``kappa_inv_d == [0]``.
-    theta_l, theta_l_inv_d, theta_l_inv_step
-        Light elevation axis (degrees, ``theta_l[0] == 0``), its inverse
-        spacings (1/degree) and ``1 / step`` when it is evenly spaced with at
-        least 3 nodes, else 0.0 (:attr:`theta_l_even`).
-    theta_v, theta_v_inv_d, theta_v_inv_step
-        The same for the view elevation.
-    phi_l0, phi_l_step, phi_l_inv_step
-        First light azimuth, spacing (degrees; 360 / n_phi_l) and its inverse.
-    phi_v0, phi_v_step, phi_v_inv_step
-        The same for the view azimuth.
+    kernel
+        The lookup fields (:class:`KernelGrid`: ``flat``, ``stride``, the
+        axes and their inverse spacings, the curvature slots, ``isotropic``).
+    phi_l_step, phi_v_step
+        The azimuths' spacings, degrees (360 / n).
     rgb_kernel
         True when the RGB kernel applies: 3 channels, both elevation axes
         evenly spaced, at most :data:`RGB_MAX_KAPPA` curvatures.
-    kappa_node, kappa_scan, kappa_slot_inv_d
-        The curvature axis in :data:`RGB_MAX_KAPPA` slots for the RGB kernel
-        (meaningful when ``rgb_kernel``): the nodes padded with the last one;
-        the interior nodes ``1 .. n - 2`` at their places, +inf elsewhere (a
-        scan counts those at or below the query); the inverse spacings padded
-        with 0.
-    isotropic
-        True for an isotropic table: queries are rotated to light azimuth 0
-        (the view azimuth axis holds ``phi_v - phi_l``) and the light pole
-        node holds the mean over that axis (see the module docstring).
-    kernel
-        The fields the compiled kernels read (:class:`KernelGrid`).
     """
 
     values: NDArray[np.floating]
-    flat: NDArray[np.floating]
-    stride: int
-    kappa: NDArray[np.float64]
-    kappa_inv_d: NDArray[np.float64]
-    theta_l: NDArray[np.float64]
-    theta_l_inv_d: NDArray[np.float64]
-    theta_l_inv_step: float
-    theta_v: NDArray[np.float64]
-    theta_v_inv_d: NDArray[np.float64]
-    theta_v_inv_step: float
-    phi_l0: float
-    phi_l_step: float
-    phi_l_inv_step: float
-    phi_v0: float
-    phi_v_step: float
-    phi_v_inv_step: float
-    rgb_kernel: bool
-    kappa_node: tuple[float, ...]
-    kappa_scan: tuple[float, ...]
-    kappa_slot_inv_d: tuple[float, ...]
-    isotropic: bool
     kernel: KernelGrid
+    phi_l_step: float
+    phi_v_step: float
+    rgb_kernel: bool
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self.kernel, name)
 
     def __repr__(self) -> str:
         return (f"LookupGrid(shape={self.shape}, dtype={self.values.dtype}, stride={self.stride}, "
@@ -440,16 +424,8 @@ def prepare(grid: Grid, values: NDArray[np.floating]) -> LookupGrid:
     }
     kernel = KernelGrid(flat=flat, stride=stride,
                         shape=tuple(int(n) for n in values.shape), **axes)  # type: ignore[arg-type]
-    return LookupGrid(
-        values=values,
-        flat=flat,
-        stride=stride,
-        phi_l_step=PERIOD_DEG / n_pl,
-        phi_v_step=PERIOD_DEG / n_pv,
-        rgb_kernel=bool(nc == 3 and inv_tl > 0.0 and inv_tv > 0.0 and kappa.size <= RGB_MAX_KAPPA),
-        kernel=kernel,
-        **axes,
-    )
+    return LookupGrid(values=values, kernel=kernel, phi_l_step=PERIOD_DEG / n_pl, phi_v_step=PERIOD_DEG / n_pv,
+                      rgb_kernel=bool(nc == 3 and inv_tl > 0.0 and inv_tv > 0.0 and kappa.size <= RGB_MAX_KAPPA))
 
 
 def _as_query(name: str, x: ArrayLike) -> NDArray[np.floating]:

@@ -470,7 +470,8 @@ def _read_parts(path: Path, heaps: Heaps | None = None) -> TableParts:
 
         # -- data: everything read, then the data digest (since 1.3), then the values' checks
         data = _read_data(path, f, datasets, raw)
-    return TableParts(axes=axes, attrs=attrs, **data)
+        names = frozenset(f.attrs)
+    return TableParts(axes=axes, attrs=attrs, file_attrs=names, **data)
 
 
 def _read_data(path: Path, f: Any, datasets: dict[str, Any], raw: dict[str, np.ndarray]) -> dict[str, Any]:

@@ -16,6 +16,8 @@ writes this provenance) relies on them:
 
 from __future__ import annotations
 
+from dataclasses import dataclass, fields
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -23,7 +25,42 @@ from .errors import TableError
 from .grid import read_array
 from .schema import FILL_METHOD_CODES
 
-__all__ = ["check_measured", "check_fill_source", "read_fill_sources", "check_fill_sources", "check_fill_method_codes"]
+__all__ = ["PROVENANCE_FIELDS", "Provenance", "check_measured", "check_fill_source", "read_fill_sources",
+           "check_fill_sources", "check_fill_method_codes"]
+
+
+@dataclass(frozen=True, eq=False)
+class Provenance:
+    """Where each sample's value comes from: measured, or filled and how (checked by :class:`cdbrdf.CDBRDF`).
+
+    Every array is indexed like the table's samples (``values.shape[:-1]``; the
+    per-source arrays add a slot axis; ``fill_std`` is shaped like the
+    values); None: not recorded (the table's defaults, :class:`cdbrdf.CDBRDF`).
+
+    Attributes
+    ----------
+    measured
+        Boolean mask, True where the sample was measured.
+    fill_source
+        Flat index of the measured sample a filled value was copied from (-1 measured, -2 unknown).
+    fill_method
+        Codes of :data:`cdbrdf.schema.FILL_METHOD_CODES`.
+    fill_sources, fill_weights
+        The measured samples each filled value was computed from and their weights.
+    fill_std
+        Estimated standard deviation of each filled value's error (0 where measured).
+    """
+
+    measured: ArrayLike | None = None
+    fill_source: ArrayLike | None = None
+    fill_method: ArrayLike | None = None
+    fill_sources: ArrayLike | None = None
+    fill_weights: ArrayLike | None = None
+    fill_std: ArrayLike | None = None
+
+
+#: The fields of :class:`Provenance` (the former keywords of :class:`cdbrdf.CDBRDF`).
+PROVENANCE_FIELDS: tuple[str, ...] = tuple(f.name for f in fields(Provenance))
 
 
 def check_measured(measured: ArrayLike | None, shape: tuple[int, ...]) -> NDArray[np.bool_]:

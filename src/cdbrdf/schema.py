@@ -421,6 +421,9 @@ class TableParts:
         The per-sample fill provenance (since 1.2; :data:`FILL_METHOD`,
         :data:`FILL_SOURCES`, :data:`FILL_WEIGHTS`, :data:`FILL_STD`), or
         None when not recorded.
+    file_attrs
+        The names of the file's global attributes, when a reader saw them
+        (another variable's attributes, a CD-BTF's: :mod:`cdbrdf.sources`); None otherwise.
     """
 
     values: np.ndarray
@@ -433,6 +436,7 @@ class TableParts:
     fill_sources: np.ndarray | None = None
     fill_weights: np.ndarray | None = None
     fill_std: np.ndarray | None = None
+    file_attrs: frozenset[str] | None = None
 
     @classmethod
     def of(cls, table: Any) -> TableParts:
@@ -473,11 +477,3 @@ class TableParts:
             FILL_STD: self.fill_std,
         }
         return {name: a for name, a in arrays.items() if a is not None}
-
-    def table_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :class:`cdbrdf.CDBRDF` besides ``values``."""
-        return dict(
-            **self.axes, measured=self.measured, fill_source=self.fill_source, std=self.std, attrs=self.attrs,
-            fill_method=self.fill_method, fill_sources=self.fill_sources, fill_weights=self.fill_weights,
-            fill_std=self.fill_std,
-        )

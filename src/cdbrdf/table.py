@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Mapping
+from dataclasses import replace
 from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -36,6 +37,8 @@ from .errors import FormatError, TableError
 from .gltf_table import is_gltf, read_gltf
 from .grid import MAX_ABS_KAPPA, MIN_AXIS_STEP, PAPER_KAPPA, PAPER_PHI, PAPER_THETA, Grid, read_array
 from .provenance import (
+    PROVENANCE_FIELDS,
+    Provenance,
     check_fill_method_codes,
     check_fill_source,
     check_fill_sources,
@@ -46,6 +49,7 @@ from .schema import (
     AXES,
     FILL_METHOD_CODES,
     QUANTITIES,
+    SAMPLE_AXES,
     SYMMETRY_ATTR,
     TableParts,
     channel_names,
@@ -59,6 +63,7 @@ __all__ = [
     "Grid",
     "CDBRDF",
     "load",
+    "load_parts",
     "MAX_ABS_VALUE",
     "AXES",
     "QUANTITIES",
@@ -87,10 +92,28 @@ class CDBRDF:
         and other float dtypes are converted to float64; bool, complex, time,
         object and string dtypes and masked arrays with masked entries are
         refused). Must be finite and within +-:data:`MAX_ABS_VALUE`.
-    kappa
-        Curvatures, mm^-1, strictly increasing.
-    phi_l, theta_l, phi_v, theta_v
-        Light and view azimuth and elevation axes, degrees (see :class:`Grid`).
+    grid
+        The sample axes and the symmetry (:class:`Grid`: curvatures in mm^-1,
+        strictly increasing; light and view azimuth and elevation in degrees).
+    std
+        Optional per-sample standard deviation, same shape as ``values``.
+    provenance
+        Where each sample comes from (:class:`cdbrdf.provenance.Provenance`,
+        its fields below); default: every sample measured.
+    attrs
+        Metadata: ``quantity`` ("brdf" or "relative"), ``colour_space``,
+        ``material``, ``provenance`` (any JSON-serialisable value), ``channels``,
+        ``symmetry`` (the grid's).
+    **keywords
+        The former form, kept for reading older code: the axes ``kappa``,
+        ``phi_l``, ``theta_l``, ``phi_v``, ``theta_v`` and ``symmetry`` instead
+        of ``grid``, the fields of :class:`~cdbrdf.provenance.Provenance` instead of
+        ``provenance``.
+
+    Notes
+    -----
+    The fields of :class:`~cdbrdf.provenance.Provenance`:
+
     measured
         Boolean mask, shape ``values.shape[:-1]``: True where the sample was
         measured, False where it was filled. Default: all True.
@@ -99,16 +122,6 @@ class CDBRDF:
         C-order flat index (over the five sample axes) of the measured sample
         its value was copied from, -2 when unknown; -1 for (and only for)
         measured samples. Default: -1 where measured, -2 where filled.
-    std
-        Optional per-sample standard deviation, same shape as ``values``.
-    attrs
-        Metadata: ``quantity`` ("brdf" or "relative"), ``colour_space``,
-        ``material``, ``provenance`` (any JSON-serialisable value), ``channels``,
-        ``symmetry``.
-    symmetry
-        ``"anisotropic"`` or ``"isotropic"`` (:data:`cdbrdf.schema.SYMMETRIES`);
-        default: ``attrs["symmetry"]``, else anisotropic. An isotropic table has
-        ``phi_l = [0]``, ``phi_v`` the azimuth difference ``phi_v - phi_l``.
     fill_method
         Codes of :data:`cdbrdf.schema.FILL_METHOD_CODES`, shape ``values.shape[:-1]``:
         how each sample was filled; 0 (``measured``) for, and only for, measured
@@ -139,7 +152,7 @@ class CDBRDF:
     --------
     >>> import numpy as np, cdbrdf
     >>> g = cdbrdf.Grid.paper()
-    >>> t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), **g.axes())
+    >>> t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), g)
     >>> t.evaluate(30.0, 45.0, 10.0, 200.0, 0.05).round(3)
     array([0.2, 0.2, 0.2])
     """
@@ -150,24 +163,51 @@ class CDBRDF:
     def __init__(
         self,
         values: ArrayLike,
+        grid: Grid | None = None,
         *,
-        kappa: ArrayLike,
-        phi_l: ArrayLike,
-        theta_l: ArrayLike,
-        phi_v: ArrayLike,
-        theta_v: ArrayLike,
-        measured: ArrayLike | None = None,
-        fill_source: ArrayLike | None = None,
         std: ArrayLike | None = None,
+        provenance: Provenance | None = None,
         attrs: Mapping[str, Any] | None = None,
-        symmetry: str | None = None,
-        fill_method: ArrayLike | None = None,
-        fill_sources: ArrayLike | None = None,
-        fill_weights: ArrayLike | None = None,
-        fill_std: ArrayLike | None = None,
+        **keywords: Any,
     ) -> None:
-        sym = self._check_symmetry(symmetry, attrs)
-        grid = Grid(kappa=kappa, theta_l=theta_l, phi_l=phi_l, theta_v=theta_v, phi_v=phi_v, symmetry=sym)
+        grid, provenance = self._records(grid, provenance, attrs, keywords)
+        self._build(values, grid, std, provenance, attrs)
+
+    @classmethod
+    def _records(cls, grid: Grid | None, provenance: Provenance | None, attrs: Mapping[str, Any] | None,
+                 keywords: dict[str, Any]) -> tuple[Grid, Provenance]:
+        """The grid and provenance records, from themselves or the former keywords (axes, symmetry, arrays)."""
+        axes = {k: keywords.pop(k) for k in SAMPLE_AXES if k in keywords}
+        symmetry = keywords.pop("symmetry", None)
+        arrays = {k: keywords.pop(k) for k in PROVENANCE_FIELDS if k in keywords}
+        if keywords:
+            raise TypeError(f"CDBRDF() got an unexpected keyword argument {next(iter(keywords))!r}")
+        if grid is None:
+            missing = [k for k in SAMPLE_AXES if k not in axes]
+            if missing:
+                raise TypeError(f"CDBRDF() needs a grid (cdbrdf.Grid) or the axes; missing {', '.join(missing)}")
+            grid = Grid(**axes, symmetry=cls._check_symmetry(symmetry, attrs))
+        elif not isinstance(grid, Grid):
+            raise TableError(f"grid: expected a cdbrdf.Grid, got {type(grid).__name__:.40}")
+        elif axes or symmetry is not None:
+            raise TableError(f"grid: give the axes and symmetry in the Grid, not beside it "
+                             f"({next(iter(axes), 'symmetry')})")
+        else:
+            cls._check_symmetry(grid.symmetry, attrs)
+        if provenance is None:
+            provenance = Provenance(**arrays)
+        elif arrays:
+            raise TableError(f"provenance: give {next(iter(arrays))} in the Provenance, not beside it")
+        return grid, provenance
+
+    def _build(self, values: ArrayLike, grid: Grid, std: ArrayLike | None, provenance: Provenance,
+               attrs: Mapping[str, Any] | None) -> None:
+        if not isinstance(provenance, Provenance):
+            raise TableError("provenance: expected a cdbrdf.provenance.Provenance, "
+                             f"got {type(provenance).__name__:.40}")
+        sym = grid.symmetry
+        measured, fill_source, fill_sources = provenance.measured, provenance.fill_source, provenance.fill_sources
+        fill_method, fill_weights, fill_std = provenance.fill_method, provenance.fill_weights, provenance.fill_std
         self._grid = grid
         self._values = self._check_values("values", values, grid)
         self._std = self._check_std("std", std, grid, self._values.shape)
@@ -311,6 +351,12 @@ class CDBRDF:
     def fill_std(self) -> NDArray[np.floating] | None:
         """Estimated standard deviation of each filled value's error (0 measured), or None."""
         return self._fill_std
+
+    @property
+    def provenance(self) -> Provenance:
+        """Where each sample comes from, as the record :class:`cdbrdf.provenance.Provenance` (checked arrays)."""
+        return Provenance(measured=self._measured, fill_source=self._fill_source, fill_method=self._fill_method,
+                          fill_sources=self._fill_sources, fill_weights=self._fill_weights, fill_std=self._fill_std)
 
     def fill_method_names(self) -> NDArray[np.str_]:
         """:attr:`fill_method` as names.
@@ -478,22 +524,9 @@ class CDBRDF:
             fstd = None
         attrs = copy.deepcopy(self._attrs)
         attrs["plain_brdf_of_kappa"] = k
-        return CDBRDF(
-            vals,
-            kappa=[k],
-            theta_l=self.theta_l,
-            phi_l=self.phi_l,
-            theta_v=self.theta_v,
-            phi_v=self.phi_v,
-            measured=meas,
-            fill_source=fill,
-            std=std,
-            attrs=attrs,
-            fill_method=method,
-            fill_sources=src,
-            fill_weights=wts,
-            fill_std=fstd,
-        )
+        return CDBRDF(vals, replace(self._grid, kappa=np.array([k], dtype=np.float64)), std=std, attrs=attrs,
+                      provenance=Provenance(measured=meas, fill_source=fill, fill_method=method, fill_sources=src,
+                                            fill_weights=wts, fill_std=fstd))
 
     def expanded(self, *, max_azimuths: int | None = None) -> CDBRDF:
         """The anisotropic table holding an isotropic table's values for every light azimuth.
@@ -536,11 +569,10 @@ class CDBRDF:
         attrs.pop(SYMMETRY_ATTR, None)
         attrs["expanded_from"] = "isotropic"
         meas = expand(self._measured)
-        return CDBRDF(
-            expand(self._values), kappa=self.kappa, theta_l=self.theta_l, phi_l=np.arange(m) * step,
-            theta_v=self.theta_v, phi_v=self.phi_v[0] + np.arange(m) * step, measured=meas,
-            fill_source=np.where(meas, -1, -2), std=None if self._std is None else expand(self._std), attrs=attrs,
-        )
+        grid = Grid(kappa=self.kappa, theta_l=self.theta_l, phi_l=np.arange(m) * step, theta_v=self.theta_v,
+                    phi_v=self.phi_v[0] + np.arange(m) * step)
+        return CDBRDF(expand(self._values), grid, std=None if self._std is None else expand(self._std), attrs=attrs,
+                      provenance=Provenance(measured=meas, fill_source=np.where(meas, -1, -2)))
 
     def save(self, path: str | PathLike[str], *, compression: str | None = "gzip") -> None:
         """Write the table to an HDF5 file, atomically (``docs/format.md``, :func:`cdbrdf.io.write`).
@@ -599,8 +631,7 @@ class CDBRDF:
         CDBRDF
             The table.
         """
-        parts = _io.parts_from_dataset(ds)
-        return cls(parts.values, **parts.table_kwargs())
+        return _of_parts(_io.parts_from_dataset(ds))
 
     def with_attrs(self, **attrs: Any) -> CDBRDF:
         """A copy with ``attrs`` updated (the symmetry cannot change this way).
@@ -617,19 +648,7 @@ class CDBRDF:
         """
         a = copy.deepcopy(self._attrs)
         a.update(attrs)
-        return CDBRDF(
-            self._values,
-            **self._grid.axes(),
-            measured=self._measured,
-            fill_source=self._fill_source,
-            std=self._std,
-            attrs=a,
-            symmetry=self.symmetry,
-            fill_method=self._fill_method,
-            fill_sources=self._fill_sources,
-            fill_weights=self._fill_weights,
-            fill_std=self._fill_std,
-        )
+        return CDBRDF(self._values, self._grid, std=self._std, provenance=self.provenance, attrs=a)
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, CDBRDF):
@@ -693,8 +712,36 @@ def load(path: str | PathLike[str]) -> CDBRDF:
     LimitError
         When the file declares more samples than the ``table_samples`` limit.
     """
-    parts = read_gltf(path) if is_gltf(path) else _io.read(path)
+    return _from_parts(read_gltf(path) if is_gltf(path) else _io.read(path), path)
+
+
+def load_parts(path: str | PathLike[str]) -> tuple[CDBRDF, frozenset[str] | None]:
+    """A CDBRDF file read as :func:`load` reads it, with the names of the file's global attributes.
+
+    Parameters
+    ----------
+    path
+        A CDBRDF (or CD-BTF) file.
+
+    Returns
+    -------
+    tuple
+        The table, and the names of the file's global attributes (None when
+        it was read in a child process, :func:`cdbrdf.io.read`).
+    """
+    parts = _io.read(path)
+    return _from_parts(parts, path), parts.file_attrs
+
+
+def _from_parts(parts: Any, path: str | PathLike[str]) -> CDBRDF:
     try:
-        return CDBRDF(parts.values, **parts.table_kwargs())
+        return _of_parts(parts)
     except TableError as exc:
         raise FormatError(f"{Path(path)}: {exc}") from None
+
+
+def _of_parts(parts: TableParts) -> CDBRDF:
+    """The table of a file's parts: its grid (the symmetry its attributes record) and provenance records."""
+    grid = Grid(**parts.axes, symmetry=CDBRDF._check_symmetry(None, parts.attrs))
+    return CDBRDF(parts.values, grid, std=parts.std, attrs=parts.attrs,
+                  provenance=Provenance(**{k: getattr(parts, k) for k in PROVENANCE_FIELDS}))

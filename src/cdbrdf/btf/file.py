@@ -39,9 +39,9 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from .. import limits
 from .._fileattrs import data_digest, get_attr, get_attr_str
 from .._hdf5 import check_storage, fail, one_line
+from ..limits import check as check_limit
 from ..schema import SAMPLE_AXES
 from ..table import MAX_ABS_VALUE
 
@@ -290,7 +290,7 @@ def _read_neural(path: Path, f: Any, nu: int, nv: int, n_channels: int) -> Neura
     return Neural(tuple(latents), tuple(ws), tuple(bs), (float(const[0]), float(const[1]), float(const[2])))
 
 
-def read(path: str | PathLike[str]) -> BTFParts:
+def read(path: str | PathLike[str], *, mean: CDBRDF | None = None) -> BTFParts:
     """Read a CD-BTF file written by :meth:`cdbrdf.btf.CDBTF.save` (:func:`cdbrdf.btf.load` builds the object).
 
     The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
@@ -312,7 +312,7 @@ def read(path: str | PathLike[str]) -> BTFParts:
     from ..table import load as load_table
 
     p = Path(path)
-    mean = load_table(p)
+    mean = load_table(p) if mean is None else mean  # given: read already, by cdbrdf.sources.open_source
     try:
         f = h5py.File(p, "r")
     except OSError as exc:
@@ -335,7 +335,7 @@ def read(path: str | PathLike[str]) -> BTFParts:
         rank = int(_scalar(p, f.attrs, "btf_rank" if version == 1 else "btf_residual_rank", low=0, high=4096,
                            integer=True))
         nu, nv = _texel_axis(p, f, TEXEL_U), _texel_axis(p, f, TEXEL_V)
-        limits.check("table_samples", float(math.prod(mean.shape)) * (rank + 1) + nu * nv * max(rank, 1),
+        check_limit("table_samples", float(math.prod(mean.shape)) * (rank + 1) + nu * nv * max(rank, 1),
                      what=f"{p}: CD-BTF of {nu} x {nv} texels and rank {rank}")
         if rank:
             weights = _array(p, f, WEIGHTS, (nv, nu, rank))

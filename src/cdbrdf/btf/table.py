@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import FormatError, QueryError, TableError
 from ..grid import Grid, read_array
+from ..provenance import Provenance
 from ..table import CDBRDF, MAX_ABS_VALUE
 
 if TYPE_CHECKING:
@@ -138,7 +139,7 @@ class CDBTF:
     @classmethod
     def from_values(cls, values: ArrayLike, grid: Grid, *, repeat_mm: ArrayLike,
                     max_error: float = DEFAULT_MAX_ERROR, max_rank: int = MAX_RANK,
-                    attrs: Mapping[str, Any] | None = None, mean_kwargs: Mapping[str, Any] | None = None,
+                    attrs: Mapping[str, Any] | None = None, provenance: Provenance | None = None,
                     method: str = "pca", fit: FitOptions | None = None) -> CDBTF:
         """Compress dense texels: the tile mean and the smallest representation meeting ``max_error``.
 
@@ -157,11 +158,10 @@ class CDBTF:
             Most components (a warning is logged when the target needs more).
         attrs
             The tile mean's attributes (material, provenance, quantity).
-        mean_kwargs
-            More keyword arguments of the tile mean's :class:`~cdbrdf.CDBRDF`:
-            the measured mask and the fill's per-sample provenance of a
-            measured CD-BTF (``measured``, ``fill_source``, ``fill_method``,
-            ``fill_sources``, ``fill_weights``; the same for every texel).
+        provenance
+            The tile mean's per-sample provenance
+            (:class:`cdbrdf.provenance.Provenance`): the measured mask and the
+            fill's sources of a measured CD-BTF (the same for every texel).
         method
             One of :data:`METHODS`: ``"pca"`` (default: components only) or
             ``"neural"`` (per-texel latent codes and a shared decoder
@@ -195,10 +195,6 @@ class CDBTF:
             raise TableError(f"values: expected (n_v, n_u) + {grid.shape} + (channels,), got shape {v.shape}")
         if not np.all(np.isfinite(v)):
             raise TableError("values: contains NaN or infinite values")
-        extra = dict(mean_kwargs or {})
-        bad = sorted(set(extra) & {"values", "attrs", "symmetry", *grid.axes()})
-        if bad:
-            raise TableError(f"mean_kwargs: {', '.join(bad)} cannot be given here (from_values sets them)")
         nv, nu = v.shape[:2]
         nc = v.shape[-1]
         dense = v.reshape(nv * nu, -1)
@@ -206,7 +202,7 @@ class CDBTF:
             from ._neural import compress
 
             m16, net, residual, comp = compress(v, grid, max_error=float(max_error), max_rank=max_rank, options=fit)
-            mean = CDBRDF(m16, **grid.axes(), attrs=attrs, symmetry=grid.symmetry, **extra)
+            mean = CDBRDF(m16, grid, attrs=attrs, provenance=provenance)
             out = cls(mean, residual.weights.reshape(nv, nu, -1),
                       np.moveaxis(residual.basis.reshape((-1,) + grid.shape + (nc,)), 0, -2),
                       repeat_mm=repeat_mm, compression=comp, neural=net)
@@ -215,7 +211,7 @@ class CDBTF:
                 return out
             # the decoder missed the target: a PCA alone may need fewer bytes than the decoder plus components
             pca = cls.from_values(v, grid, repeat_mm=repeat_mm, max_error=max_error, max_rank=max_rank, attrs=attrs,
-                                  mean_kwargs=mean_kwargs, method="pca")
+                                  provenance=provenance, method="pca")
             if pca.nbytes_ratio() <= out.nbytes_ratio():
                 return out
             for key in ("neural_relative_rms_error", "fit_seconds"):
@@ -225,8 +221,8 @@ class CDBTF:
                       pca.rank, pca.nbytes_ratio())
             return pca
         f = factorise(dense, grid.shape[0], max_error=float(max_error), max_rank=max_rank)
-        mean = CDBRDF(f.mean.reshape(grid.shape + (nc,)).astype(np.float32), **grid.axes(), attrs=attrs,
-                      symmetry=grid.symmetry, **extra)
+        mean = CDBRDF(f.mean.reshape(grid.shape + (nc,)).astype(np.float32), grid, attrs=attrs,
+                      provenance=provenance)
         rank = f.weights.shape[1]
         basis = np.moveaxis(f.basis.reshape((rank,) + grid.shape + (nc,)), 0, -2)
         comp = {"method": "pca", "rank": rank, "max_error": float(max_error),
@@ -577,7 +573,7 @@ class CDBTF:
                 f"{self.grid!r})")
 
 
-def load(path: str | PathLike[str]) -> CDBTF:
+def load(path: str | PathLike[str], *, mean: CDBRDF | None = None) -> CDBTF:
     """Read a CD-BTF file written by :meth:`CDBTF.save`.
 
     The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
@@ -585,6 +581,13 @@ def load(path: str | PathLike[str]) -> CDBTF:
     mean and each other, finite values, every number attribute in its range
     (``docs/format.md``), the digest ``btf_sha256``, and the decoded values
     within the table's bound.
+
+    Parameters
+    ----------
+    path
+        The file.
+    mean
+        The file's tile mean, when it was read already (:func:`cdbrdf.sources.open_source`).
 
     Raises
     ------
@@ -598,7 +601,7 @@ def load(path: str | PathLike[str]) -> CDBTF:
 
     from .file import read
 
-    p = read(path)
+    p = read(path, mean=mean)
     try:
         return CDBTF(p.mean, p.weights, p.basis, repeat_mm=p.repeat_mm, compression=p.compression, neural=p.neural)
     except TableError as exc:

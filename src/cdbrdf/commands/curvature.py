@@ -116,9 +116,9 @@ def run(args: argparse.Namespace) -> int:
 
     table = None
     if args.table:
-        from ..table import load
+        from ..sources import open_source
 
-        table = load(args.table)
+        table = open_source(args.table).flat
     from ..mesh import SurfaceMaps
 
     mesh = read_mesh(args.mesh)

@@ -63,7 +63,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..export.gltf import build_gltf, export_mesh, write_gltf
     from ..mesh import MeshSurface
-    from ..table import load
+    from ..sources import open_source
     from ._maps import MAP_OPTIONS, surface_maps
     from .curvature import print_mesh_report
 
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
                               "z up, with its analytic curvature)")
     if args.materialx is not None and Path(args.materialx).resolve() == Path(args.output).resolve():
         raise OptionError("--materialx: must differ from -o")
-    table = load(args.file)
+    table = open_source(args.file).flat
     surface = args.scene or MeshSurface(args.mesh, units=args.units, neighbourhood_mm=args.neighbourhood,
                                         frame=args.frame, up=args.up or "auto")
     mesh = export_mesh(surface, table=table, maps=surface_maps(args))

@@ -65,12 +65,10 @@ def describe(table: CDBRDF) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..btf import is_btf
-    from ..btf import load as load_btf
-    from ..table import load
+    from ..sources import open_source
 
-    btf = load_btf(args.file) if is_btf(args.file) else None
-    table = load(args.file) if btf is None else btf.mean()
+    source = open_source(args.file)
+    btf, table = source.btf, source.flat
     info = describe(table)
     if btf is not None:
         info["btf"] = {"texels": list(btf.texels), "repeat_mm": list(btf.repeat_mm), **btf.compression}

@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..measure.capture import WHITE_ALBEDO_RANGE
 from ..measure.fill import BTF_DEFAULT_FILL, DEFAULT_FILL, FILL_METHODS
-from ._args import finite_float, int_range, keyword, output_path
+from ..measure.options import PATCH_RANGE_PX
+from ._args import in_range, int_range, keyword, output_path
 from ._text import say
 
 __all__ = ["register", "run"]
@@ -27,7 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("capture", metavar="CAPTURE_DIR", help="capture folder with capture.csv")
     p.add_argument("-o", "--output", required=True, metavar="FILE", type=output_path(),
                    help="CDBRDF file to write (.h5)")
-    p.add_argument("--patch", type=int_range(1, 999), default=7, help="patch size N in pixels, 1 to 999 (7)")
+    p.add_argument("--patch", type=in_range(PATCH_RANGE_PX), default=7,
+                   help=f"patch size N in pixels, {PATCH_RANGE_PX.text()} (7)")
     p.add_argument("--linear", action="store_true", help="integer images hold linear values, not sRGB")
     p.add_argument("--skip-bad", action="store_true",
                    help="fill the samples of photographs that cannot be used (missing, not a file, "
@@ -36,8 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="Dask scheduler address (tcp://host:port) or threads/processes/synchronous; "
                    "default: local threads")
-    p.add_argument("--white-albedo", type=finite_float(0, 1, lo_open=True), default=None,
-                   help="albedo of the white reference (default: stands.json's, else 1)")
+    p.add_argument("--white-albedo", type=in_range(WHITE_ALBEDO_RANGE), default=None,
+                   help=f"albedo of the white reference, {WHITE_ALBEDO_RANGE.text()} (default: stands.json's, else 1)")
     p.add_argument("--material", default=None, help="material name written to the file")
     p.add_argument("--fill", type=keyword(FILL_METHODS), default=None, metavar="METHOD",
                    help="how invalid samples are filled: "

@@ -78,10 +78,10 @@ def _output(path_text: str) -> tuple[Path, str]:
 def run(args: argparse.Namespace) -> int:
     from ..io import atomic_path
     from ..plot import plot_mosaic
-    from ..table import load
+    from ..sources import open_source
 
     out, fmt = _output(args.output)
-    table = load(args.file)
+    table = open_source(args.file).flat
     fig = plot_mosaic(
         table,
         kappa=args.kappa,

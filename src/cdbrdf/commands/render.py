@@ -214,8 +214,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _check_table_options(args: argparse.Namespace) -> None:
-    """Refuse the options the table form's surface or file does not take (before anything is read)."""
-    from ..btf import is_btf
+    """Refuse the options the table form's surface or output does not take (before anything is read)."""
     from ..plot import FIGURE_FORMATS
     from ..render.output import IMAGE_FORMATS
 
@@ -227,10 +226,6 @@ def _check_table_options(args: argparse.Namespace) -> None:
             raise OptionError(f"--{opt.replace('_', '-')}: only for --scene {scene}")
     if args.delta_e is not None and not args.compare:
         raise OptionError("--delta-e: only with --compare (the metric of its heat map)")
-    if args.texel_filter is not None and not is_btf(args.file):
-        raise OptionError(f"--texel-filter: only for a CD-BTF file ({args.file} has no texels)")
-    if args.uv_scale is not None and args.mesh is None and not is_btf(args.file):
-        raise OptionError(f"--uv-scale: for the maps of --mesh MESH or a CD-BTF file ({args.file} has no texels)")
     given = [k for k in MAP_OPTIONS[1:] if getattr(args, k) is not None]
     if given and args.mesh is None:
         raise OptionError(f"--{given[0].replace('_', '-')}: only for --mesh MESH (a built-in scene's folds are its "
@@ -242,6 +237,16 @@ def _check_table_options(args: argparse.Namespace) -> None:
             raise OptionError(f"{out}: --compare writes a figure; use {', '.join(FIGURE_FORMATS)}")
     elif ext not in IMAGE_FORMATS:
         raise OptionError(f"{out}: unknown image type {ext!r}; use {' or '.join(IMAGE_FORMATS)}")
+
+
+def _check_source(args: argparse.Namespace, source: Any) -> None:
+    """Refuse the options a CDBRDF file (not a CD-BTF) does not take."""
+    if source.is_btf:
+        return
+    if args.texel_filter is not None:
+        raise OptionError(f"--texel-filter: only for a CD-BTF file ({args.file} has no texels)")
+    if args.uv_scale is not None and args.mesh is None:
+        raise OptionError(f"--uv-scale: for the maps of --mesh MESH or a CD-BTF file ({args.file} has no texels)")
 
 
 def _surface(args: argparse.Namespace) -> Any:
@@ -288,10 +293,13 @@ def _run_table(args: argparse.Namespace) -> int:
     from ..plot import plot_render_comparison, save_figure
     from ..render import RenderSpec, render_table
     from ..render.output import write_render
+    from ..sources import open_source
     from ._progress import ProgressBars
     from .curvature import LARGE_MESH_FACES, print_mesh_report
 
     _check_table_options(args)
+    source = open_source(args.file)  # the file read once
+    _check_source(args, source)
     spec = _spec(args)
     assert isinstance(spec, RenderSpec)
     out = Path(args.output)
@@ -301,7 +309,7 @@ def _run_table(args: argparse.Namespace) -> int:
             if stage != "curvature" or 2 * total >= LARGE_MESH_FACES:  # a bar for the fit of large meshes
                 bars.update(stage, done, total)
 
-        pic = render_table(args.file, spec, progress=progress)
+        pic = render_table(source.table, spec, progress=progress)
     if pic.mesh is not None and not args.quiet:
         print_mesh_report(str(args.mesh), pic.mesh)
         say(f"{args.mesh}: up axis: {pic.up} ({pic.up_reason}); lighting: {pic.lighting}", err=True)
@@ -310,9 +318,7 @@ def _run_table(args: argparse.Namespace) -> int:
                           for r in spec.surface.radii_mm)
         say(f"swatch: {folds}; lighting: {pic.lighting}", err=True)
     if args.compare:
-        from ..table import load
-
-        name = load(args.file).attrs.get("material") or Path(args.file).stem
+        name = source.name
         lit = (f"light theta={pic.light[0]:g}, phi={pic.light[1]:g} deg" if pic.light is not None
                else "environment")
         fig = plot_render_comparison(pic.display("brdf"), pic.display("cdbrdf"), exposure_ev=pic.exposure_ev,

@@ -121,9 +121,8 @@ def _user_mesh(args: argparse.Namespace, table: object, btf: bool) -> tuple[Mesh
     return world, scale
 
 
-def _btf(args: argparse.Namespace, path: str) -> Any:
-    """A CD-BTF file, read; says on standard error when the viewer uses fewer components than it has."""
-    from ..btf import load
+def _btf(args: argparse.Namespace, path: str, t: Any) -> Any:
+    """A CD-BTF read from ``path``, checked; says on standard error when the viewer uses fewer components."""
     from ..errors import OptionError
     from ..view.btf_asset import btf_rank_that_fits
 
@@ -131,7 +130,6 @@ def _btf(args: argparse.Namespace, path: str) -> Any:
     if args.grid is not None:
         raise OptionError(f"--grid: {name} is a CD-BTF, which the viewer shows on its own grid "
                           "(use --rank N for fewer components)")
-    t = load(path)
     fits = btf_rank_that_fits(t)
     used = min(fits, t.rank if args.rank is None else args.rank)
     if used < t.rank and not args.quiet:
@@ -175,11 +173,11 @@ def _gltf_files(args: argparse.Namespace) -> tuple[str, dict[str, bytes]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..btf import CDBTF, is_btf
+    from ..btf import CDBTF
     from ..errors import OptionError
     from ..gltf_table import is_gltf
     from ..mesh import has_own_uv
-    from ..table import load
+    from ..sources import open_source
     from ..view.asset import resample
     from ..view.export import MAX_TABLES, drape_entry, viewer_files
     from ._maps import MAP_OPTIONS
@@ -200,10 +198,11 @@ def run(args: argparse.Namespace) -> int:
                           "are their geometry; the draped cloth's UVs span it)")
     tables: list[tuple[str, Any]] = []
     for f in args.files:
-        if is_btf(f):
-            tables.append((Path(f).name, _btf(args, f)))
+        source = open_source(f)
+        if source.is_btf:
+            tables.append((Path(f).name, _btf(args, f, source.table)))
             continue
-        t = load(f)
+        t = source.table
         if args.grid is not None:
             ts, ps, nk = args.grid
             t = resample(t, theta_step_deg=ts, phi_step_deg=ps, n_kappa=nk)

@@ -510,11 +510,11 @@ def export_gltf(
     GltfAsset
         What was written.
     """
-    from ..table import CDBRDF, load
+    from ..sources import open_source
 
     if Path(path).suffix.lower() not in GLTF_SUFFIXES:
         raise OptionError(f"{path}: the output must end in {' or '.join(GLTF_SUFFIXES)}")
-    tbl = table if isinstance(table, CDBRDF) else load(table)
+    tbl = open_source(table).flat
     mesh = export_mesh(surface, table=tbl, maps=maps)
     asset = build_gltf(tbl, mesh, curvature_mode=curvature_mode)
     write_gltf(asset, path)

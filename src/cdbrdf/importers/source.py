@@ -116,12 +116,12 @@ class Source:
         }
 
 
-def table_on(grid: Any, values: Any, **kw: Any) -> CDBRDF:
-    """A :class:`~cdbrdf.table.CDBRDF` on ``grid`` (its axes and symmetry) with ``values`` and keywords ``kw``."""
+def table_on(grid: Any, values: Any, *, std: Any = None, attrs: Any = None, **provenance: Any) -> CDBRDF:
+    """A :class:`~cdbrdf.table.CDBRDF` on ``grid`` with ``values``; ``provenance``: the fields of its record."""
+    from ..provenance import Provenance
     from ..table import CDBRDF
 
-    return CDBRDF(values, kappa=grid.kappa, theta_l=grid.theta_l, phi_l=grid.phi_l, theta_v=grid.theta_v,
-                  phi_v=grid.phi_v, symmetry=grid.symmetry, **kw)
+    return CDBRDF(values, grid, std=std, attrs=attrs, provenance=Provenance(**provenance))
 
 
 def mitsuba() -> tuple[Any, Any]:

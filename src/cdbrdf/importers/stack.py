@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import TableError
 from ..grid import Grid
+from ..provenance import Provenance
 from ..schema import reflectance_units
 from .convert import SYMMETRY_CHOICES, table_from, target_grid
 from .resample import DEFAULT_SPACING_DEG, MAX_EVALUATIONS
@@ -184,6 +185,7 @@ def stack(
                        for k, t in zip(kappas, slices)],
         },
     }
-    return CDBRDF(np.concatenate([t.values for t in slices]), kappa=kappas, theta_l=base.theta_l, phi_l=base.phi_l,
-                  theta_v=base.theta_v, phi_v=base.phi_v, measured=np.concatenate([t.measured for t in slices]),
-                  fill_source=fill, std=std, attrs=attrs, symmetry=base.symmetry)
+    grid = Grid(kappa=kappas, theta_l=base.theta_l, phi_l=base.phi_l, theta_v=base.theta_v, phi_v=base.phi_v,
+                symmetry=base.symmetry)
+    return CDBRDF(np.concatenate([t.values for t in slices]), grid, std=std, attrs=attrs,
+                  provenance=Provenance(measured=np.concatenate([t.measured for t in slices]), fill_source=fill))

@@ -25,11 +25,13 @@ from __future__ import annotations
 from ..errors import CaptureError
 from .calibrate import MeasureReport
 from .capture import read_capture
+from .options import MeasureOptions
 from .pipeline import MeasurementInterrupted, measure
 from .plan import write_plan
 from .stands import Stand, hidden_mask
 
 __all__ = [
+    "MeasureOptions",
     "measure",
     "read_capture",
     "MeasureReport",

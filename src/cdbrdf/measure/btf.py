@@ -29,6 +29,7 @@ convex stand turns the normal by ``repeat / 2R`` at its edge).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import json
 import logging
@@ -50,12 +51,14 @@ from ..frames import direction_from_angles
 from ..fsutil import check_output_file
 from ..images import ImageError, ImageInfo, read_window
 from ..outputs import output_lock
+from ..provenance import Provenance
 from .btf_batches import run_conditions
 from .btf_geometry import GRAZING_COS, SUBPIXELS, ViewGeometry, btf_hidden, view_geometry
 from .calibrate import MeasureReport, _nearest_white, calibration
 from .capture import Capture, CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
 from .fill import BTF_DEFAULT_FILL, BTF_FILLS, check_fill_method, fill
+from .options import MeasureOptions
 from .patch import decode_codes, merge_exposures
 from .preflight import bad_list_path, read_patch_status, remove_bad_list
 from .registration import Registration
@@ -297,21 +300,12 @@ def measure_btf(
     output: str | PathLike[str] | None = None,
     *,
     texels: int | tuple[int, int],
+    options: MeasureOptions | None = None,
     repeat_mm: tuple[float, float] | None = None,
     repeats: int = 1,
-    patch: int = 7,
-    linear: bool = False,
-    skip_bad: bool = False,
-    scheduler: Any = None,
-    white_albedo: float | None = None,
-    material: str | None = None,
-    checkpoint: bool = True,
-    batch_size: int = 1024,
-    num_workers: int | None = None,
-    progress: Callable[[int, int], None] | None = None,
-    overwrite: bool = True,
-    fill: str = BTF_DEFAULT_FILL,
     max_error: float = DEFAULT_BTF_ERROR,
+    scheduler: Any = None,
+    progress: Callable[[int, int], None] | None = None,
     _interrupt_after: int | None = None,
 ) -> tuple[CDBTF, BTFReport]:
     """Measure a registered capture folder into a CD-BTF (see the module's description).
@@ -326,19 +320,19 @@ def measure_btf(
         The repeat ``(size_u, size_v)``, mm (default: the registration's).
     repeats
         Repeats per side of the footprint solved for the texels.
-    patch
-        The N x N patch (pixels) of the white references and dark frames.
-    linear, skip_bad, scheduler, white_albedo, material
+    options
+        The options shared with :func:`cdbrdf.measure.measure`
+        (:class:`~cdbrdf.measure.MeasureOptions`: patch, linear, skip_bad,
+        white_albedo, material, fill (default :data:`~cdbrdf.measure.fill.BTF_DEFAULT_FILL`),
+        checkpoint, batch_size, num_workers, overwrite). With ``output`` and
+        ``checkpoint``, each batch of sample conditions (about ``batch_size``
+        photographs) keeps its texels in ``<output>.ckpt``
+        (:mod:`cdbrdf.measure.btf_batches`); a later run with the same capture
+        and options (texels, repeat, footprint, patch, linear, dark frames)
+        reuses them: the same CD-BTF, bit for bit.
+    scheduler, progress
         As :func:`cdbrdf.measure.measure`: a Dask task reads and rectifies
         :data:`_CONDITIONS_PER_TASK` sample conditions, on any of its schedulers.
-    checkpoint, batch_size
-        As :func:`cdbrdf.measure.measure`: with ``output``, each batch of
-        sample conditions (about ``batch_size`` photographs) keeps its texels
-        in ``<output>.ckpt`` (:mod:`cdbrdf.measure.btf_batches`); a later run
-        with the same capture and options (texels, repeat, footprint, patch,
-        linear, dark frames) reuses them: the same CD-BTF, bit for bit.
-    num_workers, progress, overwrite, fill
-        As :func:`cdbrdf.measure.measure`.
     max_error
         The compression's target relative RMS error.
     _interrupt_after
@@ -360,27 +354,26 @@ def measure_btf(
         For a bad option (one line, before anything is read).
     """
     t0 = time.perf_counter()
+    o = MeasureOptions() if options is None else options
+    if not isinstance(o, MeasureOptions):
+        raise OptionError(f"options: expected a cdbrdf.measure.MeasureOptions, got {type(o).__name__:.40}")
     nu, nv = texel_count(texels)
     if isinstance(repeats, bool) or not isinstance(repeats, (int, np.integer)) or not 1 <= repeats <= 16:
         raise OptionError(f"repeats: expected a whole number in [1, 16], got {repeats!r:.40}")
-    for name, val in (("batch_size", batch_size), ("num_workers", num_workers)):
-        if not (val is None and name == "num_workers") and (
-                isinstance(val, bool) or not isinstance(val, (int, np.integer)) or val < 1):
-            raise OptionError(f"{name}: expected a positive whole number, got {val!r:.40}")
     check_scheduler(scheduler)
     if isinstance(max_error, bool) or not isinstance(max_error, (int, float)) or not 0 <= max_error < 1:
         raise OptionError(f"max_error: expected a fraction in [0, 1), got {max_error!r:.40}")
-    fill = check_fill_method(fill)
+    fill = check_fill_method(BTF_DEFAULT_FILL if o.fill is None else o.fill)
     if fill not in BTF_FILLS:
         raise OptionError(f"fill: {fill!r} fills a CDBRDF, not a CD-BTF's texels; for --btf use one of "
                           f"{', '.join(BTF_FILLS)}")
     out_path = None if output is None else check_output_file(output)
     if out_path is not None:
         check_output_file(bad_list_path(out_path))  # what refuse_bad writes beside it
-        if not overwrite and (out_path.exists() or out_path.is_symlink()):
+        if not o.overwrite and (out_path.exists() or out_path.is_symlink()):
             raise FileExistsError(f"{out_path}: already exists (use --force to overwrite)")
     with output_lock(out_path) if out_path is not None else contextlib.nullcontext():
-        cap = read_capture(folder, patch=patch)
+        cap = read_capture(folder, patch=o.patch)
         where = cap.folder / "stands.json"
         reg = cap.settings.get("registration")
         if not isinstance(reg, Registration):
@@ -402,16 +395,16 @@ def measure_btf(
             if repeats * su > st.face_width_mm:
                 raise CaptureError(f"{where}: the stand of kappa {st.kappa:g} ({st.face_width_mm:g} mm wide) "
                                    f"is narrower than {repeats} repeat(s) of {su:g} mm")
-        ck_path = checkpoint_path(out_path) if (out_path is not None and checkpoint) else None
+        ck_path = checkpoint_path(out_path) if (out_path is not None and o.checkpoint) else None
         if out_path is not None:
             from .preflight import refuse_overlap
 
             refuse_overlap(cap, [ck_path] if ck_path is not None else [], [out_path, bad_list_path(out_path)])
-        table, report, ck = _measure(cap, reg, texels=(nu, nv), repeat=(su, sv), repeats=int(repeats), patch=patch,
-                                     linear=linear, skip_bad=skip_bad, scheduler=scheduler,
-                                     white_albedo=white_albedo, material=material, num_workers=num_workers,
+        table, report, ck = _measure(cap, reg, texels=(nu, nv), repeat=(su, sv), repeats=int(repeats), patch=o.patch,
+                                     linear=o.linear, skip_bad=o.skip_bad, scheduler=scheduler,
+                                     white_albedo=o.white_albedo, material=o.material, num_workers=o.num_workers,
                                      progress=progress, fill_method=fill, max_error=float(max_error),
-                                     out_path=out_path, ck_path=ck_path, batch_size=int(batch_size),
+                                     out_path=out_path, ck_path=ck_path, batch_size=int(o.batch_size),
                                      interrupt_after=_interrupt_after)
         if out_path is not None:
             table.save(out_path)
@@ -565,7 +558,7 @@ def _fill_and_compress(cap: Capture, reg: Registration, rep: BTFReport, values: 
     """The invalid samples of ``values`` (``grid.shape + (n_texels * C,)``) filled, the CD-BTF compressed."""
     grid = cap.grid
     summary: dict[str, Any] = {}
-    provenance_kwargs: dict[str, Any] = {}
+    sample_provenance: Provenance | None = None
     for c in range(0, values.shape[-1], _FILL_CHANNELS):  # fill is per channel: texels x channels in slices
         try:
             res = fill(values[..., c:c + _FILL_CHANNELS].astype(np.float64), valid, grid, method=fill_method)
@@ -573,8 +566,8 @@ def _fill_and_compress(cap: Capture, reg: Registration, rep: BTFReport, values: 
             raise CaptureError(f"{cap.folder}: {exc}") from None
         values[..., c:c + _FILL_CHANNELS] = res.values
         summary = summary or res.summary
-        if not provenance_kwargs:  # the same for every texel and channel (it depends on the mask and the grid)
-            provenance_kwargs = {k: v for k, v in res.table_kwargs().items() if k not in ("std", "fill_std")}
+        if sample_provenance is None:  # the same for every texel and channel (it depends on the mask and the grid)
+            sample_provenance = dataclasses.replace(res.provenance(), fill_std=None)
     rep.fill_method = fill_method
     rep.n_filled_by = {k: v for k, v in summary.get("samples", {}).items() if k != "measured"}
     dense = np.moveaxis(values.reshape(grid.shape + (texels[1], texels[0], nc)), (5, 6), (0, 1))
@@ -593,7 +586,7 @@ def _fill_and_compress(cap: Capture, reg: Registration, rep: BTFReport, values: 
     attrs = {"quantity": rep.quantity, "material": str(mat), "provenance": provenance,
              "channels": ["R", "G", "B"] if nc == 3 else ["Y"]}
     btf = CDBTF.from_values(dense, grid, repeat_mm=repeat, max_error=max_error, attrs=attrs,
-                            mean_kwargs=provenance_kwargs)
+                            provenance=sample_provenance)
     rep.compression = btf.compression
     return btf
 

@@ -355,5 +355,6 @@ def assemble(cap: Capture, results: dict, *, albedo: float, patch: int, linear: 
     mat = material or cap.settings.get("material") or cap.folder.resolve().name
     attrs = {"quantity": rep.quantity, "material": str(mat), "provenance": provenance,
              "channels": ["R", "G", "B"] if nc == 3 else ["Y"]}
-    table = CDBRDF(result.values, **grid.axes(), attrs=fill_provenance(attrs, result), **result.table_kwargs())
+    table = CDBRDF(result.values, grid, std=result.std, attrs=fill_provenance(attrs, result),
+                   provenance=result.provenance())
     return table, rep

@@ -57,6 +57,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import OptionError, TableError
+from ..provenance import Provenance
 from ..schema import FILL_METHOD_CODES
 from ..table import CDBRDF, Grid
 from ._fill_estimate import (
@@ -224,11 +225,11 @@ class Fill:
     fill_std: NDArray[np.float64]
     summary: dict[str, Any] = field(default_factory=dict)
 
-    def table_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :class:`cdbrdf.CDBRDF` for the fill (all but values, axes and attrs)."""
-        return dict(measured=self.fill_method == _CODE["measured"], fill_source=self.fill_source, std=self.std,
-                    fill_method=self.fill_method, fill_sources=self.fill_sources,
-                    fill_weights=self.fill_weights, fill_std=self.fill_std)
+    def provenance(self) -> Provenance:
+        """The fill's per-sample provenance (:class:`cdbrdf.provenance.Provenance`) for the table."""
+        return Provenance(measured=self.fill_method == _CODE["measured"], fill_source=self.fill_source,
+                          fill_method=self.fill_method, fill_sources=self.fill_sources,
+                          fill_weights=self.fill_weights, fill_std=self.fill_std)
 
     def description(self) -> str:
         """One line: the method's rule (what a file's provenance says)."""
@@ -406,8 +407,8 @@ def refill(table: CDBRDF, *, method: str = DEFAULT_FILL) -> CDBRDF:
     vals = np.where(valid[..., None], table.values, np.nan)
     std = None if table.std is None else np.where(valid[..., None], table.std, np.nan)
     result = fill(vals, valid, table.grid, method=method, std=std, material=table.attrs.get("material"))
-    kw = result.table_kwargs()
+    std = result.std
     if table.std is not None and result.std is not None:
-        kw["std"] = result.std.astype(table.std.dtype)
-    return CDBRDF(result.values.astype(table.values.dtype), **table.grid.axes(),
-                  attrs=fill_provenance(table.attrs, result), **kw)
+        std = result.std.astype(table.std.dtype)
+    return CDBRDF(result.values.astype(table.values.dtype), table.grid, std=std,
+                  attrs=fill_provenance(table.attrs, result), provenance=result.provenance())

@@ -32,7 +32,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import numbers
 from collections.abc import Callable
 from os import PathLike
 from pathlib import Path
@@ -48,7 +47,8 @@ from ..table import CDBRDF
 from .calibrate import MeasureReport, assemble
 from .capture import CaptureRow, read_capture
 from .checkpoint import Checkpoint, checkpoint_path
-from .fill import BTF_DEFAULT_FILL, DEFAULT_FILL, check_fill_method
+from .fill import DEFAULT_FILL, check_fill_method
+from .options import MeasureOptions
 from .preflight import (
     bad_list_path,
     preflight,
@@ -72,29 +72,9 @@ __all__ = [
 
 # --------------------------------------------------------------------------- tasks
 # (the scheduler's handling has one owner, :mod:`cdbrdf.measure.schedulers`, shared with measure --btf)
-def _positive_int(name: str, value: Any, *, none_ok: bool = False) -> None:
-    if value is None and none_ok:
-        return
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-        raise OptionError(f"{name}: expected a positive whole number{' or None' if none_ok else ''}, "
-                          f"got {value!r:.40}")
-
-
-def _check_options(*, patch: Any, batch_size: Any, num_workers: Any, scheduler: Any, white_albedo: Any,
-                   material: Any, progress: Any) -> None:
-    """Refuse a bad option of :func:`measure` before anything is read or created."""
-    _positive_int("patch", patch)
-    _positive_int("batch_size", batch_size)
-    _positive_int("num_workers", num_workers, none_ok=True)
+def _check_runner(*, scheduler: Any, progress: Any) -> None:
+    """Refuse a bad scheduler or progress callback of :func:`measure` before anything is read or created."""
     check_scheduler(scheduler)
-    if white_albedo is not None:
-        a = white_albedo
-        if isinstance(a, bool) or not isinstance(a, numbers.Real) or not 0 < float(a) <= 1.5:
-            raise OptionError(f"white_albedo: expected a number in (0, 1.5] or None, got {a!r:.40}")
-    if material is not None and (not isinstance(material, str) or not material.strip()
-                                 or len(material) > 200 or not material.isprintable()):
-        raise OptionError(f"material: expected a printable name (1 to 200 characters) or None, "
-                          f"got {material!r:.40}")
     if progress is not None and not callable(progress):
         raise OptionError(f"progress: expected a callable progress(done, total) or None, got {progress!r:.40}")
 
@@ -292,17 +272,16 @@ def measure(  # type: ignore[misc]  # the overloads give the options as **option
         A scheduler address that cannot be reached (before the checkpoint
         is created).
     """
-    _check_options(patch=patch, batch_size=batch_size, num_workers=num_workers, scheduler=scheduler,
-                   white_albedo=white_albedo, material=material, progress=progress)
-    patch = int(patch)
+    opts = MeasureOptions(patch=patch, linear=linear, skip_bad=skip_bad, white_albedo=white_albedo,
+                          material=material, fill=fill, checkpoint=checkpoint, batch_size=batch_size,
+                          num_workers=num_workers, overwrite=overwrite)  # checked once, for both paths
+    _check_runner(scheduler=scheduler, progress=progress)
     if btf is not None:
         from .btf import measure_btf
 
-        return measure_btf(folder, output, texels=btf, patch=patch, linear=linear, skip_bad=skip_bad,
-                           scheduler=scheduler, white_albedo=white_albedo, material=material,
-                           checkpoint=checkpoint, batch_size=batch_size, num_workers=num_workers,
-                           progress=progress, overwrite=overwrite, fill=BTF_DEFAULT_FILL if fill is None else fill,
+        return measure_btf(folder, output, texels=btf, options=opts, scheduler=scheduler, progress=progress,
                            _interrupt_after=_interrupt_after)
+    patch, white_albedo = opts.patch, opts.white_albedo
     out_path = None if output is None else check_output_file(output)  # a folder, a device: refused now
     fill = check_fill_method(DEFAULT_FILL if fill is None else fill)
     if out_path is not None:

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import textwrap
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -268,7 +268,7 @@ def mosaic_arrays(table: CDBRDF, *, kappa: float | ArrayLike | None = None) -> M
     >>> import numpy as np, cdbrdf
     >>> from cdbrdf.plot import mosaic_arrays
     >>> g = cdbrdf.Grid.paper()
-    >>> t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), **g.axes())
+    >>> t = cdbrdf.CDBRDF(np.full(g.shape + (3,), 0.2), g)
     >>> m = mosaic_arrays(t, kappa=[0.0, 0.13])
     >>> m.images.shape, m.difference.max()
     ((2, 72, 72, 3), np.float64(0.0))
@@ -518,9 +518,6 @@ def plot_mosaic(
         For a curvature not on the table's axis, a non-positive exposure or
         difference limit, or an unusable channel choice.
     """
-    from matplotlib.colors import Normalize
-    from matplotlib.patches import Patch
-
     if isinstance(table, Mosaic):
         if kappa is not None:
             raise OptionError("kappa: select curvatures in mosaic_arrays() when passing a Mosaic")
@@ -549,7 +546,6 @@ def plot_mosaic(
         fig = new_figure(None, (w, h), dpi)
     axes = fig.subplots(nrows, n, squeeze=False)
 
-    any_diff_marked = False
     marks_used: list[int] = []
     for j in range(n):
         ax = axes[0, j]
@@ -559,56 +555,91 @@ def plot_mosaic(
         ax.set_title(kappa_label(m.kappa[j]), fontsize=8.5)
         if mark_filled:
             marks_used += [r for r in _mark_fill_methods(ax, m, j) if r not in marks_used]
-    any_filled = bool(marks_used)
 
     unit = "sr$^{-1}$" if m.quantity == "brdf" else "relative units"
     ylab = "Y" if channel is None and len(m.channels) == 3 else (
         m.channels[channel_index(channel, len(m.channels), m.channels)] if channel is not None else m.channels[0]
     )
     ref_text = kappa_label(m.reference_kappa, unit=True).split(" (")[0]
+    any_diff_marked = False
     if show_diff:
-        dl = luminance(m.difference, channel=channel, channels=m.channels)
-        shown = [j for j in range(n) if j != ref_col]
-        lim = diff_limit
-        if lim is None:
-            # measured samples only: filled ones are copies, their differences artefacts
-            both = ~(m.filled | m.reference_filled[None])
-            a = np.abs(dl[shown][both[shown]]) if shown else np.zeros(0)
-            if a.size == 0 and shown:
-                a = np.abs(dl[shown]).ravel()
-            lim = float(np.percentile(a, DIFF_PERCENTILE)) if a.size else 0.0
-            if not lim > 0:
-                lim = float(a.max()) if a.size and a.max() > 0 else 1.0
-        norm = Normalize(-lim, lim)
-        im = None
-        for j in range(n):
-            ax = axes[1, j]
-            if j == ref_col:
-                ax.set_axis_off()
-                continue
-            im = ax.imshow(
-                dl[j], cmap=_DIFF_CMAP, norm=norm, extent=(0, cols, rows, 0),
-                interpolation="nearest", origin="upper", aspect="equal",
-            )
-            _setup_panel(ax, m, ylabels=j == 0 or (j == 1 and ref_col == 0), xlabels=True, sep_colour=(0, 0, 0, 0.3))
-            ax.set_title(
-                f"\u0394{ylab}: {kappa_label(m.kappa[j], unit=False).split(' (')[0]} \u2212 "
-                f"{ref_text.replace('κ = ', '')}",
-                fontsize=8,
-            )
-            if mark_filled and _mark_filled(ax, m.filled[j] | m.reference_filled, _DIFF_FILLED_COLOUR, 0.5):
-                any_diff_marked = True
-        if im is not None:
-            over = bool(np.any(np.abs(dl[shown]) > lim)) if shown else False
-            cb = fig.colorbar(
-                im, ax=axes[1, :].tolist(), shrink=0.9, aspect=22, pad=0.015,
-                extend="both" if over else "neither",
-            )
-            cb.set_label(f"\u0394{ylab} vs {ref_text} [{unit}]", fontsize=7)
-            cb.ax.tick_params(labelsize=6)
-            cb.outline.set_linewidth(0.5)
+        any_diff_marked = _difference_row(fig, axes, m, channel=channel, ref_col=ref_col, diff_limit=diff_limit,
+                                          labels=(ylab, ref_text, unit), mark_filled=mark_filled)
+    _notes(fig, axes, m, marks_used=marks_used, any_diff_marked=any_diff_marked,
+           ref_col=ref_col if show_diff else None, show_diff=show_diff, labels=(ylab, ref_text),
+           exposure=(expo, how))
 
-    # legend / notes
+    if title is None:
+        name = m.material or "CDBRDF"
+        title = f"{name}: reflectance per curvature ({'BRDF, sr$^{-1}$' if m.quantity == 'brdf' else 'relative scale'})"
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def _difference_limit(m: Mosaic, dl: np.ndarray, shown: list[int]) -> float:
+    """The difference row's colour range: the :data:`DIFF_PERCENTILE`-th percentile of the measured samples'."""
+    # measured samples only: filled ones are copies, their differences artefacts
+    both = ~(m.filled | m.reference_filled[None])
+    a = np.abs(dl[shown][both[shown]]) if shown else np.zeros(0)
+    if a.size == 0 and shown:
+        a = np.abs(dl[shown]).ravel()
+    lim = float(np.percentile(a, DIFF_PERCENTILE)) if a.size else 0.0
+    if not lim > 0:
+        lim = float(a.max()) if a.size and a.max() > 0 else 1.0
+    return lim
+
+
+def _difference_row(fig: Figure, axes: Any, m: Mosaic, *, channel: int | str | None, ref_col: int | None,
+                    diff_limit: float | None, labels: tuple[str, str, str], mark_filled: bool) -> bool:
+    """The bottom row: the luminance difference against the reference, its colour bar; whether it hatched any."""
+    from matplotlib.colors import Normalize
+
+    ylab, ref_text, unit = labels
+    n = m.kappa.size
+    rows, cols = m.images.shape[1:3]
+    dl = luminance(m.difference, channel=channel, channels=m.channels)
+    shown = [j for j in range(n) if j != ref_col]
+    lim = _difference_limit(m, dl, shown) if diff_limit is None else diff_limit
+    norm = Normalize(-lim, lim)
+    im = None
+    marked = False
+    for j in range(n):
+        ax = axes[1, j]
+        if j == ref_col:
+            ax.set_axis_off()
+            continue
+        im = ax.imshow(
+            dl[j], cmap=_DIFF_CMAP, norm=norm, extent=(0, cols, rows, 0),
+            interpolation="nearest", origin="upper", aspect="equal",
+        )
+        _setup_panel(ax, m, ylabels=j == 0 or (j == 1 and ref_col == 0), xlabels=True, sep_colour=(0, 0, 0, 0.3))
+        ax.set_title(
+            f"\u0394{ylab}: {kappa_label(m.kappa[j], unit=False).split(' (')[0]} \u2212 "
+            f"{ref_text.replace('κ = ', '')}",
+            fontsize=8,
+        )
+        if mark_filled and _mark_filled(ax, m.filled[j] | m.reference_filled, _DIFF_FILLED_COLOUR, 0.5):
+            marked = True
+    if im is not None:
+        over = bool(np.any(np.abs(dl[shown]) > lim)) if shown else False
+        cb = fig.colorbar(
+            im, ax=axes[1, :].tolist(), shrink=0.9, aspect=22, pad=0.015,
+            extend="both" if over else "neither",
+        )
+        cb.set_label(f"\u0394{ylab} vs {ref_text} [{unit}]", fontsize=7)
+        cb.ax.tick_params(labelsize=6)
+        cb.outline.set_linewidth(0.5)
+    return marked
+
+
+def _notes(fig: Figure, axes: Any, m: Mosaic, *, marks_used: list[int], any_diff_marked: bool, ref_col: int | None,
+           show_diff: bool, labels: tuple[str, str], exposure: tuple[float, str]) -> None:
+    """The legend and the notes: in the reference's empty difference panel, else under the figure."""
+    from matplotlib.patches import Patch
+
+    ylab, ref_text = labels
+    expo, how = exposure
     handles = []
     for r in sorted(marks_used):
         _methods, colour, hatch, label = FILL_MARKS[r]
@@ -626,7 +657,7 @@ def plot_mosaic(
         + (f"(auto: {EXPOSURE_PERCENTILE:g}th percentile of {ylab} \u2192 1)" if how.startswith("auto") else f"({how})")
         + ", sRGB-encoded"
     )
-    if show_diff and ref_col is not None:
+    if ref_col is not None:
         lax = axes[1, ref_col]
         lines = [
             "rows: light direction",
@@ -643,21 +674,14 @@ def plot_mosaic(
         if handles:
             lax.legend(handles=handles, loc="lower center", fontsize=6.5, frameon=False, handlelength=2.2,
                        handleheight=1.4)
-    else:
-        notes = expo_note + ("; difference " + ref_note if show_diff else "")
-        if marks_used:
-            notes = "hatched: " + ", ".join(
-                f"{FILL_MARKS[r][3]} ({'orange' if FILL_MARKS[r][1] == _CURVATURE_COLOUR else 'magenta'})"
-                for r in sorted(marks_used)
-            ) + "; " + notes
-        if any_diff_marked and not any_filled:
-            notes = "hatched: differences of filled samples; " + notes
-        width_chars = max(40, int(fig.get_figwidth() * 19))
-        fig.supxlabel(textwrap.fill(notes, width_chars), fontsize=6.5)
-
-    if title is None:
-        name = m.material or "CDBRDF"
-        title = f"{name}: reflectance per curvature ({'BRDF, sr$^{-1}$' if m.quantity == 'brdf' else 'relative scale'})"
-    if title:
-        fig.suptitle(title, fontsize=10)
-    return fig
+        return
+    notes = expo_note + ("; difference " + ref_note if show_diff else "")
+    if marks_used:
+        notes = "hatched: " + ", ".join(
+            f"{FILL_MARKS[r][3]} ({'orange' if FILL_MARKS[r][1] == _CURVATURE_COLOUR else 'magenta'})"
+            for r in sorted(marks_used)
+        ) + "; " + notes
+    if any_diff_marked and not marks_used:
+        notes = "hatched: differences of filled samples; " + notes
+    width_chars = max(40, int(fig.get_figwidth() * 19))
+    fig.supxlabel(textwrap.fill(notes, width_chars), fontsize=6.5)

@@ -62,24 +62,14 @@ def load_table(source: Any) -> Any:
 
 def load_source(source: Any) -> tuple[Any, Any]:
     """``(table, btf)``: a CDBRDF and None, or a CD-BTF's tile mean and the :class:`~cdbrdf.CDBTF`."""
-    from ..btf import CDBTF, is_btf
-    from ..btf import load as load_btf
+    from ..btf import CDBTF
+    from ..sources import open_source
     from ..table import CDBRDF
 
-    if isinstance(source, CDBRDF):
-        return source, None
-    if isinstance(source, CDBTF):
-        return source.mean(), source
-    if isinstance(source, (str, os.PathLike)):
-        from ..table import load
-
-        if is_btf(source):
-            btf = load_btf(source)
-            return btf.mean(), btf
-        return load(source), None
-    raise TypeError(
-        f"cdbrdf BSDF: expected a CDBRDF or CDBTF table or a file name, got {type(source).__name__}"
-    )
+    if not isinstance(source, (CDBRDF, CDBTF, str, os.PathLike)):
+        raise TypeError(f"cdbrdf BSDF: expected a CDBRDF or CDBTF table or a file name, got {type(source).__name__}")
+    s = open_source(source)
+    return s.flat, s.btf
 
 
 def _choice(name: str, value: Any, choices: tuple[str, ...] | Mapping[str, Any]) -> str:

@@ -32,6 +32,7 @@ from ..errors import OptionError, SceneError
 from ..limits import MAX_SPP
 from ..limits import check as check_limit
 from ..mesh import MeshSurface, SineSheet, Swatch
+from ..sources import open_source
 from .lighting import DEFAULT_IRRADIANCE
 from .spec import RenderSpec
 
@@ -327,8 +328,8 @@ def render_table(table: Any, spec: RenderSpec | str | PathLike[str] | Any = None
     spec = _spec_of(spec, legacy)
     w, h = spec.size
     check_limit("render_pixels", w * h, what=f"a {w} x {h} render")
-    btf = _as_btf(table)
-    tbl = btf.mean() if btf is not None else _as_table(table)
+    source = open_source(table)
+    btf, tbl = source.btf, source.flat
     name = spec.name
     spec, mesh, btf, (up, why) = _surface(spec, tbl, btf, progress)
     images: dict[str, NDArray[np.float32]] = {}
@@ -359,14 +360,6 @@ def _spec_of(spec: Any, legacy: dict[str, Any]) -> RenderSpec:
     if isinstance(spec, RenderSpec):
         return spec
     return RenderSpec() if spec is None else RenderSpec(surface=spec)
-
-
-def _as_table(table: Any) -> Any:
-    """A :class:`~cdbrdf.CDBRDF` given, or read from its file."""
-    from ..table import CDBRDF
-    from ..table import load as load_table
-
-    return table if isinstance(table, CDBRDF) else load_table(table)
 
 
 def _surface(spec: RenderSpec, tbl: Any, btf: Any,
@@ -430,18 +423,6 @@ def _exposure(spec: RenderSpec, images: Mapping[str, NDArray[np.float32]]) -> tu
         env = environment_map(envmap) if envmap is not None else studio_environment() if spec.backdrop else None
         return card_exposure_ev(card_irradiance(spec.sun(), env)), "grey card"
     return float(spec.exposure), "given"
-
-
-def _as_btf(table: Any) -> Any:
-    """The :class:`~cdbrdf.CDBTF` of ``table`` (an object or a CD-BTF file), or None."""
-    from ..btf import CDBTF, is_btf
-    from ..btf import load as load_btf
-
-    if isinstance(table, CDBTF):
-        return table
-    if isinstance(table, (str, PathLike)) and is_btf(table):
-        return load_btf(table)
-    return None
 
 
 def _btf_uv_scale(btf: Any, spec: RenderSpec, mesh: Any) -> tuple[float, float] | None:

@@ -100,11 +100,9 @@ def load_material(material: CDBRDF | CDBTF | str | PathLike[str]) -> CDBRDF | CD
         return material
     p = Path(material)
     if p.suffix.lower() in (".h5", ".hdf5", ".nc") or p.exists():
-        from ..btf import is_btf
-        from ..btf import load as load_btf
-        from ..table import load
+        from ..sources import open_source
 
-        return load_btf(p) if p.is_file() and is_btf(p) else load(p)
+        return open_source(p, what="material").table
     try:
         from .. import materials
     except ImportError as exc:  # pragma: no cover - the presets module is part of the package

@@ -110,7 +110,7 @@ class SampledModel(ABC):
             values[i] = self._sample(v, l, float(k)).reshape(g.shape[1:] + (3,)).astype(np.float32)
             if progress is not None:
                 progress(i + 1, g.kappa.size)
-        return CDBRDF(values, **g.axes(), attrs=self.attrs())
+        return CDBRDF(values, g, attrs=self.attrs())
 
     def albedo(
         self,

@@ -280,7 +280,7 @@ def resample(table: Any, *, theta_step_deg: float, phi_step_deg: float, n_kappa:
     values = table.evaluate(m["theta_v"], m["phi_v"], m["theta_l"], m["phi_l"], m["kappa"]).astype(np.float32)
     attrs = dict(table.attrs)
     attrs["resampled_from"] = "x".join(str(n) for n in g.shape)
-    return CDBRDF(values, **new.axes(), attrs=attrs, symmetry=g.symmetry)
+    return CDBRDF(values, new, attrs=attrs)
 
 
 def _precision(lookup: NDArray[np.floating], precision: str) -> str:
