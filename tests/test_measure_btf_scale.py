@@ -132,6 +132,7 @@ def test_no_checkpoint_when_asked(capture, tmp_path):
 
 def test_bad_options_are_one_line(capture, tmp_path, capsys):
     from cdbrdf.measure.btf import measure_btf
+    from cdbrdf.measure.options import MeasureOptions
 
     folder, _, _ = capture
     for kw, match in (({"scheduler": "bogus"}, "neither a scheduler address"),
@@ -139,7 +140,12 @@ def test_bad_options_are_one_line(capture, tmp_path, capsys):
                       ({"num_workers": True}, "num_workers: expected a positive")):
         for fn in (measure, measure_btf):
             with pytest.raises(OptionError, match=match) as e:
-                fn(folder, tmp_path / "m.h5", **({"btf": 4} if fn is measure else {"texels": 4}), **kw)
+                if fn is measure:
+                    fn(folder, tmp_path / "m.h5", btf=4, **kw)
+                elif "scheduler" in kw:
+                    fn(folder, tmp_path / "m.h5", texels=4, **kw)
+                else:  # measure_btf takes the shared options as one record, checked when it is made
+                    fn(folder, tmp_path / "m.h5", texels=4, options=MeasureOptions(**kw))
             assert "\n" not in str(e.value)
     assert main(["-q", "measure", str(folder), "--btf", "4", "-o", str(tmp_path / "m.h5"),
                  "--scheduler", "bogus"]) == 2
