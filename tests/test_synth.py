@@ -74,7 +74,7 @@ def test_bad_weave_is_rejected(bad, match):
 
 
 def test_parameter_validation():
-    with pytest.raises(ValueError, match="thickness_mm: must be a positive"):
+    with pytest.raises(ValueError, match="thickness_mm: must be a number in"):
         presets.params("denim", thickness_mm=-0.5)
     with pytest.raises(ValueError, match="warp_rgb"):
         presets.params("denim", warp_rgb=(0.1, 2.0, 0.1))

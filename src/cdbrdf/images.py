@@ -66,6 +66,7 @@ __all__ = [
     "ImageInfo",
     "FORMATS",
     "image_format",
+    "decode_image",
     "read_image",
     "read_window",
     "write_png",
@@ -343,17 +344,18 @@ def _png_decode(data: bytes) -> NDArray:
     return out
 
 
-def _png_read(path: Path) -> tuple[NDArray, ImageInfo]:
-    data = path.read_bytes()
+def _png_read(path: Path, data: bytes | None = None) -> tuple[NDArray, ImageInfo]:
+    data = path.read_bytes() if data is None else data
     width, height = _png_check(path, data)
-    a = np.asarray(_png_decode(data))
-    if a.ndim == 2:
-        a = a[..., None]
+    return _integer_image(path, np.asarray(_png_decode(data)), width, height)
+
+
+def _integer_image(path: Path, a: NDArray, width: int, height: int) -> tuple[NDArray, ImageInfo]:
+    a = a[..., None] if a.ndim == 2 else a  # 8- or 16-bit codes of the declared size, alpha dropped
     if a.ndim != 3 or a.shape[:2] != (height, width) or a.dtype not in (np.uint8, np.uint16):
-        raise ImageError(f"{path}: unsupported PNG layout (decoded {a.shape} {a.dtype})")
+        raise ImageError(f"{path}: unsupported image layout (decoded {a.shape} {a.dtype})")
     keep = _channels_kept(a.shape[-1])
-    info = ImageInfo(width, height, keep, 65535 if a.dtype == np.uint16 else 255, False)
-    return a[..., :keep], info
+    return a[..., :keep], ImageInfo(width, height, keep, 65535 if a.dtype == np.uint16 else 255, False)
 
 
 @contextmanager
@@ -600,6 +602,33 @@ def _read(path: Path, window: Any) -> tuple[NDArray, ImageInfo]:
         return a, info
     x0, y0, nx, ny = _resolve(path, info, window)
     return a[y0 : y0 + ny, x0 : x0 + nx].copy(), info
+
+
+def _jpeg_size(name: str, data: bytes) -> tuple[int, int]:
+    """A JPEG's ``(width, height)`` from its first frame header, before decoding (ITU T.81, B.2)."""
+    pos = 2
+    while pos + 9 <= len(data) and data[pos] == 0xFF:
+        marker, (length,) = data[pos + 1], struct.unpack(">H", data[pos + 2 : pos + 4])
+        if 0xC0 <= marker <= 0xCF and marker not in (0xC4, 0xC8, 0xCC):
+            height, width = struct.unpack(">HH", data[pos + 5 : pos + 9])
+            return int(width), int(height)
+        pos += 1 if marker == 0xFF else 2 + max(length, 2)
+    raise ImageError(f"{name}: corrupt or truncated JPEG (no frame header)")
+
+
+def decode_image(data: bytes, *, name: str) -> tuple[NDArray, ImageInfo]:
+    """A PNG (every check of :func:`read_image`) or JPEG (its size checked first) held in memory, as :func:`read_image`
+    returns it; ``name`` for messages. Raises :class:`ImageError` (:class:`~cdbrdf.errors.LimitError`)."""
+    if data[:8] == _PNG_SIGNATURE:
+        with _reading(Path(name), "png"):
+            return _png_read(Path(name), data)
+    if data[:3] != b"\xff\xd8\xff":
+        raise ImageError(f"{name}: neither a PNG nor a JPEG image (signature {data[:8]!r})")
+    (width, height), label = _jpeg_size(name, data), Path(name)
+    _check_size(label, width, height, "png")
+    with _reading(label, "png"):
+        import imagecodecs
+        return _integer_image(label, np.asarray(imagecodecs.jpeg8_decode(data)), width, height)
 
 
 def read_image(path: str | PathLike[str]) -> tuple[NDArray, ImageInfo]:

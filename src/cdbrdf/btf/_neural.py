@@ -417,6 +417,48 @@ def check(net: Neural, *, texels: tuple[int, int], n_channels: int) -> None:
         raise TableError(f"neural: feature constants {net.constants} are not (kappa scale > 0, epsilon > 0, offset)")
 
 
+def modulation_bound(net: Neural, kappa_axis: NDArray[np.floating], mean_values: NDArray[np.floating]) -> float:
+    """An upper bound of ``|o|`` (:meth:`Neural.modulation`) over every code of the pyramid and every query.
+
+    Interval arithmetic in float64: each input's largest magnitude (the codes' per dimension, since bilinear and
+    level blends are convex; ``l``, ``v``, ``h`` at most 1; ``kappa / kappa_scale`` on the clamped axis; the log
+    luminance of a tile mean in ``[0, max |M|]``) through ``|W|`` and ``|b|`` (ReLU never grows a magnitude).
+    ``inf`` when it overflows.
+    """
+    ks, eps, off = net.constants
+    with np.errstate(all="ignore"):
+        z = np.max(np.stack([np.max(np.abs(np.asarray(a, np.float64)).reshape(-1, a.shape[-1]), axis=0)
+                             for a in net.latents]), axis=0)
+        mmax = float(np.max(np.abs(np.asarray(mean_values, np.float64)))) if np.size(mean_values) else 0.0
+        lum = max(abs(math.log(eps) - off), abs(math.log(mmax + eps) - off))
+        kmax = float(np.max(np.abs(np.asarray(kappa_axis, np.float64)))) / ks
+        x = np.concatenate([z, np.ones(9), [kmax, lum]])
+        for w, b in zip(net.weights, net.biases):
+            x = np.abs(np.asarray(w, np.float64)).T @ x + np.abs(np.asarray(b, np.float64))
+        top = float(np.max(x))
+    return top if math.isfinite(top) else math.inf
+
+
+def decoded_bound(mean_values: NDArray[np.floating], weights: NDArray[np.floating], basis: NDArray[np.floating],
+                  net: Neural | None, kappa_axis: NDArray[np.floating]) -> float:
+    """An upper bound of the magnitude of a CD-BTF's value at any position, footprint and query.
+
+    ``max |M| (1 + max |o|)`` for a neural part (``max |M|`` without), plus ``sum_i max |w_i| max |basis_i|``
+    of the components (bilinear weights, level blends and the lookup rule are convex combinations). float64;
+    ``inf`` when it overflows.
+    """
+    with np.errstate(all="ignore"):
+        m = float(np.max(np.abs(np.asarray(mean_values, np.float64)))) if np.size(mean_values) else 0.0
+        r = int(weights.shape[-1])
+        comps = 0.0
+        if r:
+            wmax = np.max(np.abs(np.asarray(weights, np.float64).reshape(-1, r)), axis=0)
+            bmax = np.max(np.abs(np.moveaxis(np.asarray(basis, np.float64), -2, 0).reshape(r, -1)), axis=1)
+            comps = float(np.sum(wmax * bmax))
+        total = m * (1.0 + modulation_bound(net, kappa_axis, mean_values)) + comps if net is not None else m + comps
+    return total if math.isfinite(total) else math.inf
+
+
 def clamp_query(grid: Grid, theta_v: NDArray[np.float64], phi_v: NDArray[np.float64], theta_l: NDArray[np.float64],
                 phi_l: NDArray[np.float64], kappa: NDArray[np.float64]
                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],

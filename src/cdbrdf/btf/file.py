@@ -43,6 +43,7 @@ from .._fileattrs import data_digest, get_attr, get_attr_str
 from .._hdf5 import check_storage, fail, one_line
 from ..limits import check as check_limit
 from ..schema import SAMPLE_AXES
+from ..table import MAX_ABS_VALUE
 
 if TYPE_CHECKING:
     from ..table import CDBRDF
@@ -185,6 +186,8 @@ def _array(path: Path, f: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
     if name not in f:
         raise fail(path, f"missing variable {name!r} of a CD-BTF file")
     ds = f[name]
+    if not isinstance(getattr(ds, "shape", None), tuple):
+        raise fail(path, f"{name!r} is not a variable (an HDF5 group?)")
     if tuple(ds.shape) != shape:
         raise fail(path, f"{name!r} has shape {tuple(ds.shape)}, expected {shape}")
     if ds.dtype.kind != "f":
@@ -196,21 +199,64 @@ def _array(path: Path, f: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
         raise fail(path, f"{name!r} cannot be read ({one_line(exc)})") from None
     if not np.all(np.isfinite(a)):
         raise fail(path, f"{name!r} holds NaN or infinite values")
+    if a.size and float(np.max(np.abs(a))) > float(np.finfo(np.float32).max):
+        raise fail(path, f"{name!r} holds values beyond float32 (up to {float(np.max(np.abs(a))):.3g})")
     return a
 
 
-def _scalar(path: Path, attrs: Any, name: str) -> float:
-    a = np.asarray(get_attr(path, attrs, name)).reshape(-1)
-    if a.size != 1 or a.dtype.kind not in "iuf" or not np.isfinite(a[0]):
-        raise fail(path, f"global attribute {name!r} is not one finite number")
-    return float(a[0])
+#: The sizes of a repeat ``btf_repeat_mm`` may have, mm: a tenth of a fibre's width to ten metres (a smaller or
+#: larger repeat is a unit error, and its reciprocal overflows the renderer's float32 texel coordinates).
+REPEAT_MM_RANGE = (0.01, 1e4)
+
+#: The bounds of the compression record's numbers: ``(low, high, integer)``. Relative errors are fractions (a
+#: few hundred percent at most for any representation; 1e3 leaves room), the ratio a positive number.
+_RECORD = {"max_error": (0.0, 1e3, False), "relative_rms_error": (0.0, 1e3, False),
+           "neural_relative_rms_error": (0.0, 1e3, False), "compression_ratio": (1e-12, 1e15, False),
+           "fit_seconds": (0.0, 1e9, False), "truncated_from": (1, 4096, True)}
+
+
+def _numbers(path: Path, attrs: Any, name: str, *, low: float = -math.inf, high: float = math.inf,
+             integer: bool = False) -> np.ndarray:
+    """A global attribute of numbers (float64, flat): one-line FormatError for text, an empty attribute,
+    NaN or a value outside ``[low, high]`` (or not whole, ``integer``)."""
+    a = np.asarray(get_attr(path, attrs, name))
+    kind = "integers" if integer else "numbers"
+    if a.dtype.kind not in "iuf" or a.size == 0:
+        raise fail(path, f"global attribute {name!r} is not {kind} (got {a.dtype} of {a.size} value(s))")
+    with np.errstate(all="ignore"):
+        x = a.astype(np.float64).reshape(-1)
+        bad = ~np.isfinite(x) | (x < low) | (x > high)
+        if integer:
+            bad |= x != np.round(x)
+    if np.any(bad):
+        top = x[bad][0]
+        raise fail(path, f"global attribute {name!r} holds {top!r}: expected finite {kind} in [{low:g}, {high:g}]")
+    return x
+
+
+def _scalar(path: Path, attrs: Any, name: str, *, low: float = -math.inf, high: float = math.inf,
+            integer: bool = False) -> float:
+    x = _numbers(path, attrs, name, low=low, high=high, integer=integer)
+    if x.size != 1:
+        raise fail(path, f"global attribute {name!r} is not one number (got {x.size})")
+    return float(x[0])
 
 
 def _ints(path: Path, f: Any, name: str) -> list[int]:
-    a = np.asarray(get_attr(path, f.attrs, name)).reshape(-1)
-    if a.dtype.kind not in "iu" or a.size > 64 or np.any(a < 1) or np.any(a > 1 << 20):
-        raise fail(path, f"global attribute {name!r} is not a short list of positive integers")
-    return [int(x) for x in a]
+    x = _numbers(path, f.attrs, name, low=1, high=1 << 20, integer=True)
+    if x.size > 64:
+        raise fail(path, f"global attribute {name!r} is not a short list of positive integers ({x.size} values)")
+    return [int(v) for v in x]
+
+
+def _texel_axis(path: Path, f: Any, name: str) -> int:
+    """The length of a texel axis: a 1-D variable of 1 to 2^20 texel centres."""
+    ds = f.get(name) if name in f else None
+    shape = getattr(ds, "shape", None)
+    if ds is None or not isinstance(shape, tuple) or len(shape) != 1 or not 1 <= shape[0] <= 1 << 20:
+        what = "missing" if ds is None else (f"of shape {shape}" if isinstance(shape, tuple) else "not a variable")
+        raise fail(path, f"the texel axis {name!r} is {what}: expected 1 to {1 << 20} texel centres")
+    return int(shape[0])
 
 
 def _read_neural(path: Path, f: Any, nu: int, nv: int, n_channels: int) -> Neural:
@@ -229,8 +275,8 @@ def _read_neural(path: Path, f: Any, nu: int, nv: int, n_channels: int) -> Neura
     n_par = sum(a * b + b for a, b in zip(layers[:-1], layers[1:]))
     lat = _array(path, f, LATENTS, (n_lat, dims)).astype(np.float32)
     dec = _array(path, f, DECODER, (n_par,)).astype(np.float32)
-    const = np.asarray(get_attr(path, f.attrs, "btf_decoder_constants"), dtype=np.float64).reshape(-1)
-    if const.size != 3 or not np.all(np.isfinite(const)) or const[0] <= 0 or const[1] <= 0:
+    const = _numbers(path, f.attrs, "btf_decoder_constants")
+    if const.size != 3 or const[0] <= 0 or const[1] <= 0:
         raise fail(path, "global attribute 'btf_decoder_constants' is not (kappa scale > 0, epsilon > 0, offset)")
     latents, start = [], 0
     for a, b in shapes:
@@ -249,7 +295,9 @@ def read(path: str | PathLike[str], *, mean: CDBRDF | None = None) -> BTFParts:
 
     The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
     the CDBRDF file), then the CD-BTF variables: shapes against the mean and
-    each other, finite values, the digest ``btf_sha256``.
+    each other, finite values within float32, every number attribute in its
+    range (``docs/format.md``), the digest ``btf_sha256``, and the decoded
+    values within the table's bound (:data:`cdbrdf.table.MAX_ABS_VALUE`).
 
     Raises
     ------
@@ -273,20 +321,22 @@ def read(path: str | PathLike[str], *, mean: CDBRDF | None = None) -> BTFParts:
         if "btf_repeat_mm" not in f.attrs:
             raise fail(p, "a CDBRDF file without the CD-BTF variables (no 'btf_repeat_mm'): read it with "
                           "cdbrdf.load")
-        repeat = np.asarray(get_attr(p, f.attrs, "btf_repeat_mm"), dtype=np.float64).reshape(-1)
+        repeat = _numbers(p, f.attrs, "btf_repeat_mm", low=REPEAT_MM_RANGE[0], high=REPEAT_MM_RANGE[1])
+        if repeat.size != 2:
+            raise fail(p, f"global attribute 'btf_repeat_mm' is not two sizes (u, v) in mm: {repeat.size} value(s)")
         method = get_attr_str(p, f.attrs, "btf_method")
-        version = int(_scalar(p, f.attrs, "btf_format_version")) if "btf_format_version" in f.attrs else 1
+        version = int(_scalar(p, f.attrs, "btf_format_version", low=1, high=1 << 20, integer=True)) \
+            if "btf_format_version" in f.attrs else 1
         if version not in (1, SCHEMA_VERSION):
             raise fail(p, f"CD-BTF variables of schema {version}: this cdbrdf reads schemas 1 and {SCHEMA_VERSION} "
                           "(a newer cdbrdf wrote it)")
         if (method == "neural") != (version == 2):
-            raise fail(p, f"'btf_method' {method!r} does not match the CD-BTF schema {version}")
-        rank = int(_scalar(p, f.attrs, "btf_rank" if version == 1 else "btf_residual_rank"))
-        nu, nv = (int(f[n].shape[0]) if n in f else -1 for n in (TEXEL_U, TEXEL_V))
-        if nu < 1 or nv < 1 or not 0 <= rank <= 4096:
-            raise fail(p, f"texel axes or rank missing or invalid (texels {nu} x {nv}, rank {rank})")
-        check_limit("table_samples", float(math.prod(mean.shape)) * (rank + 1) + nu * nv * rank,
-                     what=f"{p}: CD-BTF of rank {rank}")
+            raise fail(p, f"'btf_method' {method[:40]!r} does not match the CD-BTF schema {version}")
+        rank = int(_scalar(p, f.attrs, "btf_rank" if version == 1 else "btf_residual_rank", low=0, high=4096,
+                           integer=True))
+        nu, nv = _texel_axis(p, f, TEXEL_U), _texel_axis(p, f, TEXEL_V)
+        check_limit("table_samples", float(math.prod(mean.shape)) * (rank + 1) + nu * nv * max(rank, 1),
+                     what=f"{p}: CD-BTF of {nu} x {nv} texels and rank {rank}")
         if rank:
             weights = _array(p, f, WEIGHTS, (nv, nu, rank))
             basis = _array(p, f, BASIS, mean.shape[:-1] + (rank, mean.n_channels))
@@ -294,22 +344,37 @@ def read(path: str | PathLike[str], *, mean: CDBRDF | None = None) -> BTFParts:
             weights = np.zeros((nv, nu, 0), np.float32)
             basis = np.zeros(mean.shape[:-1] + (0, mean.n_channels), np.float32)
         net = _read_neural(p, f, nu, nv, mean.n_channels) if version == 2 else None
-        comp: dict[str, Any] = {"method": method, "rank": rank}
-        for key in ("max_error", "relative_rms_error", "compression_ratio", "neural_relative_rms_error",
-                    "fit_seconds"):
-            if f"btf_{key}" in f.attrs:
-                comp[key] = _scalar(p, f.attrs, f"btf_{key}")
-        if "btf_relative_rms_error_per_kappa" in f.attrs:
-            comp["relative_rms_error_per_kappa"] = [
-                float(x) for x in np.asarray(get_attr(p, f.attrs, "btf_relative_rms_error_per_kappa")).reshape(-1)]
-        if "btf_truncated_from" in f.attrs:
-            comp["truncated_from"] = int(_scalar(p, f.attrs, "btf_truncated_from"))
+        comp = _record(p, f.attrs, method, rank, mean.shape[0])
         stored = np.asarray(get_attr(p, f.attrs, _DIGEST)) if _DIGEST in f.attrs else None
-    if repeat.size != 2 or not np.all(np.isfinite(repeat)) or np.any(repeat <= 0):
-        raise fail(p, f"global attribute 'btf_repeat_mm' is not two positive sizes: {repeat!r}")
     btf = BTFParts(mean, weights, basis, (float(repeat[0]), float(repeat[1])), comp, net)
     if stored is None or stored.dtype != np.uint8 or stored.shape != (32,):
         raise fail(p, f"global attribute {_DIGEST!r} is missing or not 32 bytes")
     if not np.array_equal(stored, data_digest(_stored(btf))):
         raise fail(p, f"checksum mismatch in the CD-BTF variables ({_DIGEST!r}): the file is damaged")
+    from ._neural import decoded_bound
+
+    bound = decoded_bound(mean.values, weights, basis, net, mean.grid.kappa)
+    if not bound <= MAX_ABS_VALUE:
+        names = "'btf_weights' and 'btf_basis'" if net is None else "'btf_latents', 'btf_decoder' and 'btf_basis'"
+        raise fail(p, f"{names} could decode to values up to {bound:.3g}, beyond the table's bound "
+                      f"+-{MAX_ABS_VALUE:g}: not a reflectance")
     return btf
+
+
+def _record(p: Path, attrs: Any, method: str, rank: int, n_kappa: int) -> dict[str, Any]:
+    """The compression record of the file's attributes, each number checked against its range."""
+    comp: dict[str, Any] = {"method": method, "rank": rank}
+    for key, (low, high, integer) in _RECORD.items():
+        if f"btf_{key}" in attrs:
+            x = _scalar(p, attrs, f"btf_{key}", low=low, high=high, integer=integer)
+            comp[key] = int(x) if integer else x
+    if comp.get("truncated_from", rank) < rank:
+        raise fail(p, f"global attribute 'btf_truncated_from' ({comp['truncated_from']}) is below the rank {rank}")
+    name = "btf_relative_rms_error_per_kappa"
+    if name in attrs:
+        per = _numbers(p, attrs, name, low=0.0, high=1e3)
+        if per.size != n_kappa:
+            raise fail(p, f"global attribute {name!r} has {per.size} value(s), expected one per curvature "
+                          f"({n_kappa})")
+        comp["relative_rms_error_per_kappa"] = [float(v) for v in per]
+    return comp

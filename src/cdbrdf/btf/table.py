@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..errors import FormatError, QueryError, TableError
 from ..grid import Grid, read_array
 from ..provenance import Provenance
-from ..table import CDBRDF
+from ..table import CDBRDF, MAX_ABS_VALUE
 
 if TYPE_CHECKING:
     from ..interp import LookupGrid
@@ -64,10 +64,14 @@ DEFAULT_METHOD = "neural"
 _CHUNK = 1 << 15
 
 
-def _positive_pair(name: str, value: Any) -> tuple[float, float]:
-    a = read_array(name, value).astype(np.float64).reshape(-1)
-    if a.size != 2 or not np.all(np.isfinite(a)) or np.any(a <= 0):
-        raise TableError(f"{name}: expected two positive finite sizes (u, v) in mm, got {value!r}")
+def _repeat_pair(name: str, value: Any) -> tuple[float, float]:
+    from .file import REPEAT_MM_RANGE
+
+    lo, hi = REPEAT_MM_RANGE
+    with np.errstate(all="ignore"):
+        a = read_array(name, value).astype(np.float64).reshape(-1)
+    if a.size != 2 or not np.all(np.isfinite(a)) or np.any(a < lo) or np.any(a > hi):
+        raise TableError(f"{name}: expected two sizes (u, v) from {lo:g} to {hi:g} mm, got {value!r}")
     return float(a[0]), float(a[1])
 
 
@@ -96,7 +100,8 @@ class CDBTF:
     Raises
     ------
     TableError
-        When shapes disagree, values are not finite or sizes are not positive.
+        When shapes disagree, values are not finite, the repeat is outside 0.01 mm to 10 m, or the
+        factors could decode to values beyond the table's bound (1e30).
     """
 
     __slots__ = ("_mean", "_weights", "_basis", "_repeat", "_compression", "_lookup", "_neural")
@@ -116,14 +121,18 @@ class CDBTF:
             if not np.all(np.isfinite(a)):
                 raise TableError(f"{name}: contains NaN or infinite values")
             a.setflags(write=False)
-        if neural is not None:
-            from ._neural import check
+        from ._neural import check, decoded_bound
 
+        if neural is not None:
             check(neural, texels=(w.shape[1], w.shape[0]), n_channels=mean.n_channels)
+        bound = decoded_bound(mean.values, w, b, neural, mean.grid.kappa)
+        if not bound <= MAX_ABS_VALUE:
+            raise TableError(f"weights, basis{', neural' if neural is not None else ''}: could decode to values up "
+                             f"to {bound:.3g}, beyond +-{MAX_ABS_VALUE:g}: not a reflectance")
         self._mean = mean
         self._weights = w
         self._basis = b
-        self._repeat = _positive_pair("repeat_mm", repeat_mm)
+        self._repeat = _repeat_pair("repeat_mm", repeat_mm)
         self._compression = copy.deepcopy(dict(compression or {}))
         self._lookup: LookupGrid | None = None
         self._neural = neural
@@ -519,13 +528,17 @@ class CDBTF:
         QueryError
             For an elevation outside [0, 90] degrees or arguments that do not broadcast.
         """
+        from ..interp import _as_query
         from ..interp import evaluate as lookup
 
+        names = ("u_mm", "v_mm", "theta_v", "phi_v", "theta_l", "phi_l", "kappa", "footprint_mm")
         args = (u_mm, v_mm, theta_v, phi_v, theta_l, phi_l, kappa, footprint_mm)
+        # the query rule of CDBRDF.evaluate: numbers only (an integer beyond float64 is refused there)
+        as_float = [_as_query(n, a).astype(np.float64) for n, a in zip(names, args)]
         try:
-            qs = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in args))
-        except (TypeError, ValueError) as exc:
-            raise QueryError(f"u_mm, v_mm, theta_v, phi_v, theta_l, phi_l, kappa, footprint_mm: {exc}") from None
+            qs = np.broadcast_arrays(*as_float)
+        except ValueError as exc:
+            raise QueryError(f"{', '.join(names)}: {exc}") from None
         shape = qs[0].shape
         flat = [q.reshape(-1) for q in qs]
         n = flat[0].size
@@ -578,7 +591,9 @@ def load(path: str | PathLike[str], *, mean: CDBRDF | None = None) -> CDBTF:
 
     The tile mean is read and checked by :func:`cdbrdf.load` (every rule of
     the CDBRDF file), then the CD-BTF variables: their shapes against the
-    mean and each other, finite values, the digest ``btf_sha256``.
+    mean and each other, finite values, every number attribute in its range
+    (``docs/format.md``), the digest ``btf_sha256``, and the decoded values
+    within the table's bound.
 
     Parameters
     ----------

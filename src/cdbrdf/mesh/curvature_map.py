@@ -344,8 +344,10 @@ def footprint_level(cmap: CurvatureMap, fu: ArrayLike, fv: ArrayLike, min_level:
 def _bilinear(level: NDArray[np.float32], tu: NDArray[np.float64], tv: NDArray[np.float64]) -> NDArray[np.float64]:
     """Texel values at texture coordinates (periodic; row 0 at the top, t_v = 1)."""
     h, w = level.shape[:2]
-    x = (tu - np.floor(tu)) * w - 0.5
-    y = ((1.0 - tv) - np.floor(1.0 - tv)) * h - 0.5
+    with np.errstate(invalid="ignore"):  # a coordinate that is not finite reads at 0 (the renderer's rule)
+        fu, fv = tu - np.floor(tu), (1.0 - tv) - np.floor(1.0 - tv)
+    x = np.where(np.isfinite(fu), fu, 0.0) * w - 0.5
+    y = np.where(np.isfinite(fv), fv, 0.0) * h - 0.5
     x0, y0 = np.floor(x), np.floor(y)
     fx, fy = (x - x0)[..., None], (y - y0)[..., None]
     i0, j0 = x0.astype(np.int64) % w, y0.astype(np.int64) % h

@@ -312,7 +312,7 @@ def _read_trimesh(p: Path, fmt: str) -> Mesh:
     if fmt == "obj":
         meta.update(_obj_maps(refs, notes))
     elif fmt in ("gltf", "glb"):
-        meta.update(_gltf_maps(scene, p, data, notes))
+        meta.update(_gltf_maps(p, data, notes))
     if notes:
         meta["notes"] = notes
     return Mesh(v_all, f_all, n_all, uv_all, {}, None, meta)
@@ -349,12 +349,14 @@ def _mtl_transform(options: tuple[str, ...]) -> tuple[tuple[float, float, float,
 
 def _obj_maps(refs: list[Any], notes: list[str]) -> dict[str, Any]:
     """The detail map an OBJ's material library names (``norm``, else ``map_Bump``/``bump``/``disp``), if readable."""
+    from .normalmap import unusable_map
+
     for role, key, what in _MTL_MAPS:
         for r in refs:
             if r.role.lower() != role:
                 continue
             if not r.path.is_file():
-                notes.append(f"{r.named_by}: names the {what} {r.path}, which does not exist: not used")
+                unusable_map(notes, f"{r.named_by}: names the {what} {r.path}, which does not exist")
                 continue
             t, bm = _mtl_transform(r.options)
             out: dict[str, Any] = {key: str(r.path)}
@@ -366,14 +368,105 @@ def _obj_maps(refs: list[Any], notes: list[str]) -> dict[str, Any]:
     return {}
 
 
-def _gltf_maps(scene: Any, p: Path, data: bytes, notes: list[str]) -> dict[str, Any]:
-    """A glTF's first ``normalTexture`` (its image file read as data, else trimesh's), with its texture transform.
+def _data_uri(uri: str, what: str) -> bytes:
+    """The bytes of a ``data:`` URI (base64 or percent-encoded; RFC 2397)."""
+    import base64
+    import binascii
+
+    head, sep, payload = uri.partition(",")
+    if not sep:
+        raise MeshError(f"{what}: a data: URI without a comma")
+    if head.endswith(";base64"):
+        try:
+            return base64.b64decode(payload, validate=True)
+        except (binascii.Error, ValueError) as exc:
+            raise MeshError(f"{what}: its data: URI is not valid base64 ({exc})") from None
+    return unquote(payload).encode("latin-1", "replace")
+
+
+def _glb_binary(p: Path, data: bytes) -> bytes:
+    """A GLB's binary chunk (the one that follows the JSON chunk)."""
+    import struct
+
+    (json_len,) = struct.unpack_from("<I", data, 12)
+    start = 20 + json_len
+    if start + 8 > len(data):
+        raise MeshError(f"{p}: the GLB has no binary chunk (truncated?)")
+    length, kind = struct.unpack_from("<I4s", data, start)
+    if kind != b"BIN\x00" or start + 8 + length > len(data):
+        raise MeshError(f"{p}: the GLB's binary chunk is truncated or missing")
+    return data[start + 8 : start + 8 + length]
+
+
+def _gltf_image_bytes(doc: dict[str, Any], p: Path, data: bytes, img: dict[str, Any], what: str) -> bytes:
+    """An image's encoded bytes: a data: URI, or a buffer view (of a GLB's binary chunk, a data: URI or a file
+    beside the glTF, read within the image size of the JSON limit's files)."""
+    from ..fsutil import read_regular
+
+    if isinstance(img.get("uri"), str):
+        return _data_uri(img["uri"], what)
+    try:
+        bv = doc["bufferViews"][int(img["bufferView"])]
+        buf = doc["buffers"][int(bv["buffer"])]
+        off, length = int(bv.get("byteOffset", 0)), int(bv["byteLength"])
+    except (KeyError, IndexError, TypeError, ValueError):
+        raise MeshError(f"{what}: neither a uri nor a valid bufferView") from None
+    uri = buf.get("uri") if isinstance(buf, dict) else None
+    if uri is None:
+        blob = _glb_binary(p, data) if data[:4] == b"glTF" else b""
+    elif isinstance(uri, str) and uri.startswith("data:"):
+        blob = _data_uri(uri, what)
+    else:
+        try:
+            blob = read_regular(p.parent / unquote(str(uri)), max_bytes=1 << 31)
+        except OSError as exc:
+            raise MeshError(f"{what}: its buffer {uri!s:.80} cannot be read ({exc})") from None
+    if off < 0 or length < 1 or off + length > len(blob):
+        raise MeshError(f"{what}: its bufferView (bytes {off} to {off + length}) runs past the end of its buffer "
+                        f"({len(blob)} bytes): the file is truncated")
+    return blob[off : off + length]
+
+
+def _gltf_normal_map(doc: dict[str, Any], p: Path, data: bytes, index: Any) -> Any:
+    """The normal map of texture ``index``: a file beside the glTF (read as data), or embedded (decoded by
+    :func:`cdbrdf.images.decode_image`, under the image limits)."""
+    from ..images import FORMATS, decode_image
+    from .normalmap import normal_map_from_image, read_normal_map
+
+    try:
+        src = int(doc["textures"][int(index)]["source"])
+        img = doc["images"][src]
+    except (KeyError, IndexError, TypeError, ValueError):
+        raise MeshError("its normalTexture names no image") from None
+    if not isinstance(img, dict):
+        raise MeshError(f"images[{src}] is not an object")
+    uri = img.get("uri")
+    what = f"{p}: images[{src}]"
+    if isinstance(uri, str) and not uri.startswith("data:"):
+        path = p.parent / unquote(uri)
+        if not path.is_file():
+            raise MeshError(f"{path} does not exist")
+        if path.suffix.lower() in FORMATS:
+            return read_normal_map(path)
+        from ..fsutil import read_regular
+
+        blob = read_regular(path, max_bytes=1 << 31)
+        px, info = decode_image(blob, name=str(path))
+        return normal_map_from_image(px, info, name=str(path))
+    px, info = decode_image(_gltf_image_bytes(doc, p, data, img, what), name=what)
+    return normal_map_from_image(px, info, name=f"{p}: normalTexture")
+
+
+def _gltf_maps(p: Path, data: bytes, notes: list[str]) -> dict[str, Any]:
+    """A glTF's first ``normalTexture`` (read as data by the project's image reader), with its texture transform.
 
     ``KHR_texture_transform`` (glTF's texture coordinates run down from the
     top) becomes the transform of UVs with v up: repeat ``(sx, sy)``, offset
-    ``(ox, 1 - oy - sy)``; a rotation is not applied (said).
+    ``(ox, 1 - oy - sy)``; a rotation is not applied (said). A normal texture
+    that cannot be used (missing, damaged, truncated, beyond the image limits)
+    is a warning naming the file, the image and why; the mesh is read without it.
     """
-    from .normalmap import normal_map_from_normals, read_normal_map
+    from .normalmap import unusable_map
     from .references import _gltf_json
 
     doc = _gltf_json(p, data)
@@ -394,19 +487,12 @@ def _gltf_maps(scene: Any, p: Path, data: bytes, notes: list[str]) -> dict[str, 
             except (TypeError, ValueError):
                 notes.append(f"{p}: the normal texture's KHR_texture_transform cannot be read: not applied")
         try:
-            img = doc["images"][doc["textures"][int(nt["index"])]["source"]]
-            uri = img.get("uri")
-        except (KeyError, IndexError, TypeError, ValueError):
-            uri = None
-        if isinstance(uri, str) and not uri.startswith("data:") and (p.parent / unquote(uri)).is_file():
-            out["normal_map"] = read_normal_map(p.parent / unquote(uri))
-            return out
-        for geom in scene.geometry.values():  # embedded: the image trimesh decoded
-            tex = getattr(getattr(getattr(geom, "visual", None), "material", None), "normalTexture", None)
-            if tex is not None:
-                px = np.asarray(tex.convert("RGB"), dtype=np.float64)
-                out["normal_map"] = normal_map_from_normals(2.0 * px / 255.0 - 1.0, name=f"{p}: normalTexture")
-                return out
+            out["normal_map"] = _gltf_normal_map(doc, p, data, nt.get("index"))
+        except (CDBRDFError, OSError) as exc:
+            msg = str(exc).removeprefix(f"{p}: ")
+            unusable_map(notes, f"{p}: its normalTexture cannot be used ({msg})")
+            return {}
+        return out
     return {}
 
 

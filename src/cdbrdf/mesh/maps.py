@@ -301,8 +301,13 @@ def mesh_uv_scale(mesh: Mesh) -> UVScale:
     return detect_uv_scale(mesh.vertices, mesh.faces, mesh.uv, units=meta.get("units", "mm"))
 
 
-def _file_maps(maps: SurfaceMaps, meta: dict[str, Any], notes: list[str]) -> dict[str, Any]:
-    """The maps to use (given, else the file's) with their transform, height scale and what they are."""
+def _file_maps(maps: SurfaceMaps, meta: dict[str, Any], notes: list[str], name: str) -> dict[str, Any]:
+    """The maps to use (given, else the file's) with their transform, height scale and what they are.
+
+    A map the mesh file names is read here: one that cannot be used (damaged, not an image, beyond the image
+    limits) is a warning naming the mesh, the map and why (:func:`~cdbrdf.mesh.normalmap.unusable_map`), and the
+    mesh is shaded without it. A map given by the user is read later and its errors raised.
+    """
     got: dict[str, Any] = {"transform": None}
     if maps.normal_map is not None:
         got["normal"] = maps.normal_map
@@ -310,26 +315,55 @@ def _file_maps(maps: SurfaceMaps, meta: dict[str, Any], notes: list[str]) -> dic
         got["height"] = maps.height_map
     elif maps.hires_mesh is not None:
         got["mesh"] = maps.hires_mesh
-    elif maps.from_file:
+    if maps.from_file and not any(k in got for k in ("normal", "height", "mesh")):
         if meta.get("normal_map") is not None:
             got["normal"] = meta["normal_map"]
         elif meta.get("height_map") is not None:
             got["height"] = meta["height_map"]
         got["transform"] = meta.get("map_transform")
         got["bm"] = meta.get("height_scale")
-    if "height" in got and isinstance(got["height"], (str, PathLike)):  # an MTL bump that is a normal map
-        from ..images import read_image
-
-        px, info = read_image(got["height"])
-        if px.ndim == 3 and px.shape[2] >= 3:
-            v = px[..., :3].astype(np.float64) / float(info.max_code or 1.0)
-            mean = v.reshape(-1, 3).mean(axis=0)
-            if abs(mean[0] - 0.5) < 0.1 and abs(mean[1] - 0.5) < 0.1 and mean[2] > 0.75:
-                notes.append(f"{got['height']}: named as a bump map, it is an RGB normal map (mean "
-                             f"{mean[0]:.2f}, {mean[1]:.2f}, {mean[2]:.2f}): used as a normal map")
-                got["normal"] = normal_map_from_normals(2.0 * v - 1.0, convention=maps.normal_map_convention,
-                                                        name=str(got.pop("height")))
+        for key in ("normal", "height"):
+            if isinstance(got.get(key), (str, PathLike)):
+                _read_file_map(maps, got, key, notes, name)
+    elif isinstance(got.get("height"), (str, PathLike)):  # the user's: an RGB normal map is said; errors raised
+        _read_file_map(maps, got, "height", notes, name, given=True)
     return got
+
+
+def _read_file_map(maps: SurfaceMaps, got: dict[str, Any], key: str, notes: list[str], name: str, *,
+                   given: bool = False) -> None:
+    """Read the map a mesh file names (or the user's height map, ``given``) into ``got`` (a bump map that is an
+    RGB normal map becomes the normal map it is, said); one the mesh names that cannot be used is dropped with a
+    warning, the user's raises."""
+    from ..errors import CDBRDFError
+    from ..images import read_image
+    from .bake import height_map_from_values
+    from .normalmap import normal_map_from_image, unusable_map
+
+    path = str(got[key])
+    try:
+        px, info = read_image(path)
+        if key == "normal":
+            got["normal"] = normal_map_from_image(px, info, convention=maps.normal_map_convention, name=path)
+            return
+        v = px.astype(np.float64) / float(info.max_code or 1.0)
+        if v.ndim == 3 and v.shape[2] >= 3:
+            mean = v[..., :3].reshape(-1, 3).mean(axis=0)
+            if abs(mean[0] - 0.5) < 0.1 and abs(mean[1] - 0.5) < 0.1 and mean[2] > 0.75:  # an MTL bump that is RGB
+                notes.append(f"{path}: named as a bump map, it is an RGB normal map (mean "
+                             f"{mean[0]:.2f}, {mean[1]:.2f}, {mean[2]:.2f}): used as a normal map")
+                got["normal"] = normal_map_from_normals(2.0 * v[..., :3] - 1.0, convention=maps.normal_map_convention,
+                                                        name=path)
+                del got["height"]
+                return
+        got["height"] = height_map_from_values(v, name=path)
+    except (CDBRDFError, OSError) as exc:
+        if given:
+            raise
+        why = " ".join(str(exc).removeprefix(f"{path}: ").split())
+        what = "normal map" if key == "normal" else "height map"
+        unusable_map(notes, f"{name}: the {what} {path} its material names cannot be used ({why})")
+        del got[key]
 
 
 def _size_transform(maps: SurfaceMaps, uvs: UVScale, transform: Any) -> tuple[float, float, float, float] | None:
@@ -450,10 +484,14 @@ def apply_maps(mesh: Mesh, maps: SurfaceMaps | None, *, name: str = "mesh",
     """
     maps = maps if maps is not None else SurfaceMaps()
     notes: list[str] = list(mesh.metadata.get("notes", []))
-    got = _file_maps(maps, mesh.metadata, notes)
+    got = _file_maps(maps, mesh.metadata, notes, name)
     if not any(k in got for k in ("normal", "height", "mesh")):
         if maps.uv_scale is None:
-            return mesh
+            if len(notes) == len(mesh.metadata.get("notes", [])):
+                return mesh
+            out = mesh.copy()  # a map the file names could not be used: said
+            out.metadata["notes"] = notes
+            return out
     if mesh.uv is None or mesh.metadata.get("frame", "uv") != "uv":
         what = "a UV scale" if not any(k in got for k in ("normal", "height", "mesh")) else "a map"
         raise MeshError(f"{name}: {what} needs the mesh's own UV coordinates (frame 'uv')")

@@ -19,13 +19,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from os import PathLike
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import MeshError
 
-__all__ = ["NORMAL_MAP_CONVENTIONS", "NormalMap", "read_normal_map", "normal_map_from_normals"]
+if TYPE_CHECKING:
+    from ..images import ImageInfo
+
+__all__ = ["NORMAL_MAP_CONVENTIONS", "NormalMap", "read_normal_map", "normal_map_from_image",
+           "normal_map_from_normals", "unusable_map"]
 
 #: Green-channel conventions of tangent-space normal maps: +v up (OpenGL, Blender, glTF) or down (DirectX).
 NORMAL_MAP_CONVENTIONS: tuple[str, ...] = ("opengl", "directx")
@@ -111,10 +116,30 @@ def read_normal_map(path: str | PathLike[str], *, convention: str = "opengl") ->
     from ..images import read_image
 
     px, info = read_image(path)
+    return normal_map_from_image(px, info, convention=convention, name=str(path))
+
+
+def normal_map_from_image(px: NDArray[Any], info: ImageInfo, *, convention: str = "opengl",
+                          name: str = "normal map") -> NormalMap:
+    """A normal map from decoded image codes (:func:`cdbrdf.images.read_image`, :func:`~cdbrdf.images.decode_image`):
+    integer codes as ``2 code / max - 1``, floats as they are (:func:`read_normal_map`'s rule)."""
     if px.ndim != 3 or px.shape[2] < 3:
         got = px.shape[2] if px.ndim == 3 else 1
-        raise MeshError(f"{path}: a normal map must be an RGB image, got {got} channel(s)")
+        raise MeshError(f"{name}: a normal map must be an RGB image, got {got} channel(s)")
     v = px[..., :3].astype(np.float64)
     if info.max_code is not None:
         v = 2.0 * v / float(info.max_code) - 1.0
-    return normal_map_from_normals(v, convention=convention, name=str(path))
+    return normal_map_from_normals(v, convention=convention, name=name)
+
+
+def unusable_map(notes: list[str], msg: str) -> None:
+    """A map that a mesh file names but that cannot be used: one warning (logged) and one note of the mesh.
+
+    ``msg`` names the mesh (or its material library), the map and why; what is done instead is added.
+    A map the user names (``--normal-map``) is an error instead, raised by its reader.
+    """
+    import logging
+
+    msg = " ".join(msg.split()) + ": not used, the mesh is shaded without it"
+    logging.getLogger("cdbrdf.mesh.maps").warning("%s", msg)
+    notes.append(msg)

@@ -33,6 +33,7 @@ evaluate the exact bilinear blend for ``stochastic`` (:func:`scalar_texels`).
 from __future__ import annotations
 
 import logging
+import math
 import time
 from typing import Any, NamedTuple
 
@@ -42,8 +43,8 @@ from ..interp import LookupGrid, apply_pole_rule
 from . import _lookup_jit as lj
 
 __all__ = ["DEFAULT_TEXEL_FILTER", "TEXEL_FILTERS", "NeuralUpload", "TexelUpload", "as_pair", "evaluate", "lookup",
-           "lookup_neural", "modulation_basis", "scalar_texels", "scalar_value", "scalar_spectrum", "texel_choice",
-           "upload", "upload_nbytes", "upload_neural"]
+           "fraction", "lookup_neural", "modulation_basis", "scalar_texels", "scalar_value", "scalar_spectrum",
+           "texel_choice", "upload", "upload_nbytes", "upload_neural"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -128,10 +129,23 @@ def evaluate(mi: Any, up: TexelUpload | NeuralUpload, si: Any, theta_v: Any, phi
     return lookup(mi, up, si.uv, theta_v, phi_v, theta_l, phi_l, kappa, active, si.wavelengths)
 
 
-def _wrap(dr: Any, x: Any, size: float, n: int) -> Any:
-    """Texel coordinate of a position (mm) on a periodic axis of ``n`` texels: in [0, n)."""
-    t = x * (1.0 / size)
-    return (t - dr.floor(t)) * n
+def fraction(dr: Any, uv: Any, scale: float, offset: float = 0.0) -> Any:
+    """``uv * scale + offset`` modulo 1, in [0, 1] (a periodic texture coordinate; the type of ``uv``).
+
+    Computed in float64: a UV times a scale may overflow float32 (3.3e38 x 10 is inf; inf - floor(inf) is NaN,
+    whose integer index would read outside the table), and a float32 product loses the fraction long before.
+    A coordinate that is not finite even in float64 is 0.
+    """
+    F64 = dr.float64_array_t(type(uv))
+    t = dr.fma(F64(uv), float(scale), float(offset))
+    f = t - dr.floor(t)
+    return dr.clip(type(uv)(dr.select(dr.isfinite(f), f, 0.0)), 0.0, 1.0)
+
+
+def _wrap(dr: Any, uv: Any, scale: float, size: float, n: int) -> Any:
+    """Texel coordinate of a UV on a periodic axis of ``n`` texels (``scale`` mm per UV unit, a repeat of
+    ``size`` mm): in [0, n] (:func:`fraction`; the index rules wrap n to 0 and clamp)."""
+    return fraction(dr, uv, float(scale) / float(size)) * n
 
 
 def texel_choice(mi: Any, uv: Any) -> tuple[Any, Any]:
@@ -157,16 +171,16 @@ def lookup(mi: Any, up: TexelUpload, uv: Any, theta_v: Any, phi_v: Any, theta_l:
 
     UInt = mi.UInt32
     Int = dr.int32_array_t(mi.Float)
-    fu = _wrap(dr, uv.x * up.uv_scale[0], up.repeat_mm[0], up.n_u)
-    fv = _wrap(dr, uv.y * up.uv_scale[1], up.repeat_mm[1], up.n_v)
+    fu = _wrap(dr, uv.x, up.uv_scale[0], up.repeat_mm[0], up.n_u)
+    fv = _wrap(dr, uv.y, up.uv_scale[1], up.repeat_mm[1], up.n_v)
     cell = lj.corners_jit(mi, up.grid, theta_v, phi_v, theta_l, phi_l, kappa)
 
     def at(block: Any) -> Any:
         return lj.gather_jit(mi, up.grid, up.table, cell, active, wavelengths, block=block)
 
-    def wrap(i: Any, n: int) -> Any:  # i in [-1, n]
+    def wrap(i: Any, n: int) -> Any:  # i in [-1, n]; clamped, so that no index is ever outside the table
         i = dr.select(i < 0, i + n, i)
-        return dr.select(i >= n, i - n, i)
+        return dr.clip(dr.select(i >= n, i - n, i), 0, n - 1)
 
     if up.texel_filter == "nearest":
         iu = wrap(Int(dr.floor(fu)), up.n_u)
@@ -211,11 +225,24 @@ def scalar_texels(u_mm: float, v_mm: float, texels: tuple[int, int], repeat_mm: 
     return [(j, i, float(w)) for j, i, w in out if w > 0.0]
 
 
+def _in_repeat(uv: float, scale: float, size: float) -> float:
+    """A UV's position in the repeat, mm in [0, size): the rule of :func:`_wrap` in Python floats."""
+    t = float(uv) * (float(scale) / float(size))
+    if not math.isfinite(t):
+        return 0.0
+    f = (t - math.floor(t)) * size
+    return f if 0.0 <= f < size else 0.0
+
+
+def _uv_mm(bsdf: Any, si: Any) -> tuple[float, float]:
+    """The hit's position in the repeat, mm (the rule of :func:`_wrap`, in Python floats)."""
+    su, sv = bsdf.btf.repeat_mm
+    return _in_repeat(si.uv.x, bsdf.uv_scale[0], su), _in_repeat(si.uv.y, bsdf.uv_scale[1], sv)
+
+
 def scalar_value(bsdf: Any, si: Any, q: tuple[float, ...]) -> np.ndarray:
     """The CD-BTF at one query (scalar variants): :meth:`cdbrdf.CDBTF.evaluate` at the UV in mm."""
-    import math
-
-    u, v = float(si.uv.x) * bsdf.uv_scale[0], float(si.uv.y) * bsdf.uv_scale[1]
+    u, v = _uv_mm(bsdf, si)
     if bsdf.texel_filter == "nearest":  # the centre of the texel
         (nu, nv), (su, sv) = bsdf.btf.texels, bsdf.btf.repeat_mm
         u = (math.floor(u / su * nu) + 0.5) * su / nu
@@ -234,7 +261,7 @@ def scalar_spectrum(bsdf: Any, si: Any, q: tuple[float, ...], lam: np.ndarray) -
     from ..interp import evaluate_reference, prepare
     from ._spectral import lazy_table
 
-    u, v = float(si.uv.x) * bsdf.uv_scale[0], float(si.uv.y) * bsdf.uv_scale[1]
+    u, v = _uv_mm(bsdf, si)
     q = q[:4] + ((0.0,) if bsdf.settings.mode == "brdf" else q[4:])
     if bsdf.btf.neural is not None and bsdf.btf.rank == 0:  # the tile mean's spectrum, modulated
         m = scalar_modulation_spectrum(bsdf.btf, u, v, q, lam)
@@ -369,9 +396,9 @@ def _codes(mi: Any, up: NeuralUpload, fu: Any, fv: Any, lev: Any, active: Any, x
     first = _level_pick(dr, lev, [UInt(c) for _, _, c in up.levels])
     Nu, Nv = Int(nu), Int(nv)
 
-    def wrap(i: Any, n: Any) -> Any:
+    def wrap(i: Any, n: Any) -> Any:  # i in [-1, n]; clamped, so that no index is ever outside the level
         i = dr.select(i < 0, i + n, i)
-        return dr.select(i >= n, i - n, i)
+        return dr.clip(dr.select(i >= n, i - n, i), 0, n - 1)
 
     def at(i: Any, j: Any) -> Any:
         idx = first + UInt(j * Nu + i)  # records of L floats: the index counts records
@@ -472,8 +499,8 @@ def lookup_neural(mi: Any, up: NeuralUpload, si: Any, theta_v: Any, phi_v: Any, 
     cell = lj.corners_jit(mi, up.grid, theta_v, phi_v, theta_l, phi_l, kappa)
     mean = lj.gather_jit(mi, up.grid, up.mean_rgb, cell, active)
     uv = si.uv
-    fu = _wrap(dr, uv.x * up.uv_scale[0], up.repeat_mm[0], 1)
-    fv = _wrap(dr, uv.y * up.uv_scale[1], up.repeat_mm[1], 1)
+    fu = _wrap(dr, uv.x, up.uv_scale[0], up.repeat_mm[0], 1)
+    fv = _wrap(dr, uv.y, up.uv_scale[1], up.repeat_mm[1], 1)
     xu = xv = None
     if up.texel_filter == "stochastic":
         xu, xv = texel_choice(mi, uv)

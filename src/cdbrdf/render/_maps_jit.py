@@ -107,14 +107,14 @@ def _bilinear(mi: Any, up: MapUpload, tu: Any, tv: Any, lvl: Any, active: Any) -
     h = dr.gather(UInt, up.height, lvl, active)
     off = dr.gather(UInt, up.offset, lvl, active)
     wf, hf = Float(w), Float(h)
-    x = (tu - dr.floor(tu)) * wf - 0.5
-    y = ((1.0 - tv) - dr.floor(1.0 - tv)) * hf - 0.5
+    x = tu * wf - 0.5  # tu, tv: fractions in [0, 1] (row 0 at the top: tv is 1 - v)
+    y = tv * hf - 0.5
     x0, y0 = dr.floor(x), dr.floor(y)
     fx, fy = x - x0, y - y0
     wi, hi = Int(w), Int(h)
     i0, j0 = Int(x0), Int(y0)
-    i0 = dr.select(i0 < 0, i0 + wi, dr.select(i0 >= wi, i0 - wi, i0))
-    j0 = dr.select(j0 < 0, j0 + hi, dr.select(j0 >= hi, j0 - hi, j0))
+    i0 = dr.clip(dr.select(i0 < 0, i0 + wi, dr.select(i0 >= wi, i0 - wi, i0)), 0, wi - 1)  # never outside
+    j0 = dr.clip(dr.select(j0 < 0, j0 + hi, dr.select(j0 >= hi, j0 - hi, j0)), 0, hi - 1)
     i1 = dr.select(i0 + 1 >= wi, 0, i0 + 1)
     j1 = dr.select(j0 + 1 >= hi, 0, j0 + 1)
     ArrayXf = _array_x(mi)
@@ -132,9 +132,11 @@ def sample(mi: Any, up: MapUpload, uv: Any, lv: Any, active: Any) -> list[Any]:
     """The six values at the lanes' UVs and levels, by the upload's ``map_filter`` (see the module's description)."""
     import drjit as dr
 
+    from ._btf_jit import fraction
+
     ru, rv, ou, ov = up.transform
-    tu = dr.fma(uv.x, ru, ou)
-    tv = dr.fma(uv.y, rv, ov)
+    tu = fraction(dr, uv.x, ru, ou)  # the texture coordinate, and 1 - the v one (row 0 at the top), in float64
+    tv = fraction(dr, uv.y, -rv, 1.0 - ov)
     UInt = mi.UInt32
     if up.map_filter == "none":
         return _bilinear(mi, up, tu, tv, UInt(0), active)

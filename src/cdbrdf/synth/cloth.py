@@ -77,7 +77,7 @@ from .weave import (
     weave_matrix,
 )
 
-__all__ = ["ClothParams", "ClothModel", "MODEL_NAME", "MODEL_VERSION"]
+__all__ = ["CLOTH_RANGES", "ClothParams", "ClothModel", "MODEL_NAME", "MODEL_VERSION"]
 
 log = logging.getLogger(__name__)
 
@@ -96,6 +96,18 @@ _E_LIGHTS = (8, 16)
 _E_FRACTION = 0.98
 
 RGB = tuple[float, float, float]
+
+
+#: The physical range of each length, refractive index and lobe width of :class:`ClothParams` (closed): yarns of
+#: a micrometre to centimetres, lobes of a tenth of a degree to a hemisphere (below, the model's integrals
+#: underflow to NaN, naming no parameter).
+CLOTH_RANGES: dict[str, tuple[float, float]] = {
+    **{f"{y}_pitch_mm": (1e-3, 100.0) for y in ("warp", "weft")},
+    **{f"{y}_width_mm": (1e-3, 100.0) for y in ("warp", "weft")},
+    **{f"{y}_height_mm": (1e-4, 100.0) for y in ("warp", "weft")},
+    "thickness_mm": (1e-3, 100.0), "ior": (1.0, 3.0),
+    **{f"{y}_{lobe}_deg": (0.1, 90.0) for y in ("warp", "weft") for lobe in ("gloss", "sheen")},
+}
 
 
 @dataclass(frozen=True)
@@ -218,15 +230,10 @@ class ClothParams(ModelParams):
             if a.shape != (3,) or not np.all(np.isfinite(a)) or np.any(a < 0) or np.any(a > 1):
                 raise OptionError(f"{f}: expected three albedos in [0, 1], got {v!r}")
             object.__setattr__(self, f, tuple(float(x) for x in a))
-        positive = (
-            "warp_pitch_mm", "weft_pitch_mm", "warp_width_mm", "weft_width_mm",
-            "warp_height_mm", "weft_height_mm", "thickness_mm", "ior",
-            "warp_gloss_deg", "weft_gloss_deg", "warp_sheen_deg", "weft_sheen_deg",
-        )
-        for f in positive:
+        for f, (lo, hi) in CLOTH_RANGES.items():
             v = getattr(self, f)
-            if not is_real(v) or not v > 0:
-                raise OptionError(f"{f}: must be a positive number, got {v!r}")
+            if not is_real(v) or not lo <= v <= hi:
+                raise OptionError(f"{f}: must be a number in [{lo:g}, {hi:g}], got {v!r}")
             object.__setattr__(self, f, float(v))
         for f in ("crimp_share_warp", "neutral_fraction", "warp_isotropic", "weft_isotropic"):
             v = getattr(self, f)
@@ -247,11 +254,6 @@ class ClothParams(ModelParams):
             if not is_real(v) or not -60 <= v <= 60:
                 raise OptionError(f"{f}: must lie in [-60, 60] degrees, got {v!r}")
             object.__setattr__(self, f, float(v))
-        if self.ior < 1.0:
-            raise OptionError(f"ior: must be >= 1, got {self.ior!r}")
-        for f in ("warp_gloss_deg", "weft_gloss_deg", "warp_sheen_deg", "weft_sheen_deg"):
-            if getattr(self, f) > 90:
-                raise OptionError(f"{f}: must be at most 90 degrees, got {getattr(self, f)!r}")
         for f, lo in (("texels", 8), ("points", 16), ("tilt_samples", 1)):
             v = getattr(self, f)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:

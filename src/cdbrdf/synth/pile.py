@@ -88,7 +88,8 @@ from .multiple import (
     pile_reflectance,
 )
 
-__all__ = ["PILE_KINDS", "PileParams", "PileModel", "PILE_MODEL_NAME", "PILE_MODEL_VERSION", "strand_albedo"]
+__all__ = ["PILE_KINDS", "PILE_RANGES", "PileParams", "PileModel", "PILE_MODEL_NAME", "PILE_MODEL_VERSION",
+           "strand_albedo"]
 
 log = logging.getLogger(__name__)
 
@@ -111,6 +112,16 @@ _ALBEDO_N_PHI = 180
 _NORM_MARGIN = 1.01
 
 RGB = tuple[float, float, float]
+
+
+#: The physical range of each length and lobe width of :class:`PileParams` (closed): a micrometre to centimetres,
+#: a lobe of a tenth of a degree to a hemisphere. Below the lower ends the model's integrals underflow (a gloss
+#: of 1e-300 degrees gave NaN reflectance); a pile that vanishes (``strands_per_mm2``) or gaps without correlation
+#: (``correlation_mm``) keep their limits of 1e-9.
+PILE_RANGES: dict[str, tuple[float, float]] = {
+    "pile_height_mm": (1e-3, 50.0), "strand_diameter_mm": (1e-4, 5.0), "strands_per_mm2": (1e-9, 1e5),
+    "loop_width_mm": (1e-3, 50.0), "fibre_gloss_deg": (0.1, 90.0), "correlation_mm": (1e-9, 50.0),
+}
 
 
 @dataclass(frozen=True)
@@ -203,14 +214,10 @@ class PileParams(ModelParams):
             if a.shape != (3,) or not np.all(np.isfinite(a)) or np.any(a < 0) or np.any(a > 1):
                 raise OptionError(f"{f}: expected three albedos in [0, 1], got {v!r}")
             object.__setattr__(self, f, tuple(float(x) for x in a))
-        bounds = {
-            "pile_height_mm": (0.0, 50.0), "strand_diameter_mm": (0.0, 5.0), "strands_per_mm2": (0.0, 1e5),
-            "loop_width_mm": (0.0, 50.0), "fibre_gloss_deg": (0.0, 90.0), "correlation_mm": (0.0, 50.0),
-        }
-        for f, (lo, hi) in bounds.items():
+        for f, (lo, hi) in PILE_RANGES.items():
             v = getattr(self, f)
-            if not is_real(v) or not lo < v <= hi:
-                raise OptionError(f"{f}: must be a number in ({lo:g}, {hi:g}], got {v!r}")
+            if not is_real(v) or not lo <= v <= hi:
+                raise OptionError(f"{f}: must be a number in [{lo:g}, {hi:g}], got {v!r}")
             object.__setattr__(self, f, float(v))
         for f, lo, hi in (("lean_deg", 0.0, 80.0), ("spread_deg", 0.0, 60.0), ("fibre_specular", 0.0, 1.0),
                           ("brush_deg", -360.0, 360.0), ("ior", 1.0, 3.0)):

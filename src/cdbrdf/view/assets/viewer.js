@@ -75,7 +75,7 @@ vec4 dec(int row, int g) { return texelFetch(uDec, ivec2(g, row), 0); }
 void addCode(int lv, vec2 f, float s, inout vec4 z[8]) {
   ivec4 L = uLev[lv]; ivec2 n = L.xy;
   vec2 x = f * vec2(n) - 0.5, x0 = floor(x), t = x - x0;
-  ivec2 i0 = (ivec2(x0) % n + n) % n, i1 = (i0 + 1) % n;
+  ivec2 i0 = clamp((ivec2(x0) % n + n) % n, ivec2(0), n - 1), i1 = (i0 + 1) % n;  // clamped: never outside
   for (int k = 0; k < 4; k++) {
     ivec2 c = ivec2(k % 2 == 0 ? i0.x : i1.x, k < 2 ? i0.y : i1.y);
     float w = s * (k % 2 == 0 ? 1.0 - t.x : t.x) * (k < 2 ? 1.0 - t.y : t.y);
@@ -151,7 +151,7 @@ vec3 lookupBTF(float tv, float pv, float tl, float pl, float k, vec2 p, float fp
   // the weights: periodic bilinear between texel centres (CDBTF.texel_weights)
   vec2 r = p / uRepeat;
   vec2 f = (r - floor(r)) * vec2(uTexels) - 0.5, f0 = floor(f), t = f - f0;
-  ivec2 i0 = (ivec2(f0) % uTexels + uTexels) % uTexels, i1 = (i0 + 1) % uTexels;
+  ivec2 i0 = clamp((ivec2(f0) % uTexels + uTexels) % uTexels, ivec2(0), uTexels - 1), i1 = (i0 + 1) % uTexels;
   for (int g = 0; 4 * g < uRank; g++) {
     vec4 w = mix(mix(wts(i0, g), wts(ivec2(i1.x, i0.y), g), t.x), mix(wts(ivec2(i0.x, i1.y), g), wts(i1, g), t.x), t.y);
     for (int q = 0; q < 4; q++) {
