@@ -85,7 +85,8 @@ _autosummary.WELL_KNOWN_ABBREVIATIONS = (*_autosummary.WELL_KNOWN_ABBREVIATIONS,
 # page, under the first module of API_MODULES that exports it (its public name);
 # the other modules that re-export it link to that page.
 API_MODULES = {
-    "The table and its file": ["cdbrdf", "cdbrdf.table", "cdbrdf.grid", "cdbrdf.io", "cdbrdf.interp", "cdbrdf.errors"],
+    "The table and its file": ["cdbrdf", "cdbrdf.table", "cdbrdf.sources", "cdbrdf.grid", "cdbrdf.io", "cdbrdf.interp",
+                               "cdbrdf.errors"],
     "Fabrics": ["cdbrdf.materials", "cdbrdf.synth", "cdbrdf.synth.metrics", "cdbrdf.fit"],
     "Measurement and import": ["cdbrdf.measure", "cdbrdf.rig", "cdbrdf.importers", "cdbrdf.bend", "cdbrdf.images"],
     "Geometry and rendering": ["cdbrdf.frames", "cdbrdf.mesh", "cdbrdf.render"],
@@ -99,6 +100,7 @@ API_MODULES = {
     ],
     "Colour, figures, the viewer, the demo": [
         "cdbrdf.colour",
+        "cdbrdf.spectral",
         "cdbrdf.plot",
         "cdbrdf.view.export",
         "cdbrdf.view.server",

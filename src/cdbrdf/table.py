@@ -110,6 +110,14 @@ class CDBRDF:
         of ``grid``, the fields of :class:`~cdbrdf.provenance.Provenance` instead of
         ``provenance``.
 
+    Raises
+    ------
+    TableError
+        When the shapes, axes, mask or values are inconsistent. The message
+        names the argument.
+    LimitError
+        When the table has more values than the ``table_samples`` limit.
+
     Notes
     -----
     The fields of :class:`~cdbrdf.provenance.Provenance`:
@@ -139,14 +147,6 @@ class CDBRDF:
     fill_std
         Optional estimated standard deviation of the error of each filled
         value, same shape as ``values``; 0 where measured.
-
-    Raises
-    ------
-    TableError
-        When the shapes, axes, mask or values are inconsistent. The message
-        names the argument.
-    LimitError
-        When the table has more values than the ``table_samples`` limit.
 
     Examples
     --------

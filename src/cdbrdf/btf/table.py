@@ -94,6 +94,8 @@ class CDBTF:
         ``(size_u, size_v)``: the repeat's size on the flat fabric, mm.
     compression
         What the factorisation recorded (:data:`COMPRESSION_ATTRS`).
+    neural
+        A neural CD-BTF's latent pyramid and decoder (``docs/btf.md``), or None.
 
     Raises
     ------
@@ -477,7 +479,18 @@ class CDBTF:
         return out
 
     def footprint_texels(self, footprint_mm: ArrayLike) -> NDArray[np.float64]:
-        """A footprint on the fabric (mm) in texels: over the larger of the texels' two sides."""
+        """A footprint on the fabric (mm) in texels: over the larger of the texels' two sides.
+
+        Parameters
+        ----------
+        footprint_mm
+            The footprint's width on the fabric, mm.
+
+        Returns
+        -------
+        numpy.ndarray
+            The width in texels.
+        """
         nu, nv = self.texels
         return np.asarray(footprint_mm, np.float64) / max(self._repeat[0] / nu, self._repeat[1] / nv)
 

@@ -421,15 +421,15 @@ def make_bsdf(
         in mm) and ``"stochastic"`` (default: one of the four nearest texels
         with probability its bilinear weight), ``"bilinear"`` (the four
         blended, as :meth:`cdbrdf.CDBTF.evaluate`) or ``"nearest"``.
+    unit
+        The scene's unit (applied by :func:`load_dict` with the shape's
+        ``to_world``; ``docs/rendering.md``, "Curvature units").
     pixel_angle
         The angle one pixel of the camera subtends, radians: a neural
         CD-BTF's texels and a map's levels are filtered over the pixel's
         footprint at the hit (``docs/btf.md``, "Filtering"; ``docs/rendering.md``,
         "Maps"). Default: a map takes the scene's camera's
         (:func:`check_scene`), a CD-BTF 0 (the texels themselves).
-    unit
-        The scene's unit (applied by :func:`load_dict` with the shape's
-        ``to_world``; ``docs/rendering.md``, "Curvature units").
     curvature_map
         A :class:`cdbrdf.mesh.CurvatureMap` (``prepare_mesh(...).metadata["curvature_map"]``):
         looked up per shading point, added to the mesh's curvature, tilting the shading normal.
