@@ -33,7 +33,7 @@ def _bent_felt(tmp: str):
     from pathlib import Path
 
     path = shared_file(FELT)
-    table = bend(path, model="pile", kappa=KAPPA, max_evaluations=40)
+    table = bend(path, model="pile", kappa=KAPPA, max_evaluations=10)  # the bending, not the fit, is tested
     out = Path(tmp) / "felt.h5"
     table.save(out)
     return path, table, cdbrdf.load(out)
@@ -130,7 +130,7 @@ def test_other_formats_bend(tmp_path):
     one = tmp_path / "flat.h5"
     materials.load("denim").brdf(0.0).save(one)
     for src in (merl, utia, one):
-        t = bend(src, model="pile", kappa=[-0.1, 0.1], grid="regular:30,60", max_evaluations=14)
+        t = bend(src, model="pile", kappa=[-0.1, 0.1], grid="regular:30,60", max_evaluations=8)
         assert t.kappa.tolist() == [-0.1, 0.0, 0.1] and t.shape[1:5] == (6, 3, 6, 3)
         assert np.isfinite(t.values).all() and t.attrs["provenance"]["flat"]["source"]["file_name"] == src.name
     # a one-curvature table at kappa != 0 is not a flat measurement
@@ -167,10 +167,13 @@ def test_bad_arguments_are_refused():
         bend(path, model="pile", kappa=[-0.9, 0.1])
 
 
-def test_the_command_line(tmp_path, capsys):
+def test_the_command_line(tmp_path, capsys, monkeypatch):
     import shutil
 
     from cdbrdf.cli import main
+    from cdbrdf.fit.models import PileFit
+
+    monkeypatch.setattr(PileFit, "max_evaluations", 8)  # the command, not the fit (since pile 2.0, ~2 s each)
 
     path = shared_file(FELT)
     out = tmp_path / "felt.h5"
